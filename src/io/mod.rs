@@ -1,0 +1,1 @@
+//! Reading and writing OBJ, PLY, OFF and STL files.
