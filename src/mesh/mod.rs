@@ -1,7 +1,18 @@
-//! Meshes: the file-level [`PolygonMesh`] and the half-edge triangle mesh used for processing.
+//! Meshes: the file-level [`PolygonMesh`] and the half-edge triangle [`Mesh`] used for
+//! processing, with the builder that turns one into the other.
 
+pub mod build;
+pub mod geometry;
+pub mod halfedge;
 pub mod polygon;
+pub mod topology;
+pub mod validate;
 
+pub use build::{BuildError, BuildReport, Built, SourceMap};
+pub use geometry::{BoundingBox, cotangent};
+pub use halfedge::{FaceId, HalfedgeId, Mesh, Outgoing, SlotIndex, VertexId};
 pub use polygon::{
     Attribute, AttributeData, ElementProperty, ExtraElement, ListProperty, PolygonMesh, ScalarType,
 };
+pub use topology::Topology;
+pub use validate::ValidationError;

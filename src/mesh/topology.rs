@@ -1,0 +1,111 @@
+//! Global topology of a [`Mesh`]: components, boundary loops, Euler characteristic, genus.
+
+use super::halfedge::{Mesh, SlotIndex};
+use serde::Serialize;
+
+/// Counts describing a mesh's topology.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Topology {
+    /// Vertices with at least one edge.
+    pub referenced_vertices: usize,
+    /// Edges.
+    pub edges: usize,
+    /// Triangles.
+    pub faces: usize,
+    /// Closed loops of boundary half-edges (holes).
+    pub boundary_loops: usize,
+    /// Edge-connected components of faces (isolated vertices not counted).
+    pub components: usize,
+    /// V − E + F over referenced vertices.
+    pub euler_characteristic: i64,
+    /// Σ over components of (2 − b − χ)/2; `None` if a component's value is not a whole
+    /// non-negative number (which a valid orientable surface never gives).
+    pub genus: Option<u64>,
+}
+
+impl Mesh {
+    /// Computes the [`Topology`] summary in linear time.
+    pub fn topology(&self) -> Topology {
+        // Components by union-find over vertex slots, joined along edges.
+        let n = self.vertices.capacity() + 1;
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn find(p: &mut [u32], mut x: u32) -> u32 {
+            while p[x as usize] != x {
+                p[x as usize] = p[p[x as usize] as usize];
+                x = p[x as usize];
+            }
+            x
+        }
+        for h in self.edges() {
+            let a = find(&mut parent, self.from_vertex(h).slot() as u32);
+            let b = find(&mut parent, self.to_vertex(h).slot() as u32);
+            if a != b {
+                parent[a.max(b) as usize] = a.min(b);
+            }
+        }
+        // Per-component counts (V, E, F, B), keyed by root slot.
+        let mut comp_index = vec![u32::MAX; n];
+        let mut counts: Vec<[i64; 4]> = Vec::new();
+        let mut comp_of = |parent: &mut [u32], slot: usize, counts: &mut Vec<[i64; 4]>| {
+            let r = find(parent, slot as u32) as usize;
+            if comp_index[r] == u32::MAX {
+                comp_index[r] = counts.len() as u32;
+                counts.push([0; 4]);
+            }
+            comp_index[r] as usize
+        };
+        let mut referenced = 0;
+        for v in self.vertices() {
+            if !self.is_isolated(v) {
+                referenced += 1;
+                let c = comp_of(&mut parent, v.slot(), &mut counts);
+                counts[c][0] += 1;
+            }
+        }
+        for h in self.edges() {
+            let c = comp_of(&mut parent, self.from_vertex(h).slot(), &mut counts);
+            counts[c][1] += 1;
+        }
+        for f in self.faces() {
+            let v = self.face_vertices(f)[0];
+            let c = comp_of(&mut parent, v.slot(), &mut counts);
+            counts[c][2] += 1;
+        }
+        // Boundary loops: walk each unvisited boundary half-edge's loop once.
+        let mut seen = vec![false; self.halfedges.capacity() + 1];
+        let mut loops = 0;
+        for h in self.halfedges() {
+            if !self.is_boundary_halfedge(h) || seen[h.slot()] {
+                continue;
+            }
+            loops += 1;
+            let c = comp_of(&mut parent, self.from_vertex(h).slot(), &mut counts);
+            counts[c][3] += 1;
+            let mut g = h;
+            while !seen[g.slot()] {
+                seen[g.slot()] = true;
+                g = self.next(g);
+            }
+        }
+        let mut genus = Some(0u64);
+        let mut chi_total = 0;
+        for &[v, e, f, b] in &counts {
+            let chi = v - e + f;
+            chi_total += chi;
+            let twice = 2 - b - chi;
+            genus = match genus {
+                Some(g) if twice >= 0 && twice % 2 == 0 => Some(g + (twice / 2) as u64),
+                _ => None,
+            };
+        }
+        Topology {
+            referenced_vertices: referenced,
+            edges: self.n_edges(),
+            faces: self.n_faces(),
+            boundary_loops: loops,
+            components: counts.len(),
+            euler_characteristic: chi_total,
+            genus,
+        }
+    }
+}
