@@ -1,0 +1,78 @@
+//! The `meshpyr` command line: one subcommand per module. Each subcommand lives in its own file
+//! with a clap `Args` struct and a `run` function.
+
+use clap::{Parser, Subcommand};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use std::io::IsTerminal;
+
+/// Options every subcommand understands.
+#[derive(clap::Args, Debug, Clone)]
+pub struct Global {
+    /// Print nothing but errors and requested output; no progress bars.
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+}
+
+impl Global {
+    /// A progress bar on stderr that stays hidden when stderr is not a terminal or `--quiet`.
+    pub fn progress(&self, message: &str) -> ProgressBar {
+        let pb = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr());
+        if self.quiet || !std::io::stderr().is_terminal() {
+            pb.set_draw_target(ProgressDrawTarget::hidden());
+        }
+        pb.set_style(
+            ProgressStyle::with_template("{msg:>12} [{bar:40}] {percent:>3}% {elapsed}")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        pb.set_message(message.to_string());
+        pb
+    }
+
+    /// Prints a status line unless `--quiet`.
+    pub fn say(&self, line: impl std::fmt::Display) {
+        if !self.quiet {
+            eprintln!("{line}");
+        }
+    }
+}
+
+/// Adapts an indicatif bar to the library's [`crate::progress::Progress`].
+pub struct BarProgress<'a>(pub &'a ProgressBar);
+
+impl crate::progress::Progress for BarProgress<'_> {
+    fn update(&self, fraction: f64) {
+        self.0.set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
+    }
+}
+
+/// meshpyr — multiresolution processing of triangle meshes and 3D scans.
+#[derive(Parser, Debug)]
+#[command(name = "meshpyr", version, about, long_about = None)]
+pub struct Cli {
+    #[command(flatten)]
+    global: Global,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {}
+
+fn run(command: Command, global: &Global) -> anyhow::Result<()> {
+    let _ = global;
+    match command {}
+}
+
+/// Parses the command line and runs the subcommand; returns the process exit code.
+pub fn main() -> std::process::ExitCode {
+    let cli = Cli::parse();
+    match run(cli.command, &cli.global) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            // One line: the error and its causes joined by ": ".
+            eprintln!("error: {e:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
