@@ -226,7 +226,7 @@ fn next_c(c: u32) -> u32 {
 
 #[inline]
 fn prev_c(c: u32) -> u32 {
-    if c % 3 == 0 { c + 2 } else { c - 1 }
+    if c.is_multiple_of(3) { c + 2 } else { c - 1 }
 }
 
 /// Per half-edge flag: its undirected edge has two or more triangles (so being unpaired
