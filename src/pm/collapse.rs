@@ -483,7 +483,7 @@ pub fn is_collapse_topologically_legal(
         let w = mesh.to_vertex(e1);
         // An interior wing vertex loses an edge; valence 3 would leave a degenerate pillow
         // (this is also the tetrahedron rule).
-        if !mesh.is_boundary_vertex(w) && mesh.valence(w) <= 3 {
+        if !mesh.is_boundary_vertex(w) && mesh.outgoing(w).take(4).count() <= 3 {
             return None;
         }
         wings.push(w);

@@ -2,26 +2,26 @@
 //! [`ProgressiveMesh::build`](super::ProgressiveMesh::build).
 //!
 //! Every edge is evaluated in both directions (`u→v` keeps `v`'s original position, so the
-//! cost is `(Q_u + Q_v)(p_v)`) and the cheaper allowed direction goes into a binary min-heap
-//! keyed by `(cost, half-edge)`. Entries are invalidated lazily by per-half-edge version
-//! stamps. Legality is tested when an entry is popped: an illegal cheaper direction falls back
-//! to the other direction; an edge illegal both ways is parked and re-queued when a collapse
-//! changes its neighbourhood (its endpoints' 1-rings). When the heap runs dry, one sweep
-//! re-queues every edge; the build stops when a sweep finds nothing to collapse, so "no legal
-//! collapse left" really means none.
+//! cost is `(Q_u + Q_v)(p_v)`, normalised to a squared distance). The priority queue is
+//! batched, in the manner of meshoptimizer: each pass evaluates all live edges, sorts them by
+//! `(cost, half-edge slot)` and collapses them in that order, skipping an edge once one of its
+//! endpoints was the survivor of a collapse in this pass — the only vertex whose quadric
+//! changed — so every cost used is exact. A pass stops at the target or once costs exceed
+//! 1.5× the cost of the candidate that would meet the pass's share of the target, which keeps
+//! the order close to a global heap's. Legality is tested when an edge's turn comes; an illegal
+//! cheaper direction falls back to the other one. The build ends when a pass without the cost
+//! cut finds no legal collapse, so "no legal collapse left" really means none.
 //!
 //! All per-element state lives in flat arrays indexed by slot (the working mesh only loses
-//! elements, so slots are stable); the loop allocates nothing per collapse.
+//! elements, so slots are stable); passes reuse their buffers.
 
 use super::collapse::{
     Legality, Marks, half_edge_collapse, is_collapse_geometrically_legal,
     is_collapse_topologically_legal,
 };
 use super::quadric::Quadric;
-use crate::mesh::{HalfedgeId, Mesh, SlotIndex, VertexId};
+use crate::mesh::{HalfedgeId, Mesh, SlotIndex};
 use crate::progress::Progress;
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 
 /// What to stop at and what to forbid (the library-level subset of `PmOptions`).
 #[derive(Clone, Copy, Debug)]
@@ -45,92 +45,31 @@ pub(crate) struct Collapse {
 }
 
 const NONE: u32 = u32::MAX;
-const ALT: u32 = 1 << 31;
 
-#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
-struct Entry {
-    /// f64 bits of a non-negative cost: ordered like the cost.
-    key: u64,
-    /// Slot of the half-edge giving the direction (from → to).
+/// A candidate collapse: the cheaper allowed direction of an edge, and the other direction's
+/// cost (`f64::INFINITY` if not allowed).
+#[derive(Clone, Copy)]
+struct Candidate {
+    cost: f64,
     h: u32,
-    /// Version of that half-edge when queued; `ALT` set for the fallback direction.
-    stamp: u32,
+    alt_cost: f64,
 }
 
-struct State<'a> {
-    mesh: Mesh,
-    /// Half-edge handle by slot (slots are stable: nothing is inserted).
-    hid: Vec<HalfedgeId>,
-    version: Vec<u32>,
-    parked: Vec<bool>,
-    quadric: Vec<Quadric>,
-    heap: BinaryHeap<Reverse<Entry>>,
-    marks: Marks,
-    params: &'a DecimateParams,
-}
-
-impl State<'_> {
-    /// Cost of collapsing `h` (from → to), or `None` if its direction is never allowed.
-    #[inline]
-    fn direction_cost(&self, h: HalfedgeId) -> Option<f64> {
-        let m = &self.mesh;
-        let o = m.twin(h);
-        let u = m.to_vertex(o);
-        if m.is_boundary_vertex(u) && !(m.is_boundary_halfedge(h) || m.is_boundary_halfedge(o)) {
-            return None;
-        }
-        let v = m.to_vertex(h);
-        let q = self.quadric[u.slot()].sum(&self.quadric[v.slot()]);
-        Some(q.error(m.position(v)))
-    }
-
-    /// Re-evaluates the edge of `h` (both directions), invalidating its queued entries, and
-    /// returns the entry of the cheaper allowed direction.
-    fn evaluate_edge(&mut self, h: HalfedgeId) -> Option<Entry> {
-        let o = self.mesh.twin(h);
-        let (hs, os) = (h.slot(), o.slot());
-        self.version[hs] = (self.version[hs] + 1) & !ALT;
-        self.version[os] = (self.version[os] + 1) & !ALT;
-        self.parked[hs] = false;
-        self.parked[os] = false;
-        let ch = self.direction_cost(h);
-        let co = self.direction_cost(o);
-        let best = match (ch, co) {
-            (Some(a), Some(b)) => {
-                if (b, os) < (a, hs) {
-                    Some((b, os))
-                } else {
-                    Some((a, hs))
-                }
-            }
-            (Some(a), None) => Some((a, hs)),
-            (None, Some(b)) => Some((b, os)),
-            (None, None) => None,
-        };
-        best.map(|(cost, s)| Entry {
-            key: cost.to_bits(),
-            h: s as u32,
-            stamp: self.version[s],
-        })
-    }
-
-    /// Re-evaluates the edge of `h` and queues it.
-    fn requeue_edge(&mut self, h: HalfedgeId) {
-        if let Some(e) = self.evaluate_edge(h) {
-            self.heap.push(Reverse(e));
-        }
-    }
-
-    fn is_legal(&mut self, h: HalfedgeId) -> bool {
-        is_collapse_topologically_legal(
-            &self.mesh,
-            h,
-            self.params.legality.max_valence,
-            &mut self.marks,
-        )
-        .is_some()
-            && is_collapse_geometrically_legal(&self.mesh, h, &self.params.legality)
-    }
+/// Costs of collapsing the edge of `h` in both directions (`h`'s direction first); `None` for
+/// a direction that is never allowed (a boundary vertex may only slide along its boundary).
+#[inline]
+fn edge_costs(
+    mesh: &Mesh,
+    quadric: &[Quadric],
+    h: HalfedgeId,
+    o: HalfedgeId,
+) -> (Option<f64>, Option<f64>) {
+    let boundary_edge = mesh.is_boundary_halfedge(h) || mesh.is_boundary_halfedge(o);
+    let (a, b) = (mesh.to_vertex(o), mesh.to_vertex(h));
+    let q = quadric[a.slot()].sum(&quadric[b.slot()]);
+    let ab = (boundary_edge || !mesh.is_boundary_vertex(a)).then(|| q.error(mesh.position(b)));
+    let ba = (boundary_edge || !mesh.is_boundary_vertex(b)).then(|| q.error(mesh.position(a)));
+    (ab, ba)
 }
 
 fn initial_quadrics(mesh: &Mesh, boundary_weight: f64) -> Vec<Quadric> {
@@ -180,100 +119,126 @@ pub(crate) fn decimate(
     params: &DecimateParams,
     progress: &dyn Progress,
 ) -> (Vec<Collapse>, Mesh) {
-    let mesh = input.clone();
+    let mut mesh = input.clone();
     let n_he = mesh.halfedges().map(|h| h.slot() + 1).max().unwrap_or(0);
+    let n_v = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
     let mut hid = vec![HalfedgeId::default(); n_he];
     for h in mesh.halfedges() {
         hid[h.slot()] = h;
     }
-    let quadric = initial_quadrics(&mesh, params.boundary_weight);
-    let mut st = State {
-        mesh,
-        hid,
-        version: vec![0; n_he],
-        parked: vec![false; n_he],
-        quadric,
-        heap: BinaryHeap::new(),
-        marks: Marks::default(),
-        params,
-    };
+    let mut quadric = initial_quadrics(&mesh, params.boundary_weight);
+    let mut marks = Marks::default();
+    let mut locked = vec![false; n_v];
+    let mut locked_list: Vec<u32> = Vec::new();
+    let mut seen = vec![false; n_he];
+    // One half-edge per live edge (may hold dead or duplicate entries; cleaned every pass).
+    let mut edges: Vec<u32> = mesh.edges().map(|h| h.slot() as u32).collect();
+    let mut next_edges: Vec<u32> = Vec::with_capacity(edges.len());
+    let mut cands: Vec<Candidate> = Vec::with_capacity(edges.len());
     let mut collapses: Vec<Collapse> = Vec::new();
-    let start_faces = st.mesh.n_faces();
-    let target_faces = params.target_faces;
-    let work = start_faces.saturating_sub(target_faces).max(1);
-    let report_every = (work / 200).max(64);
-    let mut edges: Vec<HalfedgeId> = Vec::new();
-    let mut ring: Vec<VertexId> = Vec::new();
-    let isolated = st
-        .mesh
-        .vertices()
-        .filter(|&v| st.mesh.is_isolated(v))
-        .count();
+
+    let isolated = mesh.vertices().filter(|&v| mesh.is_isolated(v)).count();
+    let start_faces = mesh.n_faces();
+    let work = start_faces.saturating_sub(params.target_faces).max(1);
     let done = |m: &Mesh| {
         m.n_faces() <= params.target_faces || m.n_vertices() - isolated <= params.target_vertices
     };
-    'sweeps: loop {
-        // (Re-)queue every edge: the first sweep fills the heap, later ones catch edges whose
-        // legality changed without their neighbourhood being touched by a collapse.
-        edges.clear();
-        edges.extend(st.mesh.edges());
-        let mut entries = std::mem::take(&mut st.heap).into_vec();
-        entries.clear();
-        entries.reserve(edges.len());
-        for &h in &edges {
-            if let Some(e) = st.evaluate_edge(h) {
-                entries.push(Reverse(e));
-            }
-        }
-        st.heap = BinaryHeap::from(entries);
-        let before = collapses.len();
-        while let Some(Reverse(e)) = st.heap.pop() {
-            if done(&st.mesh) {
-                break 'sweeps;
-            }
-            let s = (e.h) as usize;
-            if st.version[s] != (e.stamp & !ALT) {
-                continue; // stale
-            }
-            let cost = f64::from_bits(e.key);
-            if cost > params.max_error_sq {
-                break;
-            }
-            let h = st.hid[s];
-            if !st.is_legal(h) {
-                let o = st.mesh.twin(h);
-                let os = o.slot();
-                if e.stamp & ALT == 0
-                    && let Some(c) = st.direction_cost(o)
-                {
-                    st.heap.push(Reverse(Entry {
-                        key: c.to_bits(),
-                        h: os as u32,
-                        stamp: st.version[os] | ALT,
-                    }));
-                } else {
-                    st.parked[s] = true;
-                    st.parked[os] = true;
-                }
+    let mut use_goal = true;
+    while !done(&mesh) {
+        // Live, deduplicated edges, each by the smaller slot of its two half-edges.
+        next_edges.clear();
+        for &s in &edges {
+            let h = hid[s as usize];
+            if !mesh.contains_halfedge(h) {
                 continue;
             }
-            // Collapse.
-            let o = st.mesh.twin(h);
-            let (u, v) = (st.mesh.to_vertex(o), st.mesh.to_vertex(h));
-            // The half-edges that die: bump their versions so queued entries go stale.
-            for x in [h, o] {
-                st.version[x.slot()] = (st.version[x.slot()] + 1) & !ALT;
-                if st.mesh.face(x).is_some() {
-                    let n = st.mesh.next(x);
-                    let p = st.mesh.prev(x);
-                    for y in [n, p] {
-                        st.version[y.slot()] = (st.version[y.slot()] + 1) & !ALT;
-                    }
-                }
+            let t = mesh.twin(h);
+            let r = if t.slot() < h.slot() {
+                t.slot()
+            } else {
+                h.slot()
+            };
+            if !seen[r] {
+                seen[r] = true;
+                next_edges.push(r as u32);
             }
-            let topo = half_edge_collapse(&mut st.mesh, h);
-            let qu = st.quadric[u.slot()];
-            st.quadric[v.slot()].add(&qu);
+        }
+        for &r in &next_edges {
+            seen[r as usize] = false;
+        }
+        std::mem::swap(&mut edges, &mut next_edges);
+
+        cands.clear();
+        for &s in &edges {
+            let h = hid[s as usize];
+            let o = mesh.twin(h);
+            let (ch, co) = edge_costs(&mesh, &quadric, h, o);
+            let (cost, hs, alt_cost) = match (ch, co) {
+                (Some(a), Some(b)) if b < a => (b, o.slot(), a),
+                (Some(a), Some(b)) => (a, h.slot(), b),
+                (Some(a), None) => (a, h.slot(), f64::INFINITY),
+                (None, Some(b)) => (b, o.slot(), f64::INFINITY),
+                (None, None) => continue,
+            };
+            if cost <= params.max_error_sq {
+                cands.push(Candidate {
+                    cost,
+                    h: hs as u32,
+                    alt_cost,
+                });
+            }
+        }
+        if cands.is_empty() {
+            break;
+        }
+        cands.sort_unstable_by(|a, b| a.cost.total_cmp(&b.cost).then(a.h.cmp(&b.h)));
+        // Each collapse removes about two faces; aim for this pass's share of the target and
+        // allow 1.5× the cost of the candidate that would meet it (many get locked).
+        let faces_left = mesh.n_faces() - params.target_faces.min(mesh.n_faces());
+        let goal = (faces_left / 2).max(1);
+        let error_cut = if use_goal && goal < cands.len() {
+            1.5 * cands[goal].cost
+        } else {
+            f64::INFINITY
+        }
+        .min(params.max_error_sq);
+        let before = collapses.len();
+        for c in &cands {
+            if done(&mesh) || c.cost > error_cut {
+                break;
+            }
+            let h0 = hid[c.h as usize];
+            if !mesh.contains_halfedge(h0) {
+                continue;
+            }
+            let o0 = mesh.twin(h0);
+            let (a, b) = (mesh.to_vertex(o0), mesh.to_vertex(h0));
+            if locked[a.slot()] || locked[b.slot()] {
+                continue;
+            }
+            let legal = |mesh: &Mesh, marks: &mut Marks, h: HalfedgeId| {
+                is_collapse_topologically_legal(mesh, h, params.legality.max_valence, marks)
+                    .is_some()
+                    && is_collapse_geometrically_legal(mesh, h, &params.legality)
+            };
+            let (h, cost) = if legal(&mesh, &mut marks, h0) {
+                (h0, c.cost)
+            } else if c.alt_cost <= error_cut && legal(&mesh, &mut marks, o0) {
+                (o0, c.alt_cost)
+            } else {
+                continue;
+            };
+            let o = mesh.twin(h);
+            let (u, v) = (mesh.to_vertex(o), mesh.to_vertex(h));
+            let topo = half_edge_collapse(&mut mesh, h);
+            let qu = quadric[u.slot()];
+            quadric[v.slot()].add(&qu);
+            locked[v.slot()] = true;
+            locked_list.push(v.slot() as u32);
+            // Glued edges may have lost their representative: re-list v's edges.
+            for g in mesh.outgoing(v) {
+                edges.push(g.slot() as u32);
+            }
             collapses.push(Collapse {
                 from: u.slot() as u32,
                 to: v.slot() as u32,
@@ -281,38 +246,21 @@ pub(crate) fn decimate(
                 right: topo.right.map_or(NONE, |x| x.slot() as u32),
                 error_sq: cost,
             });
-            // Costs changed on every edge at v; legality may have changed on every edge at a
-            // vertex of v's new 1-ring (re-queue those only if they were parked).
-            ring.clear();
-            edges.clear();
-            for g in st.mesh.outgoing(v) {
-                ring.push(st.mesh.to_vertex(g));
-                edges.push(g);
-            }
-            for &g in &edges {
-                st.requeue_edge(g);
-            }
-            for &w in &ring {
-                edges.clear();
-                for g in st.mesh.outgoing(w) {
-                    let (gs, ts) = (g.slot(), st.mesh.twin(g).slot());
-                    if st.parked[gs] || st.parked[ts] {
-                        edges.push(g);
-                    }
-                }
-                for &g in &edges {
-                    st.requeue_edge(g);
-                }
-            }
-            if collapses.len().is_multiple_of(report_every) {
-                let removed = start_faces - st.mesh.n_faces();
-                progress.update(removed as f64 / work as f64);
-            }
         }
-        if collapses.len() == before || done(&st.mesh) {
-            break;
+        for &v in &locked_list {
+            locked[v as usize] = false;
+        }
+        locked_list.clear();
+        progress.update((start_faces - mesh.n_faces()) as f64 / work as f64);
+        if collapses.len() == before {
+            if !use_goal || error_cut.is_infinite() || error_cut >= params.max_error_sq {
+                break; // a full pass found no legal collapse
+            }
+            use_goal = false;
+        } else {
+            use_goal = true;
         }
     }
     progress.update(1.0);
-    (collapses, st.mesh)
+    (collapses, mesh)
 }

@@ -7,6 +7,7 @@
 //! - [`quadric`]: area-weighted plane quadrics.
 //! - `decimate`: the greedy lazy-heap decimation loop.
 //! - [`ProgressiveMesh`] / [`PmCursor`]: the hierarchy and its cursor.
+//! - [`simplify()`]: a file-level mesh cut at a level, attributes carried along.
 //! - [`fuzz_operations`]: the body of the `pm_ops` fuzz target.
 
 pub mod collapse;
@@ -14,6 +15,7 @@ mod decimate;
 mod fuzz;
 mod progressive;
 pub mod quadric;
+pub mod simplify;
 
 pub use collapse::{
     CollapseTopology, Legality, Marks, MeshRecords, SplitError, canonicalize, collapse_topology,
@@ -22,3 +24,4 @@ pub use collapse::{
 };
 pub use fuzz::fuzz_operations;
 pub use progressive::{PmCursor, PmError, PmOptions, ProgressiveMesh, VertexSplit};
+pub use simplify::{Simplified, SimplifyError, SimplifyTarget, simplify};
