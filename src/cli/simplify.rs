@@ -1,0 +1,64 @@
+//! `meshpyr simplify IN -o OUT (--faces N | --ratio R | --error E)`: QEM decimation, i.e. the
+//! progressive mesh cut at a level, written compacted with per-vertex attributes carried along.
+
+use super::{BarProgress, Global};
+use crate::io;
+use crate::pm::{PmOptions, SimplifyTarget, simplify};
+use anyhow::Context;
+use std::path::PathBuf;
+
+/// Arguments of `meshpyr simplify`.
+#[derive(clap::Args, Debug)]
+#[command(group(clap::ArgGroup::new("target").required(true).args(["faces", "ratio", "error"])))]
+pub struct SimplifyArgs {
+    /// Input mesh (.obj, .ply, .off, .stl).
+    pub input: PathBuf,
+    /// Output mesh; the format follows the extension.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Keep at most this many triangles.
+    #[arg(long)]
+    pub faces: Option<usize>,
+    /// Keep at most this fraction of the triangles, in (0, 1].
+    #[arg(long)]
+    pub ratio: Option<f64>,
+    /// Collapse while the quadric error (RMS distance) stays below this fraction of the
+    /// bounding-box diagonal.
+    #[arg(long)]
+    pub error: Option<f64>,
+    /// Largest rotation of a face normal one collapse may cause, in degrees.
+    #[arg(long, default_value_t = PmOptions::default().max_normal_angle_degrees)]
+    pub max_angle: f64,
+    /// Weight of the boundary-preserving planes (0 lets boundaries drift).
+    #[arg(long, default_value_t = PmOptions::default().boundary_weight)]
+    pub boundary_weight: f64,
+}
+
+/// Runs `meshpyr simplify`.
+pub fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
+    let target = match (args.faces, args.ratio, args.error) {
+        (Some(f), _, _) => SimplifyTarget::Faces(f),
+        (_, Some(r), _) => SimplifyTarget::Ratio(r),
+        (_, _, Some(e)) => SimplifyTarget::Error(e),
+        _ => anyhow::bail!("one of --faces, --ratio, --error is required"),
+    };
+    let input = io::read_mesh(&args.input)?;
+    let opts = PmOptions {
+        max_normal_angle_degrees: args.max_angle,
+        boundary_weight: args.boundary_weight,
+        ..PmOptions::default()
+    };
+    let bar = global.progress("simplify");
+    let result = simplify(&input, target, &opts, &BarProgress(&bar))
+        .with_context(|| format!("cannot simplify {}", args.input.display()))?;
+    bar.finish_and_clear();
+    io::write_mesh(&args.output, &result.mesh)?;
+    global.say(format_args!(
+        "wrote {}: {} -> {} triangles, {} vertices",
+        args.output.display(),
+        result.input_triangles,
+        result.mesh.n_faces(),
+        result.mesh.n_vertices()
+    ));
+    Ok(())
+}
