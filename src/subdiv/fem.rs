@@ -1,0 +1,178 @@
+//! Linear finite elements on a triangle mesh: lumped mass and cotangent stiffness, assembled
+//! into flat CSR arrays indexed by vertex slot (the mesh must have dense slots).
+//!
+//! With the angles θ, θ' opposite edge ij:
+//!
+//! ```text
+//! M_ii = Σ_{T∋i} A(T)/3                       (lumped, diagonal)
+//! L_ij = −½ Σ_{T∋ij} a_T cot θ_T   (i ≠ j),   L_ii = −Σ_{j≠i} L_ij
+//! ```
+//!
+//! `a_T` is an optional per-face diffusion coefficient (1 when absent). L is positive
+//! semi-definite; boundary edges have one cotangent term (natural boundary conditions).
+//! Triangles with area below `1e-12·(longest edge)²` contribute nothing: their cotangents are
+//! meaningless and would make the element matrix indefinite.
+
+use crate::mesh::{Mesh, SlotIndex, cotangent};
+use glam::DVec3;
+
+/// Relative area below which a triangle is skipped (area < ε·ℓ_max²).
+pub const DEGENERATE_AREA: f64 = 1e-12;
+
+/// A symmetric sparse matrix in CSR form with the diagonal entry stored first in every row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SymmetricCsr {
+    /// `row_start[i]..row_start[i+1]` are row `i`'s entries; length n + 1.
+    pub row_start: Vec<u32>,
+    /// Column of each entry (the first of a row is the row itself).
+    pub col: Vec<u32>,
+    /// Value of each entry.
+    pub val: Vec<f64>,
+}
+
+impl SymmetricCsr {
+    /// Number of rows.
+    pub fn n(&self) -> usize {
+        self.row_start.len().saturating_sub(1)
+    }
+
+    /// The diagonal entry of row `i`.
+    #[inline]
+    pub fn diagonal(&self, i: usize) -> f64 {
+        self.val[self.row_start[i] as usize]
+    }
+
+    /// `y = A x` for `K` right-hand sides stored row-major.
+    pub fn mul<const K: usize>(&self, x: &[[f64; K]], y: &mut [[f64; K]]) {
+        for (i, yi) in y.iter_mut().enumerate() {
+            let (s, e) = (self.row_start[i] as usize, self.row_start[i + 1] as usize);
+            let mut acc = [0.0; K];
+            for k in s..e {
+                let (c, v) = (self.col[k] as usize, self.val[k]);
+                for (a, xc) in acc.iter_mut().zip(&x[c]) {
+                    *a += v * xc;
+                }
+            }
+            *yi = acc;
+        }
+    }
+
+    /// The matrix times `alpha`.
+    fn scaled(&self, alpha: f64) -> SymmetricCsr {
+        SymmetricCsr {
+            row_start: self.row_start.clone(),
+            col: self.col.clone(),
+            val: self.val.iter().map(|v| alpha * v).collect(),
+        }
+    }
+}
+
+/// Lumped (barycentric) mass `M_ii = Σ A(T)/3`, indexed by vertex slot. Degenerate triangles
+/// contribute zero.
+pub fn lumped_mass(mesh: &Mesh, positions: &[DVec3]) -> Vec<f64> {
+    let mut m = vec![0.0; positions.len()];
+    for f in mesh.faces() {
+        let v = mesh.face_vertices(f).map(|v| v.slot());
+        let [a, b, c] = v.map(|i| positions[i]);
+        let area = 0.5 * (b - a).cross(c - a).length();
+        if is_degenerate(a, b, c, area) {
+            continue;
+        }
+        for i in v {
+            m[i] += area / 3.0;
+        }
+    }
+    m
+}
+
+#[inline]
+fn is_degenerate(a: DVec3, b: DVec3, c: DVec3, area: f64) -> bool {
+    let l2 = (b - a)
+        .length_squared()
+        .max((c - b).length_squared())
+        .max((a - c).length_squared());
+    !(area > DEGENERATE_AREA * l2)
+}
+
+/// Cotangent stiffness matrix L (positive semi-definite, rows sum to zero), with optional
+/// per-face coefficients `face_coefficient[f.slot()]`.
+pub fn cotangent_stiffness(
+    mesh: &Mesh,
+    positions: &[DVec3],
+    face_coefficient: Option<&[f64]>,
+) -> SymmetricCsr {
+    // Half-edge weight ½ a_T cot(angle opposite h in its face); boundary half-edges stay 0.
+    let nh = mesh.halfedges().map(|h| h.slot() + 1).max().unwrap_or(0);
+    let mut hw = vec![0.0; nh];
+    for f in mesh.faces() {
+        let hs = mesh.face_halfedges(f);
+        let v = mesh.face_vertices(f).map(|v| positions[v.slot()]);
+        let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+        if is_degenerate(v[0], v[1], v[2], area) {
+            continue;
+        }
+        let coef = face_coefficient.map_or(1.0, |c| c[f.slot()]);
+        // hs[j] runs v[j] → v[j+1]; its opposite corner is v[j+2].
+        for j in 0..3 {
+            let o = v[(j + 2) % 3];
+            let cot = cotangent(v[j] - o, v[(j + 1) % 3] - o);
+            hw[hs[j].slot()] = 0.5 * coef * cot;
+        }
+    }
+    let n = positions.len();
+    let mut row_start = Vec::with_capacity(n + 1);
+    let mut col = Vec::with_capacity(n + 2 * mesh.n_halfedges());
+    let mut val = Vec::with_capacity(col.capacity());
+    row_start.push(0u32);
+    let mut next_vertex = mesh.vertices().peekable();
+    for i in 0..n {
+        let diag_at = val.len();
+        col.push(i as u32);
+        val.push(0.0);
+        let mut diag = 0.0;
+        if let Some(&v) = next_vertex.peek()
+            && v.slot() == i
+        {
+            next_vertex.next();
+            for h in mesh.outgoing(v) {
+                let w = hw[h.slot()] + hw[mesh.twin(h).slot()];
+                col.push(mesh.to_vertex(h).slot() as u32);
+                val.push(-w);
+                diag += w;
+            }
+        }
+        val[diag_at] = diag;
+        row_start.push(col.len() as u32);
+    }
+    SymmetricCsr {
+        row_start,
+        col,
+        val,
+    }
+}
+
+/// The system matrix `M + α L` (`alpha = 1` when L already carries the coefficient).
+///
+/// Rows whose diagonal is not positive (an isolated vertex, or a vertex whose triangles are
+/// all degenerate) become identity rows; [`identity_rows`] lists them so the right-hand side
+/// can pin those vertices to their interpolated initial positions.
+pub fn system_matrix(mass: &[f64], stiffness: &SymmetricCsr, alpha: f64) -> SymmetricCsr {
+    let mut a = stiffness.scaled(alpha);
+    for (i, m) in mass.iter().enumerate() {
+        let d = a.row_start[i] as usize;
+        a.val[d] += m;
+        if !(a.val[d] > 0.0) {
+            let e = a.row_start[i + 1] as usize;
+            a.val[d] = 1.0;
+            a.val[d + 1..e].iter_mut().for_each(|v| *v = 0.0);
+        }
+    }
+    a
+}
+
+/// Rows [`system_matrix`] turned into identity rows: exactly the vertices with zero mass
+/// (their stiffness row and column are zero too, because every triangle around them was
+/// skipped as degenerate, and a non-degenerate P1 stiffness diagonal is positive).
+pub fn identity_rows(mass: &[f64]) -> Vec<bool> {
+    mass.iter().map(|&m| !(m > 0.0)).collect()
+}
