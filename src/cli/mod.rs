@@ -4,6 +4,7 @@
 mod convert;
 mod demo;
 mod info;
+mod subdivide;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -69,6 +70,8 @@ enum Command {
     Convert(convert::ConvertArgs),
     /// Run the main job on the bundled scan and write the results to a directory.
     Demo(demo::DemoArgs),
+    /// Subdivide a coarse mesh: cascadic mean-curvature motion (or Loop).
+    Subdivide(subdivide::SubdivideArgs),
 }
 
 fn run(command: Command, global: &Global) -> anyhow::Result<()> {
@@ -76,6 +79,7 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
         Command::Info(a) => info::run(a, global),
         Command::Convert(a) => convert::run(a, global),
         Command::Demo(a) => demo::run(a, global),
+        Command::Subdivide(a) => subdivide::run(a, global),
     }
 }
 

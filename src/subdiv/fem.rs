@@ -91,7 +91,8 @@ fn is_degenerate(a: DVec3, b: DVec3, c: DVec3, area: f64) -> bool {
         .length_squared()
         .max((c - b).length_squared())
         .max((a - c).length_squared());
-    !(area > DEGENERATE_AREA * l2)
+    // NaN coordinates count as degenerate.
+    area.is_nan() || area <= DEGENERATE_AREA * l2
 }
 
 /// Cotangent stiffness matrix L (positive semi-definite, rows sum to zero), with optional
@@ -161,7 +162,7 @@ pub fn system_matrix(mass: &[f64], stiffness: &SymmetricCsr, alpha: f64) -> Symm
     for (i, m) in mass.iter().enumerate() {
         let d = a.row_start[i] as usize;
         a.val[d] += m;
-        if !(a.val[d] > 0.0) {
+        if a.val[d].is_nan() || a.val[d] <= 0.0 {
             let e = a.row_start[i + 1] as usize;
             a.val[d] = 1.0;
             a.val[d + 1..e].iter_mut().for_each(|v| *v = 0.0);
@@ -174,5 +175,74 @@ pub fn system_matrix(mass: &[f64], stiffness: &SymmetricCsr, alpha: f64) -> Symm
 /// (their stiffness row and column are zero too, because every triangle around them was
 /// skipped as degenerate, and a non-degenerate P1 stiffness diagonal is positive).
 pub fn identity_rows(mass: &[f64]) -> Vec<bool> {
-    mass.iter().map(|&m| !(m > 0.0)).collect()
+    mass.iter().map(|&m| m.is_nan() || m <= 0.0).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tetra_fan() -> (Mesh, Vec<DVec3>) {
+        let p = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.0, 0.0, 1.0),
+        ];
+        let m = Mesh::from_triangles(&p, &[[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+            .unwrap()
+            .mesh;
+        (m, p)
+    }
+
+    #[test]
+    fn mass_sums_to_area_and_stiffness_is_symmetric_with_zero_row_sums() {
+        let (m, p) = tetra_fan();
+        let mass = lumped_mass(&m, &p);
+        let area: f64 = m.faces().map(|f| m.face_area(f)).sum();
+        assert!((mass.iter().sum::<f64>() - area).abs() < 1e-14);
+        let l = cotangent_stiffness(&m, &p, None);
+        for i in 0..l.n() {
+            let (s, e) = (l.row_start[i] as usize, l.row_start[i + 1] as usize);
+            assert_eq!(l.col[s] as usize, i);
+            assert!(l.val[s..e].iter().sum::<f64>().abs() < 1e-14);
+            for k in s + 1..e {
+                let j = l.col[k] as usize;
+                let back = (l.row_start[j] as usize..l.row_start[j + 1] as usize)
+                    .find(|&q| l.col[q] as usize == i)
+                    .unwrap();
+                assert_eq!(l.val[k], l.val[back]);
+            }
+        }
+        // Constants are in the kernel; a linear function's Dirichlet energy is |∇f|²·area on
+        // a closed surface only through the boundary-free identity xᵀLx = Σ_T A_T |∇_T f|².
+        let x: Vec<[f64; 1]> = p.iter().map(|q| [q.x]).collect();
+        let mut lx = vec![[0.0]; 4];
+        l.mul(&x, &mut lx);
+        let energy: f64 = x.iter().zip(&lx).map(|(a, b)| a[0] * b[0]).sum();
+        assert!(energy > 0.0);
+    }
+
+    #[test]
+    fn face_coefficients_scale_the_stiffness() {
+        let (m, p) = tetra_fan();
+        let l1 = cotangent_stiffness(&m, &p, None);
+        let l3 = cotangent_stiffness(&m, &p, Some(&[3.0; 4]));
+        for (a, b) in l1.val.iter().zip(&l3.val) {
+            assert!((3.0 * a - b).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn zero_mass_rows_become_identity_rows() {
+        let mass = [0.0, 1.0];
+        let l = SymmetricCsr {
+            row_start: vec![0, 1, 2],
+            col: vec![0, 1],
+            val: vec![0.0, 0.0],
+        };
+        let a = system_matrix(&mass, &l, 2.0);
+        assert_eq!(a.val, vec![1.0, 1.0]);
+        assert_eq!(identity_rows(&mass), vec![true, false]);
+    }
 }

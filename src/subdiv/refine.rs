@@ -244,7 +244,11 @@ pub fn initial_marking(mesh: &Mesh) -> Result<Marking, SubdivError> {
             let j = (newest[t] as usize + 1) % 3;
             let h = mesh.face_halfedges(faces[t])[j];
             let twin = mesh.twin(h);
-            if let Some(k) = mesh.face_halfedges(faces[u]).iter().position(|&g| g == twin) {
+            if let Some(k) = mesh
+                .face_halfedges(faces[u])
+                .iter()
+                .position(|&g| g == twin)
+            {
                 newest[u] = ((k + 2) % 3) as u8;
             }
         }
@@ -452,4 +456,105 @@ pub fn bisect(mesh: &Mesh, marking: &Marking) -> Result<(Refined, Marking), Subd
         },
         Marking { newest },
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn octahedron() -> Mesh {
+        let p = [
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+        ]
+        .map(DVec3::from_array);
+        let f = [
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
+        Mesh::from_triangles(&p, &f).unwrap().mesh
+    }
+
+    #[test]
+    fn prolongation_copies_and_averages() {
+        let p = Prolongation {
+            parents: vec![[0, 0], [1, 1], [0, 1]],
+        };
+        assert_eq!(p.apply(&[2.0, 4.0]), vec![2.0, 4.0, 3.0]);
+        assert_eq!(p.n_fine(), 3);
+    }
+
+    #[test]
+    fn quadrisection_puts_midpoints_and_keeps_coarse_vertices_first() {
+        let m = octahedron();
+        let r = quadrisect(&m).unwrap();
+        assert_eq!(r.mesh.n_faces(), 32);
+        assert_eq!(r.mesh.n_vertices(), 6 + 12);
+        assert!(r.mesh.validate().is_ok());
+        let pos = r.mesh.positions();
+        for (i, &[a, b]) in r.prolongation.parents().iter().enumerate() {
+            let expect = (m.positions()[a as usize] + m.positions()[b as usize]) / 2.0;
+            assert_eq!(pos[i], expect);
+            // Midpoints join coarse neighbours only.
+            if a != b {
+                assert!(m.neighbors(m.vertices().nth(a as usize).unwrap()).len() == 4);
+            }
+        }
+    }
+
+    #[test]
+    fn bisection_marking_is_compatible_and_stays_so() {
+        let mut m = octahedron();
+        let mut marking = initial_marking(&m).unwrap();
+        let mut faces = m.n_faces();
+        for _ in 0..4 {
+            let (r, next) = bisect(&m, &marking).unwrap();
+            assert_eq!(r.mesh.n_faces(), 2 * faces);
+            assert_eq!(r.mesh.topology().euler_characteristic, 2);
+            faces = r.mesh.n_faces();
+            m = r.mesh;
+            marking = next;
+        }
+    }
+
+    #[test]
+    fn incompatible_marking_is_rejected() {
+        let m = octahedron();
+        let mut marking = initial_marking(&m).unwrap();
+        marking.newest[0] = (marking.newest[0] + 1) % 3;
+        assert!(matches!(
+            bisect(&m, &marking),
+            Err(SubdivError::NoCompatibleMarking { .. })
+        ));
+    }
+
+    #[test]
+    fn marking_on_an_open_strip_uses_boundary_edges() {
+        // Three triangles in a fan: an odd count, so one must take a boundary edge.
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+        ]
+        .map(DVec3::from_array);
+        let m = Mesh::from_triangles(&p, &[[0, 1, 2], [0, 2, 3], [0, 3, 4]])
+            .unwrap()
+            .mesh;
+        let marking = initial_marking(&m).unwrap();
+        let (r, _) = bisect(&m, &marking).unwrap();
+        assert_eq!(r.mesh.n_faces(), 6);
+        assert!(r.mesh.validate().is_ok());
+    }
 }

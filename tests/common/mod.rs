@@ -1,6 +1,5 @@
-//! Shared helpers for the subdivision tests: a reader for the bundled test meshes (binary
-//! little-endian PLY with float x/y/z and `list uchar int` faces — exactly their layout) and
-//! small meshes built in code.
+//! Shared helpers for the subdivision tests: loading the bundled control meshes and small
+//! meshes built in code.
 #![allow(dead_code)]
 
 use glam::DVec3;
@@ -9,44 +8,8 @@ use meshpyr::mesh::Mesh;
 /// Reads `tests/data/<name>.ply` into a half-edge mesh.
 pub fn load(name: &str) -> Mesh {
     let path = format!("{}/tests/data/{name}.ply", env!("CARGO_MANIFEST_DIR"));
-    let bytes = std::fs::read(&path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    let end = b"end_header\n";
-    let at = bytes
-        .windows(end.len())
-        .position(|w| w == end)
-        .expect("header end")
-        + end.len();
-    let header = std::str::from_utf8(&bytes[..at]).expect("ascii header");
-    assert!(header.contains("binary_little_endian"));
-    let count = |el: &str| -> usize {
-        header
-            .lines()
-            .find_map(|l| l.strip_prefix(&format!("element {el} ")))
-            .and_then(|n| n.trim().parse().ok())
-            .expect("element count")
-    };
-    let (nv, nf) = (count("vertex"), count("face"));
-    let mut pos = at;
-    let f32_at = |p: usize| f32::from_le_bytes(bytes[p..p + 4].try_into().unwrap()) as f64;
-    let mut positions = Vec::with_capacity(nv);
-    for _ in 0..nv {
-        positions.push(DVec3::new(f32_at(pos), f32_at(pos + 4), f32_at(pos + 8)));
-        pos += 12;
-    }
-    let mut tris = Vec::with_capacity(nf);
-    for _ in 0..nf {
-        let k = bytes[pos] as usize;
-        pos += 1;
-        let idx: Vec<u32> = (0..k)
-            .map(|i| i32::from_le_bytes(bytes[pos + 4 * i..pos + 4 * i + 4].try_into().unwrap()) as u32)
-            .collect();
-        pos += 4 * k;
-        for i in 1..k - 1 {
-            tris.push([idx[0], idx[i], idx[i + 1]]);
-        }
-    }
-    let built = Mesh::from_triangles(&positions, &tris).expect("valid mesh");
-    built.mesh
+    let poly = meshpyr::io::read_mesh(std::path::Path::new(&path)).expect("readable test mesh");
+    Mesh::from_polygons(&poly).expect("valid mesh").mesh
 }
 
 /// The six coarse control meshes with extraordinary vertices.
