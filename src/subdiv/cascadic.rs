@@ -305,6 +305,7 @@ pub fn subdivide_mcm(
         };
         let Refined {
             mesh: mut fine,
+            triangles,
             prolongation,
         } = match &marking {
             None => quadrisect(&current).map_err(with_level)?,
@@ -316,7 +317,7 @@ pub fn subdivide_mcm(
         };
         x0 = prolongation.apply(&x0);
         let positions = fine.positions();
-        let mass = lumped_mass(&fine, &positions);
+        let mass = lumped_mass(&triangles, &positions);
         let pinned = identity_rows(&mass);
         let m_l = steps[level - 1];
         let fail = |why: String| SubdivError::SolverFailed { level, why };
@@ -324,14 +325,11 @@ pub fn subdivide_mcm(
             h_init = prolongation.apply(&h_init);
             h_cur = prolongation.apply(&h_cur);
             let alpha_v: Vec<f64> = h_cur.iter().map(|h| 0.5 * (c * h) * (c * h)).collect();
-            let coef: Vec<f64> = fine
-                .faces()
-                .map(|f| {
-                    let v = fine.face_vertices(f);
-                    v.iter().map(|v| alpha_v[v.slot()]).sum::<f64>() / 3.0
-                })
+            let coef: Vec<f64> = triangles
+                .iter()
+                .map(|t| t.iter().map(|&v| alpha_v[v as usize]).sum::<f64>() / 3.0)
                 .collect();
-            let stiffness = cotangent_stiffness(&fine, &positions, Some(&coef));
+            let stiffness = cotangent_stiffness(&triangles, &positions, Some(&coef));
             let a = system_matrix(&mass, &stiffness, 1.0);
             let b: Vec<[f64; 4]> = (0..positions.len())
                 .map(|i| {
@@ -354,7 +352,7 @@ pub fn subdivide_mcm(
                 x.iter().map(|v| DVec3::new(v[0], v[1], v[2])).collect(),
             )
         } else {
-            let stiffness = cotangent_stiffness(&fine, &positions, None);
+            let stiffness = cotangent_stiffness(&triangles, &positions, None);
             let a = system_matrix(&mass, &stiffness, alpha);
             let b: Vec<[f64; 3]> = (0..positions.len())
                 .map(|i| (x0[i] * if pinned[i] { 1.0 } else { mass[i] }).to_array())
@@ -444,10 +442,10 @@ mod tests {
             [0, 3, 5],
         ];
         let m = Mesh::from_triangles(&p, &f).unwrap().mesh;
-        let m = super::super::refine::quadrisect(&m).unwrap().mesh;
-        let pos = m.positions();
-        let mass = lumped_mass(&m, &pos);
-        let a = system_matrix(&mass, &cotangent_stiffness(&m, &pos, None), 0.3);
+        let r = super::super::refine::quadrisect(&m).unwrap();
+        let pos = r.mesh.positions();
+        let mass = lumped_mass(&r.triangles, &pos);
+        let a = system_matrix(&mass, &cotangent_stiffness(&r.triangles, &pos, None), 0.3);
         let b = pos
             .iter()
             .zip(&mass)

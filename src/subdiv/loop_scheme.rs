@@ -9,7 +9,7 @@
 //! - Isolated vertices stay where they are.
 
 use super::SubdivError;
-use super::refine::{build, quad_topology};
+use super::refine::{build_quadrisection, quad_topology};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use glam::DVec3;
@@ -61,7 +61,7 @@ pub fn loop_step(mesh: &Mesh) -> Result<Mesh, SubdivError> {
         };
         positions.push(p);
     }
-    build(&positions, &topo.triangles, 1)
+    build_quadrisection(mesh, &topo, &positions)
 }
 
 /// `levels` levels of Loop subdivision (the input is compacted first).
