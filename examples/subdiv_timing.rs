@@ -28,7 +28,7 @@ fn main() {
         let pos = r.mesh.positions();
         let mass = lumped_mass(&r.triangles, &pos);
         let l = cotangent_stiffness(&r.triangles, &pos, None);
-        let a = system_matrix(&mass, &l, 0.1);
+        let a = system_matrix(&mass, l, 0.1);
         let t_asm = t.elapsed();
         let x: Vec<[f64; 3]> = pos.iter().map(|q| q.to_array()).collect();
         let mut y = x.clone();

@@ -330,7 +330,7 @@ pub fn subdivide_mcm(
                 .map(|t| t.iter().map(|&v| alpha_v[v as usize]).sum::<f64>() / 3.0)
                 .collect();
             let stiffness = cotangent_stiffness(&triangles, &positions, Some(&coef));
-            let a = system_matrix(&mass, &stiffness, 1.0);
+            let a = system_matrix(&mass, stiffness, 1.0);
             let b: Vec<[f64; 4]> = (0..positions.len())
                 .map(|i| {
                     let w = if pinned[i] { 1.0 } else { mass[i] };
@@ -353,7 +353,7 @@ pub fn subdivide_mcm(
             )
         } else {
             let stiffness = cotangent_stiffness(&triangles, &positions, None);
-            let a = system_matrix(&mass, &stiffness, alpha);
+            let a = system_matrix(&mass, stiffness, alpha);
             let b: Vec<[f64; 3]> = (0..positions.len())
                 .map(|i| (x0[i] * if pinned[i] { 1.0 } else { mass[i] }).to_array())
                 .collect();
@@ -445,7 +445,7 @@ mod tests {
         let r = super::super::refine::quadrisect(&m).unwrap();
         let pos = r.mesh.positions();
         let mass = lumped_mass(&r.triangles, &pos);
-        let a = system_matrix(&mass, &cotangent_stiffness(&r.triangles, &pos, None), 0.3);
+        let a = system_matrix(&mass, cotangent_stiffness(&r.triangles, &pos, None), 0.3);
         let b = pos
             .iter()
             .zip(&mass)

@@ -56,15 +56,6 @@ impl SymmetricCsr {
             *yi = acc;
         }
     }
-
-    /// The matrix times `alpha`.
-    fn scaled(&self, alpha: f64) -> SymmetricCsr {
-        SymmetricCsr {
-            row_start: self.row_start.clone(),
-            col: self.col.clone(),
-            val: self.val.iter().map(|v| alpha * v).collect(),
-        }
-    }
 }
 
 /// Lumped (barycentric) mass `M_ii = Σ A(T)/3` for `triangles` indexing `positions`.
@@ -177,8 +168,11 @@ pub fn cotangent_stiffness(
 /// Rows whose diagonal is not positive (an isolated vertex, or a vertex whose triangles are
 /// all degenerate) become identity rows; [`identity_rows`] lists them so the right-hand side
 /// can pin those vertices to their interpolated initial positions.
-pub fn system_matrix(mass: &[f64], stiffness: &SymmetricCsr, alpha: f64) -> SymmetricCsr {
-    let mut a = stiffness.scaled(alpha);
+pub fn system_matrix(mass: &[f64], stiffness: SymmetricCsr, alpha: f64) -> SymmetricCsr {
+    let mut a = stiffness;
+    if alpha != 1.0 {
+        a.val.iter_mut().for_each(|v| *v *= alpha);
+    }
     for (i, m) in mass.iter().enumerate() {
         let d = a.row_start[i] as usize;
         a.val[d] += m;
@@ -265,7 +259,7 @@ mod tests {
             col: vec![0, 1],
             val: vec![0.0, 0.0],
         };
-        let a = system_matrix(&mass, &l, 2.0);
+        let a = system_matrix(&mass, l, 2.0);
         assert_eq!(a.val, vec![1.0, 1.0]);
         assert_eq!(identity_rows(&mass), vec![true, false]);
     }
