@@ -40,9 +40,16 @@ fn topology_and_face_counts_are_kept_on_all_control_meshes() {
             };
             let fine = run(&coarse, opts);
             assert!(fine.validate().is_ok(), "{name} {scheme:?} {refinement:?}");
-            assert_eq!(fine.n_faces(), factor * coarse.n_faces(), "{name} {refinement:?}");
+            assert_eq!(
+                fine.n_faces(),
+                factor * coarse.n_faces(),
+                "{name} {refinement:?}"
+            );
             let t = fine.topology();
-            assert_eq!(t.euler_characteristic, chi, "{name} {scheme:?} {refinement:?}");
+            assert_eq!(
+                t.euler_characteristic, chi,
+                "{name} {scheme:?} {refinement:?}"
+            );
             assert_eq!(t.components, 1);
             // Coarse vertices keep their indices.
             assert_eq!(fine.n_vertices(), t.referenced_vertices);
@@ -87,7 +94,11 @@ fn exact_solves_match_the_numpy_reference() {
             ..Default::default()
         },
     );
-    assert!(close(extent(&jac), [1.087, 1.087, 2.002]), "{}", extent(&jac));
+    assert!(
+        close(extent(&jac), [1.087, 1.087, 2.002]),
+        "{}",
+        extent(&jac)
+    );
     // The reference's vertex order differs, but the max over all vertices does not.
     assert!((max_distance(&jac, &e3) - 0.413).abs() < 2e-3);
 }
@@ -110,7 +121,10 @@ fn cascadic_solves_approach_the_exact_fixed_point() {
         // Measured (levels 2): at most 1.5% of the diagonal for CG(2), 3% for Jacobi(2).
         assert!(cg2 < 0.02, "{name}: cg {cg2}");
         assert!(jac < 0.04, "{name}: jacobi {jac}");
-        assert!(cg8 < cg2, "{name}: more steps must get closer ({cg8} vs {cg2})");
+        assert!(
+            cg8 < cg2,
+            "{name}: more steps must get closer ({cg8} vs {cg2})"
+        );
     }
 }
 
@@ -159,7 +173,13 @@ fn mcm_has_fewer_gauss_sign_changes_than_loop_around_high_valence_vertices() {
     // cone20 / sphere_highval / tripod / cross / mushroom_quad, exact MCM 0 / 0 / 16 / 24 / 0.
     // Here 2 levels (2 rings) to keep the test fast: Loop 40 / 176 / 14 / 16 / 0, MCM
     // 0 / 0 / 10 / 0 / 0.
-    for name in ["cone20", "sphere_highval", "tripod", "cross", "mushroom_quad"] {
+    for name in [
+        "cone20",
+        "sphere_highval",
+        "tripod",
+        "cross",
+        "mushroom_quad",
+    ] {
         let coarse = load(name);
         let lp = run(
             &coarse,

@@ -1,20 +1,30 @@
-//! Prints the quality table of the subdivision README section (run manually:
+//! Prints the quality tables of the README's Subdivision section (run manually:
 //! `cargo test --release --test subdiv_report -- --ignored --nocapture`).
 
 mod common;
 
 use common::*;
-use meshpyr::mesh::SlotIndex;
+use meshpyr::mesh::{Mesh, SlotIndex};
 use meshpyr::metrics::curvature::{curvature_stats, gauss_curvature, ring_sign_changes};
 use meshpyr::progress::NoProgress;
 use meshpyr::subdiv::{Scheme, Solver, SubdivOptions, subdivide};
+
+fn run(mesh: &Mesh, opts: SubdivOptions) -> Mesh {
+    subdivide(mesh, &opts, &NoProgress).unwrap().mesh
+}
 
 #[test]
 #[ignore]
 fn quality_table() {
     let levels = 3;
-    println!("| mesh | max valence | scheme | H var | H rough | hybrid rings / rings | sign changes | volume ratio |");
-    println!("|---|---|---|---|---|---|---|---|");
+    println!(
+        "levels = {levels}; rings = {} around interior vertices of valence >= 8",
+        1 << (levels - 1)
+    );
+    println!(
+        "| mesh (max valence, #EV>=8) | scheme | var H·R | roughness | sign changes (hybrid rings / rings) | volume / input | max |x − x_exact| / diag |"
+    );
+    println!("|---|---|---|---|---|---|---|");
     for name in CONTROL_MESHES {
         let coarse = load(name);
         let maxval = coarse.vertices().map(|v| coarse.valence(v)).max().unwrap();
@@ -23,28 +33,83 @@ fn quality_table() {
             .filter(|&v| !coarse.is_boundary_vertex(v) && coarse.valence(v) >= 8)
             .collect();
         let v0 = volume(&coarse);
+        let diag = coarse.bbox_diagonal();
+        let exact = run(
+            &coarse,
+            SubdivOptions {
+                solver: Solver::Exact,
+                levels,
+                ..Default::default()
+            },
+        );
         for (label, opts) in [
-            ("Loop", SubdivOptions { scheme: Scheme::Loop, levels, ..Default::default() }),
-            ("MCM exact c=.25", SubdivOptions { solver: Solver::Exact, levels, ..Default::default() }),
-            ("MCM cg c=.25", SubdivOptions { levels, ..Default::default() }),
-            ("MCM exact local", SubdivOptions { solver: Solver::Exact, local_width: true, levels, ..Default::default() }),
+            (
+                "Loop",
+                SubdivOptions {
+                    scheme: Scheme::Loop,
+                    levels,
+                    ..Default::default()
+                },
+            ),
+            (
+                "MCM exact",
+                SubdivOptions {
+                    solver: Solver::Exact,
+                    levels,
+                    ..Default::default()
+                },
+            ),
+            (
+                "MCM cg (default)",
+                SubdivOptions {
+                    levels,
+                    ..Default::default()
+                },
+            ),
+            (
+                "MCM jacobi",
+                SubdivOptions {
+                    solver: Solver::Jacobi,
+                    levels,
+                    ..Default::default()
+                },
+            ),
+            (
+                "MCM exact, local width",
+                SubdivOptions {
+                    solver: Solver::Exact,
+                    local_width: true,
+                    levels,
+                    ..Default::default()
+                },
+            ),
         ] {
-            let out = subdivide(&coarse, &opts, &NoProgress).unwrap();
-            let m = &out.mesh;
-            let s = curvature_stats(m);
-            let k = gauss_curvature(m);
+            let m = run(&coarse, opts.clone());
+            let s = curvature_stats(&m);
+            let k = gauss_curvature(&m);
             let ids: Vec<_> = m.vertices().collect();
             let centres: Vec<_> = evs.iter().map(|v| ids[v.slot()]).collect();
-            let r = ring_sign_changes(m, &k, &centres, 1 << (levels - 1), 1e-2);
+            let r = ring_sign_changes(&m, &k, &centres, 1 << (levels - 1), 1e-2);
+            let diff = if opts.scheme == Scheme::Mcm && opts.solver != Solver::Exact {
+                let d = m
+                    .positions()
+                    .iter()
+                    .zip(exact.positions())
+                    .map(|(a, b)| (*a - b).length())
+                    .fold(0.0, f64::max);
+                format!("{:.4}", d / diag)
+            } else {
+                "–".to_string()
+            };
             println!(
-                "| {name} | {maxval} ({} EVs ≥8) | {label} | {:.4} | {:.4} | {} / {} | {} | {:.3} |",
+                "| {name} ({maxval}, {}) | {label} | {:.3} | {:.3} | {} ({} / {}) | {:.3} | {diff} |",
                 evs.len(),
                 s.mean_curvature_variance,
                 s.mean_curvature_roughness,
+                r.sign_changes,
                 r.hybrid_rings,
                 r.rings,
-                r.sign_changes,
-                volume(m) / v0
+                volume(&m) / v0,
             );
         }
     }
@@ -52,31 +117,50 @@ fn quality_table() {
 
 #[test]
 #[ignore]
-fn explore() {
-    let levels = 3;
-    for name in ["cone20", "sphere_highval", "tripod", "torus_quad", "mushroom_quad"] {
+fn shrinkage_table() {
+    let widths = [0.1, 0.25, 0.4, 0.5, 1.0];
+    println!("volume after 3 levels / input volume, exact solves");
+    println!(
+        "| mesh | {} |",
+        widths.map(|c| format!("c = {c}")).join(" | ")
+    );
+    println!("|---|{}", "---|".repeat(widths.len()));
+    for name in CONTROL_MESHES {
         let coarse = load(name);
-        let evs: Vec<_> = coarse
-            .vertices()
-            .filter(|&v| !coarse.is_boundary_vertex(v) && coarse.valence(v) >= 8)
-            .collect();
         let v0 = volume(&coarse);
-        let diag = coarse.bbox_diagonal();
-        for c in [0.25, 0.5, 1.0] {
-            let ex = subdivide(&coarse, &SubdivOptions { solver: Solver::Exact, width: c, levels, ..Default::default() }, &NoProgress).unwrap();
-            for (label, solver, m) in [("exact", Solver::Exact, 2), ("cg2", Solver::Cg, 2), ("cg6", Solver::Cg, 6), ("jac2", Solver::Jacobi, 2)] {
-                let out = subdivide(&coarse, &SubdivOptions { solver, width: c, finest_steps: m, levels, ..Default::default() }, &NoProgress).unwrap();
-                let mm = &out.mesh;
-                let s = curvature_stats(mm);
-                let k = gauss_curvature(mm);
-                let ids: Vec<_> = mm.vertices().collect();
-                let centres: Vec<_> = evs.iter().map(|v| ids[v.slot()]).collect();
-                let r = ring_sign_changes(mm, &k, &centres, 1 << (levels - 1), 1e-2);
-                let d = mm.positions().iter().zip(ex.mesh.positions()).map(|(a, b)| (*a - b).length()).fold(0.0, f64::max);
-                let res: Vec<String> = out.levels.iter().map(|l| format!("{}:{:.0e}", l.steps, l.relative_residual)).collect();
-                println!("{name:15} c={c:.2} {label:6} var {:.3} rough {:.3} hyb {}/{} sc {:4} vol {:.3} diff/diag {:.4} [{}]",
-                    s.mean_curvature_variance, s.mean_curvature_roughness, r.hybrid_rings, r.rings, r.sign_changes, volume(mm) / v0, d / diag, res.join(" "));
-            }
-        }
+        let cells: Vec<String> = widths
+            .iter()
+            .map(|&c| {
+                let m = run(
+                    &coarse,
+                    SubdivOptions {
+                        solver: Solver::Exact,
+                        width: c,
+                        levels: 3,
+                        ..Default::default()
+                    },
+                );
+                format!("{:.3}", volume(&m) / v0)
+            })
+            .collect();
+        println!("| {name} | {} |", cells.join(" | "));
+    }
+    let coarse = load("sphere_highval");
+    println!("\nsphere_highval curvature vs width (exact):");
+    for c in widths {
+        let m = run(
+            &coarse,
+            SubdivOptions {
+                solver: Solver::Exact,
+                width: c,
+                levels: 3,
+                ..Default::default()
+            },
+        );
+        let s = curvature_stats(&m);
+        println!(
+            "c = {c}: var {:.4} roughness {:.4}",
+            s.mean_curvature_variance, s.mean_curvature_roughness
+        );
     }
 }

@@ -212,7 +212,8 @@ pub fn ring_sign_changes(
                 .map(|&u| {
                     let k = gauss[u.slot()];
                     let d = mesh.position(u) - p;
-                    k.is_finite().then(|| (d.dot(t2).atan2(d.dot(t1)), k * r * r))
+                    k.is_finite()
+                        .then(|| (d.dot(t2).atan2(d.dot(t1)), k * r * r))
                 })
                 .collect();
             let Some(mut values) = values else { continue };
@@ -242,4 +243,106 @@ pub fn ring_sign_changes(
         }
     }
     stats
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn icosphere(levels: usize) -> Mesh {
+        let t = (1.0 + 5f64.sqrt()) / 2.0;
+        let mut p: Vec<DVec3> = [
+            [-1.0, t, 0.0],
+            [1.0, t, 0.0],
+            [-1.0, -t, 0.0],
+            [1.0, -t, 0.0],
+            [0.0, -1.0, t],
+            [0.0, 1.0, t],
+            [0.0, -1.0, -t],
+            [0.0, 1.0, -t],
+            [t, 0.0, -1.0],
+            [t, 0.0, 1.0],
+            [-t, 0.0, -1.0],
+            [-t, 0.0, 1.0],
+        ]
+        .iter()
+        .map(|a| DVec3::from_array(*a).normalize())
+        .collect();
+        let f: Vec<[u32; 3]> = vec![
+            [0, 11, 5],
+            [0, 5, 1],
+            [0, 1, 7],
+            [0, 7, 10],
+            [0, 10, 11],
+            [1, 5, 9],
+            [5, 11, 4],
+            [11, 10, 2],
+            [10, 7, 6],
+            [7, 1, 8],
+            [3, 9, 4],
+            [3, 4, 2],
+            [3, 2, 6],
+            [3, 6, 8],
+            [3, 8, 9],
+            [4, 9, 5],
+            [2, 4, 11],
+            [6, 2, 10],
+            [8, 6, 7],
+            [9, 8, 1],
+        ];
+        let mut m = Mesh::from_triangles(&p, &f).unwrap().mesh;
+        for _ in 0..levels {
+            m = crate::subdiv::refine::quadrisect(&m).unwrap().mesh;
+            p = m.positions().iter().map(|q| q.normalize()).collect();
+            let ids: Vec<_> = m.vertices().collect();
+            for (v, q) in ids.into_iter().zip(&p) {
+                m.set_position(v, *q);
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn unit_sphere_has_unit_curvatures_and_gauss_bonnet_holds() {
+        let m = icosphere(3);
+        let h = mean_curvature(&m);
+        let k = gauss_curvature(&m);
+        for v in m.vertices() {
+            assert!((h[v.slot()] - 1.0).abs() < 0.2, "{}", h[v.slot()]);
+            // Barycentric areas are only first-order accurate on the uneven icosphere.
+            assert!((k[v.slot()] - 1.0).abs() < 0.2, "{}", k[v.slot()]);
+        }
+        // Σ K_i A_i = 2πχ exactly for the angle defect.
+        let total: f64 = m
+            .vertices()
+            .map(|v| k[v.slot()] * barycentric_area(&m, v))
+            .sum();
+        assert!((total - 4.0 * std::f64::consts::PI).abs() < 1e-9);
+        let s = curvature_stats(&m);
+        assert!((s.mean_curvature_mean - 1.0).abs() < 0.02);
+        assert!(s.mean_curvature_variance < 1e-3);
+        let r = ring_sign_changes(&m, &k, &[m.vertices().next().unwrap()], 3, 1e-2);
+        assert_eq!(r.rings, 3);
+        assert_eq!(r.sign_changes, 0);
+    }
+
+    #[test]
+    fn a_saddle_ring_is_hybrid_and_boundaries_give_nan() {
+        // Monkey-saddle-like bumps: z alternates around a ring of 6.
+        let mut p = vec![DVec3::ZERO];
+        for i in 0..6 {
+            let a = i as f64 * std::f64::consts::PI / 3.0;
+            p.push(DVec3::new(
+                a.cos(),
+                a.sin(),
+                if i % 2 == 0 { 0.3 } else { -0.3 },
+            ));
+        }
+        let t: Vec<[u32; 3]> = (0..6).map(|i| [0, 1 + i, 1 + (i + 1) % 6]).collect();
+        let m = Mesh::from_triangles(&p, &t).unwrap().mesh;
+        let k = gauss_curvature(&m);
+        assert!(k[0] < 0.0);
+        assert!(k[1].is_nan());
+        assert!(mean_curvature(&m)[1].is_nan());
+    }
 }

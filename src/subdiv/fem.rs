@@ -1,5 +1,5 @@
-//! Linear finite elements on a triangle mesh: lumped mass and cotangent stiffness, assembled
-//! into flat CSR arrays indexed by vertex slot (the mesh must have dense slots).
+//! Linear finite elements on a triangle mesh given as flat arrays (positions, triangles
+//! indexing them): lumped mass and cotangent stiffness, assembled into CSR arrays.
 //!
 //! With the angles θ, θ' opposite edge ij:
 //!
@@ -13,7 +13,7 @@
 //! Triangles with area below `1e-12·(longest edge)²` contribute nothing: their cotangents are
 //! meaningless and would make the element matrix indefinite.
 
-use crate::mesh::{Mesh, SlotIndex, cotangent};
+use crate::mesh::cotangent;
 use glam::DVec3;
 
 /// Relative area below which a triangle is skipped (area < ε·ℓ_max²).
@@ -56,30 +56,20 @@ impl SymmetricCsr {
             *yi = acc;
         }
     }
-
-    /// The matrix times `alpha`.
-    fn scaled(&self, alpha: f64) -> SymmetricCsr {
-        SymmetricCsr {
-            row_start: self.row_start.clone(),
-            col: self.col.clone(),
-            val: self.val.iter().map(|v| alpha * v).collect(),
-        }
-    }
 }
 
-/// Lumped (barycentric) mass `M_ii = Σ A(T)/3`, indexed by vertex slot. Degenerate triangles
-/// contribute zero.
-pub fn lumped_mass(mesh: &Mesh, positions: &[DVec3]) -> Vec<f64> {
+/// Lumped (barycentric) mass `M_ii = Σ A(T)/3` for `triangles` indexing `positions`.
+/// Degenerate triangles contribute zero.
+pub fn lumped_mass(triangles: &[[u32; 3]], positions: &[DVec3]) -> Vec<f64> {
     let mut m = vec![0.0; positions.len()];
-    for f in mesh.faces() {
-        let v = mesh.face_vertices(f).map(|v| v.slot());
-        let [a, b, c] = v.map(|i| positions[i]);
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
         let area = 0.5 * (b - a).cross(c - a).length();
         if is_degenerate(a, b, c, area) {
             continue;
         }
-        for i in v {
-            m[i] += area / 3.0;
+        for &i in t {
+            m[i as usize] += area / 3.0;
         }
     }
     m
@@ -91,55 +81,77 @@ fn is_degenerate(a: DVec3, b: DVec3, c: DVec3, area: f64) -> bool {
         .length_squared()
         .max((c - b).length_squared())
         .max((a - c).length_squared());
-    !(area > DEGENERATE_AREA * l2)
+    // NaN coordinates count as degenerate.
+    area.is_nan() || area <= DEGENERATE_AREA * l2
 }
 
-/// Cotangent stiffness matrix L (positive semi-definite, rows sum to zero), with optional
-/// per-face coefficients `face_coefficient[f.slot()]`.
+/// Cotangent stiffness matrix L (positive semi-definite, rows sum to zero) of `triangles`
+/// indexing `positions`, with optional per-triangle coefficients. Rows are sorted by column
+/// after the diagonal; assembly is a counting sort over the triangle corners, so it is linear
+/// and reads memory in order.
 pub fn cotangent_stiffness(
-    mesh: &Mesh,
+    triangles: &[[u32; 3]],
     positions: &[DVec3],
     face_coefficient: Option<&[f64]>,
 ) -> SymmetricCsr {
-    // Half-edge weight ½ a_T cot(angle opposite h in its face); boundary half-edges stay 0.
-    let nh = mesh.halfedges().map(|h| h.slot() + 1).max().unwrap_or(0);
-    let mut hw = vec![0.0; nh];
-    for f in mesh.faces() {
-        let hs = mesh.face_halfedges(f);
-        let v = mesh.face_vertices(f).map(|v| positions[v.slot()]);
-        let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
-        if is_degenerate(v[0], v[1], v[2], area) {
-            continue;
-        }
-        let coef = face_coefficient.map_or(1.0, |c| c[f.slot()]);
-        // hs[j] runs v[j] → v[j+1]; its opposite corner is v[j+2].
-        for j in 0..3 {
-            let o = v[(j + 2) % 3];
-            let cot = cotangent(v[j] - o, v[(j + 1) % 3] - o);
-            hw[hs[j].slot()] = 0.5 * coef * cot;
+    let n = positions.len();
+    // Two directed entries per triangle corner.
+    let mut fill: Vec<u32> = vec![0; n + 1];
+    for t in triangles {
+        for &i in t {
+            fill[i as usize + 1] += 2;
         }
     }
-    let n = positions.len();
+    for i in 0..n {
+        fill[i + 1] += fill[i];
+    }
+    let mut entries: Vec<(u32, f64)> = vec![(0, 0.0); fill[n] as usize];
+    let mut cursor = fill.clone();
+    for (ti, t) in triangles.iter().enumerate() {
+        let v = t.map(|i| positions[i as usize]);
+        let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+        let coef = face_coefficient.map_or(1.0, |c| c[ti]);
+        // w[j]: ½ a_T cot of the angle at corner j+2, which is opposite edge (j, j+1).
+        let mut w = [0.0; 3];
+        if !is_degenerate(v[0], v[1], v[2], area) {
+            for (j, wj) in w.iter_mut().enumerate() {
+                let o = v[(j + 2) % 3];
+                *wj = 0.5 * coef * cotangent(v[j] - o, v[(j + 1) % 3] - o);
+            }
+        }
+        for j in 0..3 {
+            let (a, b) = (t[j], t[(j + 1) % 3]);
+            for (row, col) in [(a, b), (b, a)] {
+                let c = &mut cursor[row as usize];
+                entries[*c as usize] = (col, w[j]);
+                *c += 1;
+            }
+        }
+    }
     let mut row_start = Vec::with_capacity(n + 1);
-    let mut col = Vec::with_capacity(n + 2 * mesh.n_halfedges());
+    let mut col = Vec::with_capacity(n + entries.len() / 2);
     let mut val = Vec::with_capacity(col.capacity());
     row_start.push(0u32);
-    let mut next_vertex = mesh.vertices().peekable();
     for i in 0..n {
+        let row = &mut entries[fill[i] as usize..fill[i + 1] as usize];
+        row.sort_unstable_by_key(|e| e.0);
         let diag_at = val.len();
         col.push(i as u32);
         val.push(0.0);
         let mut diag = 0.0;
-        if let Some(&v) = next_vertex.peek()
-            && v.slot() == i
-        {
-            next_vertex.next();
-            for h in mesh.outgoing(v) {
-                let w = hw[h.slot()] + hw[mesh.twin(h).slot()];
-                col.push(mesh.to_vertex(h).slot() as u32);
-                val.push(-w);
-                diag += w;
+        let mut k = 0;
+        while k < row.len() {
+            let (c, mut w) = row[k];
+            k += 1;
+            // An interior edge appears twice (once per triangle); two terms add the same in
+            // either order, so the sum is deterministic.
+            while k < row.len() && row[k].0 == c {
+                w += row[k].1;
+                k += 1;
             }
+            col.push(c);
+            val.push(-w);
+            diag += w;
         }
         val[diag_at] = diag;
         row_start.push(col.len() as u32);
@@ -156,12 +168,15 @@ pub fn cotangent_stiffness(
 /// Rows whose diagonal is not positive (an isolated vertex, or a vertex whose triangles are
 /// all degenerate) become identity rows; [`identity_rows`] lists them so the right-hand side
 /// can pin those vertices to their interpolated initial positions.
-pub fn system_matrix(mass: &[f64], stiffness: &SymmetricCsr, alpha: f64) -> SymmetricCsr {
-    let mut a = stiffness.scaled(alpha);
+pub fn system_matrix(mass: &[f64], stiffness: SymmetricCsr, alpha: f64) -> SymmetricCsr {
+    let mut a = stiffness;
+    if alpha != 1.0 {
+        a.val.iter_mut().for_each(|v| *v *= alpha);
+    }
     for (i, m) in mass.iter().enumerate() {
         let d = a.row_start[i] as usize;
         a.val[d] += m;
-        if !(a.val[d] > 0.0) {
+        if a.val[d].is_nan() || a.val[d] <= 0.0 {
             let e = a.row_start[i + 1] as usize;
             a.val[d] = 1.0;
             a.val[d + 1..e].iter_mut().for_each(|v| *v = 0.0);
@@ -174,5 +189,78 @@ pub fn system_matrix(mass: &[f64], stiffness: &SymmetricCsr, alpha: f64) -> Symm
 /// (their stiffness row and column are zero too, because every triangle around them was
 /// skipped as degenerate, and a non-degenerate P1 stiffness diagonal is positive).
 pub fn identity_rows(mass: &[f64]) -> Vec<bool> {
-    mass.iter().map(|&m| !(m > 0.0)).collect()
+    mass.iter().map(|&m| m.is_nan() || m <= 0.0).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tetra_fan() -> (Vec<[u32; 3]>, Vec<DVec3>) {
+        let p = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.0, 0.0, 1.0),
+        ];
+        (vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]], p)
+    }
+
+    #[test]
+    fn mass_sums_to_area_and_stiffness_is_symmetric_with_zero_row_sums() {
+        let (m, p) = tetra_fan();
+        let mass = lumped_mass(&m, &p);
+        let area: f64 = m
+            .iter()
+            .map(|t| {
+                0.5 * (p[t[1] as usize] - p[t[0] as usize])
+                    .cross(p[t[2] as usize] - p[t[0] as usize])
+                    .length()
+            })
+            .sum();
+        assert!((mass.iter().sum::<f64>() - area).abs() < 1e-14);
+        let l = cotangent_stiffness(&m, &p, None);
+        for i in 0..l.n() {
+            let (s, e) = (l.row_start[i] as usize, l.row_start[i + 1] as usize);
+            assert_eq!(l.col[s] as usize, i);
+            assert!(l.val[s..e].iter().sum::<f64>().abs() < 1e-14);
+            for k in s + 1..e {
+                let j = l.col[k] as usize;
+                let back = (l.row_start[j] as usize..l.row_start[j + 1] as usize)
+                    .find(|&q| l.col[q] as usize == i)
+                    .unwrap();
+                assert_eq!(l.val[k], l.val[back]);
+            }
+        }
+        // Constants are in the kernel; a linear function's Dirichlet energy is |∇f|²·area on
+        // a closed surface only through the boundary-free identity xᵀLx = Σ_T A_T |∇_T f|².
+        let x: Vec<[f64; 1]> = p.iter().map(|q| [q.x]).collect();
+        let mut lx = vec![[0.0]; 4];
+        l.mul(&x, &mut lx);
+        let energy: f64 = x.iter().zip(&lx).map(|(a, b)| a[0] * b[0]).sum();
+        assert!(energy > 0.0);
+    }
+
+    #[test]
+    fn face_coefficients_scale_the_stiffness() {
+        let (m, p) = tetra_fan();
+        let l1 = cotangent_stiffness(&m, &p, None);
+        let l3 = cotangent_stiffness(&m, &p, Some(&[3.0; 4]));
+        for (a, b) in l1.val.iter().zip(&l3.val) {
+            assert!((3.0 * a - b).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn zero_mass_rows_become_identity_rows() {
+        let mass = [0.0, 1.0];
+        let l = SymmetricCsr {
+            row_start: vec![0, 1, 2],
+            col: vec![0, 1],
+            val: vec![0.0, 0.0],
+        };
+        let a = system_matrix(&mass, l, 2.0);
+        assert_eq!(a.val, vec![1.0, 1.0]);
+        assert_eq!(identity_rows(&mass), vec![true, false]);
+    }
 }

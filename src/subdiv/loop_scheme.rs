@@ -9,7 +9,7 @@
 //! - Isolated vertices stay where they are.
 
 use super::SubdivError;
-use super::refine::{build, quad_topology};
+use super::refine::{build_quadrisection, quad_topology};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use glam::DVec3;
@@ -39,11 +39,9 @@ pub fn loop_step(mesh: &Mesh) -> Result<Mesh, SubdivError> {
                 0.75 * p + 0.125 * (b0 + b1)
             }
             Some(_) => {
-                let (sum, n) = mesh
-                    .outgoing(v)
-                    .fold((DVec3::ZERO, 0usize), |(s, n), h| {
-                        (s + mesh.position(mesh.to_vertex(h)), n + 1)
-                    });
+                let (sum, n) = mesh.outgoing(v).fold((DVec3::ZERO, 0usize), |(s, n), h| {
+                    (s + mesh.position(mesh.to_vertex(h)), n + 1)
+                });
                 let beta = loop_beta(n);
                 (1.0 - n as f64 * beta) * p + beta * sum
             }
@@ -63,7 +61,7 @@ pub fn loop_step(mesh: &Mesh) -> Result<Mesh, SubdivError> {
         };
         positions.push(p);
     }
-    build(&positions, &topo.triangles, 1)
+    build_quadrisection(mesh, &topo, &positions)
 }
 
 /// `levels` levels of Loop subdivision (the input is compacted first).
@@ -84,4 +82,50 @@ pub fn subdivide_loop(
         progress.update(done / total);
     }
     Ok(current)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::SlotIndex;
+
+    #[test]
+    fn beta_matches_the_regular_stencil() {
+        assert!((loop_beta(6) - 1.0 / 16.0).abs() < 1e-15);
+        assert!((loop_beta(3) - 3.0 / 16.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn planar_grid_stays_planar_and_interior_linear_functions_are_reproduced() {
+        let n = 4;
+        let mut p = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                p.push(DVec3::new(i as f64, j as f64, 0.0));
+            }
+        }
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        let mut t = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let m = Mesh::from_triangles(&p, &t).unwrap().mesh;
+        let fine = loop_step(&m).unwrap();
+        assert_eq!(fine.n_faces(), 4 * m.n_faces());
+        for v in fine.vertices() {
+            assert_eq!(fine.position(v).z, 0.0);
+        }
+        // The centre vertex (regular, valence 6) stays put: Loop reproduces linear data on a
+        // regular grid and the grid coordinates are linear.
+        let c = id(2, 2) as usize;
+        let v = fine.vertices().find(|v| v.slot() == c).unwrap();
+        assert!((fine.position(v) - p[c]).length() < 1e-12);
+        // Boundary corners move along the boundary rule (3/4 v + 1/8 neighbours).
+        let corner = fine.vertices().next().unwrap();
+        let q = fine.position(corner);
+        assert!(q.x > 0.0 && q.y > 0.0 && q.x < 0.3);
+    }
 }

@@ -93,7 +93,7 @@ impl MeanCurvatureStep {
         let abs_sum: f64 = neighbors.iter().map(|(_, w)| w.abs()).sum();
         let denom = mass + alpha * w_sum;
         // Guard: the row must stay clearly positive relative to its own entries.
-        if !(denom > 1e-12 * (mass + alpha * abs_sum)) || !denom.is_finite() {
+        if !denom.is_finite() || denom <= 1e-12 * (mass + alpha * abs_sum) {
             return identity;
         }
         for (_, w) in neighbors.iter_mut() {
@@ -128,6 +128,102 @@ impl Relaxation for MeanCurvatureStep {
                     .map(|&(j, wj)| wj * signal[j.slot()])
                     .sum::<DVec3>();
             *o = s + self.damping * (x - s);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plane(n: usize, jitter: f64) -> Mesh {
+        let mut p = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                // Deterministic interior jitter keeps triangles valid but irregular.
+                let interior = i > 0 && j > 0 && i < n && j < n;
+                let d = if interior {
+                    jitter * (((i * 7 + j * 13) % 5) as f64 / 5.0 - 0.4)
+                } else {
+                    0.0
+                };
+                p.push(DVec3::new(i as f64 + d, j as f64 - 0.5 * d, 0.0));
+            }
+        }
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        let mut t = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        Mesh::from_triangles(&p, &t).unwrap().mesh
+    }
+
+    #[test]
+    fn weights_sum_to_one_and_are_positive_on_a_regular_grid() {
+        let m = plane(4, 0.0);
+        let g = m.positions();
+        let step = MeanCurvatureStep::default();
+        for v in m.vertices() {
+            let w = step.weights(&m, &g, v);
+            let sum = w.self_weight + w.neighbors.iter().map(|x| x.1).sum::<f64>();
+            assert!((sum - 1.0).abs() < 1e-14);
+            assert!(w.self_weight > 0.0 && w.self_weight < 1.0);
+            assert!(w.neighbors.iter().all(|x| x.1 >= 0.0));
+        }
+    }
+
+    #[test]
+    fn linear_signals_are_fixed_points_at_interior_vertices_of_a_plane() {
+        let m = plane(5, 0.3);
+        let g = m.positions();
+        let signal: Vec<DVec3> = g
+            .iter()
+            .map(|p| DVec3::new(2.0 * p.x - p.y + 1.0, 0.5 * p.y, p.x + p.y))
+            .collect();
+        let all: Vec<_> = m.vertices().collect();
+        let mut out = vec![DVec3::ZERO; all.len()];
+        MeanCurvatureStep::default().relax(&m, &g, &signal, &all, &mut out);
+        for (i, &v) in all.iter().enumerate() {
+            if !m.is_boundary_vertex(v) {
+                assert!((out[i] - signal[v.slot()]).length() < 1e-12);
+            }
+        }
+        // Geometry relaxed on itself stays in its plane everywhere (boundary included).
+        MeanCurvatureStep::default().relax(&m, &g, &g, &all, &mut out);
+        assert!(out.iter().all(|p| p.z.abs() < 1e-15));
+    }
+
+    #[test]
+    fn damping_and_scale_invariance() {
+        let m = plane(3, 0.2);
+        let g = m.positions();
+        let bumpy: Vec<DVec3> = g
+            .iter()
+            .enumerate()
+            .map(|(i, p)| *p + DVec3::Z * ((i % 3) as f64))
+            .collect();
+        let all: Vec<_> = m.vertices().collect();
+        let mut full = vec![DVec3::ZERO; all.len()];
+        let mut half = full.clone();
+        MeanCurvatureStep::default().relax(&m, &g, &bumpy, &all, &mut full);
+        let damped = MeanCurvatureStep {
+            damping: 0.5,
+            ..Default::default()
+        };
+        damped.relax(&m, &g, &bumpy, &all, &mut half);
+        for i in 0..all.len() {
+            let s = bumpy[all[i].slot()];
+            assert!((half[i] - (s + 0.5 * (full[i] - s))).length() < 1e-12);
+        }
+        // Scaling the parameter geometry leaves the weights unchanged.
+        let g3: Vec<DVec3> = g.iter().map(|p| *p * 3.0).collect();
+        let mut scaled = vec![DVec3::ZERO; all.len()];
+        MeanCurvatureStep::default().relax(&m, &g3, &bumpy, &all, &mut scaled);
+        for i in 0..all.len() {
+            assert!((scaled[i] - full[i]).length() < 1e-12);
         }
     }
 }

@@ -54,6 +54,8 @@ impl Prolongation {
 pub struct Refined {
     /// The new mesh, vertex positions trivially interpolated from the coarse ones.
     pub mesh: Mesh,
+    /// The new mesh's triangles as dense vertex indices, in face slot order.
+    pub triangles: Vec<[u32; 3]>,
     /// Coarse-to-fine interpolation.
     pub prolongation: Prolongation,
 }
@@ -81,6 +83,10 @@ pub(crate) struct QuadTopology {
     pub edges: Vec<HalfedgeId>,
     pub triangles: Vec<[u32; 3]>,
     pub parents: Vec<[u32; 2]>,
+    /// Fine midpoint vertex of every coarse half-edge, by half-edge slot.
+    pub mid: Vec<u32>,
+    /// Dense index of every coarse vertex, by slot.
+    pub dense: Vec<u32>,
 }
 
 pub(crate) fn quad_topology(mesh: &Mesh) -> QuadTopology {
@@ -121,7 +127,132 @@ pub(crate) fn quad_topology(mesh: &Mesh) -> QuadTopology {
         edges,
         triangles,
         parents,
+        mid,
+        dense,
     }
+}
+
+/// Builds the quadrisected half-edge mesh directly by index arithmetic — no sorting, no
+/// hashing, no repair pass — which is what keeps refinement linear and cache friendly on
+/// large levels. Needs dense half-edge, face and vertex slots (fresh meshes have them).
+///
+/// Layout: coarse half-edge slot `s` becomes fine half-edges `2s` (from its origin to the
+/// midpoint) and `2s+1` (midpoint to its head); coarse face `t` adds six interior half-edges
+/// at `2·nh + 6t ..` and fine faces `4t..4t+4` in the order of `topo.triangles`.
+pub(crate) fn build_quadrisection(
+    mesh: &Mesh,
+    topo: &QuadTopology,
+    positions: &[DVec3],
+) -> Result<Mesh, SubdivError> {
+    use crate::mesh::halfedge::{FaceRecord, HalfedgeRecord, VertexRecord};
+    let nh = mesh.n_halfedges();
+    let nf = mesh.n_faces();
+    let dense_slots = mesh.halfedges().enumerate().all(|(i, h)| h.slot() == i)
+        && mesh.faces().enumerate().all(|(i, f)| f.slot() == i);
+    if !dense_slots {
+        return build(positions, &topo.triangles, 1);
+    }
+    let mut fine = Mesh::new();
+    fine.vertices.reserve(positions.len());
+    let vids: Vec<VertexId> = positions
+        .iter()
+        .map(|&p| {
+            fine.vertices.insert(VertexRecord {
+                halfedge: None,
+                position: p,
+            })
+        })
+        .collect();
+    let n_fine_h = 2 * nh + 6 * nf;
+    fine.halfedges.reserve(n_fine_h);
+    let null = HalfedgeId::default();
+    let placeholder = HalfedgeRecord {
+        to: VertexId::default(),
+        next: null,
+        prev: null,
+        twin: null,
+        face: None,
+    };
+    let hid: Vec<HalfedgeId> = (0..n_fine_h)
+        .map(|_| fine.halfedges.insert(placeholder.clone()))
+        .collect();
+    fine.faces.reserve(4 * nf);
+    let fid: Vec<_> = (0..4 * nf)
+        .map(|_| fine.faces.insert(FaceRecord { halfedge: null }))
+        .collect();
+    let first = |h: HalfedgeId| 2 * h.slot();
+    let second = |h: HalfedgeId| 2 * h.slot() + 1;
+    // Split coarse half-edges: targets and twins; boundary ones also get their loop links.
+    for h in mesh.halfedges() {
+        let t = mesh.twin(h);
+        let m = vids[topo.mid[h.slot()] as usize];
+        let head = vids[topo.dense[mesh.to_vertex(h).slot()] as usize];
+        {
+            let r = &mut fine.halfedges[hid[first(h)]];
+            r.to = m;
+            r.twin = hid[second(t)];
+        }
+        {
+            let r = &mut fine.halfedges[hid[second(h)]];
+            r.to = head;
+            r.twin = hid[first(t)];
+        }
+        if mesh.is_boundary_halfedge(h) {
+            let (n, p) = (mesh.next(h), mesh.prev(h));
+            let r = &mut fine.halfedges[hid[first(h)]];
+            r.next = hid[second(h)];
+            r.prev = hid[second(p)];
+            let r = &mut fine.halfedges[hid[second(h)]];
+            r.next = hid[first(n)];
+            r.prev = hid[first(h)];
+        }
+    }
+    for (t, f) in mesh.faces().enumerate() {
+        let [h0, h1, h2] = mesh.face_halfedges(f);
+        let [m01, m12, m20] = [h0, h1, h2].map(|h| vids[topo.mid[h.slot()] as usize]);
+        let base = 2 * nh + 6 * t;
+        // Inner half-edges: I0 m01→m20, I1 m12→m01, I2 m20→m12 and their twins
+        // C0 m20→m01, C1 m01→m12, C2 m12→m20 (the centre face).
+        let (i0, i1, i2, c0, c1, c2) = (base, base + 1, base + 2, base + 3, base + 4, base + 5);
+        let tos = [m20, m01, m12, m01, m12, m20];
+        let twins = [c0, c1, c2, i0, i1, i2];
+        for k in 0..6 {
+            let r = &mut fine.halfedges[hid[base + k]];
+            r.to = tos[k];
+            r.twin = hid[twins[k]];
+        }
+        // Faces: corner v0 (first h0, I0, second h2), corner v1 (first h1, I1, second h0),
+        // corner v2 (first h2, I2, second h1), centre (C1, C2, C0).
+        let cycles = [
+            [first(h0), i0, second(h2)],
+            [first(h1), i1, second(h0)],
+            [first(h2), i2, second(h1)],
+            [c1, c2, c0],
+        ];
+        for (k, cycle) in cycles.iter().enumerate() {
+            let face = fid[4 * t + k];
+            fine.faces[face].halfedge = hid[cycle[0]];
+            for j in 0..3 {
+                let r = &mut fine.halfedges[hid[cycle[j]]];
+                r.next = hid[cycle[(j + 1) % 3]];
+                r.prev = hid[cycle[(j + 2) % 3]];
+                r.face = Some(face);
+            }
+        }
+    }
+    // Out-going half-edges: coarse vertices keep the first half of theirs (a boundary one
+    // stays boundary); a midpoint takes the second half of a boundary side if there is one.
+    for (i, &v) in topo.coarse.iter().enumerate() {
+        if let Some(h) = mesh.vertex_halfedge(v) {
+            fine.vertices[vids[i]].halfedge = Some(hid[first(h)]);
+        }
+    }
+    for (e, &h) in topo.edges.iter().enumerate() {
+        let t = mesh.twin(h);
+        let side = if mesh.is_boundary_halfedge(t) { t } else { h };
+        fine.vertices[vids[topo.coarse.len() + e]].halfedge = Some(hid[second(side)]);
+    }
+    Ok(fine)
 }
 
 fn slot_bound(slots: impl Iterator<Item = usize>) -> usize {
@@ -149,11 +280,15 @@ pub fn quadrisect(mesh: &Mesh) -> Result<Refined, SubdivError> {
     let topo = quad_topology(mesh);
     let coarse_pos: Vec<DVec3> = topo.coarse.iter().map(|&v| mesh.position(v)).collect();
     let prolongation = Prolongation {
-        parents: topo.parents,
+        parents: topo.parents.clone(),
     };
     let positions = prolongation.apply(&coarse_pos);
-    let mesh = build(&positions, &topo.triangles, 1)?;
-    Ok(Refined { mesh, prolongation })
+    let mesh = build_quadrisection(mesh, &topo, &positions)?;
+    Ok(Refined {
+        mesh,
+        triangles: topo.triangles,
+        prolongation,
+    })
 }
 
 /// A compatible initial marking for newest-vertex bisection.
@@ -244,7 +379,11 @@ pub fn initial_marking(mesh: &Mesh) -> Result<Marking, SubdivError> {
             let j = (newest[t] as usize + 1) % 3;
             let h = mesh.face_halfedges(faces[t])[j];
             let twin = mesh.twin(h);
-            if let Some(k) = mesh.face_halfedges(faces[u]).iter().position(|&g| g == twin) {
+            if let Some(k) = mesh
+                .face_halfedges(faces[u])
+                .iter()
+                .position(|&g| g == twin)
+            {
                 newest[u] = ((k + 2) % 3) as u8;
             }
         }
@@ -448,8 +587,128 @@ pub fn bisect(mesh: &Mesh, marking: &Marking) -> Result<(Refined, Marking), Subd
     Ok((
         Refined {
             mesh: fine,
+            triangles,
             prolongation,
         },
         Marking { newest },
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn octahedron() -> Mesh {
+        let p = [
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+        ]
+        .map(DVec3::from_array);
+        let f = [
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
+        Mesh::from_triangles(&p, &f).unwrap().mesh
+    }
+
+    #[test]
+    fn prolongation_copies_and_averages() {
+        let p = Prolongation {
+            parents: vec![[0, 0], [1, 1], [0, 1]],
+        };
+        assert_eq!(p.apply(&[2.0, 4.0]), vec![2.0, 4.0, 3.0]);
+        assert_eq!(p.n_fine(), 3);
+    }
+
+    #[test]
+    fn quadrisection_puts_midpoints_and_keeps_coarse_vertices_first() {
+        let m = octahedron();
+        let r = quadrisect(&m).unwrap();
+        assert_eq!(r.mesh.n_faces(), 32);
+        assert_eq!(r.mesh.n_vertices(), 6 + 12);
+        assert!(r.mesh.validate().is_ok());
+        // The direct construction equals the builder's, face by face.
+        let (p, t) = r.mesh.to_triangles();
+        let built = Mesh::from_triangles(&p, &t).unwrap();
+        assert!(!built.report.repaired_anything());
+        assert_eq!(built.mesh.to_triangles(), (p, t));
+        let pos = r.mesh.positions();
+        for (i, &[a, b]) in r.prolongation.parents().iter().enumerate() {
+            let expect = (m.positions()[a as usize] + m.positions()[b as usize]) / 2.0;
+            assert_eq!(pos[i], expect);
+            // Midpoints join coarse neighbours only.
+            if a != b {
+                assert!(m.neighbors(m.vertices().nth(a as usize).unwrap()).len() == 4);
+            }
+        }
+    }
+
+    #[test]
+    fn bisection_marking_is_compatible_and_stays_so() {
+        let mut m = octahedron();
+        let mut marking = initial_marking(&m).unwrap();
+        let mut faces = m.n_faces();
+        for _ in 0..4 {
+            let (r, next) = bisect(&m, &marking).unwrap();
+            assert_eq!(r.mesh.n_faces(), 2 * faces);
+            assert_eq!(r.mesh.topology().euler_characteristic, 2);
+            faces = r.mesh.n_faces();
+            m = r.mesh;
+            marking = next;
+        }
+    }
+
+    #[test]
+    fn incompatible_marking_is_rejected() {
+        let m = octahedron();
+        let mut marking = initial_marking(&m).unwrap();
+        marking.newest[0] = (marking.newest[0] + 1) % 3;
+        assert!(matches!(
+            bisect(&m, &marking),
+            Err(SubdivError::NoCompatibleMarking { .. })
+        ));
+    }
+
+    #[test]
+    fn marking_on_an_open_strip_uses_boundary_edges() {
+        // Three triangles in a fan: an odd count, so one must take a boundary edge.
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+        ]
+        .map(DVec3::from_array);
+        let m = Mesh::from_triangles(&p, &[[0, 1, 2], [0, 2, 3], [0, 3, 4]])
+            .unwrap()
+            .mesh;
+        let marking = initial_marking(&m).unwrap();
+        let (r, _) = bisect(&m, &marking).unwrap();
+        assert_eq!(r.mesh.n_faces(), 6);
+        assert!(r.mesh.validate().is_ok());
+        // Direct quadrisection of an open mesh: valid, boundary loop intact, and the same
+        // faces the generic builder makes.
+        let q = quadrisect(&m).unwrap().mesh;
+        assert!(q.validate().is_ok());
+        assert_eq!(q.topology().boundary_loops, 1);
+        assert_eq!(q.topology().euler_characteristic, 1);
+        let (p, t) = q.to_triangles();
+        assert_eq!(
+            Mesh::from_triangles(&p, &t).unwrap().mesh.to_triangles(),
+            (p, t)
+        );
+        let boundary = q.vertices().filter(|&v| q.is_boundary_vertex(v)).count();
+        assert_eq!(boundary, 2 * 5);
+    }
 }

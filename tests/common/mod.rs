@@ -7,8 +7,8 @@ use std::path::PathBuf;
 use glam::DVec3;
 use meshpyr::io::{MeshFormat, PlyEncoding, WriteOptions};
 use meshpyr::mesh::{
-    Mesh,
-    Attribute, AttributeData, ElementProperty, ExtraElement, ListProperty, PolygonMesh, ScalarType,
+    Attribute, AttributeData, ElementProperty, ExtraElement, ListProperty, Mesh, PolygonMesh,
+    ScalarType,
 };
 
 /// Path of a file in `tests/data`.
