@@ -911,15 +911,16 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
                     unreachable!()
                 };
                 let col = column(block, stride, off, t, big);
-                if finite {
-                    for i in 0..col.len() {
-                        if !col.get_f64(i).is_finite() {
-                            return Err(err_byte(
-                                (start + i * stride + off) as u64,
-                                format!("vertex {i} has a non-finite coordinate"),
-                            ));
-                        }
-                    }
+                let bad = match (&col, finite) {
+                    (AttributeData::F32(v), true) => v.iter().position(|x| !x.is_finite()),
+                    (AttributeData::F64(v), true) => v.iter().position(|x| !x.is_finite()),
+                    _ => None, // integers are always finite
+                };
+                if let Some(i) = bad {
+                    return Err(err_byte(
+                        (start + i * stride + off) as u64,
+                        format!("vertex {i} has a non-finite coordinate"),
+                    ));
                 }
                 outs.push(Out::Col(col));
                 off += t.size();
