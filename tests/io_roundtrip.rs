@@ -38,21 +38,34 @@ fn ply_double_positions_stay_double() {
 }
 
 #[test]
-fn ply_untyped_positions_become_float_unless_they_do_not_fit() {
+fn ply_untyped_positions_are_written_losslessly() {
+    // All f32 values: float.
     let mut m = PolygonMesh::from_triangles(
-        vec![DVec3::ZERO, DVec3::X, DVec3::new(0.0, 0.1, 0.0)],
+        vec![DVec3::ZERO, DVec3::X, DVec3::new(0.0, 0.5, 0.0)],
         &[[0, 1, 2]],
     );
     let b = write_mesh_bytes(&m, MeshFormat::Ply, &Default::default()).unwrap();
     assert!(String::from_utf8_lossy(&b).contains("property float x"));
     let r = read_mesh_bytes(&b, MeshFormat::Ply).unwrap();
     assert_eq!(r.position_type, Some(ScalarType::F32));
-    assert_eq!(r.positions[2].y, 0.1f32 as f64);
+    assert_eq!(position_bits(&r), position_bits(&m));
+    // A value that is not an f32 value: double, exact.
+    m.positions[2].y = 0.1;
     m.positions[0].x = 1e300;
     let b = write_mesh_bytes(&m, MeshFormat::Ply, &Default::default()).unwrap();
     assert!(String::from_utf8_lossy(&b).contains("property double x"));
-    // An explicit f32 type that cannot hold the value is an error, not a silent infinity.
+    let r = read_mesh_bytes(&b, MeshFormat::Ply).unwrap();
+    assert_eq!(position_bits(&r), position_bits(&m));
+    // An explicit f32 type is honoured (rounding), but overflow is an error, not infinity.
     m.position_type = Some(ScalarType::F32);
+    m.positions[0].x = 1.0;
+    let r = read_mesh_bytes(
+        &write_mesh_bytes(&m, MeshFormat::Ply, &Default::default()).unwrap(),
+        MeshFormat::Ply,
+    )
+    .unwrap();
+    assert_eq!(r.positions[2].y, 0.1f32 as f64);
+    m.positions[0].x = 1e300;
     let e = write_mesh_bytes(&m, MeshFormat::Ply, &Default::default()).unwrap_err();
     assert!(
         e.to_string().contains("vertex 0 does not fit in float"),

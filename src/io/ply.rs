@@ -7,7 +7,8 @@
 //! allocated) and error locations (byte offsets for binary bodies, lines for ASCII).
 //!
 //! Mapping onto [`PolygonMesh`]:
-//! - `vertex`: `x`,`y`,`z` (any scalar type; `position_type` records it) become positions, every
+//! - `vertex`: `x`,`y`,`z` (any scalar type; `position_type` records it when all three agree)
+//!   become positions, every
 //!   other scalar property becomes a vertex attribute in file order.
 //! - `face`: the list `vertex_indices` (or `vertex_index`) gives the polygons; other scalar
 //!   properties become face attributes.
@@ -16,8 +17,8 @@
 //! - list properties on `vertex`, and on `face` other than the indices, cannot be represented
 //!   and are rejected with an error.
 //!
-//! The writer emits `vertex` (`float` positions unless `position_type` is `F64`, or the values
-//! do not fit in `float`), then `face` (`list uchar int vertex_indices`, or `uint` counts for
+//! The writer emits `vertex` (`double` positions when `position_type` is `F64`, `float` when it
+//! is `F32`; otherwise `float` if every coordinate is an f32 value and `double` if not), then `face` (`list uchar int vertex_indices`, or `uint` counts for
 //! polygons with more than 255 corners), then the extra elements.
 
 use std::fmt::Write as _;
@@ -750,7 +751,25 @@ fn read_faces_fast(
     ctx.face_starts.reserve(rows + 1);
     ctx.face_indices
         .reserve((rows.saturating_mul(3)).min(left / 4));
+    // Indices below `limit` are valid (for `int` items this also rules out negatives).
+    let limit = if signed { nv.min(1 << 31) } else { nv };
     for f in 0..rows {
+        // Shortcut: `uchar 3` followed by three valid indices.
+        if count == ScalarType::U8
+            && let Some(r) = data.get(pos..pos + 13)
+            && r[0] == 3
+        {
+            let idx = |k: usize| u32::from_le_bytes([r[k], r[k + 1], r[k + 2], r[k + 3]]);
+            let t = [idx(1), idx(5), idx(9)];
+            if t.iter().all(|&v| (v as u64) < limit) {
+                ctx.face_indices.extend_from_slice(&t);
+                pos += 13;
+                let len = u32::try_from(ctx.face_indices.len())
+                    .map_err(|_| err_byte(pos as u64, "more than 2^32 - 1 face indices"))?;
+                ctx.face_starts.push(len);
+                continue;
+            }
+        }
         let Some(cb) = data.get(pos..pos + csize) else {
             return Err(err_byte(
                 pos as u64,
@@ -893,6 +912,7 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
         let rows = el.count as usize; // fits: bounded by the file size above
 
         let all_scalar = plans.iter().all(|p| matches!(p, Plan::Scalar { .. }));
+        let mut direct_positions: Option<Vec<DVec3>> = None;
         let outs = if !ascii && all_scalar {
             // Fixed-stride block: decode column by column.
             let stride: usize = plans
@@ -904,22 +924,32 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
                 .sum();
             let block = &bytes[bin.pos..bin.pos + rows * stride];
             let start = bin.pos;
+            // Common case: float x, y, z anywhere in the row, decoded in one pass.
+            if *role == Role::Vertex {
+                direct_positions = float_positions(el, block, stride, start, big)?;
+            }
             let mut off = 0;
             let mut outs = Vec::with_capacity(plans.len());
             for plan in &plans {
                 let Plan::Scalar { t, finite } = *plan else {
                     unreachable!()
                 };
+                if finite && direct_positions.is_some() {
+                    outs.push(Out::Col(empty_col(t, 0)));
+                    off += t.size();
+                    continue;
+                }
                 let col = column(block, stride, off, t, big);
-                if finite {
-                    for i in 0..col.len() {
-                        if !col.get_f64(i).is_finite() {
-                            return Err(err_byte(
-                                (start + i * stride + off) as u64,
-                                format!("vertex {i} has a non-finite coordinate"),
-                            ));
-                        }
-                    }
+                let bad = match (&col, finite) {
+                    (AttributeData::F32(v), true) => v.iter().position(|x| !x.is_finite()),
+                    (AttributeData::F64(v), true) => v.iter().position(|x| !x.is_finite()),
+                    _ => None, // integers are always finite
+                };
+                if let Some(i) = bad {
+                    return Err(err_byte(
+                        (start + i * stride + off) as u64,
+                        format!("vertex {i} has a non-finite coordinate"),
+                    ));
                 }
                 outs.push(Out::Col(col));
                 off += t.size();
@@ -966,8 +996,11 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
                 let [Some(x), Some(y), Some(z)] = xyz else {
                     unreachable!("checked by plan_element")
                 };
-                mesh.position_type = Some(position_type(&x, &y, &z));
-                mesh.positions = positions(&x, &y, &z);
+                mesh.position_type = position_type(&x, &y, &z);
+                mesh.positions = match direct_positions.take() {
+                    Some(p) => p,
+                    None => positions(&x, &y, &z),
+                };
             }
             Role::Face => {
                 for (p, out) in el.props.iter().zip(outs) {
@@ -1006,15 +1039,61 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     Ok(mesh)
 }
 
-fn position_type(x: &AttributeData, y: &AttributeData, z: &AttributeData) -> ScalarType {
-    let (a, b, c) = (x.scalar_type(), y.scalar_type(), z.scalar_type());
-    if a == b && b == c {
-        a
-    } else if [a, b, c].contains(&ScalarType::F64) {
-        ScalarType::F64
-    } else {
-        ScalarType::F32
+/// Positions straight from a fixed-stride binary vertex block when `x`, `y`, `z` are all
+/// `float`; `Ok(None)` for other layouts. Checks finiteness.
+fn float_positions(
+    el: &ElementDef,
+    block: &[u8],
+    stride: usize,
+    start: usize,
+    big: bool,
+) -> Result<Option<Vec<DVec3>>, IoError> {
+    let mut offs = [usize::MAX; 3];
+    let mut off = 0;
+    for p in &el.props {
+        let PropKind::Scalar(t) = p.kind else {
+            return Ok(None);
+        };
+        if let Some(k) = ["x", "y", "z"].iter().position(|c| *c == p.name) {
+            if t != ScalarType::F32 {
+                return Ok(None);
+            }
+            offs[k] = off;
+        }
+        off += t.size();
     }
+    let [ox, oy, oz] = offs;
+    let rd = |r: &[u8], o: usize| {
+        let a = [r[o], r[o + 1], r[o + 2], r[o + 3]];
+        if big {
+            f32::from_be_bytes(a)
+        } else {
+            f32::from_le_bytes(a)
+        }
+    };
+    let mut out = Vec::with_capacity(block.len() / stride.max(1));
+    let mut all_finite = true;
+    for r in block.chunks_exact(stride) {
+        let (x, y, z) = (rd(r, ox), rd(r, oy), rd(r, oz));
+        all_finite &= x.is_finite() & y.is_finite() & z.is_finite();
+        out.push(DVec3::new(x as f64, y as f64, z as f64));
+    }
+    if !all_finite {
+        let i = out.iter().position(|p| !p.is_finite()).unwrap_or(0);
+        let k = (0..3).find(|&k| !out[i][k].is_finite()).unwrap_or(0);
+        return Err(err_byte(
+            (start + i * stride + offs[k]) as u64,
+            format!("vertex {i} has a non-finite coordinate"),
+        ));
+    }
+    Ok(Some(out))
+}
+
+/// The stored type of x, y, z when they agree; `None` for mixed types (the writer then picks
+/// `float` or `double` by value, losslessly).
+fn position_type(x: &AttributeData, y: &AttributeData, z: &AttributeData) -> Option<ScalarType> {
+    let (a, b, c) = (x.scalar_type(), y.scalar_type(), z.scalar_type());
+    (a == b && b == c).then_some(a)
 }
 
 fn positions(x: &AttributeData, y: &AttributeData, z: &AttributeData) -> Vec<DVec3> {
@@ -1238,10 +1317,12 @@ pub fn write(mesh: &PolygonMesh, encoding: PlyEncoding) -> Result<Vec<u8>, IoErr
     let nv = mesh.positions.len();
     let nf = mesh.n_faces();
     // Positions: keep double for double input; float otherwise, unless a value would overflow.
+    // Positions: `double` for f64 data, `float` for f32 data; untyped (or integer) positions
+    // are written as `float` when every value is an f32 value and as `double` otherwise, so
+    // the write is lossless unless the mesh says its positions are f32.
     let pos_double = match mesh.position_type {
         Some(ScalarType::F64) => true,
-        None => mesh.positions.iter().any(|p| !p.as_vec3().is_finite()),
-        Some(_) => {
+        Some(ScalarType::F32) => {
             if let Some(i) = mesh.positions.iter().position(|p| !p.as_vec3().is_finite()) {
                 return Err(err_invalid(
                     MeshFormat::Ply,
@@ -1250,6 +1331,7 @@ pub fn write(mesh: &PolygonMesh, encoding: PlyEncoding) -> Result<Vec<u8>, IoErr
             }
             false
         }
+        _ => mesh.positions.iter().any(|p| p.as_vec3().as_dvec3() != *p),
     };
     let max_len = mesh.faces().map(|f| f.len()).max().unwrap_or(0);
     let count_type = if max_len <= 255 {

@@ -145,27 +145,37 @@ impl TextPrecision {
 //   number is, the file holds float data: positions are the f32 parses and `position_type`
 //   is `Some(F32)`;
 // - otherwise positions are the exact f64 parses and `position_type` is `None`.
-// The writers mirror it: f32-typed positions, and untyped/f64 positions that are all exactly
+// The writers mirror it: f32-typed positions, and other positions that are all exactly
 // f32 values, are written with shortest f32 formatting; other positions with shortest f64
 // formatting, and if that text would still look like float data, one coordinate that is not
 // an f32 value is written with 17 significant digits so the file re-reads as double.
 
-/// Significant digits of a decimal token's mantissa (leading zeros excluded).
+/// Significant digits of a decimal token's mantissa: leading zeros excluded, and trailing
+/// zeros of a mantissa without a decimal point too (`1621750100` has 8: shortest f32
+/// formatting pads large integers with zeros).
 pub(crate) fn sig_digits(tok: &[u8]) -> usize {
     let mut n = 0;
+    let mut zeros = 0; // trailing zeros so far
     let mut started = false;
+    let mut point = false;
     for &b in tok {
         match b {
             b'e' | b'E' => break,
+            b'.' => point = true,
             b'0' if !started => {}
-            b'0'..=b'9' => {
+            b'0' => {
+                n += 1;
+                zeros += 1;
+            }
+            b'1'..=b'9' => {
                 started = true;
                 n += 1;
+                zeros = 0;
             }
             _ => {}
         }
     }
-    n
+    if point { n } else { n - zeros }
 }
 
 /// The f32 reading of a coordinate token when it looks like float data (see above).
@@ -239,7 +249,7 @@ impl PositionFormat {
     /// Chooses the rendering; `Err(vertex)` if f32-typed positions overflow f32.
     pub(crate) fn new(mesh: &crate::mesh::PolygonMesh) -> Result<Self, usize> {
         let f32_exact = |x: f64| (x as f32) as f64 == x;
-        let typed_f32 = matches!(mesh.position_type, Some(t) if t != crate::mesh::ScalarType::F64);
+        let typed_f32 = mesh.position_type == Some(crate::mesh::ScalarType::F32);
         if typed_f32 {
             if let Some(i) = mesh.positions.iter().position(|p| !p.as_vec3().is_finite()) {
                 return Err(i);
@@ -312,6 +322,11 @@ mod tests {
         assert_eq!(sig_digits(b"-0.000123e5"), 3);
         assert_eq!(sig_digits(b"1.000000"), 7);
         assert_eq!(sig_digits(b"-0"), 0);
+        assert_eq!(sig_digits(b"-1621750100"), 8);
+        assert_eq!(sig_digits(b"1621750100.0"), 11);
+        let mut s = String::new();
+        push_f32(&mut s, -1621750124.1845002f64 as f32);
+        assert!(as_float_data(s.as_bytes(), -1621750144.0).is_some(), "{s}");
         assert!(as_float_data(b"0.471660", 0.47166).is_some());
         assert!(as_float_data(b"0.1000000001", 0.1000000001).is_none());
         assert!(as_float_data(b"1e-50", 1e-50).is_none());
