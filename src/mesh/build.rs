@@ -17,7 +17,9 @@
 //! faces keep the order of the triangles they come from. [`SourceMap`] maps mesh vertices and
 //! faces back onto the input, so processed results can be written in the user's layout.
 
-use super::halfedge::{FaceId, FaceRecord, HalfedgeId, HalfedgeRecord, Mesh, VertexId, VertexRecord};
+use super::halfedge::{
+    FaceId, FaceRecord, HalfedgeId, HalfedgeRecord, Mesh, VertexId, VertexRecord,
+};
 use super::polygon::PolygonMesh;
 use glam::DVec3;
 use serde::Serialize;
@@ -182,7 +184,10 @@ impl Mesh {
     }
 
     /// Builds from positions and triangles (a convenience over [`Mesh::from_polygons`]).
-    pub fn from_triangles(positions: &[DVec3], triangles: &[[u32; 3]]) -> Result<Built, BuildError> {
+    pub fn from_triangles(
+        positions: &[DVec3],
+        triangles: &[[u32; 3]],
+    ) -> Result<Built, BuildError> {
         Mesh::from_polygons(&PolygonMesh::from_triangles(positions.to_vec(), triangles))
     }
 }
@@ -321,7 +326,10 @@ fn build_triangles(
                 }
             }
         }
-        let flipped = component.iter().filter(|&&t| state[t as usize] == 2).count();
+        let flipped = component
+            .iter()
+            .filter(|&&t| state[t as usize] == 2)
+            .count();
         if 2 * flipped > component.len() {
             for &t in &component {
                 state[t as usize] = 3 - state[t as usize];
@@ -332,7 +340,11 @@ fn build_triangles(
     let mut mate2 = vec![NONE; nh];
     let remap = |state: &[u8], c: u32| -> u32 {
         let t = c / 3;
-        if state[t as usize] == 2 { 3 * t + (2 - c % 3) } else { c }
+        if state[t as usize] == 2 {
+            3 * t + (2 - c % 3)
+        } else {
+            c
+        }
     };
     for c in 0..nh as u32 {
         if mate[c as usize] != NONE {
@@ -402,7 +414,8 @@ fn build_triangles(
     // Pinched vertices: several fans although no cut or non-manifold edge touches them.
     // (A boundary edge that simply has one triangle is unpaired too, so test the vertex's
     // edges for having more than one triangle.)
-    report.non_manifold_vertices = count_pinched(&tris, &mate, &vstarts, &vitems, &vertex_source, nv);
+    report.non_manifold_vertices =
+        count_pinched(&tris, &mate, &vstarts, &vitems, &vertex_source, nv);
 
     // --- 4. assemble the half-edge structure.
     let n_total = vertex_source.len();
