@@ -10,5 +10,7 @@
 pub mod cli;
 pub mod io;
 pub mod mesh;
+pub mod plot;
 pub mod progress;
 pub mod relax;
+pub mod render;
