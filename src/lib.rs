@@ -8,6 +8,7 @@
 #![warn(missing_docs)]
 
 pub mod cli;
+pub mod format;
 pub mod io;
 pub mod mesh;
 pub mod plot;

@@ -42,8 +42,7 @@ pub struct BarProgress<'a>(pub &'a ProgressBar);
 
 impl crate::progress::Progress for BarProgress<'_> {
     fn update(&self, fraction: f64) {
-        self.0
-            .set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
+        self.0.set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
     }
 }
 

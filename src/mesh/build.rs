@@ -17,9 +17,7 @@
 //! faces keep the order of the triangles they come from. [`SourceMap`] maps mesh vertices and
 //! faces back onto the input, so processed results can be written in the user's layout.
 
-use super::halfedge::{
-    FaceId, FaceRecord, HalfedgeId, HalfedgeRecord, Mesh, VertexId, VertexRecord,
-};
+use super::halfedge::{FaceId, FaceRecord, HalfedgeRecord, Mesh, VertexId, VertexRecord};
 use super::polygon::PolygonMesh;
 use glam::DVec3;
 use serde::Serialize;
@@ -192,43 +190,48 @@ impl Mesh {
     }
 }
 
-/// Union-find over corners, with path halving.
-fn find(parent: &mut [u32], mut x: u32) -> u32 {
-    while parent[x as usize] != x {
-        let p = parent[parent[x as usize] as usize];
-        parent[x as usize] = p;
-        x = p;
-    }
-    x
-}
-
-fn union(parent: &mut [u32], a: u32, b: u32) {
-    let (ra, rb) = (find(parent, a), find(parent, b));
-    // Smaller root wins so the result does not depend on the order of unions.
-    if ra < rb {
-        parent[rb as usize] = ra;
-    } else if rb < ra {
-        parent[ra as usize] = rb;
-    }
-}
-
-/// Counting sort of `0..keys.len()` by `keys` into CSR form (`starts`, `items`).
-fn bucket(keys: impl Iterator<Item = u32> + Clone, n_buckets: usize) -> (Vec<u32>, Vec<u32>) {
+/// Counting sort of `0..n` by `key(i)` into CSR form (`starts`, `items`).
+fn bucket(n: usize, n_buckets: usize, key: impl Fn(u32) -> u32) -> (Vec<u32>, Vec<u32>) {
     let mut starts = vec![0u32; n_buckets + 1];
-    for k in keys.clone() {
-        starts[k as usize + 1] += 1;
+    for i in 0..n as u32 {
+        starts[key(i) as usize + 1] += 1;
     }
     for i in 0..n_buckets {
         starts[i + 1] += starts[i];
     }
-    let mut fill = starts.clone();
-    let mut items = vec![0u32; starts[n_buckets] as usize];
-    for (i, k) in keys.enumerate() {
-        items[fill[k as usize] as usize] = i as u32;
-        fill[k as usize] += 1;
+    let mut fill = starts[..n_buckets].to_vec();
+    let mut items = vec![0u32; n];
+    for i in 0..n as u32 {
+        let k = key(i) as usize;
+        items[fill[k] as usize] = i;
+        fill[k] += 1;
     }
     (starts, items)
 }
+
+/// The handle a fresh slotmap gives its `i`-th insertion. Lets the builder wire `next`,
+/// `prev` and `twin` before the targets exist, without a handle table; every insertion is
+/// checked against it in debug builds.
+#[inline]
+fn fresh_key<K: slotmap::Key>(i: usize) -> K {
+    // slotmap keys are (version << 32 | slot); slot 0 is the sentinel, occupied versions are odd.
+    K::from(slotmap::KeyData::from_ffi((1u64 << 32) | (i as u64 + 1)))
+}
+
+/// Half-edge `c = 3t + k` runs from corner `k` of triangle `t` to corner `k + 1`.
+#[inline]
+fn next_c(c: u32) -> u32 {
+    if c % 3 == 2 { c - 2 } else { c + 1 }
+}
+
+#[inline]
+fn prev_c(c: u32) -> u32 {
+    if c % 3 == 0 { c + 2 } else { c - 1 }
+}
+
+/// Per half-edge flag: its undirected edge has two or more triangles (so being unpaired
+/// means it was cut, not that it is a genuine boundary).
+const SHARED: u8 = 1;
 
 fn build_triangles(
     positions: &[DVec3],
@@ -238,86 +241,86 @@ fn build_triangles(
 ) -> (Mesh, SourceMap) {
     let nv = positions.len();
     let nt = input_tris.len();
-    let mut tris = input_tris.to_vec();
-    // Corner/half-edge c = 3t + k runs from tris[t][k] to tris[t][(k+1)%3].
-    let he_from = |tris: &[[u32; 3]], c: u32| tris[c as usize / 3][c as usize % 3];
-    let he_to = |tris: &[[u32; 3]], c: u32| tris[c as usize / 3][(c as usize % 3 + 1) % 3];
-
-    for t in &tris {
-        let [a, b, c] = t.map(|i| positions[i as usize]);
-        if (b - a).cross(c - a).length_squared() == 0.0 {
-            report.zero_area_faces += 1;
-        }
-    }
-
-    // --- 1. group half-edges by undirected edge: bucket by the smaller endpoint, then match
-    // the larger endpoint inside the (small) bucket. Linear time, deterministic.
     let nh = 3 * nt;
-    let (starts, items) = bucket(
-        (0..nh as u32).map(|c| he_from(&tris, c).min(he_to(&tris, c))),
-        nv,
-    );
+    let mut tris = std::borrow::Cow::Borrowed(input_tris);
+    let from = |tris: &[[u32; 3]], c: u32| tris[(c / 3) as usize][(c % 3) as usize];
+    let to = |tris: &[[u32; 3]], c: u32| from(tris, next_c(c));
+
+    report.zero_area_faces = tris
+        .iter()
+        .filter(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            (b - a).cross(c - a).length_squared() == 0.0
+        })
+        .count();
+
+    // --- 1. pair half-edges. Bucket by the smaller endpoint, then sort each (small) bucket
+    // by the larger one: linear overall, O(k log k) at a valence-k vertex, deterministic.
     let mut mate = vec![NONE; nh];
-    let mut scratch: Vec<(u32, u32)> = Vec::new();
-    for lo in 0..nv {
-        // Sorting the bucket by the far endpoint keeps high-valence vertices O(k log k).
-        scratch.clear();
-        scratch.extend(
-            items[starts[lo] as usize..starts[lo + 1] as usize]
-                .iter()
-                .map(|&c| (he_from(&tris, c).max(he_to(&tris, c)), c)),
-        );
-        scratch.sort_unstable();
-        for group in scratch.chunk_by(|a, b| a.0 == b.0) {
-            if group.len() < 2 {
+    let mut flags = vec![0u8; nh];
+    {
+        let (starts, items) = bucket(nh, nv, |c| from(&tris, c).min(to(&tris, c)));
+        let mut scratch: Vec<(u32, u32)> = Vec::new();
+        for lo in 0..nv {
+            let b = &items[starts[lo] as usize..starts[lo + 1] as usize];
+            if b.len() < 2 {
                 continue;
             }
-            let first = group[0].1;
-            let partner = if group.len() == 2 {
-                group[1].1
-            } else {
-                report.non_manifold_edges += 1;
-                let dir = he_from(&tris, first);
-                group[1..]
-                    .iter()
-                    .map(|g| g.1)
-                    .find(|&d| he_from(&tris, d) != dir)
-                    .unwrap_or(group[1].1)
-            };
-            mate[first as usize] = partner;
-            mate[partner as usize] = first;
+            scratch.clear();
+            scratch.extend(b.iter().map(|&c| (from(&tris, c).max(to(&tris, c)), c)));
+            scratch.sort_unstable();
+            for group in scratch.chunk_by(|a, b| a.0 == b.0) {
+                if group.len() < 2 {
+                    continue;
+                }
+                for g in group {
+                    flags[g.1 as usize] = SHARED;
+                }
+                let first = group[0].1;
+                let partner = if group.len() == 2 {
+                    group[1].1
+                } else {
+                    report.non_manifold_edges += 1;
+                    let dir = from(&tris, first);
+                    group[1..]
+                        .iter()
+                        .map(|g| g.1)
+                        .find(|&d| from(&tris, d) != dir)
+                        .unwrap_or(group[1].1)
+                };
+                mate[first as usize] = partner;
+                mate[partner as usize] = first;
+            }
         }
     }
 
-    // --- 2. consistent orientation per component (BFS over paired edges).
+    // --- 2. consistent orientation per component (breadth-first over paired edges).
     let mut state = vec![0u8; nt]; // 0 unvisited, 1 kept, 2 flipped
     let mut queue: Vec<u32> = Vec::new();
-    let mut component: Vec<u32> = Vec::new();
     for seed in 0..nt {
         if state[seed] != 0 {
             continue;
         }
         state[seed] = 1;
         queue.clear();
-        component.clear();
         queue.push(seed as u32);
         let mut qi = 0;
+        let mut flipped = 0usize;
         while qi < queue.len() {
             let t = queue[qi] as usize;
             qi += 1;
-            component.push(t as u32);
-            for k in 0..3 {
-                let c = (3 * t + k) as u32;
+            for c in 3 * t as u32..3 * t as u32 + 3 {
                 let m = mate[c as usize];
                 if m == NONE {
                     continue;
                 }
-                let u = m as usize / 3;
-                // Opposite directions agree when both triangles have the same state.
-                let same_dir = he_from(&tris, c) == he_from(&tris, m);
+                let u = (m / 3) as usize;
+                // Twins run opposite ways when both triangles share a state.
+                let same_dir = from(&tris, c) == from(&tris, m);
                 let want = if same_dir { 3 - state[t] } else { state[t] };
                 if state[u] == 0 {
                     state[u] = want;
+                    flipped += (want == 2) as usize;
                     queue.push(u as u32);
                 } else if state[u] != want {
                     mate[c as usize] = NONE;
@@ -326,237 +329,187 @@ fn build_triangles(
                 }
             }
         }
-        let flipped = component
-            .iter()
-            .filter(|&&t| state[t as usize] == 2)
-            .count();
-        if 2 * flipped > component.len() {
-            for &t in &component {
+        if 2 * flipped > queue.len() {
+            for &t in &queue {
                 state[t as usize] = 3 - state[t as usize];
             }
         }
     }
-    // Flip: [a,b,c] -> [a,c,b]; local edge j becomes edge 2 - j.
-    let mut mate2 = vec![NONE; nh];
-    let remap = |state: &[u8], c: u32| -> u32 {
-        let t = c / 3;
-        if state[t as usize] == 2 {
-            3 * t + (2 - c % 3)
-        } else {
-            c
+    if state.contains(&2) {
+        // Flip [a,b,c] -> [a,c,b]: local half-edge j becomes 2 - j (reversed).
+        let remap = |c: u32| {
+            if state[(c / 3) as usize] == 2 {
+                c - c % 3 + (2 - c % 3)
+            } else {
+                c
+            }
+        };
+        let mut mate2 = vec![NONE; nh];
+        let mut flags2 = vec![0u8; nh];
+        for c in 0..nh as u32 {
+            let m = mate[c as usize];
+            mate2[remap(c) as usize] = if m == NONE { NONE } else { remap(m) };
+            flags2[remap(c) as usize] = flags[c as usize];
         }
-    };
-    for c in 0..nh as u32 {
-        if mate[c as usize] != NONE {
-            mate2[remap(&state, c) as usize] = remap(&state, mate[c as usize]);
+        mate = mate2;
+        flags = flags2;
+        let t = tris.to_mut();
+        for (tri, &st) in t.iter_mut().zip(&state) {
+            if st == 2 {
+                tri.swap(1, 2);
+                report.flipped_faces += 1;
+            }
         }
     }
-    let mate = mate2;
-    for (t, tri) in tris.iter_mut().enumerate() {
-        if state[t] == 2 {
-            tri.swap(1, 2);
-            report.flipped_faces += 1;
-        }
-    }
+    drop(state);
+    let tris: &[[u32; 3]] = &tris;
 
-    // --- 3. split vertices into fans. Corner c = 3t + k sits at tris[t][k]; half-edge c leaves
-    // that corner, so across a pair (c, m) corner c meets corner next(m) and next(c) meets m.
-    let next_c = |c: u32| 3 * (c / 3) + (c % 3 + 1) % 3;
-    let mut parent: Vec<u32> = (0..nh as u32).collect();
-    for c in 0..nh as u32 {
-        let m = mate[c as usize];
-        if m != NONE && c < m {
-            union(&mut parent, c, next_c(m));
-            union(&mut parent, next_c(c), m);
-        }
-    }
-    let (vstarts, vitems) = bucket((0..nh as u32).map(|c| he_from(&tris, c)), nv);
-    let mut corner_vertex = vec![0u32; nh];
+    // --- 3. one mesh vertex per fan. Walk each fan through paired edges: across the
+    // out-going half-edge c the next corner at the same vertex is next(mate(c)); across the
+    // incoming one, prev(c), it is mate(prev(c)). The fan holding a vertex's first corner
+    // keeps the input vertex; later fans get copies, appended in order of discovery.
+    let mut corner_vertex = vec![NONE; nh];
     let mut vertex_source: Vec<u32> = (0..nv as u32).collect();
-    let mut roots: Vec<u32> = Vec::new();
-    for v in 0..nv {
-        let corners = &vitems[vstarts[v] as usize..vstarts[v + 1] as usize];
-        if corners.is_empty() {
-            report.unreferenced_vertices += 1;
+    let mut seen = vec![false; nv];
+    for c0 in 0..nh as u32 {
+        if corner_vertex[c0 as usize] != NONE {
             continue;
         }
-        roots.clear();
-        for &c in corners {
-            let r = find(&mut parent, c);
-            let slot = match roots.iter().position(|&x| x == r) {
-                Some(i) => i,
-                None => {
-                    roots.push(r);
-                    roots.len() - 1
-                }
-            };
-            corner_vertex[c as usize] = if slot == 0 {
-                v as u32
-            } else {
-                (nv + slot - 1) as u32 // provisional, fixed below
-            };
+        let v = from(tris, c0);
+        let id = if seen[v as usize] {
+            vertex_source.push(v);
+            (vertex_source.len() - 1) as u32
+        } else {
+            seen[v as usize] = true;
+            v
+        };
+        corner_vertex[c0 as usize] = id;
+        let mut c = c0;
+        let mut closed = false;
+        while mate[c as usize] != NONE {
+            c = next_c(mate[c as usize]);
+            if c == c0 {
+                closed = true;
+                break;
+            }
+            corner_vertex[c as usize] = id;
         }
-        if roots.len() > 1 {
-            // Real ids of the copies: appended in order of (vertex, fan).
-            let base = vertex_source.len() as u32;
-            for &c in corners {
-                let cv = corner_vertex[c as usize];
-                if cv != v as u32 {
-                    corner_vertex[c as usize] = base + (cv - nv as u32);
-                }
+        if !closed {
+            let mut c = c0;
+            while mate[prev_c(c) as usize] != NONE {
+                c = mate[prev_c(c) as usize];
+                corner_vertex[c as usize] = id;
             }
-            for _ in 1..roots.len() {
-                vertex_source.push(v as u32);
-            }
-            report.split_vertices += roots.len() - 1;
         }
     }
-    // Pinched vertices: several fans although no cut or non-manifold edge touches them.
-    // (A boundary edge that simply has one triangle is unpaired too, so test the vertex's
-    // edges for having more than one triangle.)
-    report.non_manifold_vertices =
-        count_pinched(&tris, &mate, &vstarts, &vitems, &vertex_source, nv);
+    report.unreferenced_vertices = seen.iter().filter(|s| !**s).count();
+    drop(seen);
+    report.split_vertices = vertex_source.len() - nv;
+    if report.split_vertices > 0 {
+        // Pinched vertices: split although no cut edge (unpaired but shared) touches them.
+        let mut split = vec![0u8; nv]; // 1 split, 2 split and touched by a cut edge
+        for &s in &vertex_source[nv..] {
+            split[s as usize] = 1;
+        }
+        for c in 0..nh as u32 {
+            let v = from(tris, c) as usize;
+            if split[v] == 1 {
+                let cut = |e: u32| mate[e as usize] == NONE && flags[e as usize] == SHARED;
+                if cut(c) || cut(prev_c(c)) {
+                    split[v] = 2;
+                }
+            }
+        }
+        report.non_manifold_vertices = split.iter().filter(|&&s| s == 1).count();
+    }
+    drop(flags);
 
-    // --- 4. assemble the half-edge structure.
+    // --- 4. assemble. Handles are predicted with `fresh_key`: half-edge c is insertion c,
+    // boundary half-edges follow in order of their interior twins.
     let n_total = vertex_source.len();
+    let mut boundary_index = vec![NONE; nh];
+    let mut n_boundary = 0u32;
+    for (c, &m) in mate.iter().enumerate() {
+        if m == NONE {
+            boundary_index[c] = nh as u32 + n_boundary;
+            n_boundary += 1;
+        }
+    }
+    // Per vertex its single boundary out-going and in-coming half-edge (unique after fan
+    // splitting). The boundary twin of c leaves c's head and arrives at c's tail.
+    let mut boundary_out = vec![NONE; n_total];
+    let mut boundary_in = vec![NONE; n_total];
+    for c in 0..nh as u32 {
+        let b = boundary_index[c as usize];
+        if b != NONE {
+            boundary_out[corner_vertex[next_c(c) as usize] as usize] = b;
+            boundary_in[corner_vertex[c as usize] as usize] = b;
+        }
+    }
     let mut mesh = Mesh::new();
     mesh.vertices.reserve(n_total);
-    let vids: Vec<VertexId> = vertex_source
-        .iter()
-        .map(|&s| {
-            mesh.vertices.insert(VertexRecord {
-                halfedge: None,
-                position: positions[s as usize],
-            })
-        })
-        .collect();
-    let n_boundary = mate.iter().filter(|&&m| m == NONE).count();
-    mesh.halfedges.reserve(nh + n_boundary);
-    mesh.faces.reserve(nt);
-    let null = HalfedgeId::default();
-    let hids: Vec<HalfedgeId> = (0..nh)
-        .map(|c| {
-            mesh.halfedges.insert(HalfedgeRecord {
-                to: vids[corner_vertex[next_c(c as u32) as usize] as usize],
-                next: null,
-                prev: null,
-                twin: null,
-                face: None,
-            })
-        })
-        .collect();
-    let fids: Vec<FaceId> = (0..nt)
-        .map(|t| {
-            mesh.faces.insert(FaceRecord {
-                halfedge: hids[3 * t],
-            })
-        })
-        .collect();
-    for c in 0..nh {
-        let t = c / 3;
-        let h = hids[c];
-        let r = &mut mesh.halfedges[h];
-        r.next = hids[3 * t + (c + 1) % 3];
-        r.prev = hids[3 * t + (c + 2) % 3];
-        r.face = Some(fids[t]);
-        if mate[c] != NONE {
-            r.twin = hids[mate[c] as usize];
-        }
-        let from = vids[corner_vertex[c] as usize];
-        mesh.vertices[from].halfedge.get_or_insert(h);
+    for (i, &s) in vertex_source.iter().enumerate() {
+        let halfedge = if boundary_out[i] != NONE {
+            Some(fresh_key(boundary_out[i] as usize))
+        } else {
+            None
+        };
+        let _k = mesh.vertices.insert(VertexRecord {
+            halfedge,
+            position: positions[s as usize],
+        });
+        debug_assert_eq!(_k, fresh_key(i));
     }
-    // Boundary half-edges, and per vertex its (unique, after splitting) boundary out-edge.
-    let mut boundary_out: Vec<Option<HalfedgeId>> = vec![None; n_total];
-    let mut boundary: Vec<(HalfedgeId, usize)> = Vec::with_capacity(n_boundary);
-    for c in 0..nh {
-        if mate[c] != NONE {
+    mesh.halfedges.reserve(nh + n_boundary as usize);
+    mesh.faces.reserve(nt);
+    for c in 0..nh as u32 {
+        let m = mate[c as usize];
+        let twin = if m != NONE {
+            m
+        } else {
+            boundary_index[c as usize]
+        };
+        let _k = mesh.halfedges.insert(HalfedgeRecord {
+            to: fresh_key(corner_vertex[next_c(c) as usize] as usize),
+            next: fresh_key(next_c(c) as usize),
+            prev: fresh_key(prev_c(c) as usize),
+            twin: fresh_key(twin as usize),
+            face: Some(fresh_key((c / 3) as usize)),
+        });
+        debug_assert_eq!(_k, fresh_key(c as usize));
+        let v = fresh_key::<VertexId>(corner_vertex[c as usize] as usize);
+        mesh.vertices[v].halfedge.get_or_insert(_k);
+    }
+    for c in 0..nh as u32 {
+        let b = boundary_index[c as usize];
+        if b == NONE {
             continue;
         }
-        let h = hids[c];
-        let from = corner_vertex[c] as usize;
-        let b = mesh.halfedges.insert(HalfedgeRecord {
-            to: vids[from],
-            next: null,
-            prev: null,
-            twin: h,
+        // b runs from c's head back to c's tail; the boundary loop goes on from the tail
+        // and comes in at the head.
+        let tail = corner_vertex[c as usize] as usize;
+        let head = corner_vertex[next_c(c) as usize] as usize;
+        let _k = mesh.halfedges.insert(HalfedgeRecord {
+            to: fresh_key(tail),
+            next: fresh_key(boundary_out[tail] as usize),
+            prev: fresh_key(boundary_in[head] as usize),
+            twin: fresh_key(c as usize),
             face: None,
         });
-        mesh.halfedges[h].twin = b;
-        // b runs to -> from of h, so it leaves the vertex at h's head.
-        let head = corner_vertex[next_c(c as u32) as usize] as usize;
-        boundary_out[head] = Some(b);
-        boundary.push((b, from));
+        debug_assert_eq!(_k, fresh_key(b as usize));
     }
-    for &(b, to) in &boundary {
-        if let Some(n) = boundary_out[to] {
-            mesh.halfedges[b].next = n;
-            mesh.halfedges[n].prev = b;
-        }
+    for t in 0..nt {
+        let _k = mesh.faces.insert(FaceRecord {
+            halfedge: fresh_key(3 * t),
+        });
+        debug_assert_eq!(_k, fresh_key::<FaceId>(t));
     }
-    for (i, &v) in vids.iter().enumerate() {
-        if let Some(b) = boundary_out[i] {
-            mesh.vertices[v].halfedge = Some(b);
-        }
-    }
-    let face_source = tri_source.to_vec();
     (
         mesh,
         SourceMap {
             vertex_source,
-            face_source,
+            face_source: tri_source.to_vec(),
             input_vertices: nv,
         },
     )
-}
-
-/// Counts input vertices with several fans when every undirected edge with exactly two
-/// triangles is considered joined (orientation ignored) — the classic "pinched vertex" test,
-/// independent of the cuts made for non-manifold edges.
-fn count_pinched(
-    tris: &[[u32; 3]],
-    mate: &[u32],
-    vstarts: &[u32],
-    vitems: &[u32],
-    vertex_source: &[u32],
-    nv: usize,
-) -> usize {
-    let mut split = vec![0u32; nv];
-    for &s in &vertex_source[nv..] {
-        split[s as usize] += 1;
-    }
-    let mut pinched = 0;
-    for v in 0..nv {
-        if split[v] == 0 {
-            continue;
-        }
-        // A vertex is "pinched" if none of its incident half-edges was cut from a partner
-        // (i.e. every unpaired half-edge at v is a genuine one-triangle boundary edge).
-        let corners = &vitems[vstarts[v] as usize..vstarts[v + 1] as usize];
-        let mut edge_ok = true;
-        for &c in corners {
-            for e in [c, 3 * (c / 3) + (c % 3 + 2) % 3] {
-                if mate[e as usize] == NONE && edge_multiplicity(tris, vitems, vstarts, e) > 1 {
-                    edge_ok = false;
-                }
-            }
-        }
-        if edge_ok {
-            pinched += 1;
-        }
-    }
-    pinched
-}
-
-/// Number of triangles on the undirected edge of half-edge `e`.
-fn edge_multiplicity(tris: &[[u32; 3]], vitems: &[u32], vstarts: &[u32], e: u32) -> usize {
-    let t = tris[e as usize / 3];
-    let (a, b) = (t[e as usize % 3], t[(e as usize % 3 + 1) % 3]);
-    let corners = &vitems[vstarts[a as usize] as usize..vstarts[a as usize + 1] as usize];
-    corners
-        .iter()
-        .filter(|&&c| {
-            let tt = tris[c as usize / 3];
-            tt.contains(&b)
-        })
-        .count()
 }

@@ -1,0 +1,44 @@
+//! Half-edge construction from indexed triangles (the builder alone; `io_read` adds parsing).
+
+use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use glam::DVec3;
+use meshpyr::mesh::{Mesh, PolygonMesh};
+use std::hint::black_box;
+
+/// A closed UV-sphere-like torus grid with `n*m*2` triangles (all vertices regular).
+fn torus(n: u32, m: u32) -> PolygonMesh {
+    let mut pos = Vec::with_capacity((n * m) as usize);
+    for i in 0..n {
+        for j in 0..m {
+            let (u, v) = (
+                i as f64 / n as f64 * std::f64::consts::TAU,
+                j as f64 / m as f64 * std::f64::consts::TAU,
+            );
+            let r = 2.0 + v.cos();
+            pos.push(DVec3::new(r * u.cos(), r * u.sin(), v.sin()));
+        }
+    }
+    let id = |i: u32, j: u32| (i % n) * m + (j % m);
+    let mut tris = Vec::with_capacity((2 * n * m) as usize);
+    for i in 0..n {
+        for j in 0..m {
+            tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    PolygonMesh::from_triangles(pos, &tris)
+}
+
+fn bench_build(c: &mut Criterion) {
+    let mesh = torus(1000, 500); // 1,000,000 triangles
+    let mut g = c.benchmark_group("build");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(mesh.n_faces() as u64));
+    g.bench_function("halfedge_from_polygons_1M_tris", |b| {
+        b.iter(|| Mesh::from_polygons(black_box(&mesh)).map(|b| b.mesh.n_faces()))
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench_build);
+criterion_main!(benches);

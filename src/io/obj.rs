@@ -1,0 +1,462 @@
+//! Wavefront OBJ reader and writer.
+//!
+//! Hand-written rather than built on `tobj`: tobj re-indexes vertices per model/group (its
+//! `add_vertex` keeps an index map per mesh), so vertex count and order are not kept and
+//! unreferenced vertices disappear, and its `LoadError` carries no line number. Here the
+//! vertices are exactly the `v` lines in file order, and every error names its line.
+//!
+//! What is read:
+//! - `v x y z [w] [r g b]`: positions (f64, `position_type` stays `None`); `w` becomes the
+//!   attribute `w` (f64, 1 where absent) when any vertex has one; colours become `red`, `green`,
+//!   `blue` (f32) when every vertex has them (otherwise they are dropped).
+//! - `vt u [v [w]]`, `vn x y z` and `f` corners `v`, `v/vt`, `v//vn`, `v/vt/vn` (negative indices
+//!   count back from the latest element). Texture coordinates and normals are per corner in
+//!   OBJ; they are kept as per-vertex attributes `u`,`v` and `nx`,`ny`,`nz` (f32) only when every
+//!   corner has one and each vertex is always used with the same value (unreferenced vertices
+//!   get 0). Otherwise positions and faces are kept exactly and the per-corner data is dropped
+//!   (a known limitation: OBJ seams need a split mesh, which is the mesh builder's business).
+//!   A third texture coordinate is dropped.
+//! - polygons are kept as they are (no triangulation).
+//! - `#` comments before the first statement become [`PolygonMesh::comments`]; `o`, `g`, `s`,
+//!   `usemtl`, `mtllib`, `l`, `p` and other statements are skipped (groups, smoothing groups,
+//!   materials, lines and points are not kept). Line continuation (`\`) and CRLF are handled.
+//!
+//! The writer emits the comments, `v` (with `w` and colours when those attributes exist),
+//! `vt` when `u`,`v` exist, `vn` when `nx`,`ny`,`nz` exist, and `f` lines. Other attributes
+//! have no place in OBJ and are not written.
+
+use std::fmt::Write as _;
+
+use glam::DVec3;
+
+use super::text::{self, Lines, TextPrecision};
+use super::{IoError, MeshFormat, err_invalid, err_line};
+use crate::mesh::{Attribute, AttributeData, PolygonMesh};
+
+const NONE: u32 = u32::MAX;
+
+/// One resolved face corner reference kind.
+struct IndexSpace {
+    /// Number of elements defined so far.
+    count: u64,
+    /// Largest positive (forward-capable) index seen and its line, validated at the end.
+    max: Option<(u64, u64)>,
+    what: &'static str,
+}
+
+impl IndexSpace {
+    fn new(what: &'static str) -> Self {
+        IndexSpace {
+            count: 0,
+            max: None,
+            what,
+        }
+    }
+
+    /// Resolves a 1-based or negative OBJ index to a 0-based one.
+    fn resolve(&mut self, tok: &[u8], line: u64) -> Result<u32, IoError> {
+        let i = text::parse_i64(tok).ok_or_else(|| {
+            err_line(line, format!("bad {} index {}", self.what, text::show(tok)))
+        })?;
+        if i > 0 {
+            let i = i as u64;
+            if i > u32::MAX as u64 - 1 {
+                return Err(err_line(
+                    line,
+                    format!("{} index {i} is too large", self.what),
+                ));
+            }
+            if self.max.is_none_or(|(m, _)| i > m) {
+                self.max = Some((i, line));
+            }
+            Ok((i - 1) as u32)
+        } else if i < 0 {
+            let back = i.unsigned_abs();
+            if back > self.count {
+                return Err(err_line(
+                    line,
+                    format!(
+                        "relative {} index {i} points before the first of {} {}s",
+                        self.what, self.count, self.what
+                    ),
+                ));
+            }
+            Ok((self.count - back) as u32)
+        } else {
+            Err(err_line(
+                line,
+                format!("{} index 0 (OBJ indices start at 1)", self.what),
+            ))
+        }
+    }
+
+    fn check(&self) -> Result<(), IoError> {
+        if let Some((m, line)) = self.max
+            && m > self.count
+        {
+            return Err(err_line(
+                line,
+                format!(
+                    "{} index {m} but the file has {} {}s",
+                    self.what, self.count, self.what
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Joins `\`-continued lines; yields (first line number, logical line).
+fn logical_lines(bytes: &[u8]) -> impl Iterator<Item = (u64, std::borrow::Cow<'_, [u8]>)> {
+    let mut lines = Lines::new(bytes, 1);
+    std::iter::from_fn(move || {
+        let (n, l) = lines.next()?;
+        if l.last() != Some(&b'\\') {
+            return Some((n, std::borrow::Cow::Borrowed(l)));
+        }
+        let mut buf = l[..l.len() - 1].to_vec();
+        buf.push(b' ');
+        for (_, next) in lines.by_ref() {
+            if next.last() == Some(&b'\\') {
+                buf.extend_from_slice(&next[..next.len() - 1]);
+                buf.push(b' ');
+            } else {
+                buf.extend_from_slice(next);
+                break;
+            }
+        }
+        Some((n, std::borrow::Cow::Owned(buf)))
+    })
+}
+
+fn parse_floats<const N: usize>(
+    toks: &[&[u8]],
+    line: u64,
+    what: &str,
+) -> Result<[f32; N], IoError> {
+    let mut out = [0f32; N];
+    for (o, t) in out.iter_mut().zip(toks) {
+        *o = text::parse_f32(t)
+            .ok_or_else(|| err_line(line, format!("bad {what} value {}", text::show(t))))?;
+    }
+    Ok(out)
+}
+
+/// Per-vertex value from per-corner references, if consistent.
+fn per_vertex<const N: usize>(
+    nv: usize,
+    corners_v: &[u32],
+    corners_x: &[u32],
+    values: &[[f32; N]],
+) -> Option<Vec<[f32; N]>> {
+    if corners_x.is_empty() {
+        // No faces: a point cloud with one vt/vn per v is kept in order.
+        return (nv > 0 && values.len() == nv).then(|| values.to_vec());
+    }
+    if corners_x.contains(&NONE) {
+        return None;
+    }
+    let mut out: Vec<Option<[f32; N]>> = vec![None; nv];
+    for (&v, &x) in corners_v.iter().zip(corners_x) {
+        let val = values[x as usize];
+        match &out[v as usize] {
+            None => out[v as usize] = Some(val),
+            Some(old) => {
+                if old
+                    .iter()
+                    .zip(&val)
+                    .any(|(a, b)| a.to_bits() != b.to_bits())
+                {
+                    return None;
+                }
+            }
+        }
+    }
+    Some(out.into_iter().map(|o| o.unwrap_or([0.0; N])).collect())
+}
+
+/// Reads an OBJ file.
+pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
+    let mut mesh = PolygonMesh::new();
+    let mut colours: Vec<[f32; 3]> = Vec::new();
+    let mut all_coloured = true;
+    let mut ws: Vec<(u32, f64)> = Vec::new();
+    let mut texcoords: Vec<[f32; 2]> = Vec::new();
+    let mut normals: Vec<[f32; 3]> = Vec::new();
+    let mut corner_vt: Vec<u32> = Vec::new();
+    let mut corner_vn: Vec<u32> = Vec::new();
+    let mut vs = IndexSpace::new("vertex");
+    let mut vts = IndexSpace::new("texture coordinate");
+    let mut vns = IndexSpace::new("normal");
+    let mut in_preamble = true;
+
+    for (line, l) in logical_lines(bytes) {
+        let (data, comment) = match l.iter().position(|&b| b == b'#') {
+            Some(i) => (&l[..i], Some(&l[i + 1..])),
+            None => (&l[..], None),
+        };
+        let toks: Vec<&[u8]> = text::tokens(data).collect();
+        let Some((&kw, args)) = toks.split_first() else {
+            if in_preamble && let Some(c) = comment {
+                let c = c.strip_prefix(b" ").unwrap_or(c);
+                mesh.comments
+                    .push(String::from_utf8_lossy(text::strip_cr(c)).into_owned());
+            }
+            continue;
+        };
+        in_preamble = false;
+        match kw {
+            b"v" => {
+                let n = args.len();
+                if !matches!(n, 3 | 4 | 6 | 7) {
+                    return Err(err_line(
+                        line,
+                        format!("a v line needs x y z [w] [r g b], found {n} values"),
+                    ));
+                }
+                let mut p = [0f64; 3];
+                for (o, t) in p.iter_mut().zip(args) {
+                    *o = text::parse_f64(t).ok_or_else(|| {
+                        err_line(line, format!("bad coordinate {}", text::show(t)))
+                    })?;
+                }
+                let idx = mesh.positions.len();
+                if !p.iter().all(|c| c.is_finite()) {
+                    return Err(err_line(
+                        line,
+                        format!("vertex {} has a non-finite coordinate", idx + 1),
+                    ));
+                }
+                if idx >= u32::MAX as usize {
+                    return Err(err_line(line, "more than 2^32 - 1 vertices"));
+                }
+                mesh.positions.push(DVec3::from_array(p));
+                vs.count += 1;
+                if n == 4 || n == 7 {
+                    let w = text::parse_f64(args[3])
+                        .ok_or_else(|| err_line(line, format!("bad w {}", text::show(args[3]))))?;
+                    ws.push((idx as u32, w));
+                }
+                if n >= 6 {
+                    let c: [f32; 3] = parse_floats(&args[n - 3..], line, "colour")?;
+                    if all_coloured {
+                        colours.push(c);
+                    }
+                } else {
+                    all_coloured = false;
+                    colours = Vec::new();
+                }
+            }
+            b"vt" => {
+                if !(1..=3).contains(&args.len()) {
+                    return Err(err_line(line, "a vt line needs 1 to 3 values"));
+                }
+                let mut uv: [f32; 2] = [0.0; 2];
+                let vals: [f32; 3] = parse_floats(args, line, "texture coordinate")?;
+                uv.copy_from_slice(&vals[..2]);
+                if args.len() == 1 {
+                    uv[1] = 0.0;
+                }
+                texcoords.push(uv);
+                vts.count += 1;
+            }
+            b"vn" => {
+                if args.len() != 3 {
+                    return Err(err_line(line, "a vn line needs 3 values"));
+                }
+                normals.push(parse_floats(args, line, "normal")?);
+                vns.count += 1;
+            }
+            b"f" => {
+                if args.is_empty() {
+                    return Err(err_line(line, "a face without vertices"));
+                }
+                for corner in args {
+                    let mut parts = corner.split(|&b| b == b'/');
+                    let v = parts.next().unwrap_or(b"");
+                    let vt = parts.next().filter(|t| !t.is_empty());
+                    let vn = parts.next().filter(|t| !t.is_empty());
+                    if parts.next().is_some() {
+                        return Err(err_line(
+                            line,
+                            format!("bad face corner {}", text::show(corner)),
+                        ));
+                    }
+                    mesh.face_indices.push(vs.resolve(v, line)?);
+                    corner_vt.push(match vt {
+                        Some(t) => vts.resolve(t, line)?,
+                        None => NONE,
+                    });
+                    corner_vn.push(match vn {
+                        Some(t) => vns.resolve(t, line)?,
+                        None => NONE,
+                    });
+                }
+                let len = u32::try_from(mesh.face_indices.len())
+                    .map_err(|_| err_line(line, "more than 2^32 - 1 face corners"))?;
+                mesh.face_starts.push(len);
+            }
+            k if k.iter().all(|b| b.is_ascii_alphanumeric() || *b == b'_') => {
+                // o, g, s, usemtl, mtllib, l, p, curves, … : tolerated, not kept.
+            }
+            k => {
+                return Err(err_line(
+                    line,
+                    format!("unknown statement {}", text::show(k)),
+                ));
+            }
+        }
+    }
+    vs.check()?;
+    vts.check()?;
+    vns.check()?;
+
+    let nv = mesh.positions.len();
+    if !ws.is_empty() {
+        let mut w = vec![1.0f64; nv];
+        for (i, x) in ws {
+            w[i as usize] = x;
+        }
+        mesh.vertex_attributes.push(Attribute {
+            name: "w".into(),
+            data: AttributeData::F64(w),
+        });
+    }
+    if all_coloured && nv > 0 {
+        for (k, name) in ["red", "green", "blue"].into_iter().enumerate() {
+            mesh.vertex_attributes.push(Attribute {
+                name: name.into(),
+                data: AttributeData::F32(colours.iter().map(|c| c[k]).collect()),
+            });
+        }
+    }
+    if let Some(uv) = per_vertex(nv, &mesh.face_indices, &corner_vt, &texcoords) {
+        for (k, name) in ["u", "v"].into_iter().enumerate() {
+            mesh.vertex_attributes.push(Attribute {
+                name: name.into(),
+                data: AttributeData::F32(uv.iter().map(|c| c[k]).collect()),
+            });
+        }
+    }
+    if let Some(n) = per_vertex(nv, &mesh.face_indices, &corner_vn, &normals) {
+        for (k, name) in ["nx", "ny", "nz"].into_iter().enumerate() {
+            mesh.vertex_attributes.push(Attribute {
+                name: name.into(),
+                data: AttributeData::F32(n.iter().map(|c| c[k]).collect()),
+            });
+        }
+    }
+    Ok(mesh)
+}
+
+/// A float-typed vertex attribute column, or `None`.
+fn float_col<'a>(mesh: &'a PolygonMesh, name: &str) -> Option<&'a AttributeData> {
+    mesh.vertex_attribute(name)
+        .map(|a| &a.data)
+        .filter(|d| matches!(d, AttributeData::F32(_) | AttributeData::F64(_)))
+}
+
+fn push_attr(out: &mut String, d: &AttributeData, i: usize) {
+    match d {
+        AttributeData::F32(v) => text::push_f32(out, v[i]),
+        AttributeData::U8(v) => text::push_f32(out, v[i] as f32 / 255.0),
+        _ => text::push_f64(out, d.get_f64(i)),
+    }
+}
+
+/// Writes an OBJ file.
+pub fn write(mesh: &PolygonMesh) -> Result<Vec<u8>, IoError> {
+    let prec = TextPrecision::for_positions(mesh.position_type);
+    let w = float_col(mesh, "w");
+    let colour_cols: Vec<&AttributeData> = ["red", "green", "blue"]
+        .iter()
+        .filter_map(|n| {
+            mesh.vertex_attribute(n).map(|a| &a.data).filter(|d| {
+                matches!(
+                    d,
+                    AttributeData::F32(_) | AttributeData::F64(_) | AttributeData::U8(_)
+                )
+            })
+        })
+        .collect();
+    let colours = (colour_cols.len() == 3).then_some(colour_cols);
+    let uv = float_col(mesh, "u").zip(float_col(mesh, "v"));
+    let normals = match (
+        float_col(mesh, "nx"),
+        float_col(mesh, "ny"),
+        float_col(mesh, "nz"),
+    ) {
+        (Some(a), Some(b), Some(c)) => Some([a, b, c]),
+        _ => None,
+    };
+
+    let mut s = String::with_capacity(mesh.positions.len() * 30 + mesh.face_indices.len() * 8);
+    for c in &mesh.comments {
+        if c.contains('\n') || c.ends_with(['\r', '\\']) {
+            return Err(err_invalid(
+                MeshFormat::Obj,
+                format!("comment {c:?} has a line break"),
+            ));
+        }
+        let _ = writeln!(s, "# {c}");
+    }
+    for (i, p) in mesh.positions.iter().enumerate() {
+        s.push('v');
+        for c in p.to_array() {
+            s.push(' ');
+            prec.push(&mut s, c).ok_or_else(|| {
+                err_invalid(MeshFormat::Obj, format!("vertex {i} does not fit in float"))
+            })?;
+        }
+        if let Some(w) = w {
+            s.push(' ');
+            push_attr(&mut s, w, i);
+        }
+        if let Some(cols) = &colours {
+            for c in cols {
+                s.push(' ');
+                push_attr(&mut s, c, i);
+            }
+        }
+        s.push('\n');
+    }
+    if let Some((u, v)) = uv {
+        for i in 0..mesh.positions.len() {
+            s.push_str("vt ");
+            push_attr(&mut s, u, i);
+            s.push(' ');
+            push_attr(&mut s, v, i);
+            s.push('\n');
+        }
+    }
+    if let Some(n) = &normals {
+        for i in 0..mesh.positions.len() {
+            s.push_str("vn");
+            for c in n {
+                s.push(' ');
+                push_attr(&mut s, c, i);
+            }
+            s.push('\n');
+        }
+    }
+    for (f, face) in mesh.faces().enumerate() {
+        if face.is_empty() {
+            return Err(err_invalid(
+                MeshFormat::Obj,
+                format!("face {f} has no vertices"),
+            ));
+        }
+        s.push('f');
+        for &v in face {
+            let k = v as u64 + 1;
+            let _ = match (uv.is_some(), normals.is_some()) {
+                (false, false) => write!(s, " {k}"),
+                (true, false) => write!(s, " {k}/{k}"),
+                (false, true) => write!(s, " {k}//{k}"),
+                (true, true) => write!(s, " {k}/{k}/{k}"),
+            };
+        }
+        s.push('\n');
+    }
+    Ok(s.into_bytes())
+}
