@@ -37,6 +37,20 @@ fn bench_build(c: &mut Criterion) {
     g.bench_function("halfedge_from_polygons_1M_tris", |b| {
         b.iter(|| Mesh::from_polygons(black_box(&mesh)).map(|b| b.mesh.n_faces()))
     });
+    let bytes = meshpyr::io::write_mesh_bytes(
+        &mesh,
+        meshpyr::io::MeshFormat::Ply,
+        &meshpyr::io::WriteOptions::default(),
+    )
+    .expect("writes");
+    g.bench_function("binary_ply_read_and_build_1M_tris", |b| {
+        b.iter(|| {
+            let poly =
+                meshpyr::io::read_mesh_bytes(black_box(&bytes), meshpyr::io::MeshFormat::Ply)
+                    .expect("reads");
+            Mesh::from_polygons(&poly).map(|b| b.mesh.n_faces())
+        })
+    });
     g.finish();
 }
 

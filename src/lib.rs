@@ -3,7 +3,7 @@
 //! A multiresolution mesh editing engine built on a progressive-mesh hierarchy.
 //!
 //! Modules, one concept each: [`mesh`] (file-level polygons and the half-edge mesh),
-//! [`io`] (OBJ/PLY/OFF/STL), [`relax`] (relaxation operators), and [`cli`] (the `meshpyr`
+//! [`io`] (OBJ/PLY/OFF/STL), [`pm`] (the progressive mesh), [`relax`] (relaxation operators), and [`cli`] (the `meshpyr`
 //! command line).
 #![warn(missing_docs)]
 
@@ -12,6 +12,7 @@ pub mod format;
 pub mod io;
 pub mod mesh;
 pub mod plot;
+pub mod pm;
 pub mod progress;
 pub mod relax;
 pub mod render;

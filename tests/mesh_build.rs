@@ -66,7 +66,10 @@ fn closed_tetrahedron_is_clean() {
     b.mesh.validate().unwrap();
     assert!(!b.report.repaired_anything());
     let topo = b.mesh.topology();
-    assert_eq!((topo.edges, topo.boundary_loops, topo.components), (6, 0, 1));
+    assert_eq!(
+        (topo.edges, topo.boundary_loops, topo.components),
+        (6, 0, 1)
+    );
     assert_eq!(topo.euler_characteristic, 2);
     assert_eq!(topo.genus, Some(0));
     for v in b.mesh.vertices() {
@@ -81,7 +84,10 @@ fn grid_has_one_boundary_loop_and_keeps_order() {
     let b = Mesh::from_triangles(&pos, &t).unwrap();
     b.mesh.validate().unwrap();
     let topo = b.mesh.topology();
-    assert_eq!((topo.boundary_loops, topo.components, topo.genus), (1, 1, Some(0)));
+    assert_eq!(
+        (topo.boundary_loops, topo.components, topo.genus),
+        (1, 1, Some(0))
+    );
     assert_eq!(b.mesh.positions(), pos);
     let (p2, t2) = b.mesh.to_triangles();
     assert_eq!(p2, pos);
@@ -102,7 +108,13 @@ fn torus_has_genus_one() {
 #[test]
 fn pinched_vertex_is_split() {
     // Two triangles touching at vertex 0 only (a bow tie).
-    let pos = vec![p(0., 0., 0.), p(1., 0., 0.), p(1., 1., 0.), p(-1., 0., 0.), p(-1., -1., 0.)];
+    let pos = vec![
+        p(0., 0., 0.),
+        p(1., 0., 0.),
+        p(1., 1., 0.),
+        p(-1., 0., 0.),
+        p(-1., -1., 0.),
+    ];
     let b = Mesh::from_triangles(&pos, &[[0, 1, 2], [0, 3, 4]]).unwrap();
     b.mesh.validate().unwrap();
     assert_eq!(b.report.split_vertices, 1);
@@ -116,7 +128,13 @@ fn pinched_vertex_is_split() {
 #[test]
 fn non_manifold_edge_is_cut() {
     // Three triangles on edge 0-1 (a book with three pages).
-    let pos = vec![p(0., 0., 0.), p(1., 0., 0.), p(0.5, 1., 0.), p(0.5, -1., 0.), p(0.5, 0., 1.)];
+    let pos = vec![
+        p(0., 0., 0.),
+        p(1., 0., 0.),
+        p(0.5, 1., 0.),
+        p(0.5, -1., 0.),
+        p(0.5, 0., 1.),
+    ];
     let b = Mesh::from_triangles(&pos, &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]).unwrap();
     b.mesh.validate().unwrap();
     assert_eq!(b.report.non_manifold_edges, 1);
@@ -151,7 +169,11 @@ fn moebius_strip_is_cut_once() {
     let mut t = Vec::new();
     for i in 0..n {
         let (a0, a1) = (2 * i, 2 * i + 1);
-        let (b0, b1) = if i + 1 < n { (2 * i + 2, 2 * i + 3) } else { (1, 0) };
+        let (b0, b1) = if i + 1 < n {
+            (2 * i + 2, 2 * i + 3)
+        } else {
+            (1, 0)
+        };
         t.push([a0, b0, b1]);
         t.push([a0, b1, a1]);
     }
@@ -163,7 +185,13 @@ fn moebius_strip_is_cut_once() {
 #[test]
 fn polygons_are_triangulated_and_degenerates_dropped() {
     let mut m = PolygonMesh::new();
-    m.positions = vec![p(0., 0., 0.), p(1., 0., 0.), p(1., 1., 0.), p(0., 1., 0.), p(5., 5., 5.)];
+    m.positions = vec![
+        p(0., 0., 0.),
+        p(1., 0., 0.),
+        p(1., 1., 0.),
+        p(0., 1., 0.),
+        p(5., 5., 5.),
+    ];
     m.push_face(&[0, 1, 2, 3]); // quad -> 2 triangles
     m.push_face(&[0, 1, 1]); // repeated index -> dropped
     m.push_face(&[0, 1]); // too short -> nothing
@@ -204,7 +232,10 @@ fn high_valence_fan() {
     let t: Vec<[u32; 3]> = (0..k).map(|i| [0, 1 + i, 1 + (i + 1) % k]).collect();
     let b = Mesh::from_triangles(&pos, &t).unwrap();
     b.mesh.validate().unwrap();
-    assert_eq!(b.mesh.valence(b.mesh.vertices().next().unwrap()), k as usize);
+    assert_eq!(
+        b.mesh.valence(b.mesh.vertices().next().unwrap()),
+        k as usize
+    );
 }
 
 fn soup() -> impl Strategy<Value = PolygonMesh> {

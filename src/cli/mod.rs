@@ -1,6 +1,10 @@
 //! The `meshpyr` command line: one subcommand per module. Each subcommand lives in its own file
 //! with a clap `Args` struct and a `run` function.
 
+mod convert;
+mod demo;
+mod info;
+
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use std::io::IsTerminal;
@@ -42,7 +46,8 @@ pub struct BarProgress<'a>(pub &'a ProgressBar);
 
 impl crate::progress::Progress for BarProgress<'_> {
     fn update(&self, fraction: f64) {
-        self.0.set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
+        self.0
+            .set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
     }
 }
 
@@ -57,11 +62,21 @@ pub struct Cli {
 }
 
 #[derive(Subcommand, Debug)]
-enum Command {}
+enum Command {
+    /// Counts, topology, size, and what a repair would change.
+    Info(info::InfoArgs),
+    /// Convert between OBJ, PLY, OFF and STL, keeping the data as it is.
+    Convert(convert::ConvertArgs),
+    /// Run the main job on the bundled scan and write the results to a directory.
+    Demo(demo::DemoArgs),
+}
 
 fn run(command: Command, global: &Global) -> anyhow::Result<()> {
-    let _ = global;
-    match command {}
+    match command {
+        Command::Info(a) => info::run(a, global),
+        Command::Convert(a) => convert::run(a, global),
+        Command::Demo(a) => demo::run(a, global),
+    }
 }
 
 /// Parses the command line and runs the subcommand; returns the process exit code.

@@ -226,7 +226,7 @@ fn next_c(c: u32) -> u32 {
 
 #[inline]
 fn prev_c(c: u32) -> u32 {
-    if c % 3 == 0 { c + 2 } else { c - 1 }
+    if c.is_multiple_of(3) { c + 2 } else { c - 1 }
 }
 
 /// Per half-edge flag: its undirected edge has two or more triangles (so being unpaired
@@ -258,6 +258,7 @@ fn build_triangles(
     // by the larger one: linear overall, O(k log k) at a valence-k vertex, deterministic.
     let mut mate = vec![NONE; nh];
     let mut flags = vec![0u8; nh];
+    let mut any_same_direction = false;
     {
         let (starts, items) = bucket(nh, nv, |c| from(&tris, c).min(to(&tris, c)));
         let mut scratch: Vec<(u32, u32)> = Vec::new();
@@ -288,14 +289,17 @@ fn build_triangles(
                         .find(|&d| from(&tris, d) != dir)
                         .unwrap_or(group[1].1)
                 };
+                any_same_direction |= from(&tris, first) == from(&tris, partner);
                 mate[first as usize] = partner;
                 mate[partner as usize] = first;
             }
         }
     }
 
-    // --- 2. consistent orientation per component (breadth-first over paired edges).
-    let mut state = vec![0u8; nt]; // 0 unvisited, 1 kept, 2 flipped
+    // --- 2. consistent orientation per component (breadth-first over paired edges). When
+    // every pair already runs in opposite directions the given orientation is consistent (a
+    // non-orientable surface always has a same-direction pair), so the walk is skipped.
+    let mut state = vec![if any_same_direction { 0u8 } else { 1 }; nt]; // 0 unvisited, 1 kept, 2 flipped
     let mut queue: Vec<u32> = Vec::new();
     for seed in 0..nt {
         if state[seed] != 0 {

@@ -249,11 +249,7 @@ impl Mesh {
     pub fn face_vertices(&self, f: FaceId) -> [VertexId; 3] {
         let h = self.faces[f].halfedge;
         let r = &self.halfedges[h];
-        [
-            self.halfedges[r.prev].to,
-            r.to,
-            self.halfedges[r.next].to,
-        ]
+        [self.halfedges[r.prev].to, r.to, self.halfedges[r.next].to]
     }
 
     /// The three half-edges of `f`, starting at its stored half-edge.

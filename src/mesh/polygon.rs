@@ -280,12 +280,20 @@ impl PolygonMesh {
         }
         for a in &self.vertex_attributes {
             if a.data.len() != nv {
-                return Err(format!("vertex attribute {} has {} rows", a.name, a.data.len()));
+                return Err(format!(
+                    "vertex attribute {} has {} rows",
+                    a.name,
+                    a.data.len()
+                ));
             }
         }
         for a in &self.face_attributes {
             if a.data.len() != self.n_faces() {
-                return Err(format!("face attribute {} has {} rows", a.name, a.data.len()));
+                return Err(format!(
+                    "face attribute {} has {} rows",
+                    a.name,
+                    a.data.len()
+                ));
             }
         }
         Ok(())

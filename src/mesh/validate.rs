@@ -117,7 +117,9 @@ impl Mesh {
                 return fail(format!("vertex {v:?}: several boundary out-edges"));
             }
             if boundary_seen == 1 && !self.is_boundary_halfedge(h0) {
-                return fail(format!("vertex {v:?}: boundary vertex stores an interior half-edge"));
+                return fail(format!(
+                    "vertex {v:?}: boundary vertex stores an interior half-edge"
+                ));
             }
         }
         Ok(())

@@ -1,0 +1,52 @@
+//! `meshpyr convert IN OUT`: any supported format to any other, data kept as it is.
+
+use super::Global;
+use crate::io::{self, PlyEncoding, WriteOptions};
+use std::path::PathBuf;
+
+/// PLY encodings selectable on the command line.
+#[derive(clap::ValueEnum, Clone, Copy, Debug)]
+pub enum PlyEncodingArg {
+    /// Text.
+    Ascii,
+    /// Binary little endian (the default).
+    BinaryLe,
+    /// Binary big endian.
+    BinaryBe,
+}
+
+/// Arguments of `meshpyr convert`.
+#[derive(clap::Args, Debug)]
+pub struct ConvertArgs {
+    /// Input mesh (.obj, .ply, .off, .stl).
+    pub input: PathBuf,
+    /// Output mesh; the format follows the extension.
+    pub output: PathBuf,
+    /// Encoding of PLY output.
+    #[arg(long, value_enum, default_value = "binary-le")]
+    pub ply_encoding: PlyEncodingArg,
+    /// Write STL as text instead of binary.
+    #[arg(long)]
+    pub stl_ascii: bool,
+}
+
+/// Runs `meshpyr convert`.
+pub fn run(args: ConvertArgs, global: &Global) -> anyhow::Result<()> {
+    let mesh = io::read_mesh(&args.input)?;
+    let opts = WriteOptions {
+        ply_encoding: match args.ply_encoding {
+            PlyEncodingArg::Ascii => PlyEncoding::Ascii,
+            PlyEncodingArg::BinaryLe => PlyEncoding::BinaryLittleEndian,
+            PlyEncodingArg::BinaryBe => PlyEncoding::BinaryBigEndian,
+        },
+        stl_binary: !args.stl_ascii,
+    };
+    io::write_mesh_with(&args.output, &mesh, &opts)?;
+    global.say(format_args!(
+        "wrote {} ({} vertices, {} faces)",
+        args.output.display(),
+        mesh.n_vertices(),
+        mesh.n_faces()
+    ));
+    Ok(())
+}

@@ -1,0 +1,163 @@
+//! `meshpyr info MESH [--json]`: counts, topology, size and what the builder repaired.
+
+use super::Global;
+use crate::io;
+use crate::mesh::{BuildReport, Mesh, PolygonMesh};
+use anyhow::Context;
+use serde::Serialize;
+use std::path::PathBuf;
+
+/// Arguments of `meshpyr info`.
+#[derive(clap::Args, Debug)]
+pub struct InfoArgs {
+    /// Mesh file (.obj, .ply, .off, .stl).
+    pub mesh: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Everything `info` reports. Counts describe the file as given; topology (loops, components,
+/// χ, genus) is measured on the mesh the builder makes of it, which for a manifold file is the
+/// file itself.
+#[derive(Serialize, Debug)]
+pub struct MeshInfo {
+    /// Vertices in the file, unreferenced ones included.
+    pub vertices: usize,
+    /// Triangles after fan-triangulating the file's polygons.
+    pub faces: usize,
+    /// Polygons as stored in the file.
+    pub polygons: usize,
+    /// Distinct undirected edges of those triangles.
+    pub edges: usize,
+    /// Holes.
+    pub boundary_loops: usize,
+    /// Edge-connected components.
+    pub components: usize,
+    /// V − E + F of the surface (referenced vertices only).
+    pub euler_characteristic: i64,
+    /// Σ over components of (2 − b − χ)/2; null when the file is not manifold.
+    pub genus: Option<u64>,
+    /// True when no edge has more than two triangles and no vertex is pinched.
+    pub manifold: bool,
+    /// Bounding-box diagonal.
+    pub bbox_diagonal: f64,
+    /// Mean edge length.
+    pub mean_edge_length: f64,
+    /// What the builder changed to make a valid half-edge mesh.
+    pub repairs: BuildReport,
+    /// Per-vertex attribute names, in file order.
+    pub vertex_attributes: Vec<String>,
+    /// Per-face attribute names, in file order.
+    pub face_attributes: Vec<String>,
+}
+
+/// Computes [`MeshInfo`] for a file-level mesh.
+pub fn mesh_info(poly: &PolygonMesh) -> anyhow::Result<MeshInfo> {
+    let built = Mesh::from_polygons(poly)?;
+    let topo = built.mesh.topology();
+    let manifold = built.report.input_was_manifold();
+    Ok(MeshInfo {
+        vertices: poly.n_vertices(),
+        faces: poly.n_triangles(),
+        polygons: poly.n_faces(),
+        edges: count_file_edges(poly),
+        boundary_loops: topo.boundary_loops,
+        components: topo.components,
+        euler_characteristic: topo.euler_characteristic,
+        genus: if manifold { topo.genus } else { None },
+        manifold,
+        bbox_diagonal: built.mesh.bbox_diagonal(),
+        mean_edge_length: built.mesh.mean_edge_length(),
+        repairs: built.report,
+        vertex_attributes: poly
+            .vertex_attributes
+            .iter()
+            .map(|a| a.name.clone())
+            .collect(),
+        face_attributes: poly
+            .face_attributes
+            .iter()
+            .map(|a| a.name.clone())
+            .collect(),
+    })
+}
+
+/// Distinct undirected index pairs over the fan triangles (repeated-index pairs skipped).
+fn count_file_edges(poly: &PolygonMesh) -> usize {
+    let mut pairs: Vec<u64> = Vec::with_capacity(poly.n_triangles() * 3);
+    for f in poly.faces() {
+        for k in 1..f.len().saturating_sub(1) {
+            let t = [f[0], f[k], f[k + 1]];
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                if a != b {
+                    pairs.push(((a.min(b) as u64) << 32) | a.max(b) as u64);
+                }
+            }
+        }
+    }
+    pairs.sort_unstable();
+    pairs.dedup();
+    pairs.len()
+}
+
+/// Runs `meshpyr info`.
+pub fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
+    let poly = io::read_mesh(&args.mesh)?;
+    let info = mesh_info(&poly).with_context(|| args.mesh.display().to_string())?;
+    if args.json {
+        println!("{}", serde_json::to_string(&info)?);
+        return Ok(());
+    }
+    let r = &info.repairs;
+    println!("{}", args.mesh.display());
+    println!(
+        "  vertices {}  faces {} (from {} polygons)  edges {}",
+        info.vertices, info.faces, info.polygons, info.edges
+    );
+    println!(
+        "  components {}  boundary loops {}  euler characteristic {}  genus {}",
+        info.components,
+        info.boundary_loops,
+        info.euler_characteristic,
+        info.genus
+            .map_or("n/a (not manifold)".to_string(), |g| g.to_string())
+    );
+    println!(
+        "  manifold {}  bbox diagonal {:.6}  mean edge length {:.6}",
+        if info.manifold { "yes" } else { "no" },
+        info.bbox_diagonal,
+        info.mean_edge_length
+    );
+    if !info.vertex_attributes.is_empty() {
+        println!("  vertex attributes: {}", info.vertex_attributes.join(" "));
+    }
+    if !info.face_attributes.is_empty() {
+        println!("  face attributes: {}", info.face_attributes.join(" "));
+    }
+    let repairs = [
+        ("polygons triangulated", r.triangulated_polygons),
+        (
+            "triangles with a repeated index dropped",
+            r.dropped_repeated_index,
+        ),
+        ("zero-area triangles (kept)", r.zero_area_faces),
+        ("non-manifold edges cut", r.non_manifold_edges),
+        ("pinched vertices", r.non_manifold_vertices),
+        ("vertex copies added", r.split_vertices),
+        ("triangles re-oriented", r.flipped_faces),
+        ("edges cut to orient", r.orientation_cuts),
+        ("unreferenced vertices (kept)", r.unreferenced_vertices),
+    ];
+    let done: Vec<String> = repairs
+        .iter()
+        .filter(|(_, n)| *n > 0)
+        .map(|(what, n)| format!("{n} {what}"))
+        .collect();
+    if done.is_empty() {
+        println!("  repairs: none needed");
+    } else {
+        println!("  repairs for processing: {}", done.join(", "));
+    }
+    Ok(())
+}

@@ -1,0 +1,24 @@
+//! The progressive mesh (PM): quadric-error half-edge collapses recorded as exact vertex
+//! splits, vertices renumbered so that level `n` is the mesh on the first `n` vertices, and a
+//! cursor that walks the levels up and down (`algorithms.md` §4, `design.md` "Progressive mesh
+//! conventions").
+//!
+//! - [`collapse`]: the half-edge collapse / vertex split primitives and the legality tests.
+//! - [`quadric`]: area-weighted plane quadrics.
+//! - `decimate`: the greedy lazy-heap decimation loop.
+//! - [`ProgressiveMesh`] / [`PmCursor`]: the hierarchy and its cursor.
+//! - [`fuzz_operations`]: the body of the `pm_ops` fuzz target.
+
+pub mod collapse;
+mod decimate;
+mod fuzz;
+mod progressive;
+pub mod quadric;
+
+pub use collapse::{
+    CollapseTopology, Legality, Marks, MeshRecords, SplitError, canonicalize, collapse_topology,
+    half_edge_collapse, is_collapse_geometrically_legal, is_collapse_legal,
+    is_collapse_topologically_legal, vertex_split,
+};
+pub use fuzz::fuzz_operations;
+pub use progressive::{PmCursor, PmError, PmOptions, ProgressiveMesh, VertexSplit};

@@ -1,0 +1,448 @@
+//! The progressive mesh: base mesh + ordered vertex splits, vertices in PM order, and a cursor
+//! that walks the levels one split at a time.
+
+use super::collapse::{half_edge_collapse, vertex_split};
+use super::decimate::{DecimateParams, decimate};
+use crate::mesh::{Mesh, SlotIndex, VertexId};
+use crate::progress::Progress;
+use glam::DVec3;
+
+/// Options for [`ProgressiveMesh::build`]. The build collapses greedily by quadric error until
+/// a target is met, the error bound is exceeded, or no legal collapse is left.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PmOptions {
+    /// Stop when the mesh has at most this many (referenced) vertices. Default 0: as far as
+    /// legal collapses go.
+    pub target_vertices: usize,
+    /// Stop when the mesh has at most this many faces. Default 0.
+    pub target_faces: usize,
+    /// Stop before the first collapse whose quadric error (an RMS distance to the original
+    /// planes around the merged vertices) exceeds this fraction of the bounding-box diagonal.
+    /// Default `None` (no error bound).
+    pub max_error: Option<f64>,
+    /// Largest rotation of any face normal a collapse may cause, in degrees. Default 60.
+    pub max_normal_angle_degrees: f64,
+    /// Smallest triangle quality `4√3·A / Σl²` (1 = equilateral) a collapse may create, unless
+    /// the face was already worse. Default 0.05.
+    pub min_quality: f64,
+    /// Largest valence a collapse may create. Default 32.
+    pub max_valence: usize,
+    /// Weight λ of the boundary constraint planes (each boundary edge adds a plane through it,
+    /// perpendicular to its face, scaled by λ·|e|²). Default 100; 0 lets boundaries drift.
+    pub boundary_weight: f64,
+}
+
+impl Default for PmOptions {
+    fn default() -> Self {
+        PmOptions {
+            target_vertices: 0,
+            target_faces: 0,
+            max_error: None,
+            max_normal_angle_degrees: 60.0,
+            min_quality: 0.05,
+            max_valence: 32,
+            boundary_weight: 100.0,
+        }
+    }
+}
+
+/// Why a progressive mesh could not be built.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PmError {
+    /// An option is out of range.
+    #[error("invalid option: {0}")]
+    InvalidOption(String),
+    /// A broken internal invariant; please report.
+    #[error("internal error in the progressive mesh (please report): {0}")]
+    Internal(String),
+}
+
+/// One vertex split: the exact inverse of one half-edge collapse. Split `i` of a
+/// [`ProgressiveMesh`] creates PM vertex `n_base + i`. All vertices are PM indices.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct VertexSplit {
+    /// The vertex the split creates (`u`, removed by the collapse). Its position is
+    /// `original_positions()[vertex]`.
+    pub vertex: u32,
+    /// The survivor `v_s` (the collapse `u → v_s` keeps its position). Always `< vertex`.
+    pub survivor: u32,
+    /// `v_l`: apex of the face `(u, v_s, v_l)` the split re-creates; `None` when `u→v_s` was a
+    /// boundary edge with no face on that side.
+    pub left: Option<u32>,
+    /// `v_r`: apex of the face `(v_s, u, v_r)`; `None` on the other boundary side.
+    ///
+    /// The fan that moves to `u` is identified by the wings: the faces around `v_s` from the
+    /// edge `(v_s, v_l)` counter-clockwise to the edge `(v_s, v_r)` (or to the boundary).
+    pub right: Option<u32>,
+}
+
+impl VertexSplit {
+    /// Number of faces the split adds (1 or 2).
+    pub fn n_new_faces(&self) -> usize {
+        self.left.is_some() as usize + self.right.is_some() as usize
+    }
+}
+
+/// A progressive mesh: vertices renumbered so that level `n` is the mesh on the first `n`
+/// vertices, for `n_base_vertices() <= n <= n_vertices()`.
+///
+/// Unreferenced (isolated) vertices of the input take no part in the hierarchy: they get the
+/// PM indices after `n_vertices()` (in input slot order), so [`pm_to_mesh`](Self::pm_to_mesh)
+/// still covers every input vertex and the finest level plus those vertices maps back onto the
+/// user's file. Copies made by the mesh builder's repairs are ordinary vertices here; the
+/// builder's `SourceMap` maps them back.
+#[derive(Clone, Debug)]
+pub struct ProgressiveMesh {
+    n_base: usize,
+    positions: Vec<DVec3>,
+    pm_to_mesh: Vec<u32>,
+    mesh_to_pm: Vec<u32>,
+    splits: Vec<VertexSplit>,
+    /// Finest-level faces in PM indices, in the input mesh's face slot order.
+    faces: Vec<[u32; 3]>,
+    /// Faces at the base level.
+    n_base_faces: usize,
+    /// Quadric error (RMS distance) of each split's collapse.
+    errors: Vec<f32>,
+}
+
+const NONE: u32 = u32::MAX;
+
+impl ProgressiveMesh {
+    /// Builds the hierarchy by greedy quadric-error half-edge collapses on a copy of `mesh`
+    /// (which must satisfy [`Mesh::validate`]; the builder's output does).
+    pub fn build(
+        mesh: &Mesh,
+        opts: &PmOptions,
+        progress: &dyn Progress,
+    ) -> Result<ProgressiveMesh, PmError> {
+        let angle = opts.max_normal_angle_degrees;
+        if !(angle > 0.0 && angle <= 180.0) {
+            return Err(PmError::InvalidOption(format!(
+                "max normal angle must be in (0, 180] degrees, got {angle}"
+            )));
+        }
+        if !(opts.min_quality >= 0.0 && opts.min_quality < 1.0) {
+            return Err(PmError::InvalidOption(format!(
+                "min quality must be in [0, 1), got {}",
+                opts.min_quality
+            )));
+        }
+        if !(opts.boundary_weight >= 0.0 && opts.boundary_weight.is_finite()) {
+            return Err(PmError::InvalidOption(
+                "boundary weight must be finite and >= 0".into(),
+            ));
+        }
+        if opts.max_valence < 3 {
+            return Err(PmError::InvalidOption(
+                "max valence must be at least 3".into(),
+            ));
+        }
+        let max_error_sq = match opts.max_error {
+            None => f64::INFINITY,
+            Some(e) if e >= 0.0 && e.is_finite() => {
+                let d = e * mesh.bbox_diagonal();
+                d * d
+            }
+            Some(e) => {
+                return Err(PmError::InvalidOption(format!(
+                    "max error must be >= 0, got {e}"
+                )));
+            }
+        };
+        let params = DecimateParams {
+            target_vertices: opts.target_vertices,
+            target_faces: opts.target_faces,
+            max_error_sq,
+            legality: super::collapse::Legality {
+                max_valence: opts.max_valence,
+                min_normal_cos: angle.to_radians().cos(),
+                min_quality: opts.min_quality,
+            },
+            boundary_weight: opts.boundary_weight,
+        };
+        let (collapses, coarse) = decimate(mesh, &params, progress);
+
+        // PM order: surviving referenced vertices (slot order), removed vertices in reverse
+        // collapse order, then isolated vertices (slot order).
+        let n_slots = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
+        let mut mesh_to_pm = vec![NONE; n_slots];
+        let mut pm_to_mesh: Vec<u32> = Vec::with_capacity(mesh.n_vertices());
+        for v in coarse.vertices() {
+            if !coarse.is_isolated(v) {
+                mesh_to_pm[v.slot()] = pm_to_mesh.len() as u32;
+                pm_to_mesh.push(v.slot() as u32);
+            }
+        }
+        let n_base = pm_to_mesh.len();
+        for c in collapses.iter().rev() {
+            mesh_to_pm[c.from as usize] = pm_to_mesh.len() as u32;
+            pm_to_mesh.push(c.from);
+        }
+        for v in mesh.vertices() {
+            if mesh.is_isolated(v) {
+                mesh_to_pm[v.slot()] = pm_to_mesh.len() as u32;
+                pm_to_mesh.push(v.slot() as u32);
+            }
+        }
+        if pm_to_mesh.len() != mesh.n_vertices() {
+            return Err(PmError::Internal("vertex permutation is incomplete".into()));
+        }
+        let map = |s: u32| {
+            if s == NONE {
+                None
+            } else {
+                Some(mesh_to_pm[s as usize])
+            }
+        };
+        let splits: Vec<VertexSplit> = collapses
+            .iter()
+            .rev()
+            .map(|c| VertexSplit {
+                vertex: mesh_to_pm[c.from as usize],
+                survivor: mesh_to_pm[c.to as usize],
+                left: map(c.left),
+                right: map(c.right),
+            })
+            .collect();
+        let errors = collapses
+            .iter()
+            .rev()
+            .map(|c| c.error_sq.sqrt() as f32)
+            .collect();
+        let mut positions = vec![DVec3::ZERO; pm_to_mesh.len()];
+        for v in mesh.vertices() {
+            positions[mesh_to_pm[v.slot()] as usize] = mesh.position(v);
+        }
+        let faces: Vec<[u32; 3]> = mesh
+            .faces()
+            .map(|f| mesh.face_vertices(f).map(|v| mesh_to_pm[v.slot()]))
+            .collect();
+        Ok(ProgressiveMesh {
+            n_base,
+            positions,
+            pm_to_mesh,
+            mesh_to_pm,
+            splits,
+            faces,
+            n_base_faces: coarse.n_faces(),
+            errors,
+        })
+    }
+
+    /// Number of vertices at the coarsest level, `n0`.
+    pub fn n_base_vertices(&self) -> usize {
+        self.n_base
+    }
+
+    /// Number of vertices at the finest level (all vertices referenced by a face).
+    pub fn n_vertices(&self) -> usize {
+        self.n_base + self.splits.len()
+    }
+
+    /// Number of faces at the coarsest level.
+    pub fn n_base_faces(&self) -> usize {
+        self.n_base_faces
+    }
+
+    /// Number of faces at the finest level.
+    pub fn n_faces(&self) -> usize {
+        self.faces.len()
+    }
+
+    /// The vertex splits; split `i` creates PM vertex `n_base_vertices() + i`.
+    pub fn splits(&self) -> &[VertexSplit] {
+        &self.splits
+    }
+
+    /// Quadric error of each split's collapse (an RMS distance in model units), by split index.
+    pub fn split_errors(&self) -> &[f32] {
+        &self.errors
+    }
+
+    /// Original positions in PM order (isolated input vertices at the end, after
+    /// `n_vertices()`).
+    pub fn original_positions(&self) -> &[DVec3] {
+        &self.positions
+    }
+
+    /// PM index → vertex slot in the input [`Mesh`] (covers every input vertex).
+    pub fn pm_to_mesh(&self) -> &[u32] {
+        &self.pm_to_mesh
+    }
+
+    /// Input vertex slot → PM index (`u32::MAX` for slots the input mesh did not use).
+    pub fn mesh_to_pm(&self) -> &[u32] {
+        &self.mesh_to_pm
+    }
+
+    /// The finest-level faces in PM indices, in the input mesh's face order, each starting at
+    /// the same corner as in the input.
+    pub fn finest_faces(&self) -> &[[u32; 3]] {
+        &self.faces
+    }
+
+    /// Number of faces at level `n` (clamped to the valid range).
+    pub fn n_faces_at(&self, n: usize) -> usize {
+        let n = n.clamp(self.n_base, self.n_vertices());
+        self.n_base_faces
+            + self.splits[..n - self.n_base]
+                .iter()
+                .map(|s| s.n_new_faces())
+                .sum::<usize>()
+    }
+
+    /// The finest level with at most `faces` faces (the base level if even that has more).
+    pub fn level_for_faces(&self, faces: usize) -> usize {
+        let mut count = self.n_base_faces;
+        let mut level = self.n_base;
+        for s in &self.splits {
+            count += s.n_new_faces();
+            if count > faces {
+                break;
+            }
+            level += 1;
+        }
+        level
+    }
+
+    /// The triangles of level `n` (clamped to the valid range) in PM indices `0..n`, in the
+    /// order of the finest level's faces. A half-edge collapse `u → v` replaces `u` by `v` and
+    /// deletes exactly the faces holding both, so mapping every finest vertex to its ancestor
+    /// at level `n` and dropping degenerate triangles gives the level.
+    pub fn level_triangles(&self, n: usize) -> Vec<[u32; 3]> {
+        let n = n.clamp(self.n_base, self.n_vertices());
+        let total = self.n_vertices();
+        let mut ancestor: Vec<u32> = (0..total as u32).collect();
+        for x in n..total {
+            let s = self.splits[x - self.n_base].survivor as usize;
+            ancestor[x] = ancestor[s];
+        }
+        self.faces
+            .iter()
+            .map(|t| t.map(|x| ancestor[x as usize]))
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+            .collect()
+    }
+
+    /// The compacted mesh at level `n`: vertex slot `i` is PM vertex `i`.
+    pub fn level_mesh(&self, n: usize) -> Mesh {
+        let n = n.clamp(self.n_base, self.n_vertices());
+        let tris = self.level_triangles(n);
+        mesh_from_clean(&self.positions[..n], &tris)
+    }
+
+    /// The base mesh (level `n_base_vertices()`): vertex slot `i` is PM vertex `i`.
+    pub fn base_mesh(&self) -> Mesh {
+        self.level_mesh(self.n_base)
+    }
+
+    /// A cursor at the finest level.
+    pub fn cursor(&self) -> PmCursor<'_> {
+        let n = self.n_vertices();
+        let mesh = mesh_from_clean(&self.positions[..n], &self.faces);
+        let handles: Vec<VertexId> = mesh.vertices().collect();
+        PmCursor {
+            pm: self,
+            mesh,
+            handles,
+            level: n,
+        }
+    }
+}
+
+/// Builds a mesh from triangles that came out of a valid half-edge mesh (no repairs happen, so
+/// vertex slot `i` is vertex `i`).
+fn mesh_from_clean(positions: &[DVec3], tris: &[[u32; 3]]) -> Mesh {
+    match Mesh::from_triangles(positions, tris) {
+        Ok(b) => {
+            debug_assert!(!b.report.repaired_anything() && b.mesh.n_vertices() == positions.len());
+            b.mesh
+        }
+        // Positions are finite and indices in range by construction.
+        Err(_) => Mesh::new(),
+    }
+}
+
+/// Walks a [`ProgressiveMesh`] one vertex split at a time.
+///
+/// Invariant: vertex slot `i` of [`mesh`](Self::mesh) is PM vertex `i` for every live vertex
+/// (`0..level()`). Moves in stack order (collapse undoes the last split, split redoes it) are
+/// exact: the mesh records, including face and half-edge slots, are restored bit for bit.
+pub struct PmCursor<'a> {
+    pm: &'a ProgressiveMesh,
+    mesh: Mesh,
+    handles: Vec<VertexId>,
+    level: usize,
+}
+
+impl PmCursor<'_> {
+    /// The current number of vertices.
+    pub fn level(&self) -> usize {
+        self.level
+    }
+
+    /// The mesh at the current level (vertex slot == PM index).
+    pub fn mesh(&self) -> &Mesh {
+        &self.mesh
+    }
+
+    /// Handle of PM vertex `i` (`i < level()`).
+    pub fn vertex(&self, i: usize) -> VertexId {
+        self.handles[i]
+    }
+
+    /// One level down: undoes the last split. False at the base level.
+    pub fn collapse(&mut self) -> bool {
+        if self.level <= self.pm.n_base {
+            return false;
+        }
+        let s = self.pm.splits[self.level - 1 - self.pm.n_base];
+        let u = self.handles[s.vertex as usize];
+        let v = self.handles[s.survivor as usize];
+        let Some(h) = self.mesh.find_halfedge(u, v) else {
+            debug_assert!(false, "split record does not match the cursor mesh");
+            return false;
+        };
+        let topo = half_edge_collapse(&mut self.mesh, h);
+        debug_assert_eq!(topo.left.map(|x| x.slot() as u32), s.left);
+        debug_assert_eq!(topo.right.map(|x| x.slot() as u32), s.right);
+        self.level -= 1;
+        true
+    }
+
+    /// One level up: applies the next split. False at the finest level.
+    pub fn split(&mut self) -> bool {
+        if self.level >= self.pm.n_vertices() {
+            return false;
+        }
+        let s = self.pm.splits[self.level - self.pm.n_base];
+        let h = |x: u32| self.handles[x as usize];
+        let (v, l, r) = (h(s.survivor), s.left.map(h), s.right.map(h));
+        match vertex_split(&mut self.mesh, v, l, r, self.pm.positions[self.level]) {
+            Ok(u) => {
+                debug_assert_eq!(u.slot(), self.level);
+                self.handles[self.level] = u;
+                self.level += 1;
+                true
+            }
+            Err(_) => {
+                debug_assert!(false, "split record does not match the cursor mesh");
+                false
+            }
+        }
+    }
+
+    /// Moves to `level` (clamped to the valid range) one split at a time.
+    pub fn seek(&mut self, level: usize) {
+        let level = level.clamp(self.pm.n_base, self.pm.n_vertices());
+        while self.level > level && self.collapse() {}
+        while self.level < level && self.split() {}
+    }
+
+    /// Moves to the finest level with at most `faces` faces.
+    pub fn seek_faces(&mut self, faces: usize) {
+        let level = self.pm.level_for_faces(faces);
+        self.seek(level);
+    }
+}
