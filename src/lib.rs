@@ -14,5 +14,6 @@ pub mod mesh;
 pub mod plot;
 pub mod pm;
 pub mod progress;
+pub mod pyramid;
 pub mod relax;
 pub mod render;

@@ -187,7 +187,7 @@ impl Camera {
                 }
             }
         }
-        if !(lo.x <= hi.x) {
+        if lo.x.is_nan() || lo.x > hi.x {
             return Camera {
                 rotation,
                 centre: DVec3::ZERO,

@@ -35,6 +35,13 @@ pub trait Relaxation {
         out: &mut [DVec3],
     );
 
+    /// True when [`Relaxation::stencil`] describes the operator exactly at every vertex (the
+    /// operator is linear in the signal, with weights from the mesh and the parameter geometry
+    /// only). Default `false`.
+    fn has_linear_stencils(&self) -> bool {
+        false
+    }
+
     /// The operator as fixed linear weights at `vertex`: fills `out` with `(neighbour, w)` so
     /// that the relaxed value is `Σ w · signal[neighbour]`, and returns `true`. Operators whose
     /// result is not such a stencil (nonlinear in the signal) keep this default, which returns

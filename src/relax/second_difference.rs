@@ -185,6 +185,10 @@ impl Relaxation for SecondDifference {
         }
     }
 
+    fn has_linear_stencils(&self) -> bool {
+        true
+    }
+
     fn stencil(
         &self,
         mesh: &Mesh,
