@@ -3,7 +3,10 @@
 
 mod convert;
 mod demo;
+mod edit;
+mod filter;
 mod info;
+mod spectrum;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -69,6 +72,12 @@ enum Command {
     Convert(convert::ConvertArgs),
     /// Run the main job on the bundled scan and write the results to a directory.
     Demo(demo::DemoArgs),
+    /// Band filters on the detail pyramid: low-pass, stop-band, enhancement.
+    Filter(filter::FilterArgs),
+    /// Plot the detail energy per band of levels.
+    Spectrum(spectrum::SpectrumArgs),
+    /// Multiresolution edit: move a coarse level, resynthesise with the details.
+    Edit(edit::EditArgs),
 }
 
 fn run(command: Command, global: &Global) -> anyhow::Result<()> {
@@ -76,6 +85,9 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
         Command::Info(a) => info::run(a, global),
         Command::Convert(a) => convert::run(a, global),
         Command::Demo(a) => demo::run(a, global),
+        Command::Filter(a) => filter::run(a, global),
+        Command::Spectrum(a) => spectrum::run(a, global),
+        Command::Edit(a) => edit::run(a, global),
     }
 }
 
