@@ -265,16 +265,15 @@ pub fn demo_filters(
     let all = render_panels(&panels, &options);
     let path = dir.join(format!("{stem}-preview.png"));
     io::write_atomic(&path, &all.encode_png()?)?;
-    for ((name, _), panel) in signals.iter().zip(&panels) {
-        let p = dir.join(format!("{stem}-{name}.png"));
-        io::write_atomic(
-            &p,
-            &render_panels(std::slice::from_ref(panel), &options).encode_png()?,
-        )?;
-    }
     global.say(format_args!(
-        "previews (input | low-pass | stop-band | enhanced): wrote {} and one PNG each",
+        "previews side by side (input | low-pass | stop-band | enhanced): wrote {}",
         path.display()
     ));
+    for ((name, _), panel) in signals.iter().zip(&panels) {
+        let p = dir.join(format!("{stem}-{name}.png"));
+        let png = render_panels(std::slice::from_ref(panel), &options).encode_png()?;
+        io::write_atomic(&p, &png)?;
+        global.say(format_args!("preview of the {name}: wrote {}", p.display()));
+    }
     Ok(())
 }
