@@ -63,10 +63,20 @@ pub fn vertex_frame(g: &[DVec3], j: u32, fan: &[u32], open: bool, reference: u32
     let pj = g[j as usize];
     let m = fan.len();
     let mut normal = DVec3::ZERO;
-    for k in usize::from(open)..m {
-        let a = g[fan[k] as usize] - pj;
-        let b = g[fan[(k + 1) % m] as usize] - pj;
-        normal += a.cross(b);
+    if m >= 2 {
+        // Triangles (fan[k], fan[k+1]) for k = 0..m-2, then the closing (fan[m-1], fan[0]);
+        // an open fan's gap is the first pair. Each neighbour is loaded once, no modulo.
+        let first = g[fan[0] as usize] - pj;
+        let mut prev = first;
+        for (k, &x) in fan[1..].iter().enumerate() {
+            let cur = g[x as usize] - pj;
+            // Pair (fan[k], fan[k+1]); skipped for k = 0 when open.
+            if k > 0 || !open {
+                normal += prev.cross(cur);
+            }
+            prev = cur;
+        }
+        normal += prev.cross(first);
     }
     let n = normal.normalize_or_zero();
     if n == DVec3::ZERO || !n.is_finite() {
