@@ -38,5 +38,6 @@ pub fn run(args: DemoArgs, global: &Global) -> anyhow::Result<()> {
         io::write_mesh(&path, &poly)?;
         global.say(format_args!("wrote {}", path.display()));
     }
+    super::filter::demo_filters(poly, "bunny", &args.out, global)?;
     Ok(())
 }

@@ -3,8 +3,11 @@
 
 mod convert;
 mod demo;
+mod edit;
+mod filter;
 mod info;
 mod simplify;
+mod spectrum;
 mod subdivide;
 
 use clap::{Parser, Subcommand};
@@ -75,6 +78,12 @@ enum Command {
     Simplify(simplify::SimplifyArgs),
     /// Subdivide a coarse mesh: cascadic mean-curvature motion (or Loop).
     Subdivide(subdivide::SubdivideArgs),
+    /// Band filters on the detail pyramid: low-pass, stop-band, enhancement.
+    Filter(filter::FilterArgs),
+    /// Plot the detail energy per band of levels.
+    Spectrum(spectrum::SpectrumArgs),
+    /// Multiresolution edit: move a coarse level, resynthesise with the details.
+    Edit(edit::EditArgs),
 }
 
 fn run(command: Command, global: &Global) -> anyhow::Result<()> {
@@ -84,6 +93,9 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
         Command::Demo(a) => demo::run(a, global),
         Command::Simplify(a) => simplify::run(a, global),
         Command::Subdivide(a) => subdivide::run(a, global),
+        Command::Filter(a) => filter::run(a, global),
+        Command::Spectrum(a) => spectrum::run(a, global),
+        Command::Edit(a) => edit::run(a, global),
     }
 }
 

@@ -8,6 +8,10 @@
 use crate::mesh::{Mesh, VertexId};
 use glam::DVec3;
 
+pub mod second_difference;
+
+pub use second_difference::SecondDifference;
+
 /// A local smoothing operator on mesh vertices.
 pub trait Relaxation {
     /// Short name used on the command line (`second-difference`, `mcm`, `normal`).
@@ -30,4 +34,30 @@ pub trait Relaxation {
         vertices: &[VertexId],
         out: &mut [DVec3],
     );
+
+    /// True when [`Relaxation::stencil`] describes the operator exactly at every vertex (the
+    /// operator is linear in the signal, with weights from the mesh and the parameter geometry
+    /// only). Default `false`.
+    fn has_linear_stencils(&self) -> bool {
+        false
+    }
+
+    /// The operator as fixed linear weights at `vertex`: fills `out` with `(neighbour, w)` so
+    /// that the relaxed value is `Σ w · signal[neighbour]`, and returns `true`. Operators whose
+    /// result is not such a stencil (nonlinear in the signal) keep this default, which returns
+    /// `false`. An operator returning `true` for a vertex must give exactly that linear map in
+    /// [`Relaxation::relax`]; an empty stencil with `true` is not allowed (return `false` for a
+    /// vertex that keeps its value). The detail pyramid caches stencils per level with this,
+    /// so re-filtering needs no mesh at all.
+    fn stencil(
+        &self,
+        mesh: &Mesh,
+        geometry: &[DVec3],
+        vertex: VertexId,
+        out: &mut Vec<(VertexId, f64)>,
+    ) -> bool {
+        let _ = (mesh, geometry, vertex);
+        out.clear();
+        false
+    }
 }

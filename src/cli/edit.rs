@@ -1,0 +1,96 @@
+//! `meshpyr edit IN -o OUT --level K --move X,Y,Z:DX,DY,DZ --radius R`: multiresolution edit —
+//! move the vertices of level K near a point, with a smooth falloff, and resynthesise so that
+//! the finer details follow.
+
+use super::Global;
+use super::filter::{FilterOptions, RelaxKind, load_pyramid};
+use crate::io;
+use crate::pyramid::MoveHandle;
+use glam::DVec3;
+use std::path::PathBuf;
+
+/// One `--move X,Y,Z:DX,DY,DZ`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Move {
+    /// Where to grab.
+    pub at: DVec3,
+    /// How far to move the grabbed point.
+    pub by: DVec3,
+}
+
+fn parse_vec3(s: &str) -> Option<DVec3> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .ok()?;
+    (v.len() == 3 && v.iter().all(|x| x.is_finite())).then(|| DVec3::new(v[0], v[1], v[2]))
+}
+
+fn parse_move(s: &str) -> Result<Move, String> {
+    let (a, b) = s
+        .split_once(':')
+        .ok_or_else(|| format!("{s:?}: expected X,Y,Z:DX,DY,DZ"))?;
+    match (parse_vec3(a), parse_vec3(b)) {
+        (Some(at), Some(by)) => Ok(Move { at, by }),
+        _ => Err(format!(
+            "{s:?}: expected X,Y,Z:DX,DY,DZ with six finite numbers"
+        )),
+    }
+}
+
+/// Arguments of `meshpyr edit`.
+#[derive(clap::Args, Debug)]
+pub struct EditArgs {
+    /// Input mesh (.obj, .ply, .off, .stl).
+    pub input: PathBuf,
+    /// Output mesh: the input's vertices and faces in the same order, new positions.
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// The level (vertex count) whose vertices are moved; coarser levels give broader edits.
+    #[arg(long, value_name = "K")]
+    pub level: usize,
+    /// Grab the level-K surface at X,Y,Z and move it by DX,DY,DZ (repeatable; model units).
+    #[arg(long = "move", value_name = "X,Y,Z:DX,DY,DZ", value_parser = parse_move, required = true)]
+    pub moves: Vec<Move>,
+    /// Radius of influence of each move (model units).
+    #[arg(long, value_name = "R")]
+    pub radius: f64,
+    /// Filters applied while resynthesising (optional).
+    #[command(flatten)]
+    pub filters: FilterOptions,
+    /// Relaxation operator used for the prediction.
+    #[arg(long, value_enum, default_value_t = RelaxKind::SecondDifference)]
+    pub relax: RelaxKind,
+}
+
+/// Runs `meshpyr edit`.
+pub fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
+    if !(args.radius > 0.0 && args.radius.is_finite()) {
+        anyhow::bail!("--radius must be a positive number, got {}", args.radius);
+    }
+    let scan = load_pyramid(&args.input, args.relax, global)?;
+    let p = &scan.pyramid;
+    if args.level < p.n_base_vertices() || args.level > p.n_vertices() {
+        anyhow::bail!(
+            "--level {} is outside this mesh's levels {}..={}",
+            args.level,
+            p.n_base_vertices(),
+            p.n_vertices()
+        );
+    }
+    let handles: Vec<MoveHandle> = args
+        .moves
+        .iter()
+        .map(|m| MoveHandle {
+            center: m.at,
+            displacement: m.by,
+            radius: args.radius,
+        })
+        .collect();
+    let gains = args.filters.filter().resolve(p.surface_area());
+    let out = p.edit(args.level, &handles, &gains)?;
+    io::write_mesh(&args.output, &scan.output_mesh(&out))?;
+    global.say(format_args!("wrote {}", args.output.display()));
+    Ok(())
+}

@@ -1,0 +1,36 @@
+//! `meshpyr spectrum IN -o F.png [--csv F]`: detail energy per octave of levels, plotted.
+
+use super::Global;
+use super::filter::{RelaxKind, load_pyramid};
+use crate::io;
+use std::path::PathBuf;
+
+/// Arguments of `meshpyr spectrum`.
+#[derive(clap::Args, Debug)]
+pub struct SpectrumArgs {
+    /// Input mesh (.obj, .ply, .off, .stl).
+    pub input: PathBuf,
+    /// Output chart (PNG).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Also write the table as CSV.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// Relaxation operator used for the prediction.
+    #[arg(long, value_enum, default_value_t = RelaxKind::SecondDifference)]
+    pub relax: RelaxKind,
+}
+
+/// Runs `meshpyr spectrum`.
+pub fn run(args: SpectrumArgs, global: &Global) -> anyhow::Result<()> {
+    let scan = load_pyramid(&args.input, args.relax, global)?;
+    let spectrum = scan.pyramid.spectrum();
+    let png = spectrum.chart("input", &[]).encode_png()?;
+    io::write_atomic(&args.output, &png)?;
+    global.say(format_args!("wrote {}", args.output.display()));
+    if let Some(csv) = &args.csv {
+        io::write_atomic(csv, spectrum.to_csv().as_bytes())?;
+        global.say(format_args!("wrote {}", csv.display()));
+    }
+    Ok(())
+}

@@ -1,0 +1,139 @@
+//! The detail spectrum: how much detail each band of levels carries.
+//!
+//! Bands are octaves of levels, `(2^k, 2^(k+1)]` clipped to the pyramid's levels, so each band
+//! doubles the resolution of the one before — the mesh analogue of a frequency octave. For
+//! each band: the number of levels and details, the energy `Σ |d|²` relative to the squared
+//! bounding-box diagonal, and the RMS detail length relative to the diagonal.
+
+use super::Pyramid;
+use super::gains::feature_size_of_level;
+use crate::plot::{BarChart, PALETTE, Series, compact_count};
+use crate::render::Image;
+use std::fmt::Write;
+
+/// The detail energy of one band of levels `(lo, hi]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BandEnergy {
+    /// Lower level (exclusive).
+    pub lo: usize,
+    /// Upper level (inclusive).
+    pub hi: usize,
+    /// Number of levels (vertex splits) in the band.
+    pub levels: usize,
+    /// Number of detail vectors in the band.
+    pub details: usize,
+    /// `Σ |d|² / diagonal²` over the band's details.
+    pub energy: f64,
+    /// `sqrt(Σ |d|² / details) / diagonal`.
+    pub rms: f64,
+    /// Typical edge length at level `hi` (model units).
+    pub feature_size: f64,
+}
+
+/// Detail energy per octave band of levels, coarse to fine.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Spectrum {
+    /// The bands, coarse to fine.
+    pub bands: Vec<BandEnergy>,
+}
+
+impl Pyramid {
+    /// The detail spectrum of the pyramid (octave bands).
+    pub fn spectrum(&self) -> Spectrum {
+        let diag2 = (self.bbox_diagonal * self.bbox_diagonal).max(f64::MIN_POSITIVE);
+        let mut bands: Vec<BandEnergy> = Vec::new();
+        let mut sums: Vec<f64> = Vec::new();
+        for k in 0..self.n_splits() {
+            let level = self.level_of_split(k);
+            // Octave (2^b, 2^(b+1)] holding `level`.
+            let hi = (level).next_power_of_two();
+            let lo = (hi / 2).max(self.n_base);
+            if bands.last().is_none_or(|b| b.hi != hi.min(self.n_finest)) {
+                bands.push(BandEnergy {
+                    lo,
+                    hi: hi.min(self.n_finest),
+                    levels: 0,
+                    details: 0,
+                    energy: 0.0,
+                    rms: 0.0,
+                    feature_size: feature_size_of_level(hi.min(self.n_finest), self.surface_area),
+                });
+                sums.push(0.0);
+            }
+            let (_, details) = self.split_details(k);
+            let band = bands.last_mut().expect("pushed above");
+            band.levels += 1;
+            band.details += details.len();
+            let sum = sums.last_mut().expect("pushed above");
+            for d in details {
+                *sum += d.length_squared();
+            }
+        }
+        for (b, s) in bands.iter_mut().zip(sums) {
+            b.energy = s / diag2;
+            b.rms = if b.details > 0 {
+                (s / b.details as f64).sqrt() / diag2.sqrt()
+            } else {
+                0.0
+            };
+        }
+        Spectrum { bands }
+    }
+}
+
+impl Spectrum {
+    /// The table as CSV with a header line.
+    pub fn to_csv(&self) -> String {
+        let mut s = String::from(
+            "level_from,level_to,levels,details,energy_rel_diag2,rms_rel_diag,feature_size\n",
+        );
+        for b in &self.bands {
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{:e},{:e},{:e}",
+                b.lo, b.hi, b.levels, b.details, b.energy, b.rms, b.feature_size
+            );
+        }
+        s
+    }
+
+    /// A bar chart of the energies of this spectrum and of `others` (same bands expected, e.g.
+    /// the spectra of filtered versions), each series named.
+    pub fn chart(&self, name: &str, others: &[(&str, &Spectrum)]) -> Image {
+        let categories = self.bands.iter().map(|b| compact_count(b.hi)).collect();
+        let mut c = BarChart::new(
+            "DETAIL SPECTRUM: ENERGY PER LEVEL OCTAVE",
+            "LEVEL (VERTICES, UPPER END OF OCTAVE)",
+            "SUM |D|^2 / DIAG^2",
+            categories,
+        );
+        let all = std::iter::once((name, self)).chain(others.iter().copied());
+        for (i, (n, s)) in all.enumerate() {
+            c.series.push(Series {
+                name: n.to_string(),
+                values: self
+                    .bands
+                    .iter()
+                    .map(|b| {
+                        s.bands
+                            .iter()
+                            .find(|o| o.hi == b.hi)
+                            .map_or(0.0, |o| o.energy)
+                    })
+                    .collect(),
+                color: PALETTE[i % PALETTE.len()],
+            });
+        }
+        c.draw()
+    }
+
+    /// Energy of the levels in `(lo, hi]`, summed over the bands inside it (bands are counted
+    /// when their range lies within `(lo, hi]`).
+    pub fn energy_within(&self, lo: usize, hi: usize) -> f64 {
+        self.bands
+            .iter()
+            .filter(|b| b.lo >= lo && b.hi <= hi)
+            .map(|b| b.energy)
+            .sum()
+    }
+}

@@ -1,0 +1,260 @@
+//! `meshpyr filter`, `spectrum` and `edit` as a user runs them.
+
+use meshpyr::io;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn meshpyr(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_meshpyr"))
+        .args(args)
+        .output()
+        .expect("the meshpyr binary runs")
+}
+
+fn data(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("meshpyr-cli-pyramid-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn ok(out: &Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn fails_with(out: &Output, needle: &str) {
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    // Status lines may come first; the error is one line of its own.
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error: ")).collect();
+    assert_eq!(errors.len(), 1, "{err}");
+    assert!(errors[0].contains(needle), "{err}");
+    assert!(
+        err.trim_end().ends_with(errors[0]),
+        "the error comes last: {err}"
+    );
+}
+
+#[test]
+fn filter_keeps_the_input_layout_and_changes_positions() {
+    let input = data("elephant_holes.ply");
+    let out = scratch("elephant-low.ply");
+    let o = meshpyr(&[
+        "filter",
+        &input,
+        "-o",
+        out.to_str().unwrap(),
+        "--lowpass",
+        "1400",
+    ]);
+    ok(&o);
+    let a = io::read_mesh(Path::new(&input)).unwrap();
+    let b = io::read_mesh(&out).unwrap();
+    assert_eq!(a.positions.len(), b.positions.len());
+    assert_eq!(a.face_starts, b.face_starts);
+    assert_eq!(a.face_indices, b.face_indices);
+    assert_ne!(a.positions, b.positions);
+
+    // Several bands, sizes in model units, normal-only, all accepted; deterministic output.
+    let out2 = scratch("elephant-bands.ply");
+    let out3 = scratch("elephant-bands-again.ply");
+    for o in [&out2, &out3] {
+        ok(&meshpyr(&[
+            "filter",
+            &input,
+            "-o",
+            o.to_str().unwrap(),
+            "--stopband",
+            "500:1000",
+            "--enhance",
+            "0.05u:0.02u=1.5",
+            "--gain",
+            "2000:2800=0.5",
+            "--normal-only",
+            "--quiet",
+        ]));
+    }
+    assert_eq!(std::fs::read(&out2).unwrap(), std::fs::read(&out3).unwrap());
+}
+
+#[test]
+fn filter_rejects_missing_or_bad_filters_and_unavailable_operators() {
+    let input = data("teapot.ply");
+    let out = scratch("never.ply");
+    let o = out.to_str().unwrap();
+    fails_with(&meshpyr(&["filter", &input, "-o", o]), "no filter given");
+    fails_with(
+        &meshpyr(&[
+            "filter",
+            &input,
+            "-o",
+            o,
+            "--lowpass",
+            "100",
+            "--relax",
+            "mcm",
+        ]),
+        "not available yet",
+    );
+    fails_with(
+        &meshpyr(&[
+            "filter",
+            &input,
+            "-o",
+            o,
+            "--lowpass",
+            "100",
+            "--relax",
+            "normal",
+        ]),
+        "not available yet",
+    );
+    let bad = meshpyr(&["filter", &input, "-o", o, "--enhance", "1000:2000"]);
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("A:B=G"));
+    fails_with(
+        &meshpyr(&["filter", "/nonexistent/x.ply", "-o", o, "--lowpass", "10"]),
+        "x.ply",
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn spectrum_writes_a_png_and_a_csv() {
+    let png = scratch("spider.png");
+    let csv = scratch("spider.csv");
+    ok(&meshpyr(&[
+        "spectrum",
+        &data("spider_assimp.ply"),
+        "-o",
+        png.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+    ]));
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    let table = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = table.lines();
+    assert!(
+        lines
+            .next()
+            .unwrap()
+            .starts_with("level_from,level_to,levels,details,energy")
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert!(rows.len() >= 3);
+    // Octaves tile the levels: each starts where the previous ended.
+    for w in rows.windows(2) {
+        assert_eq!(w[0][1], w[1][0]);
+    }
+    assert!(rows.iter().all(|r| r[4] >= 0.0 && r[4].is_finite()));
+}
+
+#[test]
+fn edit_moves_the_surface_near_the_handle_only() {
+    let input = data("elephant_holes.ply");
+    let a = io::read_mesh(Path::new(&input)).unwrap();
+    // Grab the vertex with the largest y and lift it.
+    let top = a
+        .positions
+        .iter()
+        .copied()
+        .max_by(|p, q| p.y.total_cmp(&q.y))
+        .unwrap();
+    let out = scratch("elephant-edit.ply");
+    let handle = format!("{},{},{}:0,0.1,0", top.x, top.y, top.z);
+    ok(&meshpyr(&[
+        "edit",
+        &input,
+        "-o",
+        out.to_str().unwrap(),
+        "--level",
+        "400",
+        "--move",
+        &handle,
+        "--radius",
+        "0.3",
+    ]));
+    let b = io::read_mesh(&out).unwrap();
+    assert_eq!(a.face_indices, b.face_indices);
+    let moved = |i: usize| (b.positions[i] - a.positions[i]).length();
+    let near = (0..a.positions.len())
+        .filter(|&i| (a.positions[i] - top).length() < 0.05)
+        .map(moved)
+        .fold(0.0, f64::max);
+    let far = (0..a.positions.len())
+        .filter(|&i| (a.positions[i] - top).length() > 0.9)
+        .map(moved)
+        .fold(0.0, f64::max);
+    assert!(near > 0.03, "{near}");
+    assert!(far < 0.005, "{far}");
+
+    let o = out.to_str().unwrap();
+    fails_with(
+        &meshpyr(&[
+            "edit", &input, "-o", o, "--level", "1", "--move", &handle, "--radius", "1",
+        ]),
+        "outside this mesh's levels",
+    );
+    fails_with(
+        &meshpyr(&[
+            "edit",
+            &input,
+            "-o",
+            o,
+            "--level",
+            "400",
+            "--move",
+            &handle,
+            "--radius=-1",
+        ]),
+        "--radius",
+    );
+    let bad = meshpyr(&[
+        "edit", &input, "-o", o, "--level", "400", "--move", "1,2:3", "--radius", "1",
+    ]);
+    assert!(!bad.status.success());
+}
+
+#[test]
+fn demo_writes_filtered_versions_spectrum_and_previews() {
+    let dir = scratch("demo");
+    let out = meshpyr(&["demo", "--out", dir.to_str().unwrap()]);
+    ok(&out);
+    let log = String::from_utf8_lossy(&out.stderr);
+    for name in [
+        "bunny-lowpass.ply",
+        "bunny-stopband.ply",
+        "bunny-enhanced.ply",
+        "bunny-spectrum.png",
+        "bunny-spectrum.csv",
+        "bunny-preview.png",
+        "bunny-input.png",
+        "bunny-enhanced.png",
+    ] {
+        let path = dir.join(name);
+        assert!(path.exists(), "{name} missing");
+        assert!(log.contains(name), "the demo says where {name} went: {log}");
+    }
+    let input = io::read_mesh(Path::new(&data("bunny.ply"))).unwrap();
+    let low = io::read_mesh(&dir.join("bunny-lowpass.ply")).unwrap();
+    assert_eq!(input.face_indices, low.face_indices);
+    assert_ne!(input.positions, low.positions);
+    let csv = std::fs::read_to_string(dir.join("bunny-spectrum.csv")).unwrap();
+    for series in ["input,", "lowpass,", "stopband,", "enhanced,"] {
+        assert!(csv.lines().any(|l| l.starts_with(series)), "{series}");
+    }
+}
