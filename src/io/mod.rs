@@ -20,7 +20,14 @@
 //! - **OFF** ([`off`]): positions, `C`/`N`/`ST` vertex data, per-face colours when every face has
 //!   one.
 //! - **STL** ([`stl`]): triangles, welded by exact f32 bit equality; file normals are dropped
-//!   (the writer recomputes them).
+//!   (the writer recomputes them and fan-triangulates polygons).
+//!
+//! Precision: `position_type` says how positions are stored. PLY records it; for OBJ/OFF text a
+//! file whose coordinates all have at most 9 significant digits is float data (`Some(F32)`),
+//! otherwise double (`None`, exact f64 parses). Writers keep f32 data in f32 (shortest
+//! round-trip text, or `float`), f64 data in f64, and write untyped positions as f32 only when
+//! every value is an f32 value, so writing never loses precision unless the mesh says `F32`
+//! (STL is always f32).
 
 use std::fmt;
 use std::path::{Path, PathBuf};

@@ -12,7 +12,7 @@
 //! coordinate: f32 with `position_type = Some(F32)`; otherwise exact f64, `None`), normals become `nx`,`ny`,`nz`, colours `red`,
 //! `green`,`blue` (and `alpha` when any vertex has one, 1 elsewhere), texture coordinates
 //! `u`,`v`, all f32. Face lines are `n i1 … in [colour]`; when every face carries an RGB(A)
-//! colour it is kept as face attributes `red`,`green`,`blue`[,`alpha`] (f32), otherwise face
+//! colour it is kept as face attributes `red`,`green`,`blue` (and `alpha`) (f32), otherwise face
 //! colours (including colour-map indices) are dropped. The edge count is ignored.
 
 use std::fmt::Write as _;
