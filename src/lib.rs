@@ -11,6 +11,8 @@ pub mod cli;
 pub mod format;
 pub mod io;
 pub mod mesh;
+pub mod metrics;
 pub mod pm;
 pub mod progress;
 pub mod relax;
+pub mod subdiv;

@@ -5,6 +5,7 @@ mod convert;
 mod demo;
 mod info;
 mod simplify;
+mod subdivide;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -72,6 +73,8 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Quadric-error simplification: the progressive mesh cut at a face count, ratio or error.
     Simplify(simplify::SimplifyArgs),
+    /// Subdivide a coarse mesh: cascadic mean-curvature motion (or Loop).
+    Subdivide(subdivide::SubdivideArgs),
 }
 
 fn run(command: Command, global: &Global) -> anyhow::Result<()> {
@@ -80,6 +83,7 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
         Command::Convert(a) => convert::run(a, global),
         Command::Demo(a) => demo::run(a, global),
         Command::Simplify(a) => simplify::run(a, global),
+        Command::Subdivide(a) => subdivide::run(a, global),
     }
 }
 

@@ -6,7 +6,7 @@
 //! vertices are exactly the `v` lines in file order, and every error names its line.
 //!
 //! What is read:
-//! - `v x y z [w] [r g b]`: positions (f64, `position_type` stays `None`); `w` becomes the
+//! - `v x y z [w] [r g b]`: positions (float or double, see below); `w` becomes the
 //!   attribute `w` (f64, 1 where absent) when any vertex has one; colours become `red`, `green`,
 //!   `blue` (f32) when every vertex has them (otherwise they are dropped).
 //! - `vt u [v [w]]`, `vn x y z` and `f` corners `v`, `v/vt`, `v//vn`, `v/vt/vn` (negative indices
@@ -21,15 +21,20 @@
 //!   `usemtl`, `mtllib`, `l`, `p` and other statements are skipped (groups, smoothing groups,
 //!   materials, lines and points are not kept). Line continuation (`\`) and CRLF are handled.
 //!
+//! Precision: OBJ text does not say whether it holds float or double data. When every
+//! coordinate has at most 9 significant digits (and fits a float) the positions are read as
+//! f32 values with `position_type = Some(F32)`, otherwise as exact f64 parses with
+//! `position_type = None`. The writer uses shortest f32 formatting for f32 data (and for
+//! untyped positions that are all f32 values) and shortest f64 formatting otherwise, so
+//! write → read is bit-exact either way.
+//!
 //! The writer emits the comments, `v` (with `w` and colours when those attributes exist),
 //! `vt` when `u`,`v` exist, `vn` when `nx`,`ny`,`nz` exist, and `f` lines. Other attributes
 //! have no place in OBJ and are not written.
 
 use std::fmt::Write as _;
 
-use glam::DVec3;
-
-use super::text::{self, Lines, TextPrecision};
+use super::text::{self, Lines, PositionFormat, TextPositions};
 use super::{IoError, MeshFormat, err_invalid, err_line};
 use crate::mesh::{Attribute, AttributeData, PolygonMesh};
 
@@ -42,14 +47,16 @@ struct IndexSpace {
     /// Largest positive (forward-capable) index seen and its line, validated at the end.
     max: Option<(u64, u64)>,
     what: &'static str,
+    plural: &'static str,
 }
 
 impl IndexSpace {
-    fn new(what: &'static str) -> Self {
+    fn new(what: &'static str, plural: &'static str) -> Self {
         IndexSpace {
             count: 0,
             max: None,
             what,
+            plural,
         }
     }
 
@@ -76,8 +83,8 @@ impl IndexSpace {
                 return Err(err_line(
                     line,
                     format!(
-                        "relative {} index {i} points before the first of {} {}s",
-                        self.what, self.count, self.what
+                        "relative {} index {i} points before the first of {} {}",
+                        self.what, self.count, self.plural
                     ),
                 ));
             }
@@ -97,8 +104,8 @@ impl IndexSpace {
             return Err(err_line(
                 line,
                 format!(
-                    "{} index {m} but the file has {} {}s",
-                    self.what, self.count, self.what
+                    "{} index {m} but the file has {} {}",
+                    self.what, self.count, self.plural
                 ),
             ));
         }
@@ -185,10 +192,11 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     let mut normals: Vec<[f32; 3]> = Vec::new();
     let mut corner_vt: Vec<u32> = Vec::new();
     let mut corner_vn: Vec<u32> = Vec::new();
-    let mut vs = IndexSpace::new("vertex");
-    let mut vts = IndexSpace::new("texture coordinate");
-    let mut vns = IndexSpace::new("normal");
+    let mut vs = IndexSpace::new("vertex", "vertices");
+    let mut vts = IndexSpace::new("texture coordinate", "texture coordinates");
+    let mut vns = IndexSpace::new("normal", "normals");
     let mut in_preamble = true;
+    let mut tp = TextPositions::new();
 
     for (line, l) in logical_lines(bytes) {
         let (data, comment) = match l.iter().position(|&b| b == b'#') {
@@ -220,7 +228,7 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
                         err_line(line, format!("bad coordinate {}", text::show(t)))
                     })?;
                 }
-                let idx = mesh.positions.len();
+                let idx = tp.len();
                 if !p.iter().all(|c| c.is_finite()) {
                     return Err(err_line(
                         line,
@@ -230,7 +238,7 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
                 if idx >= u32::MAX as usize {
                     return Err(err_line(line, "more than 2^32 - 1 vertices"));
                 }
-                mesh.positions.push(DVec3::from_array(p));
+                tp.push([args[0], args[1], args[2]], p);
                 vs.count += 1;
                 if n == 4 || n == 7 {
                     let w = text::parse_f64(args[3])
@@ -311,6 +319,7 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     vts.check()?;
     vns.check()?;
 
+    (mesh.positions, mesh.position_type) = tp.finish();
     let nv = mesh.positions.len();
     if !ws.is_empty() {
         let mut w = vec![1.0f64; nv];
@@ -366,7 +375,8 @@ fn push_attr(out: &mut String, d: &AttributeData, i: usize) {
 
 /// Writes an OBJ file.
 pub fn write(mesh: &PolygonMesh) -> Result<Vec<u8>, IoError> {
-    let prec = TextPrecision::for_positions(mesh.position_type);
+    let pf = PositionFormat::new(mesh)
+        .map_err(|i| err_invalid(MeshFormat::Obj, format!("vertex {i} does not fit in float")))?;
     let w = float_col(mesh, "w");
     let colour_cols: Vec<&AttributeData> = ["red", "green", "blue"]
         .iter()
@@ -402,11 +412,9 @@ pub fn write(mesh: &PolygonMesh) -> Result<Vec<u8>, IoError> {
     }
     for (i, p) in mesh.positions.iter().enumerate() {
         s.push('v');
-        for c in p.to_array() {
+        for (k, c) in p.to_array().into_iter().enumerate() {
             s.push(' ');
-            prec.push(&mut s, c).ok_or_else(|| {
-                err_invalid(MeshFormat::Obj, format!("vertex {i} does not fit in float"))
-            })?;
+            pf.push(&mut s, i, k, c);
         }
         if let Some(w) = w {
             s.push(' ');

@@ -8,7 +8,8 @@
 //! vertex and each face is one line.
 //!
 //! Vertex lines are `x y z [nx ny nz] [r g b [a]] [u v]` as the header announces; positions are
-//! read as f64 (`position_type` stays `None`), normals become `nx`,`ny`,`nz`, colours `red`,
+//! float or double data as described in [`super::obj`] (at most 9 significant digits per
+//! coordinate: f32 with `position_type = Some(F32)`; otherwise exact f64, `None`), normals become `nx`,`ny`,`nz`, colours `red`,
 //! `green`,`blue` (and `alpha` when any vertex has one, 1 elsewhere), texture coordinates
 //! `u`,`v`, all f32. Face lines are `n i1 … in [colour]`; when every face carries an RGB(A)
 //! colour it is kept as face attributes `red`,`green`,`blue`[,`alpha`] (f32), otherwise face
@@ -16,9 +17,7 @@
 
 use std::fmt::Write as _;
 
-use glam::DVec3;
-
-use super::text::{self, Lines, TextPrecision};
+use super::text::{self, Lines, PositionFormat, TextPositions};
 use super::{IoError, MeshFormat, err_invalid, err_line};
 use crate::mesh::{Attribute, AttributeData, PolygonMesh};
 
@@ -80,7 +79,7 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     let (mut st, mut c, mut n) = (false, false, false);
     let count_toks: Vec<&[u8]>;
     let count_line;
-    if htoks[0].first().is_some_and(|b| b.is_ascii_digit()) {
+    if text::parse_i64(htoks[0]).is_some() {
         // No keyword: the first line holds the counts.
         count_toks = htoks;
         count_line = hline;
@@ -157,7 +156,8 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     let mut colours: Vec<[f32; 4]> = Vec::new();
     let mut any_alpha = false;
     let mut uvs: Vec<[f32; 2]> = Vec::new();
-    mesh.positions.reserve(nv_us);
+    let mut tp = TextPositions::new();
+    tp.reserve(nv_us);
     for i in 0..nv_us {
         let Some((line, toks)) = lines.next(None) else {
             return Err(err_line(
@@ -196,7 +196,7 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
                 format!("vertex {i} has a non-finite coordinate"),
             ));
         }
-        mesh.positions.push(DVec3::from_array(p));
+        tp.push([toks[0], toks[1], toks[2]], p);
         let mut k = 3;
         if n {
             normals.push(floats(&toks[k..k + 3], line, "normal")?);
@@ -217,6 +217,7 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
         }
     }
 
+    (mesh.positions, mesh.position_type) = tp.finish();
     let mut face_colours: Vec<[f32; 4]> = Vec::new();
     let mut all_faces_coloured = true;
     let mut any_face_alpha = false;
@@ -360,7 +361,8 @@ fn colour_cols(attrs: &[Attribute]) -> Option<Vec<&AttributeData>> {
 
 /// Writes an OFF file (`[ST][C][N]OFF` as the attributes require).
 pub fn write(mesh: &PolygonMesh) -> Result<Vec<u8>, IoError> {
-    let prec = TextPrecision::for_positions(mesh.position_type);
+    let pf = PositionFormat::new(mesh)
+        .map_err(|i| err_invalid(MeshFormat::Off, format!("vertex {i} does not fit in float")))?;
     let normals = cols(&mesh.vertex_attributes, &["nx", "ny", "nz"], false);
     let colours = colour_cols(&mesh.vertex_attributes);
     let uvs = cols(&mesh.vertex_attributes, &["u", "v"], false);
@@ -392,9 +394,7 @@ pub fn write(mesh: &PolygonMesh) -> Result<Vec<u8>, IoError> {
             if k > 0 {
                 s.push(' ');
             }
-            prec.push(&mut s, c).ok_or_else(|| {
-                err_invalid(MeshFormat::Off, format!("vertex {i} does not fit in float"))
-            })?;
+            pf.push(&mut s, i, k, c);
         }
         for group in [&normals, &colours, &uvs].into_iter().flatten() {
             for d in group {

@@ -293,11 +293,14 @@ trait Source {
 struct Bin<'a> {
     data: &'a [u8],
     pos: usize,
+    /// Start of the value read last (errors about a value point at it).
+    last: usize,
     big: bool,
 }
 
 impl Bin<'_> {
     fn take<const N: usize>(&mut self) -> Result<[u8; N], IoError> {
+        self.last = self.pos;
         match self.data.get(self.pos..self.pos + N) {
             Some(s) => {
                 self.pos += N;
@@ -305,7 +308,10 @@ impl Bin<'_> {
                 a.copy_from_slice(s);
                 Ok(a)
             }
-            None => Err(self.err("the file ends in the middle of the data".into())),
+            None => Err(err_byte(
+                self.pos as u64,
+                "the file ends in the middle of the data",
+            )),
         }
     }
 }
@@ -323,7 +329,7 @@ macro_rules! rd {
 
 impl Source for Bin<'_> {
     fn err(&self, reason: String) -> IoError {
-        err_byte(self.pos as u64, reason)
+        err_byte(self.last as u64, reason)
     }
     fn begin_row(&mut self, _what: &dyn Fn() -> String) -> Result<(), IoError> {
         Ok(())
@@ -842,6 +848,7 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     let mut bin = Bin {
         data: bytes,
         pos: header.body,
+        last: header.body,
         big,
     };
     let mut asc = Ascii {

@@ -1,0 +1,9 @@
+#![no_main]
+//! Fuzzes the obj reader: parse, and on success write → re-read → write must be stable.
+
+use libfuzzer_sys::fuzz_target;
+use meshpyr::io::{MeshFormat, fuzz_read};
+
+fuzz_target!(|data: &[u8]| {
+    fuzz_read(MeshFormat::Obj, data);
+});

@@ -1,0 +1,3 @@
+//! Measurements on meshes.
+
+pub mod curvature;

@@ -1,0 +1,266 @@
+//! Linear finite elements on a triangle mesh given as flat arrays (positions, triangles
+//! indexing them): lumped mass and cotangent stiffness, assembled into CSR arrays.
+//!
+//! With the angles θ, θ' opposite edge ij:
+//!
+//! ```text
+//! M_ii = Σ_{T∋i} A(T)/3                       (lumped, diagonal)
+//! L_ij = −½ Σ_{T∋ij} a_T cot θ_T   (i ≠ j),   L_ii = −Σ_{j≠i} L_ij
+//! ```
+//!
+//! `a_T` is an optional per-face diffusion coefficient (1 when absent). L is positive
+//! semi-definite; boundary edges have one cotangent term (natural boundary conditions).
+//! Triangles with area below `1e-12·(longest edge)²` contribute nothing: their cotangents are
+//! meaningless and would make the element matrix indefinite.
+
+use crate::mesh::cotangent;
+use glam::DVec3;
+
+/// Relative area below which a triangle is skipped (area < ε·ℓ_max²).
+pub const DEGENERATE_AREA: f64 = 1e-12;
+
+/// A symmetric sparse matrix in CSR form with the diagonal entry stored first in every row.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SymmetricCsr {
+    /// `row_start[i]..row_start[i+1]` are row `i`'s entries; length n + 1.
+    pub row_start: Vec<u32>,
+    /// Column of each entry (the first of a row is the row itself).
+    pub col: Vec<u32>,
+    /// Value of each entry.
+    pub val: Vec<f64>,
+}
+
+impl SymmetricCsr {
+    /// Number of rows.
+    pub fn n(&self) -> usize {
+        self.row_start.len().saturating_sub(1)
+    }
+
+    /// The diagonal entry of row `i`.
+    #[inline]
+    pub fn diagonal(&self, i: usize) -> f64 {
+        self.val[self.row_start[i] as usize]
+    }
+
+    /// `y = A x` for `K` right-hand sides stored row-major.
+    pub fn mul<const K: usize>(&self, x: &[[f64; K]], y: &mut [[f64; K]]) {
+        for (i, yi) in y.iter_mut().enumerate() {
+            let (s, e) = (self.row_start[i] as usize, self.row_start[i + 1] as usize);
+            let mut acc = [0.0; K];
+            for k in s..e {
+                let (c, v) = (self.col[k] as usize, self.val[k]);
+                for (a, xc) in acc.iter_mut().zip(&x[c]) {
+                    *a += v * xc;
+                }
+            }
+            *yi = acc;
+        }
+    }
+}
+
+/// Lumped (barycentric) mass `M_ii = Σ A(T)/3` for `triangles` indexing `positions`.
+/// Degenerate triangles contribute zero.
+pub fn lumped_mass(triangles: &[[u32; 3]], positions: &[DVec3]) -> Vec<f64> {
+    let mut m = vec![0.0; positions.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let area = 0.5 * (b - a).cross(c - a).length();
+        if is_degenerate(a, b, c, area) {
+            continue;
+        }
+        for &i in t {
+            m[i as usize] += area / 3.0;
+        }
+    }
+    m
+}
+
+#[inline]
+fn is_degenerate(a: DVec3, b: DVec3, c: DVec3, area: f64) -> bool {
+    let l2 = (b - a)
+        .length_squared()
+        .max((c - b).length_squared())
+        .max((a - c).length_squared());
+    // NaN coordinates count as degenerate.
+    area.is_nan() || area <= DEGENERATE_AREA * l2
+}
+
+/// Cotangent stiffness matrix L (positive semi-definite, rows sum to zero) of `triangles`
+/// indexing `positions`, with optional per-triangle coefficients. Rows are sorted by column
+/// after the diagonal; assembly is a counting sort over the triangle corners, so it is linear
+/// and reads memory in order.
+pub fn cotangent_stiffness(
+    triangles: &[[u32; 3]],
+    positions: &[DVec3],
+    face_coefficient: Option<&[f64]>,
+) -> SymmetricCsr {
+    let n = positions.len();
+    // Two directed entries per triangle corner.
+    let mut fill: Vec<u32> = vec![0; n + 1];
+    for t in triangles {
+        for &i in t {
+            fill[i as usize + 1] += 2;
+        }
+    }
+    for i in 0..n {
+        fill[i + 1] += fill[i];
+    }
+    let mut entries: Vec<(u32, f64)> = vec![(0, 0.0); fill[n] as usize];
+    let mut cursor = fill.clone();
+    for (ti, t) in triangles.iter().enumerate() {
+        let v = t.map(|i| positions[i as usize]);
+        let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+        let coef = face_coefficient.map_or(1.0, |c| c[ti]);
+        // w[j]: ½ a_T cot of the angle at corner j+2, which is opposite edge (j, j+1).
+        let mut w = [0.0; 3];
+        if !is_degenerate(v[0], v[1], v[2], area) {
+            for (j, wj) in w.iter_mut().enumerate() {
+                let o = v[(j + 2) % 3];
+                *wj = 0.5 * coef * cotangent(v[j] - o, v[(j + 1) % 3] - o);
+            }
+        }
+        for j in 0..3 {
+            let (a, b) = (t[j], t[(j + 1) % 3]);
+            for (row, col) in [(a, b), (b, a)] {
+                let c = &mut cursor[row as usize];
+                entries[*c as usize] = (col, w[j]);
+                *c += 1;
+            }
+        }
+    }
+    let mut row_start = Vec::with_capacity(n + 1);
+    let mut col = Vec::with_capacity(n + entries.len() / 2);
+    let mut val = Vec::with_capacity(col.capacity());
+    row_start.push(0u32);
+    for i in 0..n {
+        let row = &mut entries[fill[i] as usize..fill[i + 1] as usize];
+        row.sort_unstable_by_key(|e| e.0);
+        let diag_at = val.len();
+        col.push(i as u32);
+        val.push(0.0);
+        let mut diag = 0.0;
+        let mut k = 0;
+        while k < row.len() {
+            let (c, mut w) = row[k];
+            k += 1;
+            // An interior edge appears twice (once per triangle); two terms add the same in
+            // either order, so the sum is deterministic.
+            while k < row.len() && row[k].0 == c {
+                w += row[k].1;
+                k += 1;
+            }
+            col.push(c);
+            val.push(-w);
+            diag += w;
+        }
+        val[diag_at] = diag;
+        row_start.push(col.len() as u32);
+    }
+    SymmetricCsr {
+        row_start,
+        col,
+        val,
+    }
+}
+
+/// The system matrix `M + α L` (`alpha = 1` when L already carries the coefficient).
+///
+/// Rows whose diagonal is not positive (an isolated vertex, or a vertex whose triangles are
+/// all degenerate) become identity rows; [`identity_rows`] lists them so the right-hand side
+/// can pin those vertices to their interpolated initial positions.
+pub fn system_matrix(mass: &[f64], stiffness: SymmetricCsr, alpha: f64) -> SymmetricCsr {
+    let mut a = stiffness;
+    if alpha != 1.0 {
+        a.val.iter_mut().for_each(|v| *v *= alpha);
+    }
+    for (i, m) in mass.iter().enumerate() {
+        let d = a.row_start[i] as usize;
+        a.val[d] += m;
+        if a.val[d].is_nan() || a.val[d] <= 0.0 {
+            let e = a.row_start[i + 1] as usize;
+            a.val[d] = 1.0;
+            a.val[d + 1..e].iter_mut().for_each(|v| *v = 0.0);
+        }
+    }
+    a
+}
+
+/// Rows [`system_matrix`] turned into identity rows: exactly the vertices with zero mass
+/// (their stiffness row and column are zero too, because every triangle around them was
+/// skipped as degenerate, and a non-degenerate P1 stiffness diagonal is positive).
+pub fn identity_rows(mass: &[f64]) -> Vec<bool> {
+    mass.iter().map(|&m| m.is_nan() || m <= 0.0).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tetra_fan() -> (Vec<[u32; 3]>, Vec<DVec3>) {
+        let p = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(0.0, 0.0, 1.0),
+        ];
+        (vec![[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]], p)
+    }
+
+    #[test]
+    fn mass_sums_to_area_and_stiffness_is_symmetric_with_zero_row_sums() {
+        let (m, p) = tetra_fan();
+        let mass = lumped_mass(&m, &p);
+        let area: f64 = m
+            .iter()
+            .map(|t| {
+                0.5 * (p[t[1] as usize] - p[t[0] as usize])
+                    .cross(p[t[2] as usize] - p[t[0] as usize])
+                    .length()
+            })
+            .sum();
+        assert!((mass.iter().sum::<f64>() - area).abs() < 1e-14);
+        let l = cotangent_stiffness(&m, &p, None);
+        for i in 0..l.n() {
+            let (s, e) = (l.row_start[i] as usize, l.row_start[i + 1] as usize);
+            assert_eq!(l.col[s] as usize, i);
+            assert!(l.val[s..e].iter().sum::<f64>().abs() < 1e-14);
+            for k in s + 1..e {
+                let j = l.col[k] as usize;
+                let back = (l.row_start[j] as usize..l.row_start[j + 1] as usize)
+                    .find(|&q| l.col[q] as usize == i)
+                    .unwrap();
+                assert_eq!(l.val[k], l.val[back]);
+            }
+        }
+        // Constants are in the kernel; a linear function's Dirichlet energy is |∇f|²·area on
+        // a closed surface only through the boundary-free identity xᵀLx = Σ_T A_T |∇_T f|².
+        let x: Vec<[f64; 1]> = p.iter().map(|q| [q.x]).collect();
+        let mut lx = vec![[0.0]; 4];
+        l.mul(&x, &mut lx);
+        let energy: f64 = x.iter().zip(&lx).map(|(a, b)| a[0] * b[0]).sum();
+        assert!(energy > 0.0);
+    }
+
+    #[test]
+    fn face_coefficients_scale_the_stiffness() {
+        let (m, p) = tetra_fan();
+        let l1 = cotangent_stiffness(&m, &p, None);
+        let l3 = cotangent_stiffness(&m, &p, Some(&[3.0; 4]));
+        for (a, b) in l1.val.iter().zip(&l3.val) {
+            assert!((3.0 * a - b).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn zero_mass_rows_become_identity_rows() {
+        let mass = [0.0, 1.0];
+        let l = SymmetricCsr {
+            row_start: vec![0, 1, 2],
+            col: vec![0, 1],
+            val: vec![0.0, 0.0],
+        };
+        let a = system_matrix(&mass, l, 2.0);
+        assert_eq!(a.val, vec![1.0, 1.0]);
+        assert_eq!(identity_rows(&mass), vec![true, false]);
+    }
+}

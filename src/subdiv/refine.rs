@@ -1,0 +1,714 @@
+//! Mesh refinement for subdivision: 1-to-4 quadrisection and conforming newest-vertex
+//! bisection. Each step returns a new [`Mesh`] whose first vertices are the coarse vertices
+//! (dense order) and a [`Prolongation`] saying which coarse vertices every new vertex
+//! interpolates (trivial interpolation: copies and edge midpoints).
+//!
+//! Both functions expect a mesh with dense slots (fresh from the builder, as
+//! [`subdivide`](super::subdivide) guarantees); their outputs are dense again.
+
+use super::SubdivError;
+use crate::mesh::{HalfedgeId, Mesh, SlotIndex, VertexId};
+use glam::DVec3;
+use std::ops::{Add, Mul};
+
+const NONE: u32 = u32::MAX;
+
+/// Trivial interpolation from a coarse to a refined mesh: fine vertex `i` takes
+/// `(f[a] + f[b]) / 2` with `[a, b] = parents()[i]` (`a == b` for a copied coarse vertex).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Prolongation {
+    parents: Vec<[u32; 2]>,
+}
+
+impl Prolongation {
+    /// The two coarse parents of every fine vertex (equal for a copy).
+    pub fn parents(&self) -> &[[u32; 2]] {
+        &self.parents
+    }
+
+    /// Number of fine vertices.
+    pub fn n_fine(&self) -> usize {
+        self.parents.len()
+    }
+
+    /// Interpolates coarse values onto the fine vertices.
+    pub fn apply<T>(&self, coarse: &[T]) -> Vec<T>
+    where
+        T: Copy + Add<Output = T> + Mul<f64, Output = T>,
+    {
+        self.parents
+            .iter()
+            .map(|&[a, b]| {
+                if a == b {
+                    coarse[a as usize]
+                } else {
+                    (coarse[a as usize] + coarse[b as usize]) * 0.5
+                }
+            })
+            .collect()
+    }
+}
+
+/// A refined mesh with its prolongation.
+#[derive(Clone, Debug)]
+pub struct Refined {
+    /// The new mesh, vertex positions trivially interpolated from the coarse ones.
+    pub mesh: Mesh,
+    /// The new mesh's triangles as dense vertex indices, in face slot order.
+    pub triangles: Vec<[u32; 3]>,
+    /// Coarse-to-fine interpolation.
+    pub prolongation: Prolongation,
+}
+
+/// Newest-vertex marking for bisection: for each face (slot order), the local index (0..3,
+/// in [`Mesh::face_vertices`] order) of its newest vertex. The refinement edge is the edge
+/// opposite that vertex.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Marking {
+    newest: Vec<u8>,
+}
+
+impl Marking {
+    /// Local index of the newest vertex of each face.
+    pub fn newest(&self) -> &[u8] {
+        &self.newest
+    }
+}
+
+/// Connectivity of a quadrisection, shared by [`quadrisect`] and Loop's scheme: fine vertex
+/// `i < coarse.len()` is coarse vertex `coarse[i]`; fine vertex `coarse.len() + k` is the
+/// midpoint of edge `edges[k]`.
+pub(crate) struct QuadTopology {
+    pub coarse: Vec<VertexId>,
+    pub edges: Vec<HalfedgeId>,
+    pub triangles: Vec<[u32; 3]>,
+    pub parents: Vec<[u32; 2]>,
+    /// Fine midpoint vertex of every coarse half-edge, by half-edge slot.
+    pub mid: Vec<u32>,
+    /// Dense index of every coarse vertex, by slot.
+    pub dense: Vec<u32>,
+}
+
+pub(crate) fn quad_topology(mesh: &Mesh) -> QuadTopology {
+    let coarse: Vec<VertexId> = mesh.vertices().collect();
+    let nv = coarse.len();
+    let mut dense = vec![NONE; slot_bound(coarse.iter().map(|v| v.slot()))];
+    for (i, v) in coarse.iter().enumerate() {
+        dense[v.slot()] = i as u32;
+    }
+    let mut parents: Vec<[u32; 2]> = (0..nv as u32).map(|i| [i, i]).collect();
+    let mut mid = vec![NONE; slot_bound(mesh.halfedges().map(|h| h.slot()))];
+    let mut edges = Vec::with_capacity(mesh.n_edges());
+    for h in mesh.edges() {
+        let k = (nv + edges.len()) as u32;
+        mid[h.slot()] = k;
+        mid[mesh.twin(h).slot()] = k;
+        parents.push([
+            dense[mesh.from_vertex(h).slot()],
+            dense[mesh.to_vertex(h).slot()],
+        ]);
+        edges.push(h);
+    }
+    let mut triangles = Vec::with_capacity(4 * mesh.n_faces());
+    for f in mesh.faces() {
+        // face_halfedges = [v0→v1, v1→v2, v2→v0].
+        let [h0, h1, h2] = mesh.face_halfedges(f);
+        let [v0, v1, v2] = mesh.face_vertices(f).map(|v| dense[v.slot()]);
+        let (m01, m12, m20) = (mid[h0.slot()], mid[h1.slot()], mid[h2.slot()]);
+        triangles.extend_from_slice(&[
+            [v0, m01, m20],
+            [v1, m12, m01],
+            [v2, m20, m12],
+            [m01, m12, m20],
+        ]);
+    }
+    QuadTopology {
+        coarse,
+        edges,
+        triangles,
+        parents,
+        mid,
+        dense,
+    }
+}
+
+/// Builds the quadrisected half-edge mesh directly by index arithmetic — no sorting, no
+/// hashing, no repair pass — which is what keeps refinement linear and cache friendly on
+/// large levels. Needs dense half-edge, face and vertex slots (fresh meshes have them).
+///
+/// Layout: coarse half-edge slot `s` becomes fine half-edges `2s` (from its origin to the
+/// midpoint) and `2s+1` (midpoint to its head); coarse face `t` adds six interior half-edges
+/// at `2·nh + 6t ..` and fine faces `4t..4t+4` in the order of `topo.triangles`.
+pub(crate) fn build_quadrisection(
+    mesh: &Mesh,
+    topo: &QuadTopology,
+    positions: &[DVec3],
+) -> Result<Mesh, SubdivError> {
+    use crate::mesh::halfedge::{FaceRecord, HalfedgeRecord, VertexRecord};
+    let nh = mesh.n_halfedges();
+    let nf = mesh.n_faces();
+    let dense_slots = mesh.halfedges().enumerate().all(|(i, h)| h.slot() == i)
+        && mesh.faces().enumerate().all(|(i, f)| f.slot() == i);
+    if !dense_slots {
+        return build(positions, &topo.triangles, 1);
+    }
+    let mut fine = Mesh::new();
+    fine.vertices.reserve(positions.len());
+    let vids: Vec<VertexId> = positions
+        .iter()
+        .map(|&p| {
+            fine.vertices.insert(VertexRecord {
+                halfedge: None,
+                position: p,
+            })
+        })
+        .collect();
+    let n_fine_h = 2 * nh + 6 * nf;
+    fine.halfedges.reserve(n_fine_h);
+    let null = HalfedgeId::default();
+    let placeholder = HalfedgeRecord {
+        to: VertexId::default(),
+        next: null,
+        prev: null,
+        twin: null,
+        face: None,
+    };
+    let hid: Vec<HalfedgeId> = (0..n_fine_h)
+        .map(|_| fine.halfedges.insert(placeholder.clone()))
+        .collect();
+    fine.faces.reserve(4 * nf);
+    let fid: Vec<_> = (0..4 * nf)
+        .map(|_| fine.faces.insert(FaceRecord { halfedge: null }))
+        .collect();
+    let first = |h: HalfedgeId| 2 * h.slot();
+    let second = |h: HalfedgeId| 2 * h.slot() + 1;
+    // Split coarse half-edges: targets and twins; boundary ones also get their loop links.
+    for h in mesh.halfedges() {
+        let t = mesh.twin(h);
+        let m = vids[topo.mid[h.slot()] as usize];
+        let head = vids[topo.dense[mesh.to_vertex(h).slot()] as usize];
+        {
+            let r = &mut fine.halfedges[hid[first(h)]];
+            r.to = m;
+            r.twin = hid[second(t)];
+        }
+        {
+            let r = &mut fine.halfedges[hid[second(h)]];
+            r.to = head;
+            r.twin = hid[first(t)];
+        }
+        if mesh.is_boundary_halfedge(h) {
+            let (n, p) = (mesh.next(h), mesh.prev(h));
+            let r = &mut fine.halfedges[hid[first(h)]];
+            r.next = hid[second(h)];
+            r.prev = hid[second(p)];
+            let r = &mut fine.halfedges[hid[second(h)]];
+            r.next = hid[first(n)];
+            r.prev = hid[first(h)];
+        }
+    }
+    for (t, f) in mesh.faces().enumerate() {
+        let [h0, h1, h2] = mesh.face_halfedges(f);
+        let [m01, m12, m20] = [h0, h1, h2].map(|h| vids[topo.mid[h.slot()] as usize]);
+        let base = 2 * nh + 6 * t;
+        // Inner half-edges: I0 m01→m20, I1 m12→m01, I2 m20→m12 and their twins
+        // C0 m20→m01, C1 m01→m12, C2 m12→m20 (the centre face).
+        let (i0, i1, i2, c0, c1, c2) = (base, base + 1, base + 2, base + 3, base + 4, base + 5);
+        let tos = [m20, m01, m12, m01, m12, m20];
+        let twins = [c0, c1, c2, i0, i1, i2];
+        for k in 0..6 {
+            let r = &mut fine.halfedges[hid[base + k]];
+            r.to = tos[k];
+            r.twin = hid[twins[k]];
+        }
+        // Faces: corner v0 (first h0, I0, second h2), corner v1 (first h1, I1, second h0),
+        // corner v2 (first h2, I2, second h1), centre (C1, C2, C0).
+        let cycles = [
+            [first(h0), i0, second(h2)],
+            [first(h1), i1, second(h0)],
+            [first(h2), i2, second(h1)],
+            [c1, c2, c0],
+        ];
+        for (k, cycle) in cycles.iter().enumerate() {
+            let face = fid[4 * t + k];
+            fine.faces[face].halfedge = hid[cycle[0]];
+            for j in 0..3 {
+                let r = &mut fine.halfedges[hid[cycle[j]]];
+                r.next = hid[cycle[(j + 1) % 3]];
+                r.prev = hid[cycle[(j + 2) % 3]];
+                r.face = Some(face);
+            }
+        }
+    }
+    // Out-going half-edges: coarse vertices keep the first half of theirs (a boundary one
+    // stays boundary); a midpoint takes the second half of a boundary side if there is one.
+    for (i, &v) in topo.coarse.iter().enumerate() {
+        if let Some(h) = mesh.vertex_halfedge(v) {
+            fine.vertices[vids[i]].halfedge = Some(hid[first(h)]);
+        }
+    }
+    for (e, &h) in topo.edges.iter().enumerate() {
+        let t = mesh.twin(h);
+        let side = if mesh.is_boundary_halfedge(t) { t } else { h };
+        fine.vertices[vids[topo.coarse.len() + e]].halfedge = Some(hid[second(side)]);
+    }
+    Ok(fine)
+}
+
+fn slot_bound(slots: impl Iterator<Item = usize>) -> usize {
+    slots.max().map_or(0, |m| m + 1)
+}
+
+/// Builds the half-edge mesh of a refinement; the triangles are consistently oriented and
+/// manifold by construction, so the builder must not repair anything.
+pub(crate) fn build(
+    positions: &[DVec3],
+    triangles: &[[u32; 3]],
+    level: usize,
+) -> Result<Mesh, SubdivError> {
+    let built = Mesh::from_triangles(positions, triangles)
+        .map_err(|_| SubdivError::NotManifold { level })?;
+    if built.report.repaired_anything() || built.mesh.n_vertices() != positions.len() {
+        return Err(SubdivError::NotManifold { level });
+    }
+    Ok(built.mesh)
+}
+
+/// 1-to-4 quadrisection: every triangle splits into three corner triangles and the midpoint
+/// triangle; new vertices sit at the edge midpoints.
+pub fn quadrisect(mesh: &Mesh) -> Result<Refined, SubdivError> {
+    let topo = quad_topology(mesh);
+    let coarse_pos: Vec<DVec3> = topo.coarse.iter().map(|&v| mesh.position(v)).collect();
+    let prolongation = Prolongation {
+        parents: topo.parents.clone(),
+    };
+    let positions = prolongation.apply(&coarse_pos);
+    let mesh = build_quadrisection(mesh, &topo, &positions)?;
+    Ok(Refined {
+        mesh,
+        triangles: topo.triangles,
+        prolongation,
+    })
+}
+
+/// A compatible initial marking for newest-vertex bisection.
+///
+/// Uniform bisection stays conforming only if every refinement edge is the refinement edge of
+/// both its triangles (or lies on the boundary): the marking is a perfect matching of the
+/// dual graph in which a triangle may also pair with one of its boundary edges. We take a
+/// greedy matching by decreasing edge length (so that long edges get bisected first, as in
+/// longest-edge bisection), then complete it with Edmonds' augmenting paths. Closed meshes
+/// always have one (Petersen: the dual graph is cubic and bridgeless); an open mesh without
+/// one gives [`SubdivError::NoCompatibleMarking`]. Once compatible, newest-vertex bisection
+/// keeps the marking compatible on every later level.
+pub fn initial_marking(mesh: &Mesh) -> Result<Marking, SubdivError> {
+    let faces: Vec<_> = mesh.faces().collect();
+    let nf = faces.len();
+    let mut face_index = vec![NONE; slot_bound(faces.iter().map(|f| f.slot()))];
+    for (i, f) in faces.iter().enumerate() {
+        face_index[f.slot()] = i as u32;
+    }
+    // Graph nodes: faces 0..nf, then one dummy per boundary edge (adjacent to its face only).
+    // adjacency: for face t, local half-edge j -> neighbour node.
+    let mut nbr = vec![[NONE; 3]; nf];
+    let mut dummy_face: Vec<u32> = Vec::new();
+    let mut dummy_local: Vec<u8> = Vec::new();
+    let mut candidates: Vec<(f64, u32, u8)> = Vec::with_capacity(3 * nf);
+    for (t, &f) in faces.iter().enumerate() {
+        for (j, h) in mesh.face_halfedges(f).into_iter().enumerate() {
+            match mesh.face(mesh.twin(h)) {
+                Some(g) => {
+                    let u = face_index[g.slot()];
+                    nbr[t][j] = u;
+                    if (t as u32) < u {
+                        candidates.push((mesh.edge_length(h), t as u32, j as u8));
+                    }
+                }
+                None => {
+                    nbr[t][j] = (nf + dummy_face.len()) as u32;
+                    dummy_face.push(t as u32);
+                    dummy_local.push(j as u8);
+                }
+            }
+        }
+    }
+    let n = nf + dummy_face.len();
+    let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for t in 0..nf {
+        for &u in &nbr[t] {
+            if u != NONE && !adj[t].contains(&u) {
+                adj[t].push(u);
+            }
+        }
+    }
+    for (d, &t) in dummy_face.iter().enumerate() {
+        adj[nf + d].push(t);
+    }
+    // Greedy: longest interior edges first; ties by face index for determinism.
+    candidates.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
+    let mut mate = vec![NONE; n];
+    for &(_, t, j) in &candidates {
+        let u = nbr[t as usize][j as usize];
+        if mate[t as usize] == NONE && mate[u as usize] == NONE {
+            mate[t as usize] = u;
+            mate[u as usize] = t;
+        }
+    }
+    let mut blossom = Blossom::new(n);
+    for t in 0..nf {
+        if mate[t] == NONE && !blossom.augment_from(t as u32, &adj, &mut mate) {
+            return Err(SubdivError::NoCompatibleMarking { face: t });
+        }
+    }
+    let mut newest = vec![0u8; nf];
+    for t in 0..nf {
+        let u = mate[t];
+        let j = if (u as usize) < nf {
+            (0..3).find(|&j| nbr[t][j] == u).unwrap_or(0)
+        } else {
+            dummy_local[u as usize - nf] as usize
+        };
+        // Half-edge j runs opposite local corner (j + 2) % 3.
+        newest[t] = ((j + 2) % 3) as u8;
+    }
+    // Two faces sharing more than one edge must agree on which one: use the half-edge the
+    // lower face picked and its twin for the partner.
+    for t in 0..nf {
+        let u = mate[t] as usize;
+        if u < nf && t < u {
+            let j = (newest[t] as usize + 1) % 3;
+            let h = mesh.face_halfedges(faces[t])[j];
+            let twin = mesh.twin(h);
+            if let Some(k) = mesh
+                .face_halfedges(faces[u])
+                .iter()
+                .position(|&g| g == twin)
+            {
+                newest[u] = ((k + 2) % 3) as u8;
+            }
+        }
+    }
+    Ok(Marking { newest })
+}
+
+/// Edmonds' blossom search (BFS with base contraction), reused across roots.
+struct Blossom {
+    parent: Vec<u32>,
+    base: Vec<u32>,
+    used: Vec<bool>,
+    in_blossom: Vec<bool>,
+    on_path: Vec<bool>,
+    queue: Vec<u32>,
+}
+
+impl Blossom {
+    fn new(n: usize) -> Self {
+        Blossom {
+            parent: vec![NONE; n],
+            base: (0..n as u32).collect(),
+            used: vec![false; n],
+            in_blossom: vec![false; n],
+            on_path: vec![false; n],
+            queue: Vec::new(),
+        }
+    }
+
+    fn lca(&mut self, mut a: u32, mut b: u32, mate: &[u32]) -> u32 {
+        self.on_path.iter_mut().for_each(|x| *x = false);
+        loop {
+            a = self.base[a as usize];
+            self.on_path[a as usize] = true;
+            if mate[a as usize] == NONE {
+                break;
+            }
+            a = self.parent[mate[a as usize] as usize];
+        }
+        loop {
+            b = self.base[b as usize];
+            if self.on_path[b as usize] {
+                return b;
+            }
+            b = self.parent[mate[b as usize] as usize];
+        }
+    }
+
+    fn mark_path(&mut self, mut v: u32, b: u32, mut child: u32, mate: &[u32]) {
+        while self.base[v as usize] != b {
+            let m = mate[v as usize];
+            self.in_blossom[self.base[v as usize] as usize] = true;
+            self.in_blossom[self.base[m as usize] as usize] = true;
+            self.parent[v as usize] = child;
+            child = m;
+            v = self.parent[m as usize];
+        }
+    }
+
+    /// Finds an augmenting path from the free node `root` and flips it; false if none.
+    fn augment_from(&mut self, root: u32, adj: &[Vec<u32>], mate: &mut [u32]) -> bool {
+        let n = self.base.len();
+        self.used.iter_mut().for_each(|x| *x = false);
+        self.parent.iter_mut().for_each(|x| *x = NONE);
+        for i in 0..n {
+            self.base[i] = i as u32;
+        }
+        self.used[root as usize] = true;
+        self.queue.clear();
+        self.queue.push(root);
+        let mut qi = 0;
+        while qi < self.queue.len() {
+            let v = self.queue[qi];
+            qi += 1;
+            for &to in &adj[v as usize] {
+                if self.base[v as usize] == self.base[to as usize] || mate[v as usize] == to {
+                    continue;
+                }
+                if to == root
+                    || (mate[to as usize] != NONE
+                        && self.parent[mate[to as usize] as usize] != NONE)
+                {
+                    let cur = self.lca(v, to, mate);
+                    self.in_blossom.iter_mut().for_each(|x| *x = false);
+                    self.mark_path(v, cur, to, mate);
+                    self.mark_path(to, cur, v, mate);
+                    for i in 0..n {
+                        if self.in_blossom[self.base[i] as usize] {
+                            self.base[i] = cur;
+                            if !self.used[i] {
+                                self.used[i] = true;
+                                self.queue.push(i as u32);
+                            }
+                        }
+                    }
+                } else if self.parent[to as usize] == NONE {
+                    self.parent[to as usize] = v;
+                    if mate[to as usize] == NONE {
+                        // Flip the alternating path ending at `to`.
+                        let mut u = to;
+                        while u != NONE {
+                            let pu = self.parent[u as usize];
+                            let next = mate[pu as usize];
+                            mate[u as usize] = pu;
+                            mate[pu as usize] = u;
+                            u = next;
+                        }
+                        return true;
+                    }
+                    let m = mate[to as usize];
+                    self.used[m as usize] = true;
+                    self.queue.push(m);
+                }
+            }
+        }
+        false
+    }
+}
+
+/// One level of newest-vertex bisection: every face is split at the midpoint `m` of its
+/// refinement edge into `(m, z0, z1)` and `(m, z2, z0)` (z0 = newest vertex), and `m` becomes
+/// the newest vertex of both children. Returns the refined mesh and the children's marking.
+///
+/// Fails with [`SubdivError::NoCompatibleMarking`] if the marking is not compatible (a
+/// refinement edge that is not the refinement edge of the face across it).
+pub fn bisect(mesh: &Mesh, marking: &Marking) -> Result<(Refined, Marking), SubdivError> {
+    let coarse: Vec<VertexId> = mesh.vertices().collect();
+    let nv = coarse.len();
+    let mut dense = vec![NONE; slot_bound(coarse.iter().map(|v| v.slot()))];
+    for (i, v) in coarse.iter().enumerate() {
+        dense[v.slot()] = i as u32;
+    }
+    let faces: Vec<_> = mesh.faces().collect();
+    if marking.newest.len() != faces.len() {
+        return Err(SubdivError::InvalidOption {
+            name: "marking",
+            why: format!(
+                "has {} entries for {} faces",
+                marking.newest.len(),
+                faces.len()
+            ),
+        });
+    }
+    let mut parents: Vec<[u32; 2]> = (0..nv as u32).map(|i| [i, i]).collect();
+    let mut mid = vec![NONE; slot_bound(mesh.halfedges().map(|h| h.slot()))];
+    let mut refinement_edge = Vec::with_capacity(faces.len());
+    for (t, &f) in faces.iter().enumerate() {
+        let k = marking.newest[t] as usize % 3;
+        let h = mesh.face_halfedges(f)[(k + 1) % 3];
+        refinement_edge.push(h);
+        if mid[h.slot()] == NONE {
+            let twin = mesh.twin(h);
+            let m = parents.len() as u32;
+            mid[h.slot()] = m;
+            mid[twin.slot()] = m;
+            parents.push([
+                dense[mesh.from_vertex(h).slot()],
+                dense[mesh.to_vertex(h).slot()],
+            ]);
+        }
+    }
+    // Conformity: the face across every refinement edge must refine the same edge.
+    for (t, &h) in refinement_edge.iter().enumerate() {
+        let twin = mesh.twin(h);
+        if let Some(g) = mesh.face(twin) {
+            let partner_ok = faces
+                .binary_search_by_key(&g.slot(), |f| f.slot())
+                .ok()
+                .is_some_and(|u| refinement_edge[u] == twin);
+            if !partner_ok {
+                return Err(SubdivError::NoCompatibleMarking { face: t });
+            }
+        }
+    }
+    let mut triangles = Vec::with_capacity(2 * faces.len());
+    for (t, &f) in faces.iter().enumerate() {
+        let k = marking.newest[t] as usize % 3;
+        let v = mesh.face_vertices(f).map(|v| dense[v.slot()]);
+        let (z0, z1, z2) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
+        let m = mid[refinement_edge[t].slot()];
+        triangles.push([m, z0, z1]);
+        triangles.push([m, z2, z0]);
+    }
+    let prolongation = Prolongation { parents };
+    let coarse_pos: Vec<DVec3> = coarse.iter().map(|&v| mesh.position(v)).collect();
+    let positions = prolongation.apply(&coarse_pos);
+    let fine = build(&positions, &triangles, 1)?;
+    // Children's newest vertex is `m`, at local index 0 as emitted; find it in the built
+    // face's own vertex order rather than relying on the builder keeping corner order.
+    let newest = fine
+        .faces()
+        .zip(&triangles)
+        .map(|(f, tri)| {
+            let m = tri[0] as usize;
+            fine.face_vertices(f)
+                .iter()
+                .position(|v| v.slot() == m)
+                .unwrap_or(0) as u8
+        })
+        .collect();
+    Ok((
+        Refined {
+            mesh: fine,
+            triangles,
+            prolongation,
+        },
+        Marking { newest },
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn octahedron() -> Mesh {
+        let p = [
+            [1.0, 0.0, 0.0],
+            [-1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, -1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, -1.0],
+        ]
+        .map(DVec3::from_array);
+        let f = [
+            [0, 2, 4],
+            [2, 1, 4],
+            [1, 3, 4],
+            [3, 0, 4],
+            [2, 0, 5],
+            [1, 2, 5],
+            [3, 1, 5],
+            [0, 3, 5],
+        ];
+        Mesh::from_triangles(&p, &f).unwrap().mesh
+    }
+
+    #[test]
+    fn prolongation_copies_and_averages() {
+        let p = Prolongation {
+            parents: vec![[0, 0], [1, 1], [0, 1]],
+        };
+        assert_eq!(p.apply(&[2.0, 4.0]), vec![2.0, 4.0, 3.0]);
+        assert_eq!(p.n_fine(), 3);
+    }
+
+    #[test]
+    fn quadrisection_puts_midpoints_and_keeps_coarse_vertices_first() {
+        let m = octahedron();
+        let r = quadrisect(&m).unwrap();
+        assert_eq!(r.mesh.n_faces(), 32);
+        assert_eq!(r.mesh.n_vertices(), 6 + 12);
+        assert!(r.mesh.validate().is_ok());
+        // The direct construction equals the builder's, face by face.
+        let (p, t) = r.mesh.to_triangles();
+        let built = Mesh::from_triangles(&p, &t).unwrap();
+        assert!(!built.report.repaired_anything());
+        assert_eq!(built.mesh.to_triangles(), (p, t));
+        let pos = r.mesh.positions();
+        for (i, &[a, b]) in r.prolongation.parents().iter().enumerate() {
+            let expect = (m.positions()[a as usize] + m.positions()[b as usize]) / 2.0;
+            assert_eq!(pos[i], expect);
+            // Midpoints join coarse neighbours only.
+            if a != b {
+                assert!(m.neighbors(m.vertices().nth(a as usize).unwrap()).len() == 4);
+            }
+        }
+    }
+
+    #[test]
+    fn bisection_marking_is_compatible_and_stays_so() {
+        let mut m = octahedron();
+        let mut marking = initial_marking(&m).unwrap();
+        let mut faces = m.n_faces();
+        for _ in 0..4 {
+            let (r, next) = bisect(&m, &marking).unwrap();
+            assert_eq!(r.mesh.n_faces(), 2 * faces);
+            assert_eq!(r.mesh.topology().euler_characteristic, 2);
+            faces = r.mesh.n_faces();
+            m = r.mesh;
+            marking = next;
+        }
+    }
+
+    #[test]
+    fn incompatible_marking_is_rejected() {
+        let m = octahedron();
+        let mut marking = initial_marking(&m).unwrap();
+        marking.newest[0] = (marking.newest[0] + 1) % 3;
+        assert!(matches!(
+            bisect(&m, &marking),
+            Err(SubdivError::NoCompatibleMarking { .. })
+        ));
+    }
+
+    #[test]
+    fn marking_on_an_open_strip_uses_boundary_edges() {
+        // Three triangles in a fan: an odd count, so one must take a boundary edge.
+        let p = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [-1.0, 1.0, 0.0],
+        ]
+        .map(DVec3::from_array);
+        let m = Mesh::from_triangles(&p, &[[0, 1, 2], [0, 2, 3], [0, 3, 4]])
+            .unwrap()
+            .mesh;
+        let marking = initial_marking(&m).unwrap();
+        let (r, _) = bisect(&m, &marking).unwrap();
+        assert_eq!(r.mesh.n_faces(), 6);
+        assert!(r.mesh.validate().is_ok());
+        // Direct quadrisection of an open mesh: valid, boundary loop intact, and the same
+        // faces the generic builder makes.
+        let q = quadrisect(&m).unwrap().mesh;
+        assert!(q.validate().is_ok());
+        assert_eq!(q.topology().boundary_loops, 1);
+        assert_eq!(q.topology().euler_characteristic, 1);
+        let (p, t) = q.to_triangles();
+        assert_eq!(
+            Mesh::from_triangles(&p, &t).unwrap().mesh.to_triangles(),
+            (p, t)
+        );
+        let boundary = q.vertices().filter(|&v| q.is_boundary_vertex(v)).count();
+        assert_eq!(boundary, 2 * 5);
+    }
+}

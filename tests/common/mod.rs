@@ -1,0 +1,221 @@
+//! Helpers shared by the integration tests: test data paths, io round trips, and small meshes
+//! built in code.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+use glam::DVec3;
+use meshpyr::io::{MeshFormat, PlyEncoding, WriteOptions};
+use meshpyr::mesh::{
+    Attribute, AttributeData, ElementProperty, ExtraElement, ListProperty, Mesh, PolygonMesh,
+    ScalarType,
+};
+
+/// Path of a file in `tests/data`.
+pub fn data(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+/// Bytes of a file in `tests/data`.
+pub fn data_bytes(name: &str) -> Vec<u8> {
+    std::fs::read(data(name)).unwrap()
+}
+
+/// Options for a PLY encoding.
+pub fn ply(enc: PlyEncoding) -> WriteOptions {
+    WriteOptions {
+        ply_encoding: enc,
+        ..Default::default()
+    }
+}
+
+/// All PLY encodings.
+pub const ENCODINGS: [PlyEncoding; 3] = [
+    PlyEncoding::Ascii,
+    PlyEncoding::BinaryLittleEndian,
+    PlyEncoding::BinaryBigEndian,
+];
+
+/// Positions compared bit for bit.
+pub fn position_bits(m: &PolygonMesh) -> Vec<[u64; 3]> {
+    m.positions
+        .iter()
+        .map(|p| p.to_array().map(f64::to_bits))
+        .collect()
+}
+
+/// write → read → write: asserts the two writes are byte-identical; returns the re-read mesh.
+pub fn trip(m: &PolygonMesh, format: MeshFormat, opts: &WriteOptions) -> PolygonMesh {
+    let a = meshpyr::io::write_mesh_bytes(m, format, opts).unwrap();
+    let r = meshpyr::io::read_mesh_bytes(&a, format)
+        .unwrap_or_else(|e| panic!("re-read failed: {e}\n{}", String::from_utf8_lossy(&a)));
+    let b = meshpyr::io::write_mesh_bytes(&r, format, opts).unwrap();
+    assert!(a == b, "write → read → write differs for {format} {opts:?}");
+    r
+}
+
+/// A small mesh exercising everything PLY can hold: f32 positions with awkward values, mixed
+/// polygons, an unreferenced vertex, typed vertex and face attributes, an extra element with a
+/// scalar and a list property, and comments.
+pub fn rich_mesh() -> PolygonMesh {
+    let mut m = PolygonMesh::new();
+    m.positions = vec![
+        DVec3::new(0.1f32 as f64, -0.0, 1e-30f32 as f64),
+        DVec3::new(3.4e38f32 as f64, 1.0, 2.0),
+        DVec3::new(-1.5, 1.17e-38f32 as f64, 123456.79f32 as f64),
+        DVec3::new(7.0, 8.0, 9.0), // unreferenced
+        DVec3::new(0.3f32 as f64, 0.7f32 as f64, -2.25),
+    ];
+    m.position_type = Some(ScalarType::F32);
+    m.push_face(&[0, 1, 2]);
+    m.push_face(&[4, 2, 1, 0]);
+    m.push_face(&[0, 4, 1, 2, 0]);
+    m.vertex_attributes = vec![
+        Attribute {
+            name: "red".into(),
+            data: AttributeData::U8(vec![255, 0, 7, 1, 128]),
+        },
+        Attribute {
+            name: "quality".into(),
+            data: AttributeData::F32(vec![0.5, -1e-7, 3.0, f32::MAX, 0.1]),
+        },
+        Attribute {
+            name: "id".into(),
+            data: AttributeData::I32(vec![-1, i32::MIN, i32::MAX, 0, 42]),
+        },
+        Attribute {
+            name: "w64".into(),
+            data: AttributeData::F64(vec![0.1, 1e300, -5e-324, 2.0, 0.0]),
+        },
+    ];
+    m.face_attributes = vec![
+        Attribute {
+            name: "flags".into(),
+            data: AttributeData::U32(vec![0, u32::MAX, 5]),
+        },
+        Attribute {
+            name: "s".into(),
+            data: AttributeData::I16(vec![-3, 300, i16::MIN]),
+        },
+        Attribute {
+            name: "c".into(),
+            data: AttributeData::I8(vec![-128, 0, 127]),
+        },
+        Attribute {
+            name: "us".into(),
+            data: AttributeData::U16(vec![65535, 1, 2]),
+        },
+    ];
+    m.extra_elements = vec![
+        ExtraElement {
+            name: "edge".into(),
+            rows: 2,
+            properties: vec![
+                ElementProperty::Scalar(Attribute {
+                    name: "vertex1".into(),
+                    data: AttributeData::I32(vec![0, 1]),
+                }),
+                ElementProperty::List(ListProperty {
+                    name: "weights".into(),
+                    count_type: ScalarType::U8,
+                    item_type: ScalarType::F32,
+                    starts: vec![0, 2, 2],
+                    items: vec![0.5, 0.1f32 as f64],
+                }),
+            ],
+        },
+        ExtraElement {
+            name: "material".into(),
+            rows: 1,
+            properties: vec![ElementProperty::List(ListProperty {
+                name: "ids".into(),
+                count_type: ScalarType::I32,
+                item_type: ScalarType::I16,
+                starts: vec![0, 3],
+                items: vec![-1.0, 2.0, 300.0],
+            })],
+        },
+    ];
+    m.comments = vec!["made by a test".into(), "".into(), "  indented".into()];
+    m
+}
+
+/// Reads `tests/data/<name>.ply` into a half-edge mesh.
+pub fn load(name: &str) -> meshpyr::mesh::Mesh {
+    let poly = meshpyr::io::read_mesh(&data(&format!("{name}.ply")))
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    meshpyr::mesh::Mesh::from_polygons(&poly)
+        .expect("valid mesh")
+        .mesh
+}
+
+/// The six coarse control meshes with extraordinary vertices.
+pub const CONTROL_MESHES: [&str; 6] = [
+    "cone20",
+    "sphere_highval",
+    "tripod",
+    "cross",
+    "torus_quad",
+    "mushroom_quad",
+];
+
+/// The octahedron stretched along z used by `reference/cascadic_mcm.py`.
+pub fn stretched_octahedron() -> Mesh {
+    let p = [
+        [1.0, 0.0, 0.0],
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, -1.0, 0.0],
+        [0.0, 0.0, 1.6],
+        [0.0, 0.0, -1.6],
+    ]
+    .map(DVec3::from_array);
+    let f = [
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
+    Mesh::from_triangles(&p, &f).unwrap().mesh
+}
+
+/// A planar n×n grid of unit squares split into triangles (an open disk), in the z = 0 plane.
+pub fn grid(n: usize) -> Mesh {
+    let mut p = Vec::new();
+    for j in 0..=n {
+        for i in 0..=n {
+            p.push(DVec3::new(i as f64, j as f64, 0.0));
+        }
+    }
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut t = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    Mesh::from_triangles(&p, &t).unwrap().mesh
+}
+
+/// Bounding-box extent (max − min per axis).
+pub fn extent(mesh: &Mesh) -> DVec3 {
+    let b = mesh.bounding_box().unwrap();
+    b.max - b.min
+}
+
+/// Signed enclosed volume (divergence theorem; meaningful for closed meshes).
+pub fn volume(mesh: &Mesh) -> f64 {
+    mesh.faces()
+        .map(|f| {
+            let [a, b, c] = mesh.face_positions(f);
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum()
+}
