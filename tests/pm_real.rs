@@ -29,12 +29,6 @@ fn check(name: &str, max_base_vertices: usize) {
         "{name}: base has {n0} vertices (of {}), expected at most {max_base_vertices}",
         pm.n_vertices()
     );
-    eprintln!(
-        "{name}: {} -> {} vertices, {} faces",
-        pm.n_vertices(),
-        n0,
-        pm.n_base_faces()
-    );
     let base = pm.base_mesh();
     base.validate().unwrap();
     let after = base.topology();

@@ -432,7 +432,7 @@ impl Marks {
 pub struct Legality {
     /// Largest valence the survivor may get.
     pub max_valence: usize,
-    /// Cosine of the largest allowed rotation of a face normal (`cos 60°` by default).
+    /// Cosine of the largest allowed rotation of a face normal (`cos 60°` by default here; `PmOptions` defaults to 45°).
     pub min_normal_cos: f64,
     /// Smallest allowed triangle quality `4√3·A / (l1² + l2² + l3²)` (1 for equilateral) of a
     /// face the collapse changes, unless the face was already worse before.
