@@ -97,3 +97,27 @@ fn bad_input_exits_nonzero_with_one_line() {
         .unwrap();
     assert!(!missing.status.success());
 }
+
+#[test]
+fn default_solver_is_exact_on_small_outputs() {
+    // `--solver auto` (the default) must give the exact fixed point for a coarse control mesh,
+    // which differs from the cascadic CG result.
+    let input = data("cone20.ply");
+    let run = |extra: &[&str], name: &str| {
+        let out = tmp(name);
+        let status = bin()
+            .arg("subdivide")
+            .arg(&input)
+            .arg("-o")
+            .arg(&out)
+            .args(["--levels", "2", "--quiet"])
+            .args(extra)
+            .status()
+            .unwrap();
+        assert!(status.success());
+        std::fs::read(out).unwrap()
+    };
+    let default = run(&[], "auto.ply");
+    assert_eq!(default, run(&["--solver", "exact"], "exact.ply"));
+    assert_ne!(default, run(&["--solver", "cg"], "cg.ply"));
+}

@@ -28,6 +28,9 @@ pub enum RefineArg {
 /// Linear solver of each MCM level.
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
 pub enum SolverArg {
+    /// `exact` while the output has at most 250k vertices (where the cascadic approximation
+    /// visibly oscillates on coarse inputs and the exact solve costs little), `cg` above.
+    Auto,
     /// Cascadic damped Jacobi.
     Jacobi,
     /// Cascadic Jacobi-preconditioned CG.
@@ -35,6 +38,9 @@ pub enum SolverArg {
     /// Exact per level (sparse Cholesky; CG to 1e-10 in builds without the `solver` feature).
     Exact,
 }
+
+/// Largest output for which `--solver auto` picks the exact solve.
+const AUTO_EXACT_MAX_VERTICES: f64 = 250_000.0;
 
 /// Arguments of `meshpyr subdivide`.
 #[derive(clap::Args, Debug)]
@@ -59,8 +65,8 @@ pub struct SubdivideArgs {
     #[arg(long, value_enum, default_value = "quad")]
     pub refine: RefineArg,
     /// Solver for MCM levels (`exact` gives the true fixed point; `cg`/`jacobi` are the
-    /// faster cascadic approximations).
-    #[arg(long, value_enum, default_value = "cg")]
+    /// faster cascadic approximations, linear in the output size).
+    #[arg(long, value_enum, default_value = "auto")]
     pub solver: SolverArg,
     /// Filter-width constant c (σ = c · mean edge length of the input). Larger values
     /// smooth and shrink more; coarse meshes collapse above about 0.4.
@@ -99,6 +105,20 @@ pub fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
             RefineArg::Bisect => Refinement::Bisection,
         },
         solver: match args.solver {
+            SolverArg::Auto => {
+                // Each quad level multiplies the vertex count by about 4, a bisection level by 2.
+                let growth: f64 = match args.refine {
+                    RefineArg::Quad => 4.0,
+                    RefineArg::Bisect => 2.0,
+                };
+                let output_vertices =
+                    built.mesh.n_vertices() as f64 * growth.powi(args.levels.min(64) as i32);
+                if output_vertices <= AUTO_EXACT_MAX_VERTICES {
+                    Solver::Exact
+                } else {
+                    Solver::Cg
+                }
+            }
             SolverArg::Jacobi => Solver::Jacobi,
             SolverArg::Cg => Solver::Cg,
             SolverArg::Exact => Solver::Exact,
