@@ -277,3 +277,30 @@ proptest! {
         }
     }
 }
+
+#[test]
+fn solids_touching_along_an_edge_become_two_closed_surfaces() {
+    // Two tetrahedra sharing the edge 0-1 (four triangles on it): pairing the triangles by
+    // their angle around the edge keeps both solids closed instead of leaving flaps.
+    let pos = vec![
+        p(0., 0., 0.),
+        p(0., 0., 1.),
+        p(1., 0., 0.5),
+        p(0.5, 1., 0.5),
+        p(-1., 0., 0.5),
+        p(-0.5, -1., 0.5),
+    ];
+    let tet = |a: u32, b: u32, c: u32, d: u32| [[a, c, b], [a, b, d], [b, c, d], [a, d, c]];
+    let mut t = tet(0, 1, 2, 3).to_vec();
+    t.extend(tet(0, 1, 4, 5));
+    let b = Mesh::from_triangles(&pos, &t).unwrap();
+    b.mesh.validate().unwrap();
+    assert_eq!(b.report.non_manifold_edges, 1);
+    assert_eq!(b.report.non_manifold_vertices, 0);
+    let topo = b.mesh.topology();
+    assert_eq!(
+        (topo.components, topo.boundary_loops, topo.genus),
+        (2, 0, Some(0))
+    );
+    assert_eq!(b.report.split_vertices, 2);
+}

@@ -218,6 +218,80 @@ fn fresh_key<K: slotmap::Key>(i: usize) -> K {
     K::from(slotmap::KeyData::from_ffi((1u64 << 32) | (i as u64 + 1)))
 }
 
+/// Pairs the half-edges of a non-manifold edge `{lo, hi}` (`group` holds `(hi, c)`).
+///
+/// The triangles are sorted by the angle of their third vertex about the edge; two angular
+/// neighbours that run along the edge in opposite directions are locally one consistently
+/// oriented sheet, so they are paired, as many as possible; among pairings with equally many
+/// pairs, the one whose pairs face away from the wedge between them (bound the same solid) wins,
+/// so two solids touching along an edge become two closed surfaces. The rest stay unpaired and
+/// become boundary. If no opposite pair exists, the first two are paired and the orientation
+/// pass sorts them out.
+fn pair_around_edge(
+    positions: &[DVec3],
+    tris: &[[u32; 3]],
+    lo: u32,
+    group: &[(u32, u32)],
+) -> Vec<(u32, u32)> {
+    let hi = group[0].0;
+    let p0 = positions[lo as usize];
+    let axis = (positions[hi as usize] - p0).normalize_or_zero();
+    let wing = |c: u32| {
+        let t = tris[(c / 3) as usize];
+        let w = positions[t[((c % 3 + 2) % 3) as usize] as usize] - p0;
+        w - axis * w.dot(axis)
+    };
+    let reference = group
+        .iter()
+        .map(|g| wing(g.1))
+        .find(|w| w.length_squared() > 0.0)
+        .unwrap_or(DVec3::X)
+        .normalize_or_zero();
+    let side = axis.cross(reference);
+    let mut around: Vec<(f64, u32, bool)> = group
+        .iter()
+        .map(|&(_, c)| {
+            let w = wing(c);
+            let forward = tris[(c / 3) as usize][(c % 3) as usize] == lo;
+            (w.dot(side).atan2(w.dot(reference)), c, forward)
+        })
+        .collect();
+    around.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let n = around.len();
+    // Pair angular neighbours of opposite direction, greedily around the circle from `start`;
+    // `solid_only` takes only the pairs that enclose the wedge between them: a triangle running
+    // lo → hi has its normal (hi − lo) × wing pointing towards increasing angle, so a backward
+    // triangle followed (counter-clockwise) by a forward one faces away from that wedge.
+    let pair_from = |start: usize, solid_only: bool| {
+        let mut used = vec![false; n];
+        let mut pairs = Vec::new();
+        for k in 0..n {
+            let (i, j) = ((start + k) % n, (start + k + 1) % n);
+            let opposite = around[i].2 != around[j].2;
+            let encloses = !around[i].2 && around[j].2;
+            if i != j && !used[i] && !used[j] && opposite && (encloses || !solid_only) {
+                used[i] = true;
+                used[j] = true;
+                pairs.push((around[i].1, around[j].1));
+            }
+        }
+        pairs
+    };
+    // Most pairs wins; among equals, the pairing that keeps solids apart.
+    let mut best = pair_from(0, true);
+    for start in [0, 1] {
+        let candidate = pair_from(start, false);
+        if candidate.len() > best.len() {
+            best = candidate;
+        }
+    }
+    if best.is_empty() {
+        vec![(group[0].1, group[1].1)]
+    } else {
+        best
+    }
+}
+
 /// Half-edge `c = 3t + k` runs from corner `k` of triangle `t` to corner `k + 1`.
 #[inline]
 fn next_c(c: u32) -> u32 {
@@ -232,6 +306,8 @@ fn prev_c(c: u32) -> u32 {
 /// Per half-edge flag: its undirected edge has two or more triangles (so being unpaired
 /// means it was cut, not that it is a genuine boundary).
 const SHARED: u8 = 1;
+/// Per half-edge flag: its undirected edge has more than two triangles.
+const NON_MANIFOLD: u8 = 2;
 
 fn build_triangles(
     positions: &[DVec3],
@@ -274,24 +350,25 @@ fn build_triangles(
                 if group.len() < 2 {
                     continue;
                 }
+                let flag = if group.len() > 2 {
+                    SHARED | NON_MANIFOLD
+                } else {
+                    SHARED
+                };
                 for g in group {
-                    flags[g.1 as usize] = SHARED;
+                    flags[g.1 as usize] = flag;
                 }
-                let first = group[0].1;
-                let partner = if group.len() == 2 {
-                    group[1].1
+                let pairs = if group.len() == 2 {
+                    vec![(group[0].1, group[1].1)]
                 } else {
                     report.non_manifold_edges += 1;
-                    let dir = from(&tris, first);
-                    group[1..]
-                        .iter()
-                        .map(|g| g.1)
-                        .find(|&d| from(&tris, d) != dir)
-                        .unwrap_or(group[1].1)
+                    pair_around_edge(positions, &tris, lo as u32, group)
                 };
-                any_same_direction |= from(&tris, first) == from(&tris, partner);
-                mate[first as usize] = partner;
-                mate[partner as usize] = first;
+                for (a, b) in pairs {
+                    any_same_direction |= from(&tris, a) == from(&tris, b);
+                    mate[a as usize] = b;
+                    mate[b as usize] = a;
+                }
             }
         }
     }
@@ -410,18 +487,20 @@ fn build_triangles(
     drop(seen);
     report.split_vertices = vertex_source.len() - nv;
     if report.split_vertices > 0 {
-        // Pinched vertices: split although no cut edge (unpaired but shared) touches them.
-        let mut split = vec![0u8; nv]; // 1 split, 2 split and touched by a cut edge
+        // Pinched vertices: split although no non-manifold or cut edge (unpaired but shared)
+        // touches them.
+        let mut split = vec![0u8; nv]; // 1 split, 2 split and touched by such an edge
         for &s in &vertex_source[nv..] {
             split[s as usize] = 1;
         }
+        let explained = |e: u32| {
+            let f = flags[e as usize];
+            f & NON_MANIFOLD != 0 || (mate[e as usize] == NONE && f & SHARED != 0)
+        };
         for c in 0..nh as u32 {
             let v = from(tris, c) as usize;
-            if split[v] == 1 {
-                let cut = |e: u32| mate[e as usize] == NONE && flags[e as usize] == SHARED;
-                if cut(c) || cut(prev_c(c)) {
-                    split[v] = 2;
-                }
+            if split[v] == 1 && (explained(c) || explained(prev_c(c))) {
+                split[v] = 2;
             }
         }
         report.non_manifold_vertices = split.iter().filter(|&&s| s == 1).count();
