@@ -33,11 +33,10 @@ pub fn run(args: DemoArgs, global: &Global) -> anyhow::Result<()> {
     let info_path = args.out.join("bunny-info.json");
     io::write_atomic(&info_path, serde_json::to_string_pretty(&info)?.as_bytes())?;
     global.say(format_args!("wrote {}", info_path.display()));
-    for ext in ["ply", "obj", "off", "stl"] {
-        let path = args.out.join(format!("bunny.{ext}"));
-        io::write_mesh(&path, &poly)?;
-        global.say(format_args!("wrote {}", path.display()));
-    }
+    // The input next to the results, to open side by side in a viewer.
+    let input_path = args.out.join("bunny.ply");
+    io::write_mesh(&input_path, &poly)?;
+    global.say(format_args!("wrote {}", input_path.display()));
     super::filter::demo_filters(poly, "bunny", &args.out, global)?;
     Ok(())
 }
