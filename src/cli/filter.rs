@@ -18,22 +18,20 @@ pub enum RelaxKind {
     /// Guskov's non-uniform second-difference operator.
     #[default]
     SecondDifference,
-    /// One implicit mean-curvature step (not available yet).
+    /// One Jacobi step of implicit mean-curvature motion (cotangent weights, lumped mass).
     Mcm,
     /// Ohtake's normal-adaptive operator (not available yet).
     Normal,
 }
 
 impl RelaxKind {
-    /// The operator, or an error saying it does not exist yet.
+    /// The operator, or an error saying it cannot drive the pyramid.
     pub fn operator(self) -> anyhow::Result<Box<dyn Relaxation>> {
         match self {
             RelaxKind::SecondDifference => Ok(Box::new(SecondDifference::default())),
-            RelaxKind::Mcm => anyhow::bail!(
-                "--relax mcm: the mean-curvature relaxation operator is not available yet (it lands with the cascadic subdivision work); use --relax second-difference"
-            ),
+            RelaxKind::Mcm => Ok(Box::new(crate::subdiv::MeanCurvatureStep::default())),
             RelaxKind::Normal => anyhow::bail!(
-                "--relax normal: the normal-adaptive relaxation operator is not available yet (it lands with the denoising work); use --relax second-difference"
+                "--relax normal: the normal-adaptive relaxation operator is not available yet (it lands with the denoising work); use --relax second-difference or --relax mcm"
             ),
         }
     }

@@ -11,9 +11,9 @@
 //! Presmoothing only changes vertices the synthesis overwrites with `q + d`, so the pyramid
 //! reconstructs exactly whatever the presmoothing does (the Burt–Adelson property).
 
-use super::synthesis::Scratch;
-use super::{Pyramid, PyramidError};
-use crate::mesh::{Mesh, SlotIndex};
+use super::synthesis::{Scratch, decode, predict_local, presmooth_local};
+use super::{Codes, Pyramid, PyramidError, SplitOffsets};
+use crate::mesh::{Mesh, SlotIndex, VertexId};
 use crate::pm::ProgressiveMesh;
 use crate::progress::Progress;
 use crate::relax::Relaxation;
@@ -55,32 +55,28 @@ impl Pyramid {
         let mut cursor = pm.cursor();
         let (surface_area, bbox_diagonal) = surface_stats(cursor.mesh());
 
-        let mut p = Pyramid {
-            n_base,
-            n_finest,
-            passthrough: signal[n_finest..].to_vec(),
-            base: Vec::new(),
-            survivor: Vec::with_capacity(n_splits),
-            touched_start: Vec::with_capacity(n_splits + 1),
-            touched: Vec::with_capacity(7 * n_splits),
-            stencil_start: Vec::with_capacity(7 * n_splits + 1),
-            stencil_vertex: Vec::with_capacity(80 * n_splits),
-            stencil_weight: Vec::with_capacity(80 * n_splits),
-            fan_start: Vec::with_capacity(7 * n_splits + 1),
-            fan: Vec::with_capacity(45 * n_splits),
-            fan_open: Vec::with_capacity(7 * n_splits),
-            details: Vec::with_capacity(7 * n_splits),
-            relaxation: relaxation.name(),
-            surface_area,
-            bbox_diagonal,
+        // Records are written finest split first (the order of the collapses), with wide
+        // codes, then reversed into synthesis order and narrowed at the end.
+        let mut offsets = Vec::with_capacity(n_splits + 1);
+        let mut locals: Vec<u32> = Vec::with_capacity(32 * n_splits);
+        let mut codes: Vec<u32> = Vec::with_capacity(128 * n_splits);
+        let mut weights: Vec<f64> = Vec::with_capacity(72 * n_splits);
+        let mut details: Vec<DVec3> = Vec::with_capacity(7 * n_splits);
+        let push_offsets = |o: &mut Vec<SplitOffsets>, l: usize, c: usize, w: usize, d: usize| {
+            o.push(SplitOffsets {
+                locals: l,
+                codes: c,
+                weights: w,
+                details: d,
+            })
         };
-        p.touched_start.push(0);
-        p.stencil_start.push(0);
-        p.fan_start.push(0);
 
         let mut f = signal.to_vec();
         let mut scratch = Scratch::default();
         let mut stencil = Vec::new();
+        let mut touched: Vec<VertexId> = Vec::new();
+        // PM vertex → its index in the current split's local table (u32::MAX: not in it).
+        let mut local_of = vec![u32::MAX; geometry.len()];
         let report_every = (n_splits / 200).max(1);
         for (done, k) in (0..n_splits).rev().enumerate() {
             if done % report_every == 0 {
@@ -97,57 +93,104 @@ impl Pyramid {
             let survivor = pm.splits()[k].survivor;
             let mesh = cursor.mesh();
             let vh = cursor.vertex(v);
-            // 1. Record the touched vertices (v, then its ring CCW) with weights and fans.
-            let s = p.survivor.len();
-            p.survivor.push(survivor);
-            for j in std::iter::once(vh).chain(mesh.outgoing(vh).map(|h| mesh.to_vertex(h))) {
-                p.touched.push(j.slot() as u32);
-                if relaxation.stencil(mesh, geometry, j, &mut stencil) {
-                    for &(u, w) in &stencil {
-                        p.stencil_vertex.push(u.slot() as u32);
-                        p.stencil_weight.push(w);
-                    }
+            push_offsets(
+                &mut offsets,
+                locals.len(),
+                codes.len(),
+                weights.len(),
+                details.len(),
+            );
+            let (l0, c0, w0) = (locals.len(), codes.len(), weights.len());
+            // 1. The touched vertices (v, then its ring CCW) open the local table; their
+            //    stencils and fans (indices into the table) follow, weights alongside.
+            touched.clear();
+            touched.push(vh);
+            touched.extend(mesh.outgoing(vh).map(|h| mesh.to_vertex(h)));
+            let mut local = |u: usize, locals: &mut Vec<u32>| {
+                if local_of[u] == u32::MAX {
+                    local_of[u] = (locals.len() - l0) as u32;
+                    locals.push(u as u32);
                 }
-                p.stencil_start.push(p.stencil_vertex.len() as u32);
-                let mut first = None;
-                for h in mesh.outgoing(j) {
-                    first.get_or_insert(h);
-                    p.fan.push(mesh.to_vertex(h).slot() as u32);
-                }
-                p.fan_start.push(p.fan.len() as u32);
-                p.fan_open
-                    .push(first.is_some_and(|h| mesh.is_boundary_halfedge(h)));
+                local_of[u]
+            };
+            for &j in &touched {
+                local(j.slot(), &mut locals);
             }
-            p.touched_start.push(p.touched.len() as u32);
-            let (a, b) = (p.touched_start[s] as usize, p.touched_start[s + 1] as usize);
-            if p.touched[a] as usize != v || !p.touched[a + 1..b].contains(&survivor) {
+            let Some(survivor_local) = touched.iter().position(|j| j.slot() == survivor as usize)
+            else {
                 return Err(PyramidError::Internal(format!(
                     "split {k}: vertex {v} is not adjacent to its survivor {survivor}"
                 )));
+            };
+            if vh.slot() != v || survivor_local == 0 {
+                return Err(PyramidError::Internal(format!(
+                    "split {k}: vertex {v} has PM slot {}",
+                    vh.slot()
+                )));
             }
+            codes.push(touched.len() as u32);
+            codes.push(survivor_local as u32);
+            for &j in &touched {
+                let len_at = codes.len();
+                codes.extend([0, 0]);
+                if relaxation.stencil(mesh, geometry, j, &mut stencil) {
+                    for &(u, w) in &stencil {
+                        let x = local(u.slot(), &mut locals);
+                        codes.push(x);
+                        weights.push(w);
+                    }
+                }
+                let mut first = None;
+                let fan_at = codes.len();
+                for h in mesh.outgoing(j) {
+                    first.get_or_insert(h);
+                    let x = local(mesh.to_vertex(h).slot(), &mut locals);
+                    codes.push(x);
+                }
+                let open = first.is_some_and(|h| mesh.is_boundary_halfedge(h));
+                codes[len_at] = (fan_at - len_at - 2) as u32;
+                codes[len_at + 1] = ((codes.len() - fan_at) as u32) << 1 | open as u32;
+            }
+            for &u in &locals[l0..] {
+                local_of[u as usize] = u32::MAX;
+            }
+            let t = touched.len();
+            let table = &locals[l0..];
+            let decoded = decode(&codes, c0, w0, &mut scratch.entries);
+            debug_assert_eq!(decoded, survivor_local);
             // 2. Presmooth the ring from f^(n); remember f^(n) on the touched vertices.
+            let g = &mut scratch.g;
+            g.clear();
+            g.extend(table.iter().map(|&x| f[x as usize]));
             scratch.saved.clear();
-            scratch
-                .saved
-                .extend(p.touched[a..b].iter().map(|&j| f[j as usize]));
-            let mut smoothed = std::mem::take(&mut scratch.smoothed);
-            p.presmooth_ring(s, &f, &mut smoothed);
-            for (e, &x) in (a + 1..b).zip(&smoothed) {
-                f[p.touched[e] as usize] = x;
+            scratch.saved.extend_from_slice(&g[..t]);
+            presmooth_local(
+                &codes,
+                &weights,
+                &scratch.entries,
+                g,
+                &mut scratch.smoothed,
+            );
+            // 3. Downsample: f^(n−1) is the presmoothed ring; the removed vertex is gone (its
+            //    value is never read again: the prediction starts it at its survivor).
+            g[1..t].copy_from_slice(&scratch.smoothed);
+            for (&x, &s) in table[1..t].iter().zip(&scratch.smoothed) {
+                f[x as usize] = s;
             }
-            // 3–4. Downsample (f[v] is no longer read: stencils never contain their own
-            // vertex, and v's value is replaced by its prediction) and predict.
-            p.predict_split(s, &mut f, &mut scratch);
-            // 5. Details in the frames of the predicted geometry.
-            for i in 0..b - a {
+            // 4. Predict, 5. details in the frames of the predicted geometry.
+            predict_local(
+                &codes,
+                &weights,
+                &scratch.entries,
+                survivor_local,
+                g,
+                &mut scratch.q,
+                &mut scratch.frames,
+            );
+            for i in 0..t {
                 let d = scratch.saved[i] - scratch.q[i];
-                p.details.push(scratch.frames[i].to_local(d));
+                details.push(scratch.frames[i].to_local(d));
             }
-            // f^(n−1): the presmoothed ring; the removed vertex is gone.
-            for (e, &x) in (a + 1..b).zip(&smoothed) {
-                f[p.touched[e] as usize] = x;
-            }
-            scratch.smoothed = smoothed;
             if !cursor.collapse() {
                 return Err(PyramidError::Internal(format!(
                     "cannot collapse level {}",
@@ -155,10 +198,84 @@ impl Pyramid {
                 )));
             }
         }
+        push_offsets(
+            &mut offsets,
+            locals.len(),
+            codes.len(),
+            weights.len(),
+            details.len(),
+        );
         progress.update(1.0);
-        p.base = f[..n_base].to_vec();
-        Ok(p)
+
+        // Synthesis order: coarsest split first.
+        let offsets = reverse_records(
+            &mut offsets,
+            &mut locals,
+            &mut codes,
+            &mut weights,
+            &mut details,
+        );
+        let codes = if codes.iter().all(|&c| c <= u16::MAX as u32) {
+            Codes::Narrow(codes.iter().map(|&c| c as u16).collect())
+        } else {
+            Codes::Wide(codes)
+        };
+        Ok(Pyramid {
+            n_base,
+            n_finest,
+            passthrough: signal[n_finest..].to_vec(),
+            base: f[..n_base].to_vec(),
+            offsets,
+            locals,
+            codes,
+            weights,
+            details,
+            relaxation: relaxation.name(),
+            surface_area,
+            bbox_diagonal,
+        })
     }
+}
+
+/// Reverses the order of the split records in every stream in place (each record keeps its
+/// internal order) and returns the offsets of the reversed layout.
+fn reverse_records(
+    offsets: &mut [SplitOffsets],
+    locals: &mut [u32],
+    codes: &mut [u32],
+    weights: &mut [f64],
+    details: &mut [DVec3],
+) -> Vec<SplitOffsets> {
+    fn reverse<T>(v: &mut [T], starts: impl Iterator<Item = (usize, usize)>) {
+        // Reversing the whole stream reverses the record order and each record; reversing
+        // every record back restores their contents.
+        let total = v.len();
+        v.reverse();
+        for (a, b) in starts {
+            v[total - b..total - a].reverse();
+        }
+    }
+    let pairs = |get: fn(&SplitOffsets) -> usize| {
+        offsets
+            .windows(2)
+            .map(move |w| (get(&w[0]), get(&w[1])))
+            .collect::<Vec<_>>()
+    };
+    reverse(locals, pairs(|o| o.locals).into_iter());
+    reverse(codes, pairs(|o| o.codes).into_iter());
+    reverse(weights, pairs(|o| o.weights).into_iter());
+    reverse(details, pairs(|o| o.details).into_iter());
+    let last = offsets.last().copied().unwrap_or_default();
+    offsets
+        .iter()
+        .rev()
+        .map(|o| SplitOffsets {
+            locals: last.locals - o.locals,
+            codes: last.codes - o.codes,
+            weights: last.weights - o.weights,
+            details: last.details - o.details,
+        })
+        .collect()
 }
 
 /// Total area and bounding-box diagonal of a mesh.

@@ -54,22 +54,49 @@ impl Frame {
 /// Relative size below which a projected reference direction counts as degenerate.
 const DEGENERATE_TANGENT: f64 = 1e-12;
 
+/// An integer index into a signal array: the pyramid stores local indices as `u16` when they
+/// fit, `u32` otherwise.
+pub trait LocalIndex: Copy {
+    /// The index as `usize`.
+    fn at(self) -> usize;
+}
+
+impl LocalIndex for u16 {
+    #[inline(always)]
+    fn at(self) -> usize {
+        self as usize
+    }
+}
+
+impl LocalIndex for u32 {
+    #[inline(always)]
+    fn at(self) -> usize {
+        self as usize
+    }
+}
+
 /// The frame of vertex `j` from the signal `g` (indexed by vertex), its counter-clockwise fan
 /// of neighbours (`open`: `j` is a boundary vertex) and the preferred reference neighbour.
 ///
 /// The fan's triangles are `(j, fan[k], fan[k+1 mod m])` for every `k`, except `k = 0` when the
 /// fan is open: a boundary vertex's circulation starts at its boundary edge, which has no face.
-pub fn vertex_frame(g: &[DVec3], j: u32, fan: &[u32], open: bool, reference: u32) -> Frame {
-    let pj = g[j as usize];
+pub fn vertex_frame<I: LocalIndex>(
+    g: &[DVec3],
+    j: usize,
+    fan: &[I],
+    open: bool,
+    reference: usize,
+) -> Frame {
+    let pj = g[j];
     let m = fan.len();
     let mut normal = DVec3::ZERO;
     if m >= 2 {
         // Triangles (fan[k], fan[k+1]) for k = 0..m-2, then the closing (fan[m-1], fan[0]);
         // an open fan's gap is the first pair. Each neighbour is loaded once, no modulo.
-        let first = g[fan[0] as usize] - pj;
+        let first = g[fan[0].at()] - pj;
         let mut prev = first;
         for (k, &x) in fan[1..].iter().enumerate() {
-            let cur = g[x as usize] - pj;
+            let cur = g[x.at()] - pj;
             // Pair (fan[k], fan[k+1]); skipped for k = 0 when open.
             if k > 0 || !open {
                 normal += prev.cross(cur);
@@ -82,18 +109,22 @@ pub fn vertex_frame(g: &[DVec3], j: u32, fan: &[u32], open: bool, reference: u32
     if n == DVec3::ZERO || !n.is_finite() {
         return Frame::WORLD;
     }
+    // Compared squared: one square root per frame instead of three.
     let tangent_of = |r: DVec3| {
         let t = r - r.dot(n) * n;
-        let len = t.length();
-        (len > DEGENERATE_TANGENT * r.length() && len > 0.0 && len.is_finite()).then(|| t / len)
+        let len2 = t.length_squared();
+        let usable = len2 > (DEGENERATE_TANGENT * DEGENERATE_TANGENT) * r.length_squared()
+            && len2 > 0.0
+            && len2.is_finite();
+        usable.then(|| t / len2.sqrt())
     };
-    let t1 = tangent_of(g[reference as usize] - pj)
+    let t1 = tangent_of(g[reference] - pj)
         .or_else(|| {
             let start = fan
                 .iter()
-                .position(|&x| x == reference)
+                .position(|&x| x.at() == reference)
                 .map_or(0, |p| p + 1);
-            (0..m).find_map(|i| tangent_of(g[fan[(start + i) % m] as usize] - pj))
+            (0..m).find_map(|i| tangent_of(g[fan[(start + i) % m].at()] - pj))
         })
         .unwrap_or_else(|| {
             // The world axis most perpendicular to n always has a usable projection.
@@ -159,7 +190,7 @@ mod tests {
         }
         // The circulation of a boundary vertex starts at its boundary edge: here the edge to the
         // neighbour at angle π, followed by angle 0, π/3, 2π/3 … so the gap is (fan[0], fan[1]).
-        let fan = [4, 1, 2, 3];
+        let fan = [4u32, 1, 2, 3];
         let f = vertex_frame(&g, 0, &fan, true, 1);
         assert!((f.n - DVec3::Z).length() < 1e-12, "{:?}", f.n);
         // Treating it as closed would add the reflex triangle (0, 4, 1) with zero area here; tilt
@@ -181,13 +212,13 @@ mod tests {
             DVec3::new(-1.0, -1.0, 0.0),
             DVec3::new(0.0, 0.0, 2.0), // straight above: no tangential part
         ];
-        let f = vertex_frame(&g, 0, &[1, 2, 3], false, 4);
+        let f = vertex_frame(&g, 0, &[1u32, 2, 3], false, 4);
         assert!(is_orthonormal(&f));
         assert!((f.t1 - DVec3::X).length() < 1e-12);
         // All neighbours coincide with the vertex: no normal → world frame.
         let z = vec![DVec3::ZERO; 4];
-        assert_eq!(vertex_frame(&z, 0, &[1, 2, 3], false, 1), Frame::WORLD);
+        assert_eq!(vertex_frame(&z, 0, &[1u32, 2, 3], false, 1), Frame::WORLD);
         let nan = vec![DVec3::splat(f64::NAN); 4];
-        assert_eq!(vertex_frame(&nan, 0, &[1, 2, 3], false, 1), Frame::WORLD);
+        assert_eq!(vertex_frame(&nan, 0, &[1u32, 2, 3], false, 1), Frame::WORLD);
     }
 }

@@ -66,8 +66,20 @@ pub enum PyramidError {
 /// A Burt–Adelson detail pyramid: base signal, details, and the per-level weights and fans
 /// synthesis needs. Build one with [`Pyramid::analyze`]; see the [module docs](self).
 ///
-/// All vertex indices are PM indices. Per-split data is stored in analysis order (finest split
-/// first); [`Pyramid::split_slot`] maps a split index to its storage slot.
+/// All vertex indices are PM indices. Per-split data is stored in synthesis order (split `k`,
+/// which creates vertex `n0 + k`, at slot `k`) as a few sequential streams, so synthesis reads
+/// memory front to back:
+///
+/// * `locals`: per split, its *local table* — the PM vertices the split reads or writes: the new
+///   vertex, its 1-ring counter-clockwise (these `t` are the touched vertices), then every other
+///   vertex of their stencils and fans. Synthesis gathers these values once into a small
+///   contiguous buffer and works there.
+/// * `codes`: per split `[t, survivor]`, then per touched entry `[s, 2·m + open]` followed by
+///   `s` stencil and `m` fan indices — all indices into the split's local table, so they fit in
+///   16 bits for any PM whose neighbourhoods have fewer than 65 536 vertices (32 bits otherwise).
+/// * `weights`: per touched entry its `s` stencil weights (f64: they set the prediction's
+///   linear precision).
+/// * `details`: per touched entry its detail in the local frame `(t1, t2, n)`.
 #[derive(Clone, Debug)]
 pub struct Pyramid {
     pub(crate) n_base: usize,
@@ -76,25 +88,40 @@ pub struct Pyramid {
     pub(crate) passthrough: Vec<DVec3>,
     /// The base signal `f^(n0)` on PM vertices `0..n_base`.
     pub(crate) base: Vec<DVec3>,
-    /// Per storage slot: the survivor `t_n` of the split (the frame reference of the new vertex).
-    pub(crate) survivor: Vec<u32>,
-    /// Per storage slot: range into `touched` (the new vertex first, then its 1-ring CCW).
-    pub(crate) touched_start: Vec<u32>,
-    pub(crate) touched: Vec<u32>,
-    /// Per touched entry: range into the stencil arrays (empty = the operator keeps the value).
-    pub(crate) stencil_start: Vec<u32>,
-    pub(crate) stencil_vertex: Vec<u32>,
-    pub(crate) stencil_weight: Vec<f64>,
-    /// Per touched entry: range into `fan` (its 1-ring at the split's level, CCW).
-    pub(crate) fan_start: Vec<u32>,
-    pub(crate) fan: Vec<u32>,
-    /// Per touched entry: the fan has a boundary gap between its last and first neighbour.
-    pub(crate) fan_open: Vec<bool>,
-    /// Per touched entry: the detail in the entry's local frame `(t1, t2, n)`.
+    /// Per split (plus an end sentinel): where its records start in each stream.
+    pub(crate) offsets: Vec<SplitOffsets>,
+    pub(crate) locals: Vec<u32>,
+    pub(crate) codes: Codes,
+    pub(crate) weights: Vec<f64>,
     pub(crate) details: Vec<DVec3>,
     pub(crate) relaxation: &'static str,
     pub(crate) surface_area: f64,
     pub(crate) bbox_diagonal: f64,
+}
+
+/// Start of one split's records in each stream of a [`Pyramid`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) struct SplitOffsets {
+    pub locals: usize,
+    pub codes: usize,
+    pub weights: usize,
+    pub details: usize,
+}
+
+/// The code stream, as narrow as the largest local index allows.
+#[derive(Clone, Debug)]
+pub(crate) enum Codes {
+    Narrow(Vec<u16>),
+    Wide(Vec<u32>),
+}
+
+impl Codes {
+    fn bytes(&self) -> usize {
+        match self {
+            Codes::Narrow(c) => 2 * c.len(),
+            Codes::Wide(c) => 4 * c.len(),
+        }
+    }
 }
 
 impl Pyramid {
@@ -116,7 +143,7 @@ impl Pyramid {
 
     /// Number of vertex splits (`n_vertices() − n_base_vertices()`).
     pub fn n_splits(&self) -> usize {
-        self.survivor.len()
+        self.offsets.len().saturating_sub(1)
     }
 
     /// Name of the relaxation operator the pyramid was analysed with.
@@ -144,10 +171,11 @@ impl Pyramid {
         self.details.len()
     }
 
-    /// Storage slot of split `k` (split `k` creates vertex `n0 + k`, level `n0 + k + 1`).
+    /// Storage slot of split `k` (split `k` creates vertex `n0 + k`, level `n0 + k + 1`). The
+    /// pyramid stores splits in synthesis order, so this is `k`.
     #[inline]
     pub fn split_slot(&self, k: usize) -> usize {
-        self.survivor.len() - 1 - k
+        k
     }
 
     /// The level (vertex count) whose details split `k` carries.
@@ -159,22 +187,20 @@ impl Pyramid {
     /// The vertices whose values split `k` sets (the new vertex first, then its 1-ring) and
     /// their details in local frames `(t1, t2, n)`.
     pub fn split_details(&self, k: usize) -> (&[u32], &[DVec3]) {
-        let s = self.split_slot(k);
-        let r = self.touched_start[s] as usize..self.touched_start[s + 1] as usize;
-        (&self.touched[r.clone()], &self.details[r])
+        let (o, next) = (self.offsets[k], self.offsets[k + 1]);
+        let t = next.details - o.details;
+        (
+            &self.locals[o.locals..o.locals + t],
+            &self.details[o.details..next.details],
+        )
     }
 
-    /// Approximate heap memory in bytes (weights, fans, details).
+    /// Heap memory of the pyramid in bytes (weights, indices, fans, details, base signal).
     pub fn memory_bytes(&self) -> usize {
-        4 * (self.survivor.len()
-            + self.touched_start.len()
-            + self.touched.len()
-            + self.stencil_start.len()
-            + self.stencil_vertex.len()
-            + self.fan_start.len()
-            + self.fan.len())
-            + 8 * self.stencil_weight.len()
-            + self.fan_open.len()
+        std::mem::size_of::<SplitOffsets>() * self.offsets.len()
+            + 4 * self.locals.len()
+            + self.codes.bytes()
+            + 8 * self.weights.len()
             + 24 * (self.details.len() + self.base.len() + self.passthrough.len())
     }
 }

@@ -2,110 +2,215 @@
 //! and its 1-ring with the level's relaxation weights, rebuild their frames from the prediction,
 //! and add the scaled details.
 //!
-//! The prediction step here is the one the analysis uses too ([`Pyramid::predict_split`]), so
-//! both passes evaluate identical arithmetic in identical order; with unit gains synthesis
-//! returns the analysed signal up to rounding.
+//! The prediction step here is the one the analysis uses too ([`predict_local`]), so both passes
+//! evaluate identical arithmetic in identical order; with unit gains synthesis returns the
+//! analysed signal up to rounding.
+//!
+//! Each split works on its *local table* (see [`Pyramid`]): the values of the few dozen vertices
+//! it reads are gathered once into a small contiguous buffer, predicted and framed there, and
+//! only the touched vertices are written back. All per-split records are read front to back.
 
-use super::frames::{Frame, vertex_frame};
+use super::frames::{Frame, LocalIndex, vertex_frame};
 use super::gains::LevelGains;
-use super::{Pyramid, PyramidError};
+use super::{Codes, Pyramid, PyramidError};
 use glam::DVec3;
+
+/// One touched entry of a split record, decoded: where its stencil indices, weights and fan
+/// live in the streams.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Entry {
+    /// Stencil indices: `codes[stencil..stencil + len]`, weights `weights[weight..weight + len]`.
+    pub stencil: usize,
+    pub len: usize,
+    pub weight: usize,
+    /// Fan indices: `codes[fan..fan + fan_len]`.
+    pub fan: usize,
+    pub fan_len: usize,
+    pub open: bool,
+}
 
 /// Scratch buffers reused across splits (no allocation per split).
 #[derive(Default)]
 pub(crate) struct Scratch {
+    /// The split's local signal (gathered values, then the predicted geometry `G`).
+    pub g: Vec<DVec3>,
     pub q: Vec<DVec3>,
     pub frames: Vec<Frame>,
+    pub entries: Vec<Entry>,
     pub saved: Vec<DVec3>,
     pub smoothed: Vec<DVec3>,
 }
 
+/// Decodes the record of one split starting at `codes[c]` (weights at `w`) into `entries`;
+/// returns the local index of the survivor.
+#[inline]
+pub(crate) fn decode<I: LocalIndex>(
+    codes: &[I],
+    c: usize,
+    w: usize,
+    entries: &mut Vec<Entry>,
+) -> usize {
+    let t = codes[c].at();
+    let survivor = codes[c + 1].at();
+    let (mut c, mut w) = (c + 2, w);
+    entries.clear();
+    for _ in 0..t {
+        let len = codes[c].at();
+        let fan_word = codes[c + 1].at();
+        let fan_len = fan_word >> 1;
+        entries.push(Entry {
+            stencil: c + 2,
+            len,
+            weight: w,
+            fan: c + 2 + len,
+            fan_len,
+            open: fan_word & 1 == 1,
+        });
+        c += 2 + len + fan_len;
+        w += len;
+    }
+    survivor
+}
+
+/// `Σ w g[i]` over a stencil (two interleaved accumulators: the dependency chain of the sum
+/// is what bounds this loop).
+#[inline(always)]
+fn relax_local<I: LocalIndex>(idx: &[I], w: &[f64], g: &[DVec3]) -> DVec3 {
+    let mut a0 = DVec3::ZERO;
+    let mut a1 = DVec3::ZERO;
+    let mut pairs = idx.chunks_exact(2).zip(w.chunks_exact(2));
+    for (i, w) in pairs.by_ref() {
+        a0 += w[0] * g[i[0].at()];
+        a1 += w[1] * g[i[1].at()];
+    }
+    if idx.len() % 2 == 1 {
+        let last = idx.len() - 1;
+        a0 += w[last] * g[idx[last].at()];
+    }
+    a0 + a1
+}
+
+/// The value of entry `e` relaxed from `g`, or `fallback` when its stencil is empty.
+#[inline(always)]
+fn relax_entry<I: LocalIndex>(
+    codes: &[I],
+    weights: &[f64],
+    e: &Entry,
+    g: &[DVec3],
+    fallback: DVec3,
+) -> DVec3 {
+    if e.len == 0 {
+        return fallback;
+    }
+    relax_local(
+        &codes[e.stencil..e.stencil + e.len],
+        &weights[e.weight..e.weight + e.len],
+        g,
+    )
+}
+
+/// The relaxation `R^n` of every 1-ring entry (entries `1..`) from `g` (Jacobi), into `out`;
+/// the analysis presmoothing.
+pub(crate) fn presmooth_local<I: LocalIndex>(
+    codes: &[I],
+    weights: &[f64],
+    entries: &[Entry],
+    g: &[DVec3],
+    out: &mut Vec<DVec3>,
+) {
+    out.clear();
+    for (i, e) in entries.iter().enumerate().skip(1) {
+        out.push(relax_entry(codes, weights, e, g, g[i]));
+    }
+}
+
+/// The subdivision step `S_n` on a split's local signal `g` (entry `i` is `g[i]`; `g` holds
+/// `f^(n−1)` on everything but the new vertex): the new vertex starts at its survivor's value
+/// (operators with a self weight read it) and is predicted, then its 1-ring simultaneously
+/// (reading the new vertex's prediction). Leaves the predicted geometry `G` in `g`, the
+/// predictions in `q` and the frames of all touched entries, built from `G`, in `frames`.
+#[inline]
+pub(crate) fn predict_local<I: LocalIndex>(
+    codes: &[I],
+    weights: &[f64],
+    entries: &[Entry],
+    survivor: usize,
+    g: &mut [DVec3],
+    q: &mut Vec<DVec3>,
+    frames: &mut Vec<Frame>,
+) {
+    let t = entries.len();
+    g[0] = g[survivor];
+    let qv = relax_entry(codes, weights, &entries[0], g, g[survivor]);
+    g[0] = qv;
+    q.clear();
+    q.push(qv);
+    for (i, e) in entries.iter().enumerate().skip(1) {
+        q.push(relax_entry(codes, weights, e, g, g[i]));
+    }
+    g[1..t].copy_from_slice(&q[1..]);
+    frames.clear();
+    for (i, e) in entries.iter().enumerate() {
+        let reference = if i == 0 { survivor } else { 0 };
+        let fan = &codes[e.fan..e.fan + e.fan_len];
+        frames.push(vertex_frame(g, i, fan, e.open, reference));
+    }
+}
+
 impl Pyramid {
-    /// `Σ w f` over the stencil of touched entry `e`, or `fallback` when the stencil is empty.
+    /// Synthesis of split `k` on top of `f = f^(n−1)`, leaving `f^(n)`.
     #[inline]
-    fn relax_entry(&self, e: usize, f: &[DVec3], fallback: DVec3) -> DVec3 {
-        let r = self.stencil_start[e] as usize..self.stencil_start[e + 1] as usize;
-        if r.is_empty() {
-            return fallback;
-        }
-        let mut acc = DVec3::ZERO;
-        for (&v, &w) in self.stencil_vertex[r.clone()]
-            .iter()
-            .zip(&self.stencil_weight[r])
-        {
-            acc += w * f[v as usize];
-        }
-        acc
-    }
-
-    /// The relaxation `R^n` of every 1-ring vertex of storage slot `s` from `f` (Jacobi), into
-    /// `out`; the analysis presmoothing.
-    pub(crate) fn presmooth_ring(&self, s: usize, f: &[DVec3], out: &mut Vec<DVec3>) {
-        out.clear();
-        let (a, b) = (
-            self.touched_start[s] as usize,
-            self.touched_start[s + 1] as usize,
-        );
-        for e in a + 1..b {
-            let j = self.touched[e] as usize;
-            out.push(self.relax_entry(e, f, f[j]));
-        }
-    }
-
-    /// The subdivision step `S_n` of storage slot `s`: predicts the new vertex from the coarser
-    /// signal, then its 1-ring (simultaneously, reading the new vertex's prediction), writes the
-    /// predictions into `f` (which then holds the predicted geometry `G`) and into `q`, and
-    /// builds the frames of all touched vertices from `G`.
-    pub(crate) fn predict_split(&self, s: usize, f: &mut [DVec3], scratch: &mut Scratch) {
-        let (a, b) = (
-            self.touched_start[s] as usize,
-            self.touched_start[s + 1] as usize,
-        );
-        let v = self.touched[a] as usize;
-        let survivor = self.survivor[s];
-        // A new vertex without weights starts where it was collapsed to.
-        let qv = self.relax_entry(a, f, f[survivor as usize]);
-        f[v] = qv;
-        let q = &mut scratch.q;
-        q.clear();
-        q.push(qv);
-        for e in a + 1..b {
-            let j = self.touched[e] as usize;
-            q.push(self.relax_entry(e, f, f[j]));
-        }
-        for (e, &qj) in (a + 1..b).zip(&q[1..]) {
-            f[self.touched[e] as usize] = qj;
-        }
-        let frames = &mut scratch.frames;
-        frames.clear();
-        for e in a..b {
-            let j = self.touched[e];
-            let fan = &self.fan[self.fan_start[e] as usize..self.fan_start[e + 1] as usize];
-            let reference = if e == a { survivor } else { v as u32 };
-            frames.push(vertex_frame(f, j, fan, self.fan_open[e], reference));
-        }
-    }
-
-    /// Synthesis of split storage slot `s` on top of `f = f^(n−1)`, leaving `f^(n)`.
-    #[inline]
-    fn synthesize_split(
+    fn synthesize_split<I: LocalIndex>(
         &self,
+        codes: &[I],
         k: usize,
         f: &mut [DVec3],
         gains: &LevelGains,
         scratch: &mut Scratch,
     ) {
-        let s = self.split_slot(k);
-        self.predict_split(s, f, scratch);
+        let (o, next) = (self.offsets[k], self.offsets[k + 1]);
+        let locals = &self.locals[o.locals..next.locals];
+        let g = &mut scratch.g;
+        g.clear();
+        g.extend(locals.iter().map(|&x| f[x as usize]));
+        let survivor = decode(codes, o.codes, o.weights, &mut scratch.entries);
+        predict_local(
+            codes,
+            &self.weights,
+            &scratch.entries,
+            survivor,
+            g,
+            &mut scratch.q,
+            &mut scratch.frames,
+        );
         let (tangential, normal) = gains.split_gain(self.level_of_split(k));
-        let a = self.touched_start[s] as usize;
-        for (i, (&q, frame)) in scratch.q.iter().zip(&scratch.frames).enumerate() {
-            let e = a + i;
-            let d = self.details[e];
-            f[self.touched[e] as usize] = q + frame.to_world_scaled(d, tangential, normal);
+        let details = &self.details[o.details..next.details];
+        for (((&x, &q), frame), &d) in locals
+            .iter()
+            .zip(&scratch.q)
+            .zip(&scratch.frames)
+            .zip(details)
+        {
+            f[x as usize] = q + frame.to_world_scaled(d, tangential, normal);
         }
     }
 
+    fn synthesize_splits<I: LocalIndex>(
+        &self,
+        codes: &[I],
+        f: &mut [DVec3],
+        splits: std::ops::Range<usize>,
+        gains: &LevelGains,
+    ) {
+        let mut scratch = Scratch::default();
+        for k in splits {
+            self.synthesize_split(codes, k, f, gains, &mut scratch);
+        }
+    }
+
+}
+
+impl Pyramid {
     /// The finest signal (positions, PM order, [`Pyramid::signal_len`] long) with the details
     /// of every level `n` scaled by `gains` — the filtered surface. Unit gains reproduce the
     /// analysed signal to rounding.
@@ -138,9 +243,10 @@ impl Pyramid {
     pub fn synthesize_range(&self, f: &mut [DVec3], from: usize, to: usize, gains: &LevelGains) {
         let from = from.clamp(self.n_base, self.n_finest);
         let to = to.clamp(from, self.n_finest);
-        let mut scratch = Scratch::default();
-        for k in from - self.n_base..to - self.n_base {
-            self.synthesize_split(k, f, gains, &mut scratch);
+        let splits = from - self.n_base..to - self.n_base;
+        match &self.codes {
+            Codes::Narrow(c) => self.synthesize_splits(c, f, splits, gains),
+            Codes::Wide(c) => self.synthesize_splits(c, f, splits, gains),
         }
     }
 

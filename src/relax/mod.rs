@@ -47,8 +47,10 @@ pub trait Relaxation {
     /// result is not such a stencil (nonlinear in the signal) keep this default, which returns
     /// `false`. An operator returning `true` for a vertex must give exactly that linear map in
     /// [`Relaxation::relax`]; an empty stencil with `true` is not allowed (return `false` for a
-    /// vertex that keeps its value). The detail pyramid caches stencils per level with this,
-    /// so re-filtering needs no mesh at all.
+    /// vertex that keeps its value). The stencil may contain `vertex` itself (a self weight);
+    /// the detail pyramid starts a vertex being predicted at its survivor's value, so a self
+    /// weight reads that. The detail pyramid caches stencils per level with this, so
+    /// re-filtering needs no mesh at all.
     fn stencil(
         &self,
         mesh: &Mesh,

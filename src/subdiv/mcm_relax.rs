@@ -130,6 +130,35 @@ impl Relaxation for MeanCurvatureStep {
             *o = s + self.damping * (x - s);
         }
     }
+
+    fn has_linear_stencils(&self) -> bool {
+        true
+    }
+
+    /// The damped update as one stencil: `(1 − ω + ω·self_weight)` on the vertex itself (first
+    /// entry, omitted when zero), `ω·w_j` on each neighbour. The stencil contains the vertex
+    /// itself, so a caller predicting a vertex without a value must give it a starting value
+    /// first (the detail pyramid starts a new vertex at its survivor). A vertex whose update is
+    /// the identity returns `false`.
+    fn stencil(
+        &self,
+        mesh: &Mesh,
+        geometry: &[DVec3],
+        vertex: VertexId,
+        out: &mut Vec<(VertexId, f64)>,
+    ) -> bool {
+        out.clear();
+        let w = self.weights(mesh, geometry, vertex);
+        let self_weight = 1.0 - self.damping + self.damping * w.self_weight;
+        if w.neighbors.is_empty() || self.damping == 0.0 {
+            return false;
+        }
+        if self_weight != 0.0 {
+            out.push((vertex, self_weight));
+        }
+        out.extend(w.neighbors.iter().map(|&(j, wj)| (j, self.damping * wj)));
+        true
+    }
 }
 
 #[cfg(test)]
@@ -194,6 +223,46 @@ mod tests {
         // Geometry relaxed on itself stays in its plane everywhere (boundary included).
         MeanCurvatureStep::default().relax(&m, &g, &g, &all, &mut out);
         assert!(out.iter().all(|p| p.z.abs() < 1e-15));
+    }
+
+    #[test]
+    fn stencil_is_the_relax_step_as_weights() {
+        let m = plane(4, 0.25);
+        let g = m.positions();
+        let bumpy: Vec<DVec3> = g
+            .iter()
+            .enumerate()
+            .map(|(i, p)| *p + DVec3::new(0.1, -0.2, 1.0) * (((i * 7) % 5) as f64 * 0.1))
+            .collect();
+        let all: Vec<_> = m.vertices().collect();
+        for damping in [1.0, 0.6] {
+            let step = MeanCurvatureStep {
+                damping,
+                ..Default::default()
+            };
+            assert!(step.has_linear_stencils());
+            let mut out = vec![DVec3::ZERO; all.len()];
+            step.relax(&m, &g, &bumpy, &all, &mut out);
+            let mut st = Vec::new();
+            for (i, &v) in all.iter().enumerate() {
+                assert!(step.stencil(&m, &g, v, &mut st));
+                let sum: f64 = st.iter().map(|x| x.1).sum();
+                assert!((sum - 1.0).abs() < 1e-13, "weights sum to {sum}");
+                let x: DVec3 = st.iter().map(|&(u, w)| w * bumpy[u.slot()]).sum();
+                assert!((x - out[i]).length() < 1e-13, "{x} vs {}", out[i]);
+            }
+        }
+        // An isolated vertex keeps its value: no stencil.
+        let lone = Mesh::from_triangles(
+            &[DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z],
+            &[[0, 1, 2]],
+        )
+        .unwrap()
+        .mesh;
+        let iso = lone.vertices().find(|&v| lone.is_isolated(v)).unwrap();
+        let mut st = vec![(iso, 1.0)];
+        assert!(!MeanCurvatureStep::default().stencil(&lone, &lone.positions(), iso, &mut st));
+        assert!(st.is_empty());
     }
 
     #[test]
