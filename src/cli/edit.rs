@@ -42,9 +42,10 @@ fn parse_move(s: &str) -> Result<Move, String> {
 /// Arguments of `meshpyr edit`.
 #[derive(clap::Args, Debug)]
 pub struct EditArgs {
-    /// Input mesh (.obj, .ply, .off, .stl).
+    /// Input mesh (.obj, .ply, .off, .stl) or .pyr file.
     pub input: PathBuf,
-    /// Output mesh: the input's vertices and faces in the same order, new positions.
+    /// Output mesh: the input's vertices and faces in the same order, new positions. A `.pyr`
+    /// output keeps the hierarchy with the edited positions as its new original positions.
     #[arg(short, long)]
     pub output: PathBuf,
     /// The level (vertex count) whose vertices are moved; coarser levels give broader edits.
@@ -90,7 +91,19 @@ pub fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
         .collect();
     let gains = args.filters.filter().resolve(p.surface_area());
     let out = p.edit(args.level, &handles, &gains)?;
-    io::write_mesh(&args.output, &scan.output_mesh(&out))?;
+    let is_pyr = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pyr"));
+    if is_pyr {
+        let positions = scan.to_input_positions(&out);
+        let relaxation = crate::format::RelaxationSpec::SecondDifference {
+            degenerate_area_ratio: crate::relax::SecondDifference::default().degenerate_area_ratio,
+        };
+        super::build::save_edited(&scan, positions, relaxation, &args.output)?;
+    } else {
+        io::write_mesh(&args.output, &scan.output_mesh(&out))?;
+    }
     global.say(format_args!("wrote {}", args.output.display()));
     Ok(())
 }

@@ -38,8 +38,13 @@ impl RelaxKind {
 }
 
 /// Reads `path` and builds its progressive mesh and pyramid, reporting progress and timing.
+/// A `.pyr` file (detected by its signature) is loaded instead, with the relaxation recorded
+/// in it, and its details are recomputed.
 pub fn load_pyramid(path: &Path, relax: RelaxKind, global: &Global) -> anyhow::Result<ScanPyramid> {
     let relaxation = relax.operator()?;
+    if super::build::is_pyr_file(path) {
+        return super::build::load_pyr_scan(path, global);
+    }
     let input = io::read_mesh(path)?;
     build_pyramid(
         input,
@@ -130,7 +135,7 @@ impl FilterOptions {
 /// Arguments of `meshpyr filter`.
 #[derive(clap::Args, Debug)]
 pub struct FilterArgs {
-    /// Input mesh (.obj, .ply, .off, .stl).
+    /// Input mesh (.obj, .ply, .off, .stl) or .pyr file.
     pub input: PathBuf,
     /// Output mesh: the input's vertices and faces in the same order, new positions.
     #[arg(short, long)]

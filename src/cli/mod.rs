@@ -1,9 +1,11 @@
 //! The `meshpyr` command line: one subcommand per module. Each subcommand lives in its own file
 //! with a clap `Args` struct and a `run` function.
 
+mod build;
 mod convert;
 mod demo;
 mod edit;
+mod extract;
 mod filter;
 mod info;
 mod simplify;
@@ -84,6 +86,10 @@ enum Command {
     Spectrum(spectrum::SpectrumArgs),
     /// Multiresolution edit: move a coarse level, resynthesise with the details.
     Edit(edit::EditArgs),
+    /// Build the hierarchy and save it with the exact input as a compact .pyr file.
+    Build(build::BuildArgs),
+    /// Write a level of a .pyr file (the finest: the original mesh, exactly) as a mesh file.
+    Extract(extract::ExtractArgs),
 }
 
 fn run(command: Command, global: &Global) -> anyhow::Result<()> {
@@ -96,6 +102,8 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
         Command::Filter(a) => filter::run(a, global),
         Command::Spectrum(a) => spectrum::run(a, global),
         Command::Edit(a) => edit::run(a, global),
+        Command::Build(a) => build::run(a, global),
+        Command::Extract(a) => extract::run(a, global),
     }
 }
 

@@ -8,7 +8,7 @@ use std::path::PathBuf;
 /// Arguments of `meshpyr spectrum`.
 #[derive(clap::Args, Debug)]
 pub struct SpectrumArgs {
-    /// Input mesh (.obj, .ply, .off, .stl).
+    /// Input mesh (.obj, .ply, .off, .stl) or .pyr file.
     pub input: PathBuf,
     /// Output chart (PNG).
     #[arg(short, long)]

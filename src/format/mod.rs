@@ -2,7 +2,13 @@
 //! versioned, checksummed binary container (specified in `formats/pyr.md`).
 
 pub mod container;
+pub mod pyr;
 pub mod varint;
+
+pub use pyr::{
+    BuildInfo, LevelMesh, PyrData, RelaxationSpec, SizeReport, decode, encode, fuzz_read_pyr,
+    is_pyr, read_level, with_positions,
+};
 
 /// What can go wrong reading a `.pyr` file. Every variant says where.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

@@ -23,5 +23,7 @@ pub use collapse::{
     is_collapse_topologically_legal, vertex_split,
 };
 pub use fuzz::fuzz_operations;
-pub use progressive::{PmCursor, PmError, PmOptions, ProgressiveMesh, VertexSplit};
+pub use progressive::{
+    PmCursor, PmError, PmOptions, PmParts, ProgressiveMesh, SplitReplay, VertexSplit,
+};
 pub use simplify::{Simplified, SimplifyError, SimplifyTarget, simplify};

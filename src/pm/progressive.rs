@@ -7,6 +7,12 @@ use crate::mesh::{Mesh, SlotIndex, VertexId};
 use crate::progress::Progress;
 use glam::DVec3;
 
+// Rebuilding from stored parts (`.pyr` files) lives in its own file; a child module so that it
+// can fill the private fields.
+#[path = "parts.rs"]
+mod parts;
+pub use parts::{PmParts, SplitReplay};
+
 /// Options for [`ProgressiveMesh::build`]. The build collapses greedily by quadric error until
 /// a target is met, the error bound is exceeded, or no legal collapse is left.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,0 +1,72 @@
+//! `meshpyr extract F.pyr -o OUT [--level N]`: a level of the hierarchy as a mesh file. The
+//! finest level of a complete file is the user's original mesh, exactly (vertex order, faces,
+//! attributes, f32 bits); coarser levels and truncated files read only the progressive prefix.
+
+use super::Global;
+use crate::format;
+use crate::io;
+use anyhow::Context;
+use std::path::PathBuf;
+
+/// Arguments of `meshpyr extract`.
+#[derive(clap::Args, Debug)]
+pub struct ExtractArgs {
+    /// Input `.pyr` file.
+    pub input: PathBuf,
+    /// Output mesh (.obj, .ply, .off, .stl).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// Level (vertex count) to extract; default the finest (the original mesh).
+    #[arg(long, value_name = "N")]
+    pub level: Option<usize>,
+}
+
+/// Runs `meshpyr extract`.
+pub fn run(args: ExtractArgs, global: &Global) -> anyhow::Result<()> {
+    let name = args.input.display().to_string();
+    let bytes = std::fs::read(&args.input).with_context(|| format!("cannot read {name}"))?;
+    let level =
+        format::read_level(&bytes, args.level).with_context(|| format!("cannot read {name}"))?;
+    if let Some(n) = args.level
+        && (n < level.base || n > level.finest)
+    {
+        anyhow::bail!(
+            "--level {n} is outside this file's levels {}..={}",
+            level.base,
+            level.finest
+        );
+    }
+    let wanted = args.level.unwrap_or(level.finest);
+    if level.level == level.finest && wanted == level.finest {
+        // The finest level: the user's mesh exactly, if the trailing sections are intact.
+        match format::decode(&bytes) {
+            Ok(data) => {
+                io::write_mesh(&args.output, &data.input)?;
+                global.say(format_args!(
+                    "wrote {}: the original mesh, {} vertices, {} faces",
+                    args.output.display(),
+                    data.input.n_vertices(),
+                    data.input.n_faces()
+                ));
+                return Ok(());
+            }
+            Err(e @ format::FormatError::Truncated { .. }) => eprintln!(
+                "warning: {name}: {e}; writing the finest level in hierarchy order, without the original vertex order and attributes"
+            ),
+            Err(e) => return Err(e).with_context(|| format!("cannot read {name}")),
+        }
+    } else if level.level < wanted {
+        eprintln!(
+            "warning: {name} is truncated; writing its last complete level {} (asked for {wanted})",
+            level.level
+        );
+    }
+    io::write_mesh(&args.output, &level.to_polygon_mesh())?;
+    global.say(format_args!(
+        "wrote {}: level {} ({} triangles)",
+        args.output.display(),
+        level.level,
+        level.triangles.len()
+    ));
+    Ok(())
+}

@@ -1,0 +1,1173 @@
+//! Reading and writing `.pyr` files: the progressive mesh (base mesh + vertex splits in
+//! checksummed blocks), the exact original positions, and trailing sections that restore the
+//! user's file exactly (vertex order, polygons, attributes). Specified in `formats/pyr.md`.
+//!
+//! Details of the detail pyramid are *not* stored: the analysis is a deterministic function of
+//! the hierarchy, the original positions and the relaxation operator, so a loader recomputes
+//! them bit for bit ([`PyrData::into_scan`]).
+
+use super::FormatError;
+use super::container::{Container, REQUIRED, Section, write_container};
+use super::varint::{ByteReader, put_ivarint, put_uvarint};
+use crate::mesh::{
+    Attribute, AttributeData, Built, ElementProperty, ExtraElement, ListProperty, Mesh,
+    PolygonMesh, ScalarType, SlotIndex,
+};
+use crate::pm::{PmOptions, PmParts, ProgressiveMesh, SplitReplay, VertexSplit};
+use crate::progress::Progress;
+use crate::pyramid::{Pyramid, PyramidError, ScanPyramid};
+use crate::relax::SecondDifference;
+use glam::DVec3;
+use serde::{Deserialize, Serialize};
+
+/// Major version written; readers refuse other majors.
+pub const MAJOR: u16 = 1;
+/// Minor version written; readers accept any minor of their major (unknown optional sections
+/// are skipped).
+pub const MINOR: u16 = 0;
+/// Vertex splits per block of the `SPLT` section.
+pub const SPLITS_PER_BLOCK: u32 = 4096;
+/// Largest `META` section a reader decodes.
+const MAX_META: usize = 4096;
+/// Largest ring index a wing code may hold (far above any real valence).
+const MAX_RING: u64 = 1 << 20;
+
+const META: [u8; 4] = *b"META";
+const BASE: [u8; 4] = *b"BASE";
+const SPLT: [u8; 4] = *b"SPLT";
+const ISOL: [u8; 4] = *b"ISOL";
+const ORDR: [u8; 4] = *b"ORDR";
+const POLY: [u8; 4] = *b"POLY";
+const ATTR: [u8; 4] = *b"ATTR";
+const KNOWN: [[u8; 4]; 7] = [META, BASE, SPLT, ISOL, ORDR, POLY, ATTR];
+
+/// The relaxation operator the pyramid is analysed with, with its options.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum RelaxationSpec {
+    /// Guskov's second-difference operator.
+    SecondDifference {
+        /// [`SecondDifference::degenerate_area_ratio`].
+        degenerate_area_ratio: f64,
+    },
+}
+
+impl RelaxationSpec {
+    /// The operator.
+    pub fn operator(&self) -> SecondDifference {
+        match *self {
+            RelaxationSpec::SecondDifference {
+                degenerate_area_ratio,
+            } => SecondDifference {
+                degenerate_area_ratio,
+            },
+        }
+    }
+
+    /// The spec of an operator.
+    pub fn of(op: &SecondDifference) -> Self {
+        RelaxationSpec::SecondDifference {
+            degenerate_area_ratio: op.degenerate_area_ratio,
+        }
+    }
+}
+
+/// The build options recorded in the header.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BuildInfo {
+    /// How the progressive mesh was built.
+    pub pm_options: PmOptions,
+    /// The relaxation operator of the pyramid.
+    pub relaxation: RelaxationSpec,
+}
+
+impl Default for BuildInfo {
+    fn default() -> Self {
+        BuildInfo {
+            pm_options: PmOptions::default(),
+            relaxation: RelaxationSpec::of(&SecondDifference::default()),
+        }
+    }
+}
+
+/// The `META` section (bincode 2 standard configuration). Fixed-size fields only: nothing in
+/// it allocates while decoding, so a damaged length cannot make bincode allocate.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+struct Meta {
+    n_input_vertices: u64,
+    n_input_faces: u64,
+    n_vertices: u64,
+    n_base: u64,
+    n_splits: u64,
+    splits_per_block: u32,
+    position_bits: u8,
+    bbox_min: [f64; 3],
+    bbox_max: [f64; 3],
+    relaxation: RelaxationSpec,
+    target_vertices: u64,
+    target_faces: u64,
+    max_error: Option<f64>,
+    max_normal_angle_degrees: f64,
+    min_quality: f64,
+    max_valence: u64,
+    boundary_weight: f64,
+}
+
+/// A fully decoded `.pyr` file.
+#[derive(Clone, Debug)]
+pub struct PyrData {
+    /// The user's mesh exactly as it was read when the file was built.
+    pub input: PolygonMesh,
+    /// The repaired half-edge mesh of `input` and its map back (recomputed, deterministic).
+    pub built: Built,
+    /// The hierarchy.
+    pub pm: ProgressiveMesh,
+    /// Build options.
+    pub info: BuildInfo,
+}
+
+impl PyrData {
+    /// Recomputes the detail pyramid (bit-identical to the one the file was built with) and
+    /// returns the whole scan.
+    pub fn into_scan(self, progress: &dyn Progress) -> Result<ScanPyramid, PyramidError> {
+        let op = self.info.relaxation.operator();
+        let pyramid = Pyramid::analyze(&self.pm, &op, progress)?;
+        Ok(ScanPyramid {
+            input: self.input,
+            built: self.built,
+            pm: self.pm,
+            pyramid,
+        })
+    }
+}
+
+/// One level of the hierarchy read from a (possibly truncated) file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LevelMesh {
+    /// Number of vertices of this level.
+    pub level: usize,
+    /// Finest level the file describes.
+    pub finest: usize,
+    /// Coarsest level.
+    pub base: usize,
+    /// True when the file is truncated (this may be less than the level asked for).
+    pub truncated: bool,
+    /// Positions of PM vertices `0..level`.
+    pub positions: Vec<DVec3>,
+    /// Triangles in PM indices.
+    pub triangles: Vec<[u32; 3]>,
+    /// True when the file stores positions as f32.
+    pub f32_positions: bool,
+}
+
+impl LevelMesh {
+    /// As a polygon mesh (positions typed f32 when the file stored f32).
+    pub fn to_polygon_mesh(&self) -> PolygonMesh {
+        let mut m = PolygonMesh::from_triangles(self.positions.clone(), &self.triangles);
+        m.position_type = Some(if self.f32_positions {
+            ScalarType::F32
+        } else {
+            ScalarType::F64
+        });
+        m
+    }
+}
+
+/// Byte counts of the parts of an encoded file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SizeReport {
+    /// Whole file.
+    pub total: usize,
+    /// Connectivity of the hierarchy: base faces + split records (survivor, wings).
+    pub pm_connectivity: usize,
+    /// Quadric errors of the splits (f32 each).
+    pub split_errors: usize,
+    /// Positions (base + split blocks + vertices without faces).
+    pub positions: usize,
+    /// Input vertex order, polygons and attributes.
+    pub trailing: usize,
+}
+
+fn corrupt(offset: u64, reason: impl Into<String>) -> FormatError {
+    FormatError::Corrupt {
+        offset,
+        reason: reason.into(),
+    }
+}
+
+fn internal(reason: &str) -> FormatError {
+    corrupt(0, format!("cannot encode: {reason}"))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writing
+
+fn put_position(out: &mut Vec<u8>, p: DVec3, f32: bool) {
+    for c in p.to_array() {
+        if f32 {
+            out.extend_from_slice(&(c as f32).to_le_bytes());
+        } else {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+}
+
+fn exactly_f32(p: DVec3) -> bool {
+    p.to_array()
+        .iter()
+        .all(|&c| ((c as f32) as f64).to_bits() == c.to_bits())
+}
+
+fn put_str(out: &mut Vec<u8>, s: &str) {
+    put_uvarint(out, s.len() as u64);
+    out.extend_from_slice(s.as_bytes());
+}
+
+fn scalar_code(t: ScalarType) -> u8 {
+    match t {
+        ScalarType::I8 => 1,
+        ScalarType::U8 => 2,
+        ScalarType::I16 => 3,
+        ScalarType::U16 => 4,
+        ScalarType::I32 => 5,
+        ScalarType::U32 => 6,
+        ScalarType::F32 => 7,
+        ScalarType::F64 => 8,
+    }
+}
+
+fn scalar_of(code: u8) -> Option<ScalarType> {
+    Some(match code {
+        1 => ScalarType::I8,
+        2 => ScalarType::U8,
+        3 => ScalarType::I16,
+        4 => ScalarType::U16,
+        5 => ScalarType::I32,
+        6 => ScalarType::U32,
+        7 => ScalarType::F32,
+        8 => ScalarType::F64,
+        _ => return None,
+    })
+}
+
+fn put_column(out: &mut Vec<u8>, d: &AttributeData) {
+    out.push(scalar_code(d.scalar_type()));
+    match d {
+        AttributeData::I8(v) => v
+            .iter()
+            .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+        AttributeData::U8(v) => out.extend_from_slice(v),
+        AttributeData::I16(v) => v
+            .iter()
+            .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+        AttributeData::U16(v) => v
+            .iter()
+            .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+        AttributeData::I32(v) => v
+            .iter()
+            .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+        AttributeData::U32(v) => v
+            .iter()
+            .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+        AttributeData::F32(v) => v
+            .iter()
+            .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+        AttributeData::F64(v) => v
+            .iter()
+            .for_each(|x| out.extend_from_slice(&x.to_le_bytes())),
+    }
+}
+
+fn put_attribute(out: &mut Vec<u8>, a: &Attribute) {
+    put_str(out, &a.name);
+    put_column(out, &a.data);
+}
+
+fn encode_attributes(m: &PolygonMesh) -> Vec<u8> {
+    let mut out = Vec::new();
+    out.push(m.position_type.map_or(0, scalar_code));
+    for list in [&m.vertex_attributes, &m.face_attributes] {
+        put_uvarint(&mut out, list.len() as u64);
+        for a in list {
+            put_attribute(&mut out, a);
+        }
+    }
+    put_uvarint(&mut out, m.extra_elements.len() as u64);
+    for e in &m.extra_elements {
+        put_str(&mut out, &e.name);
+        put_uvarint(&mut out, e.rows as u64);
+        put_uvarint(&mut out, e.properties.len() as u64);
+        for p in &e.properties {
+            match p {
+                ElementProperty::Scalar(a) => {
+                    out.push(0);
+                    put_attribute(&mut out, a);
+                }
+                ElementProperty::List(l) => {
+                    out.push(1);
+                    put_str(&mut out, &l.name);
+                    out.push(scalar_code(l.count_type));
+                    out.push(scalar_code(l.item_type));
+                    let mut prev = 0u32;
+                    for &s in &l.starts {
+                        put_uvarint(&mut out, u64::from(s.wrapping_sub(prev)));
+                        prev = s;
+                    }
+                    for x in &l.items {
+                        out.extend_from_slice(&x.to_le_bytes());
+                    }
+                }
+            }
+        }
+    }
+    put_uvarint(&mut out, m.comments.len() as u64);
+    for c in &m.comments {
+        put_str(&mut out, c);
+    }
+    out
+}
+
+/// Encodes the polygons: per face its degree, then its indices, each as a zig-zag delta from
+/// the previous index in the stream (neighbouring faces share vertices, so deltas are small).
+fn encode_polygons(m: &PolygonMesh) -> Vec<u8> {
+    let mut out = Vec::with_capacity(m.face_indices.len() * 2 + m.n_faces());
+    put_uvarint(&mut out, m.n_faces() as u64);
+    let mut prev = 0i64;
+    for f in m.faces() {
+        put_uvarint(&mut out, f.len() as u64);
+        for &i in f {
+            put_ivarint(&mut out, i64::from(i) - prev);
+            prev = i64::from(i);
+        }
+    }
+    out
+}
+
+/// Encodes `input` with its hierarchy `pm` (built from `Mesh::from_polygons(input)`).
+pub fn encode(
+    input: &PolygonMesh,
+    pm: &ProgressiveMesh,
+    info: &BuildInfo,
+) -> Result<(Vec<u8>, SizeReport), FormatError> {
+    let positions = pm.original_positions();
+    let n_total = positions.len();
+    let n_base = pm.n_base_vertices();
+    let n_fin = pm.n_vertices();
+    if pm.pm_to_mesh().len() != n_total || input.positions.len() > n_total {
+        return Err(internal(
+            "the progressive mesh does not belong to this input",
+        ));
+    }
+    // The input positions are restored from the PM positions through the vertex order, so
+    // check now that this is exact.
+    for (i, &s) in pm.pm_to_mesh().iter().enumerate() {
+        if let Some(p) = input.positions.get(s as usize)
+            && p.to_array().map(f64::to_bits) != positions[i].to_array().map(f64::to_bits)
+        {
+            return Err(internal(
+                "the progressive mesh does not belong to this input",
+            ));
+        }
+    }
+    let f32 = positions.iter().all(|&p| exactly_f32(p));
+    let width = if f32 { 4 } else { 8 };
+    let mut sizes = SizeReport::default();
+
+    let (lo, hi) = positions.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    );
+    let (lo, hi) = if n_total == 0 {
+        (DVec3::ZERO, DVec3::ZERO)
+    } else {
+        (lo, hi)
+    };
+    let o = &info.pm_options;
+    let meta = Meta {
+        n_input_vertices: input.positions.len() as u64,
+        n_input_faces: input.n_faces() as u64,
+        n_vertices: n_total as u64,
+        n_base: n_base as u64,
+        n_splits: pm.splits().len() as u64,
+        splits_per_block: SPLITS_PER_BLOCK,
+        position_bits: if f32 { 32 } else { 64 },
+        bbox_min: lo.to_array(),
+        bbox_max: hi.to_array(),
+        relaxation: info.relaxation,
+        target_vertices: o.target_vertices as u64,
+        target_faces: o.target_faces as u64,
+        max_error: o.max_error,
+        max_normal_angle_degrees: o.max_normal_angle_degrees,
+        min_quality: o.min_quality,
+        max_valence: o.max_valence as u64,
+        boundary_weight: o.boundary_weight,
+    };
+    let meta_bytes = bincode::serde::encode_to_vec(&meta, bincode::config::standard())
+        .map_err(|e| internal(&e.to_string()))?;
+
+    // BASE: positions, then triangles as zig-zag deltas.
+    let base_tris = pm.base_triangles();
+    let mut base = Vec::new();
+    for &p in &positions[..n_base] {
+        put_position(&mut base, p, f32);
+    }
+    let before = base.len();
+    put_uvarint(&mut base, base_tris.len() as u64);
+    let mut prev = 0i64;
+    for t in &base_tris {
+        put_ivarint(&mut base, i64::from(t[0]) - prev);
+        put_ivarint(&mut base, i64::from(t[1]) - i64::from(t[0]));
+        put_ivarint(&mut base, i64::from(t[2]) - i64::from(t[0]));
+        prev = i64::from(t[0]);
+    }
+    sizes.pm_connectivity += base.len() - before;
+    sizes.positions += before;
+
+    // SPLT: blocks of split records, replayed on the base mesh to code wings as ring indices.
+    let mut replay =
+        SplitReplay::new(&positions[..n_base], &base_tris).map_err(|e| internal(&e.to_string()))?;
+    let mut splt = Vec::new();
+    let mut ring = Vec::new();
+    for (b, chunk) in pm.splits().chunks(SPLITS_PER_BLOCK as usize).enumerate() {
+        let first = n_base + b * SPLITS_PER_BLOCK as usize;
+        let mut payload = Vec::with_capacity(chunk.len() * (4 + 4 + 3 * width));
+        for (k, s) in chunk.iter().enumerate() {
+            put_uvarint(&mut payload, u64::from(s.vertex - 1 - s.survivor));
+            replay
+                .ring(s.survivor, &mut ring)
+                .map_err(|e| internal(&e.to_string()))?;
+            let find = |x: u32| ring.iter().position(|&r| r == x);
+            let il = match s.left {
+                None => None,
+                Some(l) => Some(find(l).ok_or_else(|| internal("left wing not in ring"))?),
+            };
+            let ir = match s.right {
+                None => None,
+                Some(r) => Some(find(r).ok_or_else(|| internal("right wing not in ring"))?),
+            };
+            put_uvarint(&mut payload, il.map_or(0, |i| i as u64 + 1));
+            let rc = match (il, ir) {
+                (_, None) => 0,
+                (Some(l), Some(r)) => ((r + ring.len() - l) % ring.len()) as u64 + 1,
+                (None, Some(r)) => r as u64 + 1,
+            };
+            put_uvarint(&mut payload, rc);
+            replay
+                .apply(s, positions[first + k])
+                .map_err(|e| internal(&e.to_string()))?;
+        }
+        sizes.pm_connectivity += payload.len() + 12;
+        for &p in &positions[first..first + chunk.len()] {
+            put_position(&mut payload, p, f32);
+        }
+        sizes.positions += chunk.len() * 3 * width;
+        let errs = &pm.split_errors()[first - n_base..first - n_base + chunk.len()];
+        for e in errs {
+            payload.extend_from_slice(&e.to_le_bytes());
+        }
+        sizes.split_errors += errs.len() * 4;
+        splt.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
+        splt.extend_from_slice(&(payload.len() as u32).to_le_bytes());
+        splt.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
+        splt.extend_from_slice(&payload);
+    }
+
+    let mut isol = Vec::new();
+    for &p in &positions[n_fin..] {
+        put_position(&mut isol, p, f32);
+    }
+    sizes.positions += isol.len();
+    let mut ordr = Vec::with_capacity(n_total * 3);
+    for &s in pm.pm_to_mesh() {
+        put_uvarint(&mut ordr, u64::from(s));
+    }
+    let poly = encode_polygons(input);
+    let attr = encode_attributes(input);
+    sizes.trailing = ordr.len() + poly.len() + attr.len();
+
+    let sections = [
+        Section {
+            tag: META,
+            flags: REQUIRED,
+            bytes: meta_bytes,
+        },
+        Section {
+            tag: BASE,
+            flags: REQUIRED,
+            bytes: base,
+        },
+        Section {
+            tag: SPLT,
+            flags: REQUIRED,
+            bytes: splt,
+        },
+        Section {
+            tag: ISOL,
+            flags: REQUIRED,
+            bytes: isol,
+        },
+        Section {
+            tag: ORDR,
+            flags: REQUIRED,
+            bytes: ordr,
+        },
+        Section {
+            tag: POLY,
+            flags: REQUIRED,
+            bytes: poly,
+        },
+        Section {
+            tag: ATTR,
+            flags: REQUIRED,
+            bytes: attr,
+        },
+    ];
+    let bytes = write_container(MAJOR, MINOR, &sections);
+    sizes.total = bytes.len();
+    Ok((bytes, sizes))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading
+
+fn read_position(r: &mut ByteReader<'_>, f32: bool) -> Result<DVec3, FormatError> {
+    let mut c = [0f64; 3];
+    for x in &mut c {
+        *x = if f32 {
+            f64::from(f32::from_le_bytes(r.array("position")?))
+        } else {
+            r.f64("position")?
+        };
+    }
+    let p = DVec3::from_array(c);
+    if !p.is_finite() {
+        return Err(corrupt(r.offset(), "non-finite position"));
+    }
+    Ok(p)
+}
+
+fn read_positions(
+    r: &mut ByteReader<'_>,
+    n: usize,
+    f32: bool,
+    out: &mut Vec<DVec3>,
+) -> Result<(), FormatError> {
+    let width = if f32 { 12 } else { 24 };
+    if n.saturating_mul(width) > r.remaining() {
+        return Err(FormatError::Truncated {
+            offset: r.offset(),
+            what: "positions".into(),
+        });
+    }
+    out.reserve(n);
+    for _ in 0..n {
+        out.push(read_position(r, f32)?);
+    }
+    Ok(())
+}
+
+/// The parsed header and the progressive part, shared by the full and the level readers.
+struct Progressive {
+    meta: Meta,
+    truncated: bool,
+    replay: SplitReplay,
+    base_faces: Vec<[u32; 3]>,
+    splits: Vec<VertexSplit>,
+    positions: Vec<DVec3>,
+    errors: Vec<f32>,
+}
+
+fn check_version(c: &Container<'_>) -> Result<(), FormatError> {
+    if c.major != MAJOR {
+        return Err(FormatError::Version {
+            major: c.major,
+            minor: c.minor,
+            supported: format!("{MAJOR}.x"),
+        });
+    }
+    let unknown = c.unknown_required(&KNOWN);
+    if !unknown.is_empty() {
+        return Err(FormatError::Version {
+            major: c.major,
+            minor: c.minor,
+            supported: format!(
+                "{MAJOR}.{MINOR}; required sections {} are unknown",
+                unknown.join(", ")
+            ),
+        });
+    }
+    Ok(())
+}
+
+fn required<'a>(c: &Container<'a>, tag: [u8; 4]) -> Result<ByteReader<'a>, FormatError> {
+    c.section(tag)?.ok_or_else(|| {
+        corrupt(
+            0,
+            format!("section {} is missing", super::container::tag_name(tag)),
+        )
+    })
+}
+
+fn read_meta(c: &Container<'_>) -> Result<Meta, FormatError> {
+    let mut r = required(c, META)?;
+    let at = r.offset();
+    if r.remaining() > MAX_META {
+        return Err(corrupt(at, "META section is too large"));
+    }
+    let bytes = r.take(r.remaining(), "META")?;
+    let cfg = bincode::config::standard().with_limit::<MAX_META>();
+    let (meta, used): (Meta, usize) = bincode::serde::decode_from_slice(bytes, cfg)
+        .map_err(|e| corrupt(at, format!("META: {e}")))?;
+    if used != bytes.len() {
+        return Err(corrupt(at, "META has trailing bytes"));
+    }
+    if meta.position_bits != 32 && meta.position_bits != 64 {
+        return Err(corrupt(at, "position width must be 32 or 64 bits"));
+    }
+    if meta.splits_per_block == 0
+        || meta
+            .n_base
+            .checked_add(meta.n_splits)
+            .is_none_or(|n| n > meta.n_vertices)
+        || meta.n_input_vertices > meta.n_vertices
+        || meta.n_vertices >= u64::from(u32::MAX)
+    {
+        return Err(corrupt(at, "inconsistent counts in META"));
+    }
+    Ok(meta)
+}
+
+fn read_progressive(
+    bytes: &[u8],
+    max_level: Option<usize>,
+) -> Result<(Container<'_>, Progressive), FormatError> {
+    let c = Container::parse(bytes)?;
+    check_version(&c)?;
+    let meta = read_meta(&c)?;
+    let f32 = meta.position_bits == 32;
+    let n_base = meta.n_base as usize;
+    let n_splits = meta.n_splits as usize;
+
+    let mut r = required(&c, BASE)?;
+    let mut positions = Vec::new();
+    read_positions(&mut r, n_base, f32, &mut positions)?;
+    let n_faces = r.count(r.remaining() as u64 / 3, "base face count")?;
+    let mut base_faces = Vec::with_capacity(n_faces);
+    let mut prev = 0i64;
+    for _ in 0..n_faces {
+        let at = r.offset();
+        let a = prev + r.ivarint("base face")?;
+        let b = a + r.ivarint("base face")?;
+        let cc = a + r.ivarint("base face")?;
+        let t = [a, b, cc].map(|x| u32::try_from(x).unwrap_or(u32::MAX));
+        if t.iter().any(|&x| x as usize >= n_base) {
+            return Err(corrupt(at, "base face index out of range"));
+        }
+        base_faces.push(t);
+        prev = a;
+    }
+    if !r.is_empty() {
+        return Err(corrupt(r.offset(), "trailing bytes in BASE"));
+    }
+    let mut replay = SplitReplay::new(&positions, &base_faces)
+        .map_err(|e| corrupt(r.offset(), e.to_string()))?;
+
+    let truncated = c.is_truncated();
+    let whole = if truncated {
+        c.section_prefix(SPLT)
+    } else {
+        // An intact file: check the section checksum too.
+        c.section(SPLT)?
+    };
+    let mut r = whole.ok_or_else(|| corrupt(0, "section SPLT is missing"))?;
+    let want = max_level.map_or(n_splits, |l| l.saturating_sub(n_base).min(n_splits));
+    let mut splits: Vec<VertexSplit> = Vec::new();
+    let mut errors: Vec<f32> = Vec::new();
+    let mut ring = Vec::new();
+    while splits.len() < want {
+        if r.remaining() < 12 && truncated {
+            break;
+        }
+        let at = r.offset();
+        let count = r.u32("split block")? as usize;
+        let len = r.u32("split block")? as usize;
+        let crc = r.u32("split block")?;
+        let expected = (n_splits - splits.len()).min(meta.splits_per_block as usize);
+        if count != expected {
+            return Err(corrupt(
+                at,
+                format!("split block holds {count} splits, expected {expected}"),
+            ));
+        }
+        if len > r.remaining() {
+            if truncated {
+                break;
+            }
+            return Err(FormatError::Truncated {
+                offset: r.offset(),
+                what: "split block".into(),
+            });
+        }
+        let payload = r.take(len, "split block")?;
+        if crc32fast::hash(payload) != crc {
+            return Err(FormatError::Checksum {
+                what: "split block".into(),
+                offset: at,
+            });
+        }
+        // Payload: the records (variable length), then `count` positions and `count` errors
+        // (fixed length), so the records end where the fixed-size tail begins.
+        let tail = count * (3 * if f32 { 4 } else { 8 } + 4);
+        if tail > payload.len() {
+            return Err(corrupt(at, "split block is shorter than its positions"));
+        }
+        let (records, fixed) = payload.split_at(payload.len() - tail);
+        let mut p = ByteReader::new(records, at + 12);
+        let mut q = ByteReader::new(fixed, at + 12 + records.len() as u64);
+        let first_position = positions.len();
+        read_positions(&mut q, count, f32, &mut positions)?;
+        for k in 0..count {
+            let vertex = (n_base + splits.len()) as u32;
+            let at = p.offset();
+            if vertex == 0 {
+                return Err(corrupt(at, "split without a survivor"));
+            }
+            let back = p.count(u64::from(vertex - 1), "survivor")? as u32;
+            let survivor = vertex - 1 - back;
+            replay
+                .ring(survivor, &mut ring)
+                .map_err(|e| corrupt(at, e.to_string()))?;
+            let deg = ring.len() as u64;
+            let lc = p.count(MAX_RING, "left wing")? as u64;
+            let rc = p.count(MAX_RING, "right wing")? as u64;
+            if lc > deg || rc > deg {
+                return Err(corrupt(at, "wing index past the survivor's ring"));
+            }
+            let il = lc.checked_sub(1);
+            let ir = rc
+                .checked_sub(1)
+                .map(|r| il.map_or(r, |l| (l + r) % deg.max(1)));
+            let s = VertexSplit {
+                vertex,
+                survivor,
+                left: il.map(|i| ring[i as usize]),
+                right: ir.map(|i| ring[i as usize]),
+            };
+            replay
+                .apply(&s, positions[first_position + k])
+                .map_err(|e| corrupt(at, e.to_string()))?;
+            splits.push(s);
+        }
+        for _ in 0..count {
+            errors.push(f32::from_le_bytes(q.array("split error")?));
+        }
+        if !p.is_empty() {
+            return Err(corrupt(p.offset(), "trailing bytes in split block"));
+        }
+    }
+    Ok((
+        c,
+        Progressive {
+            meta,
+            truncated,
+            replay,
+            base_faces,
+            splits,
+            positions,
+            errors,
+        },
+    ))
+}
+
+/// Reads level `level` (default: the finest in the file) from the progressive part only. A
+/// truncated file yields its last complete level (`truncated` set); the caller warns.
+pub fn read_level(bytes: &[u8], level: Option<usize>) -> Result<LevelMesh, FormatError> {
+    let (_, p) = read_progressive(bytes, level)?;
+    let n_base = p.meta.n_base as usize;
+    let finest = n_base + p.meta.n_splits as usize;
+    let mut splits_needed = level.map_or(finest, |l| l.clamp(n_base, finest)) - n_base;
+    splits_needed = splits_needed.min(p.splits.len());
+    // Blocks were decoded whole; rebuild exactly the level asked for.
+    let mut replay = SplitReplay::new(&p.positions[..n_base], &p.base_faces)
+        .map_err(|e| corrupt(0, e.to_string()))?;
+    let reuse = splits_needed == p.splits.len();
+    if !reuse {
+        for (k, s) in p.splits[..splits_needed].iter().enumerate() {
+            replay
+                .apply(s, p.positions[n_base + k])
+                .map_err(|e| corrupt(0, e.to_string()))?;
+        }
+    } else {
+        replay = p.replay;
+    }
+    let (positions, triangles) = replay.mesh().to_triangles();
+    Ok(LevelMesh {
+        level: n_base + splits_needed,
+        finest,
+        base: n_base,
+        truncated: p.truncated,
+        positions,
+        triangles,
+        f32_positions: p.meta.position_bits == 32,
+    })
+}
+
+fn read_str(r: &mut ByteReader<'_>) -> Result<String, FormatError> {
+    let n = r.count(r.remaining() as u64, "string length")?;
+    let at = r.offset();
+    let b = r.take(n, "string")?;
+    String::from_utf8(b.to_vec()).map_err(|_| corrupt(at, "string is not UTF-8"))
+}
+
+fn read_scalar_type(r: &mut ByteReader<'_>) -> Result<ScalarType, FormatError> {
+    let at = r.offset();
+    let [c] = r.array("scalar type")?;
+    scalar_of(c).ok_or_else(|| corrupt(at, format!("unknown scalar type {c}")))
+}
+
+fn read_column(r: &mut ByteReader<'_>, rows: usize) -> Result<AttributeData, FormatError> {
+    let t = read_scalar_type(r)?;
+    let bytes = r.take(
+        rows.checked_mul(t.size())
+            .ok_or_else(|| corrupt(r.offset(), "column too large"))?,
+        "attribute values",
+    )?;
+    macro_rules! col {
+        ($v:ident, $ty:ty) => {
+            AttributeData::$v(
+                bytes
+                    .chunks_exact(std::mem::size_of::<$ty>())
+                    .map(|c| <$ty>::from_le_bytes(c.try_into().unwrap_or_default()))
+                    .collect(),
+            )
+        };
+    }
+    Ok(match t {
+        ScalarType::I8 => col!(I8, i8),
+        ScalarType::U8 => AttributeData::U8(bytes.to_vec()),
+        ScalarType::I16 => col!(I16, i16),
+        ScalarType::U16 => col!(U16, u16),
+        ScalarType::I32 => col!(I32, i32),
+        ScalarType::U32 => col!(U32, u32),
+        ScalarType::F32 => col!(F32, f32),
+        ScalarType::F64 => col!(F64, f64),
+    })
+}
+
+fn read_attribute(r: &mut ByteReader<'_>, rows: usize) -> Result<Attribute, FormatError> {
+    let name = read_str(r)?;
+    let data = read_column(r, rows)?;
+    Ok(Attribute { name, data })
+}
+
+fn decode_attributes(r: &mut ByteReader<'_>, m: &mut PolygonMesh) -> Result<(), FormatError> {
+    let at = r.offset();
+    let [pt] = r.array("position type")?;
+    m.position_type = match pt {
+        0 => None,
+        c => Some(scalar_of(c).ok_or_else(|| corrupt(at, "unknown position type"))?),
+    };
+    let rows = [m.positions.len(), m.n_faces()];
+    for (k, &n) in rows.iter().enumerate() {
+        let count = r.count(r.remaining() as u64 / 2, "attribute count")?;
+        let mut list = Vec::with_capacity(count);
+        for _ in 0..count {
+            list.push(read_attribute(r, n)?);
+        }
+        if k == 0 {
+            m.vertex_attributes = list;
+        } else {
+            m.face_attributes = list;
+        }
+    }
+    let n_el = r.count(r.remaining() as u64 / 3, "element count")?;
+    for _ in 0..n_el {
+        let name = read_str(r)?;
+        let rows = r.count(u64::from(u32::MAX), "element rows")?;
+        let n_prop = r.count(r.remaining() as u64 / 2, "property count")?;
+        let mut properties = Vec::with_capacity(n_prop);
+        for _ in 0..n_prop {
+            let at = r.offset();
+            let [kind] = r.array("property kind")?;
+            match kind {
+                0 => properties.push(ElementProperty::Scalar(read_attribute(r, rows)?)),
+                1 => {
+                    let name = read_str(r)?;
+                    let count_type = read_scalar_type(r)?;
+                    let item_type = read_scalar_type(r)?;
+                    if rows >= r.remaining() {
+                        return Err(FormatError::Truncated {
+                            offset: r.offset(),
+                            what: "list offsets".into(),
+                        });
+                    }
+                    let mut starts = Vec::with_capacity(rows + 1);
+                    let mut s = 0u64;
+                    for _ in 0..=rows {
+                        s += r.count(u64::from(u32::MAX), "list offset")? as u64;
+                        if s > u64::from(u32::MAX) {
+                            return Err(corrupt(r.offset(), "list offsets overflow"));
+                        }
+                        starts.push(s as u32);
+                    }
+                    let n_items = s as usize;
+                    let bytes = r.take(
+                        n_items
+                            .checked_mul(8)
+                            .ok_or_else(|| corrupt(r.offset(), "list too large"))?,
+                        "list items",
+                    )?;
+                    let items = bytes
+                        .chunks_exact(8)
+                        .map(|c| f64::from_le_bytes(c.try_into().unwrap_or_default()))
+                        .collect();
+                    properties.push(ElementProperty::List(ListProperty {
+                        name,
+                        count_type,
+                        item_type,
+                        starts,
+                        items,
+                    }));
+                }
+                k => return Err(corrupt(at, format!("unknown property kind {k}"))),
+            }
+        }
+        m.extra_elements.push(ExtraElement {
+            name,
+            rows,
+            properties,
+        });
+    }
+    let n_c = r.count(r.remaining() as u64, "comment count")?;
+    for _ in 0..n_c {
+        m.comments.push(read_str(r)?);
+    }
+    if !r.is_empty() {
+        return Err(corrupt(r.offset(), "trailing bytes in ATTR"));
+    }
+    Ok(())
+}
+
+fn decode_polygons(
+    r: &mut ByteReader<'_>,
+    n_faces_meta: u64,
+    n_vertices: usize,
+    m: &mut PolygonMesh,
+) -> Result<(), FormatError> {
+    let at = r.offset();
+    let n = r.count(r.remaining() as u64, "face count")?;
+    if n as u64 != n_faces_meta {
+        return Err(corrupt(at, "face count disagrees with META"));
+    }
+    m.face_starts = Vec::with_capacity(n + 1);
+    m.face_starts.push(0);
+    m.face_indices = Vec::with_capacity(n * 3);
+    let mut prev = 0i64;
+    for _ in 0..n {
+        let d = r.count(r.remaining() as u64, "face degree")?;
+        for _ in 0..d {
+            let at = r.offset();
+            let i = prev + r.ivarint("face index")?;
+            if i < 0 || i as u64 >= n_vertices as u64 {
+                return Err(corrupt(at, "face index out of range"));
+            }
+            m.face_indices.push(i as u32);
+            prev = i;
+        }
+        if m.face_indices.len() > u32::MAX as usize {
+            return Err(corrupt(at, "too many face indices"));
+        }
+        m.face_starts.push(m.face_indices.len() as u32);
+    }
+    if !r.is_empty() {
+        return Err(corrupt(r.offset(), "trailing bytes in POLY"));
+    }
+    Ok(())
+}
+
+/// Decodes a complete file: the hierarchy (validated), the user's mesh, and the build options.
+/// Truncated or damaged files are errors (use [`read_level`] for the progressive prefix).
+pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
+    let (c, p) = read_progressive(bytes, None)?;
+    if p.truncated {
+        return Err(FormatError::Truncated {
+            offset: bytes.len() as u64,
+            what: format!(
+                "the file (it holds levels up to {} of {})",
+                p.meta.n_base as usize + p.splits.len(),
+                p.meta.n_base + p.meta.n_splits
+            ),
+        });
+    }
+    let Progressive {
+        meta,
+        mut positions,
+        splits,
+        errors,
+        ..
+    } = p;
+    let f32 = meta.position_bits == 32;
+    let n_total = meta.n_vertices as usize;
+    let n_fin = positions.len();
+    let mut r = required(&c, ISOL)?;
+    read_positions(&mut r, n_total - n_fin, f32, &mut positions)?;
+    if !r.is_empty() {
+        return Err(corrupt(r.offset(), "trailing bytes in ISOL"));
+    }
+    let mut r = required(&c, ORDR)?;
+    if n_total > r.remaining() {
+        return Err(FormatError::Truncated {
+            offset: r.offset(),
+            what: "vertex order".into(),
+        });
+    }
+    let mut pm_to_mesh = Vec::with_capacity(n_total);
+    for _ in 0..n_total {
+        pm_to_mesh.push(r.count(n_total as u64, "vertex order")? as u32);
+    }
+    if !r.is_empty() {
+        return Err(corrupt(r.offset(), "trailing bytes in ORDR"));
+    }
+    let n_input = meta.n_input_vertices as usize;
+    let mut input = PolygonMesh::new();
+    input.positions = vec![DVec3::ZERO; n_input];
+    let mut seen = vec![false; n_input];
+    for (i, &s) in pm_to_mesh.iter().enumerate() {
+        if let Some(p) = input.positions.get_mut(s as usize) {
+            *p = positions[i];
+            seen[s as usize] = true;
+        }
+    }
+    if seen.iter().any(|&x| !x) {
+        return Err(corrupt(0, "vertex order does not cover the input vertices"));
+    }
+    let mut r = required(&c, POLY)?;
+    decode_polygons(&mut r, meta.n_input_faces, n_input, &mut input)?;
+    let mut r = required(&c, ATTR)?;
+    decode_attributes(&mut r, &mut input)?;
+    input
+        .check()
+        .map_err(|e| corrupt(0, format!("restored mesh: {e}")))?;
+
+    let built = Mesh::from_polygons(&input).map_err(|e| corrupt(0, e.to_string()))?;
+    if built.mesh.n_vertices() != n_total {
+        return Err(corrupt(0, "the polygons do not build the stored hierarchy"));
+    }
+    let mut mesh_to_pm = vec![u32::MAX; n_total];
+    for (i, &s) in pm_to_mesh.iter().enumerate() {
+        if let Some(m) = mesh_to_pm.get_mut(s as usize) {
+            *m = i as u32;
+        }
+    }
+    let mut faces = Vec::with_capacity(built.mesh.n_faces());
+    for f in built.mesh.faces() {
+        let t = built
+            .mesh
+            .face_vertices(f)
+            .map(|v| mesh_to_pm.get(v.slot()).copied().unwrap_or(u32::MAX));
+        faces.push(t);
+    }
+    // The positions of the built mesh (including the builder's vertex copies) must be the
+    // stored ones.
+    for v in built.mesh.vertices() {
+        let i = mesh_to_pm.get(v.slot()).copied().unwrap_or(u32::MAX) as usize;
+        let same = positions.get(i).is_some_and(|p| {
+            p.to_array().map(f64::to_bits) == built.mesh.position(v).to_array().map(f64::to_bits)
+        });
+        if !same {
+            return Err(corrupt(0, "the polygons do not build the stored hierarchy"));
+        }
+    }
+    let pm = ProgressiveMesh::from_parts(PmParts {
+        n_base: meta.n_base as usize,
+        positions,
+        pm_to_mesh,
+        splits,
+        faces,
+        errors,
+    })
+    .map_err(|e| corrupt(0, e.to_string()))?;
+    let info = BuildInfo {
+        pm_options: PmOptions {
+            target_vertices: meta.target_vertices as usize,
+            target_faces: meta.target_faces as usize,
+            max_error: meta.max_error,
+            max_normal_angle_degrees: meta.max_normal_angle_degrees,
+            min_quality: meta.min_quality,
+            max_valence: meta.max_valence as usize,
+            boundary_weight: meta.boundary_weight,
+        },
+        relaxation: meta.relaxation,
+    };
+    Ok(PyrData {
+        input,
+        built,
+        pm,
+        info,
+    })
+}
+
+/// True when `bytes` start with the `.pyr` signature.
+pub fn is_pyr(bytes: &[u8]) -> bool {
+    bytes.starts_with(&super::container::MAGIC)
+}
+
+/// Body of the `read_pyr` fuzz target: every reader on arbitrary bytes must return, never
+/// panic; whatever decodes must re-encode to a file that decodes to the same data.
+pub fn fuzz_read_pyr(data: &[u8]) {
+    let _ = read_level(data, None);
+    let _ = read_level(data, Some(5));
+    if let Ok(d) = decode(data)
+        && let Ok((again, _)) = encode(&d.input, &d.pm, &d.info)
+    {
+        let Ok(d2) = decode(&again) else {
+            panic!("re-encoded file does not decode");
+        };
+        assert_eq!(d2.input, d.input);
+        assert_eq!(d2.pm.splits(), d.pm.splits());
+        let Ok((third, _)) = encode(&d2.input, &d2.pm, &d2.info) else {
+            panic!("cannot re-encode");
+        };
+        assert!(third == again, "encode is not idempotent");
+    }
+}
+
+/// The same hierarchy with new original positions (for saving an edit): `positions` are the
+/// new positions of the input's vertices; split copies follow their source vertex. When the
+/// input stores f32 positions they are rounded to f32 first, as writing a mesh file would.
+pub fn with_positions(
+    input: &PolygonMesh,
+    built: &Built,
+    pm: &ProgressiveMesh,
+    positions: Vec<DVec3>,
+) -> Result<(PolygonMesh, ProgressiveMesh), FormatError> {
+    if positions.len() != input.positions.len() {
+        return Err(internal("position count differs from the input"));
+    }
+    let round = input.position_type == Some(ScalarType::F32);
+    let mut new_input = input.clone();
+    new_input.positions = positions
+        .into_iter()
+        .map(|p| if round { p.as_vec3().as_dvec3() } else { p })
+        .collect();
+    let source = &built.source.vertex_source;
+    let mut pm_positions = Vec::with_capacity(pm.pm_to_mesh().len());
+    for &s in pm.pm_to_mesh() {
+        let src = source.get(s as usize).copied().unwrap_or(s) as usize;
+        let p = new_input
+            .positions
+            .get(src)
+            .copied()
+            .ok_or_else(|| internal("vertex source out of range"))?;
+        pm_positions.push(p);
+    }
+    let new_pm = ProgressiveMesh::from_parts(PmParts {
+        n_base: pm.n_base_vertices(),
+        positions: pm_positions,
+        pm_to_mesh: pm.pm_to_mesh().to_vec(),
+        splits: pm.splits().to_vec(),
+        faces: pm.finest_faces().to_vec(),
+        errors: pm.split_errors().to_vec(),
+    })
+    .map_err(|e| internal(&e.to_string()))?;
+    Ok((new_input, new_pm))
+}

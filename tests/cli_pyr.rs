@@ -1,0 +1,212 @@
+//! `meshpyr build`, `extract`, and `.pyr` files as input of `filter`/`spectrum`/`edit` and as
+//! output of `edit`, run as a user runs them.
+
+mod common;
+
+use meshpyr::io;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn meshpyr(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_meshpyr"))
+        .args(args)
+        .output()
+        .expect("the meshpyr binary runs")
+}
+
+fn data(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+fn scratch(name: &str) -> String {
+    let dir: PathBuf = std::env::temp_dir().join(format!("meshpyr-cli-pyr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name).display().to_string()
+}
+
+fn ok(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn fails_with(out: &Output, needle: &str) {
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error: ")).collect();
+    assert_eq!(errors.len(), 1, "{err}");
+    assert!(errors[0].contains(needle), "{err}");
+}
+
+#[test]
+fn build_then_extract_gives_back_the_file_byte_for_byte() {
+    for name in [
+        "joint.ply",
+        "cube_quad_poly.ply",
+        "spider_assimp.ply",
+        "tetrahedron.off",
+    ] {
+        let pyr = scratch(&format!("{name}.pyr"));
+        let back = scratch(&format!("back-{name}"));
+        let msg = ok(&meshpyr(&["build", &data(name), "-o", &pyr]));
+        assert!(msg.contains("bytes/vertex"), "{msg}");
+        ok(&meshpyr(&["extract", &pyr, "-o", &back]));
+        let a = io::read_mesh(Path::new(&data(name))).unwrap();
+        let b = io::read_mesh(Path::new(&back)).unwrap();
+        assert_eq!(a, b, "{name}");
+        assert_eq!(
+            common::position_bits(&a),
+            common::position_bits(&b),
+            "{name}"
+        );
+        // Our own writers wrote these test files, so even the bytes come back.
+        if name.ends_with(".ply") {
+            assert!(
+                std::fs::read(data(name)).unwrap() == std::fs::read(&back).unwrap(),
+                "{name}"
+            );
+        }
+    }
+}
+
+#[test]
+fn attributes_survive_build_and_extract() {
+    let src = scratch("rich.ply");
+    io::write_mesh(Path::new(&src), &common::rich_mesh()).unwrap();
+    let pyr = scratch("rich.pyr");
+    let back = scratch("rich-back.ply");
+    ok(&meshpyr(&["build", &src, "-o", &pyr]));
+    ok(&meshpyr(&["extract", &pyr, "-o", &back]));
+    assert!(std::fs::read(&src).unwrap() == std::fs::read(&back).unwrap());
+}
+
+#[test]
+fn extract_level_and_truncated_files() {
+    let pyr = scratch("joint-levels.pyr");
+    ok(&meshpyr(&["-q", "build", &data("joint.ply"), "-o", &pyr]));
+    let out = scratch("joint-60.ply");
+    ok(&meshpyr(&[
+        "-q", "extract", &pyr, "-o", &out, "--level", "60",
+    ]));
+    assert_eq!(io::read_mesh(Path::new(&out)).unwrap().n_vertices(), 60);
+    fails_with(
+        &meshpyr(&["-q", "extract", &pyr, "-o", &out, "--level", "100000"]),
+        "outside this file's levels",
+    );
+
+    let bytes = std::fs::read(&pyr).unwrap();
+    // Cut inside the split blocks: the last complete level, with a warning.
+    let cut = scratch("joint-cut.pyr");
+    std::fs::write(&cut, &bytes[..bytes.len() / 3]).unwrap();
+    let w = ok(&meshpyr(&["-q", "extract", &cut, "-o", &out]));
+    assert!(w.contains("warning:") && w.contains("truncated"), "{w}");
+    assert_eq!(w.lines().count(), 1, "{w}");
+    let m = io::read_mesh(Path::new(&out)).unwrap();
+    assert!(m.n_vertices() < 221 && m.n_faces() > 0);
+    // Cut inside the header: a clean error.
+    std::fs::write(&cut, &bytes[..30]).unwrap();
+    fails_with(&meshpyr(&["-q", "extract", &cut, "-o", &out]), "truncated");
+    // A damaged byte: a checksum error, not a wrong mesh.
+    let mut bad = bytes.clone();
+    let k = bad.len() - 100;
+    bad[k] ^= 0x10;
+    std::fs::write(&cut, &bad).unwrap();
+    fails_with(&meshpyr(&["-q", "extract", &cut, "-o", &out]), "checksum");
+    // Not a .pyr at all.
+    fails_with(
+        &meshpyr(&["-q", "extract", &data("joint.ply"), "-o", &out]),
+        "not a .pyr file",
+    );
+}
+
+#[test]
+fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
+    let pyr = scratch("elephant.pyr");
+    ok(&meshpyr(&[
+        "-q",
+        "build",
+        &data("elephant_holes.ply"),
+        "-o",
+        &pyr,
+    ]));
+    let (a, b) = (scratch("el-a.ply"), scratch("el-b.ply"));
+    ok(&meshpyr(&[
+        "-q",
+        "filter",
+        &data("elephant_holes.ply"),
+        "-o",
+        &a,
+        "--lowpass",
+        "500",
+    ]));
+    ok(&meshpyr(&[
+        "-q",
+        "filter",
+        &pyr,
+        "-o",
+        &b,
+        "--lowpass",
+        "500",
+    ]));
+    assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap());
+
+    let (ca, cb) = (scratch("sa.csv"), scratch("sb.csv"));
+    let png = scratch("s.png");
+    ok(&meshpyr(&[
+        "-q",
+        "spectrum",
+        &data("elephant_holes.ply"),
+        "-o",
+        &png,
+        "--csv",
+        &ca,
+    ]));
+    ok(&meshpyr(&[
+        "-q", "spectrum", &pyr, "-o", &png, "--csv", &cb,
+    ]));
+    assert_eq!(std::fs::read(&ca).unwrap(), std::fs::read(&cb).unwrap());
+
+    // edit: mesh output from .pyr input == from the mesh; .pyr output extracts to the same.
+    let m = io::read_mesh(Path::new(&data("elephant_holes.ply"))).unwrap();
+    let p = m.positions[0];
+    let mv = format!("{},{},{}:0.01,0.02,0.0", p.x, p.y, p.z);
+    let edit = |input: &str, out: &str| {
+        ok(&meshpyr(&[
+            "-q", "edit", input, "-o", out, "--level", "600", "--move", &mv, "--radius", "0.2",
+        ]))
+    };
+    let (ea, eb, ep, ex) = (
+        scratch("ea.ply"),
+        scratch("eb.ply"),
+        scratch("e.pyr"),
+        scratch("ex.ply"),
+    );
+    edit(&data("elephant_holes.ply"), &ea);
+    edit(&pyr, &eb);
+    edit(&pyr, &ep);
+    ok(&meshpyr(&["-q", "extract", &ep, "-o", &ex]));
+    let ra = std::fs::read(&ea).unwrap();
+    assert!(ra == std::fs::read(&eb).unwrap());
+    assert!(
+        ra == std::fs::read(&ex).unwrap(),
+        "edit to .pyr then extract differs"
+    );
+    assert!(ra != std::fs::read(data("elephant_holes.ply")).unwrap());
+    // The edited file is a valid hierarchy: filtering it works.
+    ok(&meshpyr(&[
+        "-q",
+        "filter",
+        &ep,
+        "-o",
+        &ex,
+        "--lowpass",
+        "500",
+    ]));
+}

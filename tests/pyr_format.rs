@@ -1,0 +1,301 @@
+//! `.pyr` files: exact round trips, progressive prefixes, damage handling, golden files.
+
+mod common;
+
+use common::{data, position_bits, rich_mesh};
+use meshpyr::format::{self, BuildInfo, FormatError};
+use meshpyr::io;
+use meshpyr::mesh::{Mesh, PolygonMesh};
+use meshpyr::pm::ProgressiveMesh;
+use meshpyr::progress::NoProgress;
+use meshpyr::pyramid::{Pyramid, ScanPyramid};
+use std::path::PathBuf;
+
+fn build(input: &PolygonMesh) -> (ProgressiveMesh, Vec<u8>) {
+    let built = Mesh::from_polygons(input).unwrap();
+    let info = BuildInfo::default();
+    let pm = ProgressiveMesh::build(&built.mesh, &info.pm_options, &NoProgress).unwrap();
+    let (bytes, sizes) = format::encode(input, &pm, &info).unwrap();
+    assert_eq!(sizes.total, bytes.len());
+    (pm, bytes)
+}
+
+fn tetra() -> PolygonMesh {
+    io::read_mesh(&data("tetrahedron.ply")).unwrap()
+}
+
+/// Everything the user's file holds, compared bit for bit.
+fn assert_same_mesh(a: &PolygonMesh, b: &PolygonMesh, name: &str) {
+    assert_eq!(position_bits(a), position_bits(b), "{name}: position bits");
+    assert_eq!(a.face_starts, b.face_starts, "{name}: polygons");
+    assert_eq!(a.face_indices, b.face_indices, "{name}: polygons");
+    assert_eq!(a.position_type, b.position_type, "{name}: position type");
+    assert_eq!(a.vertex_attributes, b.vertex_attributes, "{name}");
+    assert_eq!(a.face_attributes, b.face_attributes, "{name}");
+    assert_eq!(a.extra_elements, b.extra_elements, "{name}");
+    assert_eq!(a.comments, b.comments, "{name}");
+}
+
+fn meshes() -> Vec<(String, PolygonMesh)> {
+    let mut v: Vec<(String, PolygonMesh)> = [
+        "tetrahedron.ply",
+        "joint.ply",
+        "spider_assimp.ply",
+        "cube_quad_poly.ply",
+        "elephant_holes.ply",
+        "planar_pymeshfix_vtk.ply",
+    ]
+    .iter()
+    .map(|n| (n.to_string(), io::read_mesh(&data(n)).unwrap()))
+    .collect();
+    v.push(("rich_mesh".into(), rich_mesh()));
+    v
+}
+
+#[test]
+fn decode_restores_input_and_hierarchy_exactly() {
+    for (name, input) in meshes() {
+        let (pm, bytes) = build(&input);
+        let d = format::decode(&bytes).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert_same_mesh(&input, &d.input, &name);
+        assert_eq!(d.input, input, "{name}");
+        assert_eq!(d.pm.splits(), pm.splits(), "{name}");
+        assert_eq!(d.pm.finest_faces(), pm.finest_faces(), "{name}");
+        assert_eq!(d.pm.pm_to_mesh(), pm.pm_to_mesh(), "{name}");
+        assert_eq!(d.pm.n_base_faces(), pm.n_base_faces(), "{name}");
+        let bits = |p: &ProgressiveMesh| -> Vec<[u64; 3]> {
+            p.original_positions()
+                .iter()
+                .map(|x| x.to_array().map(f64::to_bits))
+                .collect()
+        };
+        assert_eq!(bits(&d.pm), bits(&pm), "{name}");
+        assert_eq!(
+            d.pm.split_errors()
+                .iter()
+                .map(|e| e.to_bits())
+                .collect::<Vec<_>>(),
+            pm.split_errors()
+                .iter()
+                .map(|e| e.to_bits())
+                .collect::<Vec<_>>()
+        );
+        // write → read → write is byte-identical
+        let (again, _) = format::encode(&d.input, &d.pm, &d.info).unwrap();
+        assert!(again == bytes, "{name}: re-encoding changed the bytes");
+    }
+}
+
+#[test]
+fn f64_positions_are_kept_exactly() {
+    let mut m = io::read_mesh(&data("joint.ply")).unwrap();
+    for p in &mut m.positions {
+        p.x += 1e-9 * p.y; // not representable as f32
+    }
+    m.position_type = Some(meshpyr::mesh::ScalarType::F64);
+    let (_, bytes) = build(&m);
+    let d = format::decode(&bytes).unwrap();
+    assert_same_mesh(&m, &d.input, "joint f64");
+}
+
+#[test]
+fn loaded_pyramid_has_identical_details_and_synthesis() {
+    let input = io::read_mesh(&data("joint.ply")).unwrap();
+    let relax = meshpyr::relax::SecondDifference::default();
+    let scan = ScanPyramid::build(input.clone(), &relax, &Default::default(), &NoProgress).unwrap();
+    let (bytes, _) = format::encode(&scan.input, &scan.pm, &BuildInfo::default()).unwrap();
+    let loaded = format::decode(&bytes)
+        .unwrap()
+        .into_scan(&NoProgress)
+        .unwrap();
+    let (a, b) = (&scan.pyramid, &loaded.pyramid);
+    assert_eq!(a.n_splits(), b.n_splits());
+    let bits = |v: &[glam::DVec3]| -> Vec<[u64; 3]> {
+        v.iter().map(|x| x.to_array().map(f64::to_bits)).collect()
+    };
+    assert_eq!(bits(a.base()), bits(b.base()));
+    for k in 0..a.n_splits() {
+        let (ia, da) = a.split_details(k);
+        let (ib, db) = b.split_details(k);
+        assert_eq!(ia, ib);
+        assert_eq!(bits(da), bits(db), "details of split {k}");
+    }
+    let gains = meshpyr::pyramid::Filter::default()
+        .lowpass(meshpyr::pyramid::LevelSpec::Vertices(60))
+        .resolve(a.surface_area());
+    assert_eq!(bits(&a.synthesize(&gains)), bits(&b.synthesize(&gains)));
+    let _ = Pyramid::analyze; // the loader's path
+}
+
+#[test]
+fn levels_match_the_progressive_mesh() {
+    let input = io::read_mesh(&data("joint.ply")).unwrap();
+    let (pm, bytes) = build(&input);
+    for level in [
+        pm.n_base_vertices(),
+        pm.n_base_vertices() + 7,
+        150,
+        pm.n_vertices(),
+    ] {
+        let l = format::read_level(&bytes, Some(level)).unwrap();
+        assert_eq!(l.level, level);
+        assert!(!l.truncated);
+        assert_eq!(l.positions, pm.original_positions()[..level]);
+        let canon = |t: &[[u32; 3]]| {
+            let mut v: Vec<[u32; 3]> = t
+                .iter()
+                .map(|t| {
+                    let k = (0..3).min_by_key(|&i| t[i]).unwrap();
+                    [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+                })
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(
+            canon(&l.triangles),
+            canon(&pm.level_triangles(level)),
+            "level {level}"
+        );
+    }
+}
+
+#[test]
+fn every_truncation_gives_a_prefix_level_or_a_clean_error() {
+    for name in ["tetrahedron.ply", "joint.ply"] {
+        let input = io::read_mesh(&data(name)).unwrap();
+        let (pm, bytes) = build(&input);
+        let mut levels = Vec::new();
+        for cut in 0..bytes.len() {
+            let part = &bytes[..cut];
+            assert!(
+                format::decode(part).is_err(),
+                "{name}: decode of {cut} bytes"
+            );
+            match format::read_level(part, None) {
+                Ok(l) => {
+                    assert!(l.truncated, "{name}: cut {cut} not flagged");
+                    assert_eq!(l.positions, pm.original_positions()[..l.level]);
+                    levels.push(l.level);
+                }
+                Err(FormatError::Truncated { .. }) => {}
+                Err(e) => panic!("{name}: cut at {cut}: unexpected {e}"),
+            }
+        }
+        // Levels only grow as more of the file arrives.
+        assert!(levels.windows(2).all(|w| w[0] <= w[1]));
+        assert!(!levels.is_empty(), "{name}: no prefix was readable");
+    }
+}
+
+#[test]
+fn bit_flips_are_errors_or_harmless() {
+    let (_, bytes) = build(&io::read_mesh(&data("joint.ply")).unwrap());
+    let original = format::decode(&bytes).unwrap().input;
+    for i in 0..bytes.len() {
+        for bit in [0, 3, 7] {
+            let mut b = bytes.clone();
+            b[i] ^= 1 << bit;
+            if let Ok(d) = format::decode(&b) {
+                // Only bytes no checksum covers (reserved fields) may change silently.
+                assert_eq!(
+                    d.input, original,
+                    "flip at byte {i} bit {bit} changed the data"
+                );
+            }
+            let _ = format::read_level(&b, Some(100));
+        }
+    }
+}
+
+#[test]
+fn wrong_version_and_unknown_required_sections_are_refused() {
+    let (_, bytes) = build(&tetra());
+    let c = meshpyr::format::container::Container::parse(&bytes).unwrap();
+    let mut sections: Vec<meshpyr::format::container::Section> = c
+        .sections
+        .iter()
+        .map(|e| meshpyr::format::container::Section {
+            tag: e.tag,
+            flags: e.flags,
+            bytes: bytes[e.offset as usize..(e.offset + e.length) as usize].to_vec(),
+        })
+        .collect();
+    let v2 = meshpyr::format::container::write_container(2, 0, &sections);
+    assert!(matches!(
+        format::decode(&v2),
+        Err(FormatError::Version { major: 2, .. })
+    ));
+    // A newer minor with an extra optional section still reads.
+    sections.push(meshpyr::format::container::Section {
+        tag: *b"XTRA",
+        flags: 0,
+        bytes: vec![1, 2, 3],
+    });
+    let minor = meshpyr::format::container::write_container(1, 7, &sections);
+    assert_eq!(format::decode(&minor).unwrap().input, tetra());
+    sections.last_mut().unwrap().flags = meshpyr::format::container::REQUIRED;
+    let req = meshpyr::format::container::write_container(1, 7, &sections);
+    assert!(matches!(
+        format::decode(&req),
+        Err(FormatError::Version { .. })
+    ));
+    assert!(matches!(
+        format::decode(b"ply\nformat"),
+        Err(FormatError::NotPyr)
+    ));
+}
+
+fn golden(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("formats/golden")
+        .join(name)
+}
+
+/// The golden files pin the byte layout. If this fails, the encoder's output changed: if that
+/// was deliberate, bump the format version (major for incompatible, minor for additions, see
+/// formats/pyr.md) and regenerate with `MESHPYR_REGENERATE_GOLDEN=1 cargo test --test pyr_format`.
+#[test]
+fn golden_files_are_byte_identical() {
+    for (file, mesh) in [("tetra.pyr", "tetrahedron.ply"), ("joint.pyr", "joint.ply")] {
+        let (_, bytes) = build(&io::read_mesh(&data(mesh)).unwrap());
+        let path = golden(file);
+        if std::env::var_os("MESHPYR_REGENERATE_GOLDEN").is_some() {
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(&path, &bytes).unwrap();
+        }
+        let stored = std::fs::read(&path).unwrap();
+        assert!(
+            stored == bytes,
+            "{file}: the .pyr encoder no longer writes the golden bytes. If the layout change is \
+             deliberate, bump the version in src/format/pyr.rs and formats/pyr.md, then regenerate \
+             with MESHPYR_REGENERATE_GOLDEN=1 cargo test --test pyr_format"
+        );
+        // And the stored file still decodes to the mesh.
+        let d = format::decode(&stored).unwrap();
+        assert_eq!(d.input, io::read_mesh(&data(mesh)).unwrap());
+    }
+}
+
+#[test]
+fn fuzz_corpus_replays() {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus/read_pyr");
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        let bytes = std::fs::read(&p).unwrap();
+        let r = std::panic::catch_unwind(|| format::fuzz_read_pyr(&bytes));
+        assert!(r.is_ok(), "{} panics", p.display());
+        n += 1;
+    }
+    assert!(n > 0);
+}
+
+#[test]
+#[ignore = "bunny: a few seconds in release; run with --ignored"]
+fn bunny_round_trip() {
+    let input = io::read_mesh(&data("bunny.ply")).unwrap();
+    let (_, bytes) = build(&input);
+    let d = format::decode(&bytes).unwrap();
+    assert_eq!(d.input, input);
+}
