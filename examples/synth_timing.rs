@@ -1,8 +1,12 @@
 //! Times re-filtering (synthesis) on a mesh, reporting thread CPU time per split so that a
-//! loaded machine does not distort the number: `cargo run --release --example synth_timing -- [IN]`.
+//! loaded machine does not distort the number, plus the analysis against the PM build (CPU
+//! time, median of 3) and the pyramid's memory per vertex:
+//! `cargo run --release --example synth_timing -- [IN]`.
 
+use meshpyr::mesh::Mesh;
+use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Filter, LevelSpec, PyramidOptions, ScanPyramid};
+use meshpyr::pyramid::{Filter, LevelSpec, Pyramid, PyramidOptions, ScanPyramid};
 use meshpyr::relax::SecondDifference;
 use std::path::PathBuf;
 
@@ -50,6 +54,42 @@ fn main() -> anyhow::Result<()> {
             per_million(c)
         ))
     );
-    println!("pyramid memory: {:.1} MB", p.memory_bytes() as f64 / 1e6);
+    println!(
+        "pyramid memory: {:.1} MB ({:.0} bytes per vertex)",
+        p.memory_bytes() as f64 / 1e6,
+        p.memory_bytes() as f64 / p.n_vertices() as f64
+    );
+    // Analysis vs PM build, thread CPU time, median of 3.
+    let mesh = Mesh::from_polygons(&meshpyr::io::read_mesh(&input)?)?.mesh;
+    let median = |mut t: Vec<f64>| {
+        t.sort_by(f64::total_cmp);
+        t[t.len() / 2]
+    };
+    let time = |f: &mut dyn FnMut()| {
+        median(
+            (0..3)
+                .map(|_| {
+                    let c0 = cpu_seconds().unwrap_or(0.0);
+                    f();
+                    cpu_seconds().unwrap_or(0.0) - c0
+                })
+                .collect(),
+        )
+    };
+    let pm_opts = PmOptions::default();
+    let build = time(&mut || {
+        std::hint::black_box(ProgressiveMesh::build(&mesh, &pm_opts, &NoProgress).ok());
+    });
+    let pm = ProgressiveMesh::build(&mesh, &pm_opts, &NoProgress)?;
+    let relax = SecondDifference::default();
+    let analysis = time(&mut || {
+        std::hint::black_box(Pyramid::analyze(&pm, &relax, &NoProgress).ok());
+    });
+    println!(
+        "thread CPU: PM build {:.0} ms, analysis {:.0} ms ({:.2}x the PM build)",
+        build * 1e3,
+        analysis * 1e3,
+        analysis / build
+    );
     Ok(())
 }

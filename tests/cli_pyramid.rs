@@ -89,24 +89,36 @@ fn filter_keeps_the_input_layout_and_changes_positions() {
 }
 
 #[test]
+fn filter_with_the_mcm_relaxation_keeps_the_layout_and_differs_from_second_difference() {
+    let input = data("elephant_holes.ply");
+    let (mcm, sd) = (scratch("elephant-mcm.ply"), scratch("elephant-sd.ply"));
+    for (out, relax) in [(&mcm, "mcm"), (&sd, "second-difference")] {
+        ok(&meshpyr(&[
+            "filter",
+            &input,
+            "-o",
+            out.to_str().unwrap(),
+            "--lowpass",
+            "1400",
+            "--relax",
+            relax,
+            "--quiet",
+        ]));
+    }
+    let a = io::read_mesh(Path::new(&input)).unwrap();
+    let (m, s) = (io::read_mesh(&mcm).unwrap(), io::read_mesh(&sd).unwrap());
+    assert_eq!(a.face_indices, m.face_indices);
+    assert_eq!(a.positions.len(), m.positions.len());
+    assert_ne!(a.positions, m.positions);
+    assert_ne!(m.positions, s.positions);
+}
+
+#[test]
 fn filter_rejects_missing_or_bad_filters_and_unavailable_operators() {
     let input = data("teapot.ply");
     let out = scratch("never.ply");
     let o = out.to_str().unwrap();
     fails_with(&meshpyr(&["filter", &input, "-o", o]), "no filter given");
-    fails_with(
-        &meshpyr(&[
-            "filter",
-            &input,
-            "-o",
-            o,
-            "--lowpass",
-            "100",
-            "--relax",
-            "mcm",
-        ]),
-        "not available yet",
-    );
     fails_with(
         &meshpyr(&[
             "filter",

@@ -164,13 +164,7 @@ impl Pyramid {
             g.extend(table.iter().map(|&x| f[x as usize]));
             scratch.saved.clear();
             scratch.saved.extend_from_slice(&g[..t]);
-            presmooth_local(
-                &codes,
-                &weights,
-                &scratch.entries,
-                g,
-                &mut scratch.smoothed,
-            );
+            presmooth_local(&codes, &weights, &scratch.entries, g, &mut scratch.smoothed);
             // 3. Downsample: f^(n−1) is the presmoothed ring; the removed vertex is gone (its
             //    value is never read again: the prediction starts it at its survivor).
             g[1..t].copy_from_slice(&scratch.smoothed);
@@ -215,7 +209,10 @@ impl Pyramid {
             &mut weights,
             &mut details,
         );
-        let codes = if codes.iter().all(|&c| c <= u16::MAX as u32) {
+        let widest = codes.iter().copied().max().unwrap_or(0);
+        let codes = if widest <= u8::MAX as u32 {
+            Codes::Byte(codes.iter().map(|&c| c as u8).collect())
+        } else if widest <= u16::MAX as u32 {
             Codes::Narrow(codes.iter().map(|&c| c as u16).collect())
         } else {
             Codes::Wide(codes)

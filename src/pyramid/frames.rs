@@ -54,11 +54,18 @@ impl Frame {
 /// Relative size below which a projected reference direction counts as degenerate.
 const DEGENERATE_TANGENT: f64 = 1e-12;
 
-/// An integer index into a signal array: the pyramid stores local indices as `u16` when they
-/// fit, `u32` otherwise.
+/// An integer index into a signal array: the pyramid stores local indices in the narrowest of
+/// `u8`, `u16`, `u32` that fits.
 pub trait LocalIndex: Copy {
     /// The index as `usize`.
     fn at(self) -> usize;
+}
+
+impl LocalIndex for u8 {
+    #[inline(always)]
+    fn at(self) -> usize {
+        self as usize
+    }
 }
 
 impl LocalIndex for u16 {
@@ -80,6 +87,7 @@ impl LocalIndex for u32 {
 ///
 /// The fan's triangles are `(j, fan[k], fan[k+1 mod m])` for every `k`, except `k = 0` when the
 /// fan is open: a boundary vertex's circulation starts at its boundary edge, which has no face.
+#[inline]
 pub fn vertex_frame<I: LocalIndex>(
     g: &[DVec3],
     j: usize,

@@ -75,8 +75,9 @@ pub enum PyramidError {
 ///   vertex of their stencils and fans. Synthesis gathers these values once into a small
 ///   contiguous buffer and works there.
 /// * `codes`: per split `[t, survivor]`, then per touched entry `[s, 2·m + open]` followed by
-///   `s` stencil and `m` fan indices — all indices into the split's local table, so they fit in
-///   16 bits for any PM whose neighbourhoods have fewer than 65 536 vertices (32 bits otherwise).
+///   `s` stencil and `m` fan indices — all indices into the split's local table, so they are
+///   stored in 8 bits when every neighbourhood has fewer than 256 vertices and every valence is
+///   below 128 (typical scans), else in 16 bits, and in 32 bits only for extreme valences.
 /// * `weights`: per touched entry its `s` stencil weights (f64: they set the prediction's
 ///   linear precision).
 /// * `details`: per touched entry its detail in the local frame `(t1, t2, n)`.
@@ -111,6 +112,7 @@ pub(crate) struct SplitOffsets {
 /// The code stream, as narrow as the largest local index allows.
 #[derive(Clone, Debug)]
 pub(crate) enum Codes {
+    Byte(Vec<u8>),
     Narrow(Vec<u16>),
     Wide(Vec<u32>),
 }
@@ -118,6 +120,7 @@ pub(crate) enum Codes {
 impl Codes {
     fn bytes(&self) -> usize {
         match self {
+            Codes::Byte(c) => c.len(),
             Codes::Narrow(c) => 2 * c.len(),
             Codes::Wide(c) => 4 * c.len(),
         }
@@ -202,5 +205,67 @@ impl Pyramid {
             + self.codes.bytes()
             + 8 * self.weights.len()
             + 24 * (self.details.len() + self.base.len() + self.passthrough.len())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::Mesh;
+    use crate::pm::{PmOptions, ProgressiveMesh};
+    use crate::progress::NoProgress;
+    use crate::relax::SecondDifference;
+
+    #[test]
+    fn codes_of_every_width_synthesize_the_same_bits() {
+        // Large neighbourhoods need 16- or 32-bit local indices; every width must run the same
+        // arithmetic. Widen a small pyramid's 8-bit codes and compare bits.
+        let (n, m) = (12u32, 10u32);
+        let mut p = Vec::new();
+        for i in 0..n {
+            for j in 0..m {
+                let (u, v) = (
+                    i as f64 / n as f64 * std::f64::consts::TAU,
+                    j as f64 / m as f64 * std::f64::consts::TAU,
+                );
+                let r = 2.0 + (1.0 + 0.1 * (3.0 * u).sin()) * v.cos();
+                p.push(DVec3::new(r * u.cos(), r * u.sin(), v.sin()));
+            }
+        }
+        let id = |i: u32, j: u32| (i % n) * m + (j % m);
+        let mut t = Vec::new();
+        for i in 0..n {
+            for j in 0..m {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let mesh = Mesh::from_triangles(&p, &t).unwrap().mesh;
+        let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &NoProgress).unwrap();
+        let narrow = Pyramid::analyze(&pm, &SecondDifference::default(), &NoProgress).unwrap();
+        let Codes::Byte(c) = &narrow.codes else {
+            panic!("a small mesh should get 8-bit codes");
+        };
+        let mut wide = narrow.clone();
+        wide.codes = Codes::Wide(c.iter().map(|&x| x as u32).collect());
+        let mut middle = narrow.clone();
+        middle.codes = Codes::Narrow(c.iter().map(|&x| x as u16).collect());
+        assert_eq!(
+            middle.synthesize(&LevelGains::unit()),
+            wide.synthesize(&LevelGains::unit())
+        );
+        let gains = gains::Filter::default()
+            .gain(LevelSpec::Vertices(20), LevelSpec::Vertices(60), 1.7)
+            .resolve(1.0);
+        let (a, b) = (narrow.synthesize(&gains), wide.synthesize(&gains));
+        assert_eq!(a, b);
+        assert!(wide.memory_bytes() > narrow.memory_bytes());
+        let err = narrow
+            .synthesize(&LevelGains::unit())
+            .iter()
+            .zip(pm.original_positions())
+            .map(|(x, y)| (*x - *y).length())
+            .fold(0.0, f64::max);
+        assert!(err < 1e-12 * narrow.bbox_diagonal(), "{err:e}");
     }
 }

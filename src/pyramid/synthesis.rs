@@ -207,7 +207,6 @@ impl Pyramid {
             self.synthesize_split(codes, k, f, gains, &mut scratch);
         }
     }
-
 }
 
 impl Pyramid {
@@ -245,6 +244,7 @@ impl Pyramid {
         let to = to.clamp(from, self.n_finest);
         let splits = from - self.n_base..to - self.n_base;
         match &self.codes {
+            Codes::Byte(c) => self.synthesize_splits(c, f, splits, gains),
             Codes::Narrow(c) => self.synthesize_splits(c, f, splits, gains),
             Codes::Wide(c) => self.synthesize_splits(c, f, splits, gains),
         }

@@ -253,12 +253,9 @@ mod tests {
             }
         }
         // An isolated vertex keeps its value: no stencil.
-        let lone = Mesh::from_triangles(
-            &[DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z],
-            &[[0, 1, 2]],
-        )
-        .unwrap()
-        .mesh;
+        let lone = Mesh::from_triangles(&[DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z], &[[0, 1, 2]])
+            .unwrap()
+            .mesh;
         let iso = lone.vertices().find(|&v| lone.is_isolated(v)).unwrap();
         let mut st = vec![(iso, 1.0)];
         assert!(!MeanCurvatureStep::default().stencil(&lone, &lone.positions(), iso, &mut st));
