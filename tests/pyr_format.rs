@@ -194,7 +194,8 @@ fn bit_flips_are_errors_or_harmless() {
     let original = format::decode(&bytes).unwrap().input;
     for i in 0..bytes.len() {
         // One bit per byte, varying which, keeps the test short.
-        for bit in [i % 8] {
+        {
+            let bit = i % 8;
             let mut b = bytes.clone();
             b[i] ^= 1 << bit;
             if let Ok(d) = format::decode(&b) {
