@@ -238,3 +238,36 @@ fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
         "500",
     ]));
 }
+
+#[test]
+fn the_relaxation_is_recorded_and_a_different_one_is_refused() {
+    let mesh = data("joint.ply");
+    let pyr = scratch("joint-mcm.pyr");
+    ok(&meshpyr(&[
+        "-q", "build", &mesh, "-o", &pyr, "--relax", "mcm",
+    ]));
+    // The file's operator is used without being asked for, like the mesh with --relax mcm.
+    let (a, b, c) = (
+        scratch("jm-a.ply"),
+        scratch("jm-b.ply"),
+        scratch("jm-c.ply"),
+    );
+    let filter = |input: &str, out: &str, relax: &[&str]| {
+        let mut args = vec!["-q", "filter", input, "-o", out, "--enhance", "30:221=2"];
+        args.extend_from_slice(relax);
+        meshpyr(&args)
+    };
+    ok(&filter(&mesh, &a, &["--relax", "mcm"]));
+    ok(&filter(&pyr, &b, &[]));
+    ok(&filter(&mesh, &c, &[]));
+    let ra = std::fs::read(&a).unwrap();
+    assert!(ra == std::fs::read(&b).unwrap());
+    assert!(
+        ra != std::fs::read(&c).unwrap(),
+        "mcm and second-difference differ"
+    );
+    fails_with(
+        &filter(&pyr, &c, &["--relax", "second-difference"]),
+        "was built with --relax mcm",
+    );
+}
