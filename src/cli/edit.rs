@@ -68,6 +68,13 @@ pub struct EditArgs {
 
 /// Runs `meshpyr edit`.
 pub fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
+    let writes_pyr = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pyr"));
+    if !writes_pyr {
+        super::check_mesh_output(&args.output)?;
+    }
     if !(args.radius > 0.0 && args.radius.is_finite()) {
         anyhow::bail!("--radius must be a positive number, got {}", args.radius);
     }
@@ -92,11 +99,7 @@ pub fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
         .collect();
     let gains = args.filters.filter().resolve(p.surface_area());
     let out = p.edit(args.level, &handles, &gains)?;
-    let is_pyr = args
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("pyr"));
-    if is_pyr {
+    if writes_pyr {
         let positions = scan.to_input_positions(&out);
         super::build::save_edited(&scan, positions, spec, &args.output)?;
     } else {

@@ -174,6 +174,7 @@ pub struct FilterArgs {
 
 /// Runs `meshpyr filter`.
 pub fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
+    super::check_mesh_output(&args.output)?;
     let filter = args.filters.filter();
     if filter.bands.is_empty() {
         anyhow::bail!(
