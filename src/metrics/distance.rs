@@ -206,8 +206,9 @@ impl TriangleBvh {
             point: p,
             distance_squared: f64::INFINITY,
         };
-        // Depth is O(log n) for a median split; 64 covers any mesh that fits in memory.
-        let mut stack: Vec<(u32, f64)> = Vec::with_capacity(64);
+        // The stack holds at most two entries per tree level, and a median split has about
+        // log2(n/4) levels, so 64 inline entries cover any mesh without a heap allocation.
+        let mut stack: smallvec::SmallVec<[(u32, f64); 64]> = smallvec::SmallVec::new();
         stack.push((0, self.nodes[0].distance_squared(p)));
         while let Some((ni, nd)) = stack.pop() {
             // `>` rather than `>=`: an equally distant box may hold a smaller triangle index.

@@ -236,32 +236,43 @@ impl Reference {
 }
 
 fn one_sided(target: &TriangleBvh, samples: Surface<'_>) -> f64 {
+    // Each sample once: the vertices some triangle uses, the midpoint of every distinct
+    // edge, and every centroid (visiting them per face would query vertices six times).
     let tris = samples.triangles;
-    let per_face: Vec<f64> = (0..tris.len())
-        .into_par_iter()
-        .map(|t| {
+    let mut used = vec![false; samples.positions.len()];
+    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(3 * tris.len());
+    for t in tris {
+        for k in 0..3 {
+            used[t[k] as usize] = true;
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            edges.push((a.min(b), a.max(b)));
+        }
+    }
+    edges.sort_unstable();
+    edges.dedup();
+    let p = samples.positions;
+    let points: Vec<DVec3> = (0..p.len())
+        .filter(|&i| used[i])
+        .map(|i| p[i])
+        .chain(
+            edges
+                .iter()
+                .map(|&(a, b)| (p[a as usize] + p[b as usize]) * 0.5),
+        )
+        .chain((0..tris.len()).map(|t| {
             let [a, b, c] = samples.corners(t);
-            // Each edge midpoint and vertex is visited once per incident face; the repeats
-            // cost a little time and change nothing in a maximum.
-            [
-                a,
-                b,
-                c,
-                (a + b) * 0.5,
-                (b + c) * 0.5,
-                (c + a) * 0.5,
-                (a + b + c) / 3.0,
-            ]
-            .into_iter()
-            .map(|p| {
-                target
-                    .closest(p)
-                    .map_or(f64::INFINITY, |c| c.distance_squared)
-            })
-            .fold(0.0, f64::max)
+            (a + b + c) / 3.0
+        }))
+        .collect();
+    let d2: Vec<f64> = points
+        .par_iter()
+        .map(|&q| {
+            target
+                .closest(q)
+                .map_or(f64::INFINITY, |c| c.distance_squared)
         })
         .collect();
-    per_face.iter().copied().fold(0.0, f64::max).sqrt()
+    d2.iter().copied().fold(0.0, f64::max).sqrt()
 }
 
 /// The result of [`compare`]. `*_rel` values are divided by the reference's bounding-box
