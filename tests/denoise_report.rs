@@ -94,6 +94,7 @@ fn methods() -> Vec<Method> {
             TAUBIN_COUNTS,
             taubin(Weights::Cotangent),
         ),
+        m("implicit MCF, dt = 0.1 L²", MCF_COUNTS, mcf(0.1)),
         m("implicit MCF, dt = 0.25 L²", MCF_COUNTS, mcf(0.25)),
         m("implicit MCF, dt = 1 L²", MCF_COUNTS, mcf(1.0)),
         m("implicit MCF, dt = 4 L²", MCF_COUNTS, mcf(4.0)),
@@ -178,7 +179,8 @@ fn denoise_sweep_table() {
         for method in &methods {
             let b = sweep(&reference, &noisy, method);
             let note = b.failed.map_or(String::new(), |(i, e)| {
-                format!(" — stopped at iteration {i}: {e}")
+                eprintln!("{}: stopped at iteration {i}: {e}", method.name);
+                format!(" (solver failed at iteration {i})")
             });
             println!(
                 "| {}{} | {:.4} ({}) | {:.3e} ({:.3} L) | {:.3e} ({:.3} L) ({}) |",
