@@ -41,6 +41,10 @@ fn json_has_every_key_and_consistent_values() {
     // Noise of 0.2 L along the normal: E_v is the RMS displacement (README: 0.00408).
     let e_v = get("e_v");
     assert!((e_v - 0.00408).abs() < 2e-4, "{e_v}");
+    // Brute-force values of the Python reference implementation (E_v, E_n of algorithms.md §5
+    // with Ericson's point-triangle distance over all triangles) on the same files.
+    assert!((e_v - 0.004103968731742834).abs() < 1e-12, "{e_v}");
+    assert!((get("e_n") - 0.39413491163288983).abs() < 1e-10, "{v}");
     same(get("e_v_rel"), e_v / diag);
     same(get("e_v_over_l"), e_v / l);
     assert_eq!(get("e_n_rel"), get("e_n"));
@@ -67,6 +71,25 @@ fn identical_meshes_give_zero_and_hausdorff_is_symmetric() {
         ab["hausdorff_result_to_reference"],
         ba["hausdorff_reference_to_result"]
     );
+}
+
+#[test]
+fn json_is_byte_identical_across_thread_counts() {
+    let run = |threads: &str| {
+        let o = Command::new(env!("CARGO_BIN_EXE_meshpyr"))
+            .env("RAYON_NUM_THREADS", threads)
+            .arg("compare")
+            .arg(data("fandisk_noise_i010.ply"))
+            .arg(data("fandisk.ply"))
+            .arg("--json")
+            .output()
+            .unwrap();
+        assert!(o.status.success());
+        o.stdout
+    };
+    let one = run("1");
+    assert_eq!(one, run("2"));
+    assert_eq!(one, run("5"));
 }
 
 #[test]
