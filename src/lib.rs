@@ -3,8 +3,9 @@
 //! A multiresolution mesh editing engine built on a progressive-mesh hierarchy.
 //!
 //! Modules, one concept each: [`mesh`] (file-level polygons and the half-edge mesh),
-//! [`io`] (OBJ/PLY/OFF/STL), [`pm`] (the progressive mesh), [`relax`] (relaxation operators), and [`cli`] (the `meshpyr`
-//! command line).
+//! [`io`] (OBJ/PLY/OFF/STL), [`pm`] (the progressive mesh), [`relax`] (relaxation operators),
+//! [`smooth`] (denoising), [`metrics`] (error metrics and curvature), and [`cli`] (the
+//! `meshpyr` command line).
 #![warn(missing_docs)]
 
 pub mod cli;
@@ -18,4 +19,5 @@ pub mod progress;
 pub mod pyramid;
 pub mod relax;
 pub mod render;
+pub mod smooth;
 pub mod subdiv;

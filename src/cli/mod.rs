@@ -2,6 +2,7 @@
 //! with a clap `Args` struct and a `run` function.
 
 mod build;
+mod compare;
 mod convert;
 mod demo;
 mod edit;
@@ -9,6 +10,7 @@ mod extract;
 mod filter;
 mod info;
 mod simplify;
+mod smooth;
 mod spectrum;
 mod subdivide;
 
@@ -97,6 +99,10 @@ enum Command {
     Build(build::BuildArgs),
     /// Write a level of a .pyr file (the finest: the original mesh, exactly) as a mesh file.
     Extract(extract::ExtractArgs),
+    /// Denoise a mesh (Taubin λ|μ or implicit mean-curvature flow), keeping its vertex layout.
+    Smooth(smooth::SmoothArgs),
+    /// Error of a processed mesh against a reference: E_v, E_n, Hausdorff.
+    Compare(compare::CompareArgs),
 }
 
 fn run(command: Command, global: &Global) -> anyhow::Result<()> {
@@ -111,6 +117,8 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
         Command::Edit(a) => edit::run(a, global),
         Command::Build(a) => build::run(a, global),
         Command::Extract(a) => extract::run(a, global),
+        Command::Smooth(a) => smooth::run(a, global),
+        Command::Compare(a) => compare::run(a, global),
     }
 }
 

@@ -163,6 +163,31 @@ pub fn cotangent_stiffness(
     }
 }
 
+/// Clamps negative edge weights (positive off-diagonal entries of L, on edges whose opposite
+/// angles sum to more than π) to zero and restores zero row sums. The result is a weakly
+/// diagonally dominant M-matrix, so `M + αL` is positive definite for any α ≥ 0 even where the
+/// cotangent clamp of needle triangles has made the exact stiffness slightly indefinite.
+/// Returns the number of entries clamped (each edge counts twice).
+pub fn clamp_negative_weights(stiffness: &mut SymmetricCsr) -> usize {
+    let mut clamped = 0;
+    for i in 0..stiffness.n() {
+        let (s, e) = (
+            stiffness.row_start[i] as usize,
+            stiffness.row_start[i + 1] as usize,
+        );
+        let mut diag = 0.0;
+        for v in &mut stiffness.val[s + 1..e] {
+            if *v > 0.0 {
+                *v = 0.0;
+                clamped += 1;
+            }
+            diag -= *v;
+        }
+        stiffness.val[s] = diag;
+    }
+    clamped
+}
+
 /// The system matrix `M + α L` (`alpha = 1` when L already carries the coefficient).
 ///
 /// Rows whose diagonal is not positive (an isolated vertex, or a vertex whose triangles are
@@ -248,6 +273,26 @@ mod tests {
         let l3 = cotangent_stiffness(&m, &p, Some(&[3.0; 4]));
         for (a, b) in l1.val.iter().zip(&l3.val) {
             assert!((3.0 * a - b).abs() < 1e-14);
+        }
+    }
+
+    #[test]
+    fn clamping_removes_negative_weights_and_keeps_zero_row_sums() {
+        // An obtuse fan: the edge 0-1 is opposite two angles of about 150 degrees.
+        let p = vec![
+            DVec3::new(0.0, 0.0, 0.0),
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.5, 0.1, 0.0),
+            DVec3::new(0.5, -0.1, 0.0),
+        ];
+        let t = [[0, 1, 2], [1, 0, 3]];
+        let mut l = cotangent_stiffness(&t, &p, None);
+        assert!(l.val.iter().any(|&v| v > 0.0 && v != l.val[0]));
+        assert_eq!(clamp_negative_weights(&mut l), 2);
+        for i in 0..l.n() {
+            let (s, e) = (l.row_start[i] as usize, l.row_start[i + 1] as usize);
+            assert!(l.val[s + 1..e].iter().all(|&v| v <= 0.0));
+            assert!(l.val[s..e].iter().sum::<f64>().abs() < 1e-14);
         }
     }
 

@@ -1,0 +1,46 @@
+//! Mesh smoothing (denoising) of noisy scans, keeping the connectivity: every smoother is a
+//! plain function over a [`Mesh`](crate::mesh::Mesh) that returns new positions indexed like
+//! [`Mesh::positions`](crate::mesh::Mesh::positions) (vertex slot order).
+//!
+//! Baselines from the comparisons of Ohtake–Belyaev–Seidel 2002 (algorithms.md §2, §5):
+//! - [`taubin`]: λ|μ smoothing with uniform, inverse-edge-length or cotangent weights;
+//! - [`mcf`]: implicit mean-curvature flow (Desbrun et al. 1999).
+//!
+//! Measure results with [`crate::metrics::error`] (E_v, E_n, Hausdorff).
+
+pub mod mcf;
+pub mod taubin;
+#[cfg(test)]
+mod testutil;
+
+pub use mcf::{McfOptions, implicit_mcf};
+pub use taubin::{TaubinOptions, Weights, taubin_smoothing};
+
+/// What the smoothers do with boundary vertices (those on a hole's rim).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Boundary {
+    /// Boundary vertices stay where they are. Safe on open scans (the rim does not shrink), at
+    /// the price of leaving noise on the rim itself.
+    #[default]
+    Fixed,
+    /// Boundary vertices move too: Taubin smooths them along the boundary curve (only their
+    /// two boundary neighbours count), MCF uses natural boundary conditions (the rim follows
+    /// the flow of the surface). Rims shrink slowly, as any curve smoothing does.
+    Smooth,
+}
+
+/// Why smoothing could not run.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SmoothError {
+    /// A parameter is out of its range.
+    #[error("{0}")]
+    InvalidParameter(String),
+    /// The linear solve of an implicit step failed.
+    #[error("linear solve of iteration {iteration}: {reason}")]
+    Solver {
+        /// 1-based iteration.
+        iteration: usize,
+        /// What the solver reported.
+        reason: String,
+    },
+}
