@@ -18,4 +18,5 @@ pub mod progress;
 pub mod pyramid;
 pub mod relax;
 pub mod render;
+pub mod smooth;
 pub mod subdiv;
