@@ -9,6 +9,7 @@ mod extract;
 mod filter;
 mod info;
 mod simplify;
+mod smooth;
 mod spectrum;
 mod subdivide;
 
@@ -84,6 +85,8 @@ enum Command {
     Filter(filter::FilterArgs),
     /// Plot the detail energy per band of levels.
     Spectrum(spectrum::SpectrumArgs),
+    /// Denoise: adaptive or anisotropic normal filtering with vertex fitting (Ohtake et al.).
+    Smooth(smooth::SmoothArgs),
     /// Multiresolution edit: move a coarse level, resynthesise with the details.
     Edit(edit::EditArgs),
     /// Build the hierarchy and save it with the exact input as a compact .pyr file.
@@ -101,6 +104,7 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
         Command::Subdivide(a) => subdivide::run(a, global),
         Command::Filter(a) => filter::run(a, global),
         Command::Spectrum(a) => spectrum::run(a, global),
+        Command::Smooth(a) => smooth::run(a, global),
         Command::Edit(a) => edit::run(a, global),
         Command::Build(a) => build::run(a, global),
         Command::Extract(a) => extract::run(a, global),
