@@ -374,3 +374,41 @@ fn cli_errors_are_one_line() {
     }
     assert!(!out.exists());
 }
+
+#[test]
+fn filter_with_normal_relaxation_reproduces_and_filters_the_fandisk() {
+    let input = data("fandisk.ply");
+    let before = meshpyr::io::read_mesh(&input).expect("readable");
+    let run = |extra: &[&str], name: &str| {
+        let out = tmp(name);
+        let o = bin()
+            .args(["filter", "--quiet", "--relax", "normal"])
+            .args(extra)
+            .arg(&input)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .expect("runs");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        meshpyr::io::read_mesh(&out).expect("readable output")
+    };
+    let low = run(&["--lowpass", "1000"], "fandisk-low.ply");
+    assert_eq!(low.n_vertices(), before.n_vertices());
+    assert!(before.faces().eq(low.faces()));
+    let moved = before
+        .positions
+        .iter()
+        .zip(&low.positions)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f64::max);
+    assert!(moved > 0.0, "the low-pass changes the shape");
+    // Unit gains (a band with gain 1) give the input back.
+    let same = run(&["--gain", "1000:2000=1"], "fandisk-unit.ply");
+    let err = before
+        .positions
+        .iter()
+        .zip(&same.positions)
+        .map(|(a, b)| (*a - *b).length())
+        .fold(0.0, f64::max);
+    assert!(err < 1e-6, "{err}");
+}

@@ -20,7 +20,8 @@ pub enum RelaxKind {
     SecondDifference,
     /// One Jacobi step of implicit mean-curvature motion (cotangent weights, lumped mass).
     Mcm,
-    /// Ohtake's normal-adaptive operator (not available yet).
+    /// 1-ring average with weights that fall off with the vertex-normal difference, so the
+    /// prediction does not average across creases.
     Normal,
 }
 
@@ -30,9 +31,7 @@ impl RelaxKind {
         match self {
             RelaxKind::SecondDifference => Ok(Box::new(SecondDifference::default())),
             RelaxKind::Mcm => Ok(Box::new(crate::subdiv::MeanCurvatureStep::default())),
-            RelaxKind::Normal => anyhow::bail!(
-                "--relax normal: the normal-adaptive relaxation operator is not available yet (it lands with the denoising work); use --relax second-difference or --relax mcm"
-            ),
+            RelaxKind::Normal => Ok(Box::new(crate::relax::NormalAdaptive::default())),
         }
     }
 }
