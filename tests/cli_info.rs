@@ -104,6 +104,41 @@ fn errors_are_one_line_and_non_zero() {
 }
 
 #[test]
+fn output_errors_name_the_output_once_and_come_before_the_work() {
+    let input = data("joint.ply");
+    // A missing directory: the message names the requested file, not a temporary one, and
+    // says the reason once.
+    let target = scratch("no-such-dir").join("out.ply");
+    let out = meshpyr(&[
+        "simplify",
+        input.as_str(),
+        "-o",
+        target.to_str().unwrap(),
+        "--ratio",
+        "0.5",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains(target.to_str().unwrap()), "{err}");
+    assert!(!err.contains(".tmp"), "{err}");
+    assert_eq!(err.matches("No such file").count(), 1, "{err}");
+    // An unknown output extension fails before the pyramid is built (nothing else printed).
+    let out = meshpyr(&[
+        "filter",
+        input.as_str(),
+        "-o",
+        scratch("out.xyz").to_str().unwrap(),
+        "--lowpass",
+        "50",
+    ]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("unknown mesh format"), "{err}");
+}
+
+#[test]
 fn failed_convert_leaves_existing_output_alone() {
     let target = scratch("keep-me.ply");
     std::fs::write(&target, b"precious").unwrap();

@@ -77,6 +77,34 @@ fn build_then_extract_gives_back_the_file_byte_for_byte() {
 }
 
 #[test]
+fn dirty_scans_build_and_extract_exactly() {
+    // Non-manifold edges whose repair needs vertices detached (multi-edges).
+    for name in ["snowden_lo.ply", "back_to_back_scad.stl"] {
+        let pyr = scratch(&format!("{name}.pyr"));
+        let back = scratch(&format!("back-{name}"));
+        ok(&meshpyr(&["build", &data(name), "-o", &pyr]));
+        ok(&meshpyr(&["extract", &pyr, "-o", &back]));
+        let a = io::read_mesh(Path::new(&data(name))).unwrap();
+        let b = io::read_mesh(Path::new(&back)).unwrap();
+        assert_eq!(a.positions.len(), b.positions.len(), "{name}");
+        assert_eq!(
+            common::position_bits(&a),
+            common::position_bits(&b),
+            "{name}"
+        );
+        assert_eq!(a.face_indices, b.face_indices, "{name}");
+        ok(&meshpyr(&[
+            "filter",
+            &pyr,
+            "-o",
+            &scratch(&format!("f-{name}")),
+            "--lowpass",
+            "100",
+        ]));
+    }
+}
+
+#[test]
 fn attributes_survive_build_and_extract() {
     let src = scratch("rich.ply");
     io::write_mesh(Path::new(&src), &common::rich_mesh()).unwrap();
@@ -209,4 +237,37 @@ fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
         "--lowpass",
         "500",
     ]));
+}
+
+#[test]
+fn the_relaxation_is_recorded_and_a_different_one_is_refused() {
+    let mesh = data("joint.ply");
+    let pyr = scratch("joint-mcm.pyr");
+    ok(&meshpyr(&[
+        "-q", "build", &mesh, "-o", &pyr, "--relax", "mcm",
+    ]));
+    // The file's operator is used without being asked for, like the mesh with --relax mcm.
+    let (a, b, c) = (
+        scratch("jm-a.ply"),
+        scratch("jm-b.ply"),
+        scratch("jm-c.ply"),
+    );
+    let filter = |input: &str, out: &str, relax: &[&str]| {
+        let mut args = vec!["-q", "filter", input, "-o", out, "--enhance", "30:221=2"];
+        args.extend_from_slice(relax);
+        meshpyr(&args)
+    };
+    ok(&filter(&mesh, &a, &["--relax", "mcm"]));
+    ok(&filter(&pyr, &b, &[]));
+    ok(&filter(&mesh, &c, &[]));
+    let ra = std::fs::read(&a).unwrap();
+    assert!(ra == std::fs::read(&b).unwrap());
+    assert!(
+        ra != std::fs::read(&c).unwrap(),
+        "mcm and second-difference differ"
+    );
+    fails_with(
+        &filter(&pyr, &c, &["--relax", "second-difference"]),
+        "was built with --relax mcm",
+    );
 }

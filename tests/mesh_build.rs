@@ -272,6 +272,13 @@ proptest! {
                 prop_assert_eq!(&b.source.vertex_source[..m.n_vertices()],
                     &(0..m.n_vertices() as u32).collect::<Vec<_>>()[..]);
                 let _ = b.mesh.topology();
+                // The repaired mesh is expressible as a triangle list: rebuilding it from its
+                // own triangles changes nothing (the PM and .pyr files rely on this).
+                let (pos, tris) = b.mesh.to_triangles();
+                let again = Mesh::from_triangles(&pos, &tris)
+                    .map_err(|e| TestCaseError::fail(e.to_string()))?;
+                prop_assert!(!again.report.repaired_anything(), "{:?}", again.report);
+                prop_assert_eq!(again.mesh.n_vertices(), b.mesh.n_vertices());
             }
             Err(_) => prop_assert!(m.positions.iter().any(|p| !p.is_finite())),
         }

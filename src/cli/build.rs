@@ -9,7 +9,6 @@ use crate::format::{self, BuildInfo, RelaxationSpec};
 use crate::io;
 use crate::pm::{PmOptions, ProgressiveMesh};
 use crate::pyramid::ScanPyramid;
-use crate::relax::SecondDifference;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -22,18 +21,17 @@ pub struct BuildArgs {
     /// Output `.pyr` file.
     #[arg(short, long)]
     pub output: PathBuf,
-    /// Relaxation operator the pyramid is analysed with (recorded in the file).
+    /// Relaxation operator the pyramid is analysed with (recorded in the file; `filter`,
+    /// `spectrum` and `edit` use it).
     #[arg(long, value_enum, default_value_t = RelaxKind::SecondDifference)]
     pub relax: RelaxKind,
 }
 
 /// Runs `meshpyr build`.
 pub fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
-    // Only the second-difference operator exists; the others report that they do not.
-    args.relax.operator()?;
     let info = BuildInfo {
         pm_options: PmOptions::default(),
-        relaxation: RelaxationSpec::of(&SecondDifference::default()),
+        relaxation: args.relax.spec()?,
     };
     let input = io::read_mesh(&args.input)?;
     let start = Instant::now();
@@ -85,10 +83,14 @@ pub fn is_pyr_file(path: &Path) -> bool {
 }
 
 /// Loads a `.pyr` file and recomputes its pyramid (the relaxation recorded in the file).
-pub fn load_pyr_scan(path: &Path, global: &Global) -> anyhow::Result<ScanPyramid> {
+pub fn load_pyr_scan(
+    path: &Path,
+    global: &Global,
+) -> anyhow::Result<(ScanPyramid, RelaxationSpec)> {
     let start = Instant::now();
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     let data = format::decode(&bytes).with_context(|| format!("cannot load {}", path.display()))?;
+    let spec = data.info.relaxation;
     let loaded = start.elapsed().as_secs_f64();
     let bar = global.progress("analysis");
     let scan = data
@@ -105,7 +107,7 @@ pub fn load_pyr_scan(path: &Path, global: &Global) -> anyhow::Result<ScanPyramid
         loaded,
         start.elapsed().as_secs_f64() - loaded
     ));
-    Ok(scan)
+    Ok((scan, spec))
 }
 
 /// Saves `scan` with new input positions as a `.pyr` file (same hierarchy, new originals).

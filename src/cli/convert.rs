@@ -32,6 +32,7 @@ pub struct ConvertArgs {
 
 /// Runs `meshpyr convert`.
 pub fn run(args: ConvertArgs, global: &Global) -> anyhow::Result<()> {
+    super::check_mesh_output(&args.output)?;
     let mesh = io::read_mesh(&args.input)?;
     let opts = WriteOptions {
         ply_encoding: match args.ply_encoding {

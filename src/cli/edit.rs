@@ -60,17 +60,25 @@ pub struct EditArgs {
     /// Filters applied while resynthesising (optional).
     #[command(flatten)]
     pub filters: FilterOptions,
-    /// Relaxation operator used for the prediction.
-    #[arg(long, value_enum, default_value_t = RelaxKind::SecondDifference)]
-    pub relax: RelaxKind,
+    /// Relaxation operator used for the prediction (default second-difference; a .pyr input
+    /// uses the one it was built with).
+    #[arg(long, value_enum)]
+    pub relax: Option<RelaxKind>,
 }
 
 /// Runs `meshpyr edit`.
 pub fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
+    let writes_pyr = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pyr"));
+    if !writes_pyr {
+        super::check_mesh_output(&args.output)?;
+    }
     if !(args.radius > 0.0 && args.radius.is_finite()) {
         anyhow::bail!("--radius must be a positive number, got {}", args.radius);
     }
-    let scan = load_pyramid(&args.input, args.relax, global)?;
+    let (scan, spec) = load_pyramid(&args.input, args.relax, global)?;
     let p = &scan.pyramid;
     if args.level < p.n_base_vertices() || args.level > p.n_vertices() {
         anyhow::bail!(
@@ -91,16 +99,9 @@ pub fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
         .collect();
     let gains = args.filters.filter().resolve(p.surface_area());
     let out = p.edit(args.level, &handles, &gains)?;
-    let is_pyr = args
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("pyr"));
-    if is_pyr {
+    if writes_pyr {
         let positions = scan.to_input_positions(&out);
-        let relaxation = crate::format::RelaxationSpec::SecondDifference {
-            degenerate_area_ratio: crate::relax::SecondDifference::default().degenerate_area_ratio,
-        };
-        super::build::save_edited(&scan, positions, relaxation, &args.output)?;
+        super::build::save_edited(&scan, positions, spec, &args.output)?;
     } else {
         io::write_mesh(&args.output, &scan.output_mesh(&out))?;
     }

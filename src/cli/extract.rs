@@ -23,6 +23,7 @@ pub struct ExtractArgs {
 
 /// Runs `meshpyr extract`.
 pub fn run(args: ExtractArgs, global: &Global) -> anyhow::Result<()> {
+    super::check_mesh_output(&args.output)?;
     let name = args.input.display().to_string();
     let bytes = std::fs::read(&args.input).with_context(|| format!("cannot read {name}"))?;
     let level =

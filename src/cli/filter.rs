@@ -5,6 +5,7 @@
 //! a [`ScanPyramid`] with a progress bar.
 
 use super::{BarProgress, Global};
+use crate::format::RelaxationSpec;
 use crate::io;
 use crate::pyramid::{Filter, GainBand, LevelSpec, PyramidOptions, ScanPyramid};
 use crate::relax::{Relaxation, SecondDifference};
@@ -26,31 +27,56 @@ pub enum RelaxKind {
 }
 
 impl RelaxKind {
-    /// The operator, or an error saying it cannot drive the pyramid.
-    pub fn operator(self) -> anyhow::Result<Box<dyn Relaxation>> {
+    /// The operator's recordable description, or an error saying it cannot drive the pyramid.
+    pub fn spec(self) -> anyhow::Result<RelaxationSpec> {
         match self {
-            RelaxKind::SecondDifference => Ok(Box::new(SecondDifference::default())),
-            RelaxKind::Mcm => Ok(Box::new(crate::subdiv::MeanCurvatureStep::default())),
-            RelaxKind::Normal => Ok(Box::new(crate::relax::NormalAdaptive::default())),
+            RelaxKind::SecondDifference => Ok(RelaxationSpec::of(&SecondDifference::default())),
+            RelaxKind::Mcm => Ok(RelaxationSpec::of_mean_curvature(
+                &crate::subdiv::MeanCurvatureStep::default(),
+            )),
+            RelaxKind::Normal => Ok(RelaxationSpec::of_normal_adaptive(
+                &crate::relax::NormalAdaptive::default(),
+            )),
         }
     }
 }
 
-/// Reads `path` and builds its progressive mesh and pyramid, reporting progress and timing.
-/// A `.pyr` file (detected by its signature) is loaded instead, with the relaxation recorded
-/// in it, and its details are recomputed.
-pub fn load_pyramid(path: &Path, relax: RelaxKind, global: &Global) -> anyhow::Result<ScanPyramid> {
-    let relaxation = relax.operator()?;
+/// Reads `path` and builds its progressive mesh and pyramid, reporting progress and timing;
+/// returns it with the relaxation it was analysed with. `relax` defaults to the
+/// second-difference operator. A `.pyr` file (detected by its signature) is loaded instead and
+/// analysed with the relaxation recorded in it; asking for another one is an error.
+pub fn load_pyramid(
+    path: &Path,
+    relax: Option<RelaxKind>,
+    global: &Global,
+) -> anyhow::Result<(ScanPyramid, RelaxationSpec)> {
+    let wanted = relax.map(RelaxKind::spec).transpose()?;
     if super::build::is_pyr_file(path) {
-        return super::build::load_pyr_scan(path, global);
+        let (scan, spec) = super::build::load_pyr_scan(path, global)?;
+        if let Some(w) = wanted
+            && w != spec
+        {
+            anyhow::bail!(
+                "{} was built with --relax {}; rebuild it with `meshpyr build --relax {}` to use that operator",
+                path.display(),
+                spec.name(),
+                w.name()
+            );
+        }
+        return Ok((scan, spec));
     }
+    let spec = match wanted {
+        Some(s) => s,
+        None => RelaxKind::SecondDifference.spec()?,
+    };
     let input = io::read_mesh(path)?;
-    build_pyramid(
+    let scan = build_pyramid(
         input,
-        relaxation.as_ref(),
+        spec.operator().as_ref(),
         &path.display().to_string(),
         global,
-    )
+    )?;
+    Ok((scan, spec))
 }
 
 /// Builds the pyramid of an already-read mesh; `name` is used in messages.
@@ -141,20 +167,22 @@ pub struct FilterArgs {
     pub output: PathBuf,
     #[command(flatten)]
     pub filters: FilterOptions,
-    /// Relaxation operator used for the prediction.
-    #[arg(long, value_enum, default_value_t = RelaxKind::SecondDifference)]
-    pub relax: RelaxKind,
+    /// Relaxation operator used for the prediction (default second-difference; a .pyr input
+    /// uses the one it was built with).
+    #[arg(long, value_enum)]
+    pub relax: Option<RelaxKind>,
 }
 
 /// Runs `meshpyr filter`.
 pub fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
+    super::check_mesh_output(&args.output)?;
     let filter = args.filters.filter();
     if filter.bands.is_empty() {
         anyhow::bail!(
             "no filter given: use --lowpass N, --stopband A:B, --enhance A:B=G or --gain A:B=G"
         );
     }
-    let scan = load_pyramid(&args.input, args.relax, global)?;
+    let (scan, _) = load_pyramid(&args.input, args.relax, global)?;
     let start = Instant::now();
     let gains = filter.resolve(scan.pyramid.surface_area());
     let out = scan.pyramid.synthesize(&gains);
@@ -183,6 +211,19 @@ pub fn demo_filters(
 
     let relaxation = SecondDifference::default();
     let scan = build_pyramid(input, &relaxation, stem, global)?;
+    // The hierarchy, saved: `filter`, `spectrum` and `edit` take it instead of the mesh.
+    let info = crate::format::BuildInfo {
+        pm_options: crate::pm::PmOptions::default(),
+        relaxation: RelaxationSpec::of(&relaxation),
+    };
+    let (bytes, sizes) = crate::format::encode(&scan.input, &scan.pm, &info)?;
+    let pyr_path = dir.join(format!("{stem}.pyr"));
+    io::write_atomic(&pyr_path, &bytes)?;
+    global.say(format_args!(
+        "saved the hierarchy: wrote {} ({:.1} bytes/vertex)",
+        pyr_path.display(),
+        sizes.total as f64 / scan.input.n_vertices().max(1) as f64
+    ));
     let pyr = &scan.pyramid;
     let v = LevelSpec::Vertices;
     let experiments = [

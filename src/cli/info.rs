@@ -147,6 +147,7 @@ pub fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
         ("vertex copies added", r.split_vertices),
         ("triangles re-oriented", r.flipped_faces),
         ("edges cut to orient", r.orientation_cuts),
+        ("vertices detached (multi-edges)", r.detached_vertices),
         ("unreferenced vertices (kept)", r.unreferenced_vertices),
     ];
     let done: Vec<String> = repairs

@@ -49,6 +49,13 @@ impl Global {
     }
 }
 
+/// Fails before any work when `path` has no mesh format we can write (the extension decides),
+/// so a typo in `-o` does not cost a whole run.
+pub fn check_mesh_output(path: &std::path::Path) -> anyhow::Result<()> {
+    crate::io::MeshFormat::from_path(path)?;
+    Ok(())
+}
+
 /// Adapts an indicatif bar to the library's [`crate::progress::Progress`].
 pub struct BarProgress<'a>(pub &'a ProgressBar);
 

@@ -36,6 +36,7 @@ pub struct SimplifyArgs {
 
 /// Runs `meshpyr simplify`.
 pub fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
+    super::check_mesh_output(&args.output)?;
     let target = match (args.faces, args.ratio, args.error) {
         (Some(f), _, _) => SimplifyTarget::Faces(f),
         (_, Some(r), _) => SimplifyTarget::Ratio(r),

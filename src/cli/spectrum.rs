@@ -16,14 +16,15 @@ pub struct SpectrumArgs {
     /// Also write the table as CSV.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
-    /// Relaxation operator used for the prediction.
-    #[arg(long, value_enum, default_value_t = RelaxKind::SecondDifference)]
-    pub relax: RelaxKind,
+    /// Relaxation operator used for the prediction (default second-difference; a .pyr input
+    /// uses the one it was built with).
+    #[arg(long, value_enum)]
+    pub relax: Option<RelaxKind>,
 }
 
 /// Runs `meshpyr spectrum`.
 pub fn run(args: SpectrumArgs, global: &Global) -> anyhow::Result<()> {
-    let scan = load_pyramid(&args.input, args.relax, global)?;
+    let (scan, _) = load_pyramid(&args.input, args.relax, global)?;
     let spectrum = scan.pyramid.spectrum();
     let png = spectrum.chart("input", &[]).encode_png()?;
     io::write_atomic(&args.output, &png)?;

@@ -85,6 +85,7 @@ pub struct SubdivideArgs {
 
 /// Runs `meshpyr subdivide`.
 pub fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
+    super::check_mesh_output(&args.output)?;
     let input = io::read_mesh(&args.input)?;
     let built = Mesh::from_polygons(&input)
         .with_context(|| format!("building a mesh from {}", args.input.display()))?;

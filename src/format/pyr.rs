@@ -49,25 +49,85 @@ pub enum RelaxationSpec {
         /// [`SecondDifference::degenerate_area_ratio`].
         degenerate_area_ratio: f64,
     },
+    /// One Jacobi step of implicit mean-curvature motion
+    /// ([`MeanCurvatureStep`](crate::subdiv::MeanCurvatureStep)).
+    MeanCurvature {
+        /// [`MeanCurvatureStep::width`](crate::subdiv::MeanCurvatureStep::width).
+        width: f64,
+        /// [`MeanCurvatureStep::damping`](crate::subdiv::MeanCurvatureStep::damping).
+        damping: f64,
+    },
+    /// The normal-adaptive 1-ring average ([`NormalAdaptive`](crate::relax::NormalAdaptive)).
+    NormalAdaptive {
+        /// [`NormalAdaptive::normal_scale`](crate::relax::NormalAdaptive::normal_scale).
+        normal_scale: f64,
+    },
 }
 
 impl RelaxationSpec {
     /// The operator.
-    pub fn operator(&self) -> SecondDifference {
+    pub fn operator(&self) -> Box<dyn crate::relax::Relaxation> {
         match *self {
             RelaxationSpec::SecondDifference {
                 degenerate_area_ratio,
-            } => SecondDifference {
+            } => Box::new(SecondDifference {
                 degenerate_area_ratio,
-            },
+            }),
+            RelaxationSpec::MeanCurvature { width, damping } => {
+                Box::new(crate::subdiv::MeanCurvatureStep { width, damping })
+            }
+            RelaxationSpec::NormalAdaptive { normal_scale } => {
+                Box::new(crate::relax::NormalAdaptive { normal_scale })
+            }
         }
     }
 
-    /// The spec of an operator.
+    /// The spec of a second-difference operator.
     pub fn of(op: &SecondDifference) -> Self {
         RelaxationSpec::SecondDifference {
             degenerate_area_ratio: op.degenerate_area_ratio,
         }
+    }
+
+    /// The spec of a mean-curvature step.
+    pub fn of_mean_curvature(op: &crate::subdiv::MeanCurvatureStep) -> Self {
+        RelaxationSpec::MeanCurvature {
+            width: op.width,
+            damping: op.damping,
+        }
+    }
+
+    /// The spec of a normal-adaptive operator.
+    pub fn of_normal_adaptive(op: &crate::relax::NormalAdaptive) -> Self {
+        RelaxationSpec::NormalAdaptive {
+            normal_scale: op.normal_scale,
+        }
+    }
+
+    /// The operator's command-line name (`second-difference`, `mcm`, `normal`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            RelaxationSpec::SecondDifference { .. } => "second-difference",
+            RelaxationSpec::MeanCurvature { .. } => "mcm",
+            RelaxationSpec::NormalAdaptive { .. } => "normal",
+        }
+    }
+
+    /// `None` when every option is in its valid range, else what is wrong (a file could hold
+    /// anything).
+    pub fn invalid(&self) -> Option<&'static str> {
+        let ok = match *self {
+            RelaxationSpec::SecondDifference {
+                degenerate_area_ratio,
+            } => (0.0..1.0).contains(&degenerate_area_ratio),
+            RelaxationSpec::MeanCurvature { width, damping } => {
+                width > 0.0 && width.is_finite() && damping > 0.0 && damping <= 1.0
+            }
+            RelaxationSpec::NormalAdaptive { normal_scale } => {
+                normal_scale > 0.0 && normal_scale.is_finite()
+            }
+        };
+        (!ok).then_some("relaxation options out of range")
     }
 }
 
@@ -130,7 +190,7 @@ impl PyrData {
     /// returns the whole scan.
     pub fn into_scan(self, progress: &dyn Progress) -> Result<ScanPyramid, PyramidError> {
         let op = self.info.relaxation.operator();
-        let pyramid = Pyramid::analyze(&self.pm, &op, progress)?;
+        let pyramid = Pyramid::analyze(&self.pm, op.as_ref(), progress)?;
         Ok(ScanPyramid {
             input: self.input,
             built: self.built,
@@ -622,6 +682,9 @@ fn read_meta(c: &Container<'_>) -> Result<Meta, FormatError> {
     }
     if meta.position_bits != 32 && meta.position_bits != 64 {
         return Err(corrupt(at, "position width must be 32 or 64 bits"));
+    }
+    if let Some(why) = meta.relaxation.invalid() {
+        return Err(corrupt(at, why));
     }
     if meta.splits_per_block == 0
         || meta

@@ -16,11 +16,11 @@ static COUNTER: AtomicU64 = AtomicU64::new(0);
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
     let io_err = |p: &Path| {
         let p = p.to_path_buf();
-        move |source| IoError::Io { path: p, source }
+        move |error| IoError::Io { path: p, error }
     };
     let file_name = path.file_name().ok_or_else(|| IoError::Io {
         path: path.to_path_buf(),
-        source: std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file path"),
+        error: std::io::Error::new(std::io::ErrorKind::InvalidInput, "not a file path"),
     })?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
@@ -47,12 +47,13 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempt < 100 => {
                     attempt += 1;
                 }
-                Err(e) => return Err(io_err(&tmp)(e)),
+                // Name the file the user asked for, not our temporary one.
+                Err(e) => return Err(io_err(path)(e)),
             }
         }
     };
     let result = write_sync(file, bytes)
-        .map_err(io_err(&tmp))
+        .map_err(io_err(path))
         .and_then(|()| fs::rename(&tmp, path).map_err(io_err(path)));
     if let Err(e) = result {
         let _ = fs::remove_file(&tmp);

@@ -165,12 +165,13 @@ impl fmt::Display for PathPrefix<'_> {
 #[derive(Debug, thiserror::Error)]
 pub enum IoError {
     /// The operating system refused a read, write, rename, ….
-    #[error("{}: {source}", path.display())]
+    #[error("{}: {error}", path.display())]
     Io {
         /// The file involved.
         path: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
+        /// The underlying error (part of the message, not a separate cause, so the one-line
+        /// report does not repeat it).
+        error: std::io::Error,
     },
     /// The file's content is malformed or unsupported.
     #[error("{}{location}{reason}", PathPrefix(path))]
@@ -274,9 +275,9 @@ pub(crate) fn err_invalid(format: MeshFormat, reason: impl Into<String>) -> IoEr
 /// Reads a mesh file; the format comes from the extension.
 pub fn read_mesh(path: &Path) -> Result<PolygonMesh, IoError> {
     let format = MeshFormat::from_path(path)?;
-    let bytes = std::fs::read(path).map_err(|source| IoError::Io {
+    let bytes = std::fs::read(path).map_err(|error| IoError::Io {
         path: path.to_path_buf(),
-        source,
+        error,
     })?;
     read_mesh_bytes(&bytes, format).map_err(|e| e.with_path(path))
 }

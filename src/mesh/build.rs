@@ -5,13 +5,17 @@
 //! 1. Polygons are fan-triangulated; triangles with a repeated vertex index are dropped.
 //!    Zero-area triangles are kept (they are counted).
 //! 2. Each undirected edge pairs at most two triangles. An edge with more (a non-manifold
-//!    edge) pairs the first triangle with the first later one of opposite direction (or the
-//!    second, if none), and the rest become boundary along that edge.
+//!    edge) pairs angular neighbours about the edge that run along it in opposite directions,
+//!    as many as possible, preferring pairs that bound one solid (so two solids touching
+//!    along an edge stay two closed surfaces); the rest become boundary along that edge.
 //! 3. Orientation is made consistent per connected component by a breadth-first walk from the
 //!    component's first triangle; the majority orientation wins. Where a component cannot be
 //!    oriented (a Möbius band) the offending edge is cut.
 //! 4. Every vertex whose triangles form more than one fan (a pinched vertex, or the endpoint of
 //!    a cut edge) gets one copy per extra fan, appended after the input's vertices.
+//! 5. If two distinct edges still join the same two vertices (possible around tangled
+//!    non-manifold edges), one endpoint is detached: all its edges are cut, giving one copy
+//!    per triangle. So the result can always be rebuilt from its own triangle list unchanged.
 //!
 //! Input vertices keep their slots `0..n` in input order (unreferenced ones stay, isolated);
 //! faces keep the order of the triangles they come from. [`SourceMap`] maps mesh vertices and
@@ -42,6 +46,10 @@ pub struct BuildReport {
     pub flipped_faces: usize,
     /// Edges cut because their two triangles could not be oriented consistently.
     pub orientation_cuts: usize,
+    /// Vertices detached into one copy per triangle because, after fan splitting, two distinct
+    /// edges still joined them to the same neighbour (a multi-edge, which a triangle list
+    /// cannot express). Their copies are counted in `split_vertices` too.
+    pub detached_vertices: usize,
     /// Input vertices no face refers to (kept, isolated).
     pub unreferenced_vertices: usize,
 }
@@ -309,6 +317,88 @@ const SHARED: u8 = 1;
 /// Per half-edge flag: its undirected edge has more than two triangles.
 const NON_MANIFOLD: u8 = 2;
 
+/// Step 3 of the build: one mesh vertex per fan. Walks each fan through paired edges: across
+/// the out-going half-edge c the next corner at the same vertex is next(mate(c)); across the
+/// incoming one, prev(c), it is mate(prev(c)). The fan holding a vertex's first corner keeps
+/// the input vertex; later fans get copies, appended in order of discovery. Returns the mesh
+/// vertex of every corner, the input vertex of every mesh vertex, and which input vertices
+/// are referenced.
+fn assign_fans(tris: &[[u32; 3]], mate: &[u32], nv: usize) -> (Vec<u32>, Vec<u32>, Vec<bool>) {
+    let nh = mate.len();
+    let from = |c: u32| tris[(c / 3) as usize][(c % 3) as usize];
+    let mut corner_vertex = vec![NONE; nh];
+    let mut vertex_source: Vec<u32> = (0..nv as u32).collect();
+    let mut seen = vec![false; nv];
+    for c0 in 0..nh as u32 {
+        if corner_vertex[c0 as usize] != NONE {
+            continue;
+        }
+        let v = from(c0);
+        let id = if seen[v as usize] {
+            vertex_source.push(v);
+            (vertex_source.len() - 1) as u32
+        } else {
+            seen[v as usize] = true;
+            v
+        };
+        corner_vertex[c0 as usize] = id;
+        let mut c = c0;
+        let mut closed = false;
+        while mate[c as usize] != NONE {
+            c = next_c(mate[c as usize]);
+            if c == c0 {
+                closed = true;
+                break;
+            }
+            corner_vertex[c as usize] = id;
+        }
+        if !closed {
+            let mut c = c0;
+            while mate[prev_c(c) as usize] != NONE {
+                c = mate[prev_c(c) as usize];
+                corner_vertex[c as usize] = id;
+            }
+        }
+    }
+    (corner_vertex, vertex_source, seen)
+}
+
+/// Mesh vertices to detach so that no two distinct edges join the same two vertices: for every
+/// vertex pair with more half-edges than one twin pair (or one boundary half-edge), its
+/// smaller endpoint. Sorted and deduplicated.
+fn multi_edge_vertices(
+    tris: &[[u32; 3]],
+    mate: &[u32],
+    corner_vertex: &[u32],
+    n_vertices: usize,
+) -> Vec<u32> {
+    let nh = mate.len();
+    let head = |c: u32| corner_vertex[next_c(c) as usize];
+    let tail = |c: u32| corner_vertex[c as usize];
+    debug_assert_eq!(nh, 3 * tris.len());
+    let (starts, items) = bucket(nh, n_vertices, |c| tail(c).min(head(c)));
+    let mut out = Vec::new();
+    let mut scratch: Vec<(u32, u32)> = Vec::new();
+    for lo in 0..n_vertices {
+        let b = &items[starts[lo] as usize..starts[lo + 1] as usize];
+        if b.len() < 2 {
+            continue;
+        }
+        scratch.clear();
+        scratch.extend(b.iter().map(|&c| (tail(c).max(head(c)), c)));
+        scratch.sort_unstable();
+        for group in scratch.chunk_by(|a, b| a.0 == b.0) {
+            let clean =
+                group.len() == 1 || (group.len() == 2 && mate[group[0].1 as usize] == group[1].1);
+            if !clean {
+                out.push(lo as u32);
+                break;
+            }
+        }
+    }
+    out
+}
+
 fn build_triangles(
     positions: &[DVec3],
     input_tris: &[[u32; 3]],
@@ -445,50 +535,12 @@ fn build_triangles(
     drop(state);
     let tris: &[[u32; 3]] = &tris;
 
-    // --- 3. one mesh vertex per fan. Walk each fan through paired edges: across the
-    // out-going half-edge c the next corner at the same vertex is next(mate(c)); across the
-    // incoming one, prev(c), it is mate(prev(c)). The fan holding a vertex's first corner
-    // keeps the input vertex; later fans get copies, appended in order of discovery.
-    let mut corner_vertex = vec![NONE; nh];
-    let mut vertex_source: Vec<u32> = (0..nv as u32).collect();
-    let mut seen = vec![false; nv];
-    for c0 in 0..nh as u32 {
-        if corner_vertex[c0 as usize] != NONE {
-            continue;
-        }
-        let v = from(tris, c0);
-        let id = if seen[v as usize] {
-            vertex_source.push(v);
-            (vertex_source.len() - 1) as u32
-        } else {
-            seen[v as usize] = true;
-            v
-        };
-        corner_vertex[c0 as usize] = id;
-        let mut c = c0;
-        let mut closed = false;
-        while mate[c as usize] != NONE {
-            c = next_c(mate[c as usize]);
-            if c == c0 {
-                closed = true;
-                break;
-            }
-            corner_vertex[c as usize] = id;
-        }
-        if !closed {
-            let mut c = c0;
-            while mate[prev_c(c) as usize] != NONE {
-                c = mate[prev_c(c) as usize];
-                corner_vertex[c as usize] = id;
-            }
-        }
-    }
-    report.unreferenced_vertices = seen.iter().filter(|s| !**s).count();
-    drop(seen);
-    report.split_vertices = vertex_source.len() - nv;
-    if report.split_vertices > 0 {
-        // Pinched vertices: split although no non-manifold or cut edge (unpaired but shared)
-        // touches them.
+    // --- 3. one mesh vertex per fan (see `assign_fans`).
+    let (mut corner_vertex, mut vertex_source, mut seen) = assign_fans(tris, &mate, nv);
+    if vertex_source.len() > nv {
+        // Pinched vertices (counted on the first fan split, so the count describes the input,
+        // not the detaching below): split although no non-manifold or cut edge (unpaired but
+        // shared) touches them.
         let mut split = vec![0u8; nv]; // 1 split, 2 split and touched by such an edge
         for &s in &vertex_source[nv..] {
             split[s as usize] = 1;
@@ -505,6 +557,38 @@ fn build_triangles(
         }
         report.non_manifold_vertices = split.iter().filter(|&&s| s == 1).count();
     }
+    // --- 3b. after fan splitting two distinct edges may still join the same two vertices (a
+    // multi-edge: e.g. two pairs of a non-manifold edge whose fans meet again around both
+    // endpoints). A half-edge mesh can hold that but a triangle list cannot express it, and
+    // every later stage (the PM's base mesh, the .pyr file) rebuilds from triangles. Detach
+    // one endpoint into one copy per triangle (unpair all its edges) and split fans again;
+    // each round removes pairings, so this ends.
+    loop {
+        let detach = multi_edge_vertices(tris, &mate, &corner_vertex, vertex_source.len());
+        if detach.is_empty() {
+            break;
+        }
+        report.detached_vertices += detach.len();
+        let mut marked = vec![false; vertex_source.len()];
+        for &u in &detach {
+            marked[u as usize] = true;
+        }
+        for c in 0..nh as u32 {
+            if marked[corner_vertex[c as usize] as usize] {
+                for e in [c, prev_c(c)] {
+                    let m = mate[e as usize];
+                    if m != NONE {
+                        mate[e as usize] = NONE;
+                        mate[m as usize] = NONE;
+                    }
+                }
+            }
+        }
+        (corner_vertex, vertex_source, seen) = assign_fans(tris, &mate, nv);
+    }
+    report.unreferenced_vertices = seen.iter().filter(|s| !**s).count();
+    drop(seen);
+    report.split_vertices = vertex_source.len() - nv;
     drop(flags);
 
     // --- 4. assemble. Handles are predicted with `fresh_key`: half-edge c is insertion c,

@@ -73,7 +73,8 @@ impl Pyramid {
 
         let mut f = signal.to_vec();
         let mut scratch = Scratch::default();
-        let mut stencil = Vec::new();
+        let mut stencils = Vec::new();
+        let mut stencil_lens = Vec::new();
         let mut touched: Vec<VertexId> = Vec::new();
         // PM vertex → its index in the current split's local table (u32::MAX: not in it).
         let mut local_of = vec![u32::MAX; geometry.len()];
@@ -130,16 +131,19 @@ impl Pyramid {
             }
             codes.push(touched.len() as u32);
             codes.push(survivor_local as u32);
-            for &j in &touched {
+            stencils.clear();
+            stencil_lens.clear();
+            relaxation.stencils(mesh, geometry, &touched, &mut stencils, &mut stencil_lens);
+            let mut next_stencil = 0;
+            for (&j, &len) in touched.iter().zip(&stencil_lens) {
                 let len_at = codes.len();
                 codes.extend([0, 0]);
-                if relaxation.stencil(mesh, geometry, j, &mut stencil) {
-                    for &(u, w) in &stencil {
-                        let x = local(u.slot(), &mut locals);
-                        codes.push(x);
-                        weights.push(w);
-                    }
+                for &(u, w) in &stencils[next_stencil..next_stencil + len] {
+                    let x = local(u.slot(), &mut locals);
+                    codes.push(x);
+                    weights.push(w);
                 }
+                next_stencil += len;
                 let mut first = None;
                 let fan_at = codes.len();
                 for h in mesh.outgoing(j) {

@@ -64,4 +64,29 @@ pub trait Relaxation {
         out.clear();
         false
     }
+
+    /// [`Relaxation::stencil`] for several vertices at once: appends the stencil of each of
+    /// `vertices` to `out` and its length to `lens` (`0` where `stencil` returns `false`).
+    /// Operators whose weights share work between neighbouring vertices (an edge's hinge
+    /// coefficients enter the stencils of all four of its flap vertices) override this to
+    /// compute that work once; the result must be bit-identical to calling `stencil` per
+    /// vertex.
+    fn stencils(
+        &self,
+        mesh: &Mesh,
+        geometry: &[DVec3],
+        vertices: &[VertexId],
+        out: &mut Vec<(VertexId, f64)>,
+        lens: &mut Vec<usize>,
+    ) {
+        let mut one = Vec::new();
+        for &v in vertices {
+            if self.stencil(mesh, geometry, v, &mut one) {
+                out.extend_from_slice(&one);
+                lens.push(one.len());
+            } else {
+                lens.push(0);
+            }
+        }
+    }
 }

@@ -89,8 +89,28 @@ fn apex_cotangents(pj1: DVec3, pj2: DVec3, pl: DVec3, min_double_area: f64) -> O
 impl SecondDifference {
     /// Coefficients of the interior edge of half-edge `h` as `([j1, j2, l1, l2], [c; 4])` with
     /// `j1 → j2` along `h`, or `None` for boundary and degenerate edges.
+    ///
+    /// The arithmetic always runs on the edge's half-edge of smaller slot and is permuted for
+    /// its twin, so both directions (and a cached copy, see [`Relaxation::stencils`]) give the
+    /// same bits.
     #[inline]
     fn edge_flap(
+        &self,
+        mesh: &Mesh,
+        geometry: &[DVec3],
+        h: HalfedgeId,
+    ) -> Option<([VertexId; 4], [f64; 4])> {
+        let t = mesh.twin(h);
+        if t.slot() < h.slot() {
+            let ([j1, j2, l1, l2], [c1, c2, d1, d2]) = self.canonical_flap(mesh, geometry, t)?;
+            return Some(([j2, j1, l2, l1], [c2, c1, d2, d1]));
+        }
+        self.canonical_flap(mesh, geometry, h)
+    }
+
+    /// [`Self::edge_flap`] evaluated along `h` itself.
+    #[inline]
+    fn canonical_flap(
         &self,
         mesh: &Mesh,
         geometry: &[DVec3],
@@ -117,6 +137,15 @@ impl SecondDifference {
     /// flap apexes across the link edges), from the parameter geometry `geometry[v.slot()]`.
     /// Returns `false` and leaves `out` empty when `i` has no usable edge (then `R f_i = f_i`).
     pub fn stencil(&self, mesh: &Mesh, geometry: &[DVec3], i: VertexId, out: &mut Stencil) -> bool {
+        self.stencil_with(mesh, i, out, |h| self.edge_flap(mesh, geometry, h))
+    }
+
+    /// The stencil of `i` with the flaps of its edges supplied by `flap` (direct or cached).
+    #[inline]
+    fn stencil_with<F>(&self, mesh: &Mesh, i: VertexId, out: &mut Stencil, mut flap: F) -> bool
+    where
+        F: FnMut(HalfedgeId) -> Option<([VertexId; 4], [f64; 4])>,
+    {
         out.clear();
         let mut den = 0.0;
         let mut accumulate = |flap: [VertexId; 4], c: [f64; 4], at: usize, out: &mut Stencil| {
@@ -136,17 +165,17 @@ impl SecondDifference {
         };
         for h in mesh.outgoing(i) {
             // (a) the edge i → to(h): i is j1 of its flap.
-            if let Some((flap, c)) = self.edge_flap(mesh, geometry, h) {
-                accumulate(flap, c, 0, out);
+            if let Some((f, c)) = flap(h) {
+                accumulate(f, c, 0, out);
             }
             // (b) the link edge opposite i in the face left of h: i is its apex l1.
             if mesh.face(h).is_some() {
                 let g = mesh.next(h);
-                if let Some((flap, c)) = self.edge_flap(mesh, geometry, g)
-                    && flap[2] == i
-                    && flap[3] != i
+                if let Some((f, c)) = flap(g)
+                    && f[2] == i
+                    && f[3] != i
                 {
-                    accumulate(flap, c, 2, out);
+                    accumulate(f, c, 2, out);
                 }
             }
         }
@@ -159,6 +188,59 @@ impl SecondDifference {
             *w *= scale;
         }
         true
+    }
+}
+
+/// A small direct-mapped cache of edge flaps for one batch of stencils, keyed by the slot of
+/// the edge's canonical (smaller-slot) half-edge. A collision just recomputes.
+struct FlapCache {
+    tags: [u32; FLAP_CACHE_SIZE],
+    flaps: [Option<([VertexId; 4], [f64; 4])>; FLAP_CACHE_SIZE],
+}
+
+const FLAP_CACHE_SIZE: usize = 128;
+
+impl FlapCache {
+    fn new() -> Self {
+        Self {
+            tags: [u32::MAX; FLAP_CACHE_SIZE],
+            flaps: [None; FLAP_CACHE_SIZE],
+        }
+    }
+
+    /// The flap of `h`, from the cache when its edge was seen in this batch.
+    #[inline]
+    fn flap(
+        &mut self,
+        op: &SecondDifference,
+        mesh: &Mesh,
+        geometry: &[DVec3],
+        h: HalfedgeId,
+    ) -> Option<([VertexId; 4], [f64; 4])> {
+        let t = mesh.twin(h);
+        let (canonical, flipped) = if t.slot() < h.slot() {
+            (t, true)
+        } else {
+            (h, false)
+        };
+        let key = canonical.slot() as u32;
+        // Fibonacci hashing: neighbouring slots spread over the table.
+        let at =
+            (key.wrapping_mul(0x9E37_79B1) >> (32 - FLAP_CACHE_SIZE.trailing_zeros())) as usize;
+        let flap = if self.tags[at] == key {
+            self.flaps[at]
+        } else {
+            let f = op.canonical_flap(mesh, geometry, canonical);
+            self.tags[at] = key;
+            self.flaps[at] = f;
+            f
+        };
+        let (v, c) = flap?;
+        Some(if flipped {
+            ([v[1], v[0], v[3], v[2]], [c[1], c[0], c[3], c[2]])
+        } else {
+            (v, c)
+        })
     }
 }
 
@@ -201,6 +283,28 @@ impl Relaxation for SecondDifference {
         out.clear();
         out.extend_from_slice(&s);
         ok
+    }
+
+    /// Shares each edge's hinge coefficients among the batch's stencils (an edge enters the
+    /// stencils of up to four vertices of a 1-ring); bit-identical to per-vertex stencils.
+    fn stencils(
+        &self,
+        mesh: &Mesh,
+        geometry: &[DVec3],
+        vertices: &[VertexId],
+        out: &mut Vec<(VertexId, f64)>,
+        lens: &mut Vec<usize>,
+    ) {
+        let mut cache = FlapCache::new();
+        let mut s = Stencil::new();
+        for &v in vertices {
+            if self.stencil_with(mesh, v, &mut s, |h| cache.flap(self, mesh, geometry, h)) {
+                out.extend_from_slice(&s);
+                lens.push(s.len());
+            } else {
+                lens.push(0);
+            }
+        }
     }
 }
 
@@ -478,6 +582,37 @@ mod tests {
             assert!((sum - 1.0).abs() < 1e-12, "{sum}");
             assert!(s.iter().all(|&(_, w)| w.is_finite()));
         }
+    }
+
+    #[test]
+    fn batched_stencils_are_bit_identical_to_single_ones() {
+        // The batch shares hinge coefficients through a cache (with collisions, since the
+        // batch holds every vertex); the weights must not change by a single bit.
+        let (mut p, t) = jittered_plane(14, 3);
+        for q in &mut p {
+            q.z = 0.2 * (q.x * 1.3).sin() * (q.y * 0.4).cos();
+        }
+        let mesh = Mesh::from_triangles(&p, &t).unwrap().mesh;
+        let geometry = mesh.positions();
+        let op = SecondDifference::default();
+        let all: Vec<VertexId> = mesh.vertices().collect();
+        let (mut batch, mut lens) = (Vec::new(), Vec::new());
+        op.stencils(&mesh, &geometry, &all, &mut batch, &mut lens);
+        assert_eq!(lens.len(), all.len());
+        let mut at = 0;
+        let mut s = Stencil::new();
+        for (&v, &len) in all.iter().zip(&lens) {
+            let ok = op.stencil(&mesh, &geometry, v, &mut s);
+            assert_eq!(ok, len > 0);
+            let got = &batch[at..at + len];
+            assert_eq!(got.len(), s.len());
+            for (a, b) in got.iter().zip(&s) {
+                assert_eq!(a.0, b.0);
+                assert_eq!(a.1.to_bits(), b.1.to_bits());
+            }
+            at += len;
+        }
+        assert_eq!(at, batch.len());
     }
 
     #[test]
