@@ -98,6 +98,7 @@ impl SmoothArgs {
 
 /// Runs `meshpyr smooth`.
 pub fn run(args: SmoothArgs, global: &Global) -> anyhow::Result<()> {
+    super::check_mesh_output(&args.output)?;
     let options = args.options();
     options.validate()?;
     let input = io::read_mesh(&args.input)?;
