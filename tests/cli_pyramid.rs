@@ -114,24 +114,11 @@ fn filter_with_the_mcm_relaxation_keeps_the_layout_and_differs_from_second_diffe
 }
 
 #[test]
-fn filter_rejects_missing_or_bad_filters_and_unavailable_operators() {
+fn filter_rejects_missing_or_bad_filters() {
     let input = data("teapot.ply");
     let out = scratch("never.ply");
     let o = out.to_str().unwrap();
     fails_with(&meshpyr(&["filter", &input, "-o", o]), "no filter given");
-    fails_with(
-        &meshpyr(&[
-            "filter",
-            &input,
-            "-o",
-            o,
-            "--lowpass",
-            "100",
-            "--relax",
-            "normal",
-        ]),
-        "not available yet",
-    );
     let bad = meshpyr(&["filter", &input, "-o", o, "--enhance", "1000:2000"]);
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("A:B=G"));

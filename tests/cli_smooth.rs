@@ -51,8 +51,17 @@ fn every_method_improves_the_noisy_fandisk_and_keeps_the_layout() {
     let input = meshpyr::io::read_mesh(&noisy).unwrap();
     for extra in [
         vec![],
-        vec!["--weights", "uniform", "--iterations", "5"],
         vec![
+            "--method",
+            "taubin",
+            "--weights",
+            "uniform",
+            "--iterations",
+            "5",
+        ],
+        vec![
+            "--method",
+            "taubin",
             "--weights",
             "inverse-edge",
             "--lambda",
@@ -62,7 +71,7 @@ fn every_method_improves_the_noisy_fandisk_and_keeps_the_layout() {
         ],
         vec!["--method", "mcf"],
         vec!["--method", "mcf", "--iterations", "2", "--time-step", "0.5"],
-        vec!["--boundary", "smooth"],
+        vec!["--method", "taubin", "--boundary", "smooth"],
     ] {
         let out = tmp("fandisk.ply");
         let o = smooth(&noisy, &out, &extra);
@@ -153,9 +162,9 @@ fn output_is_byte_identical_across_runs_and_thread_counts() {
 #[test]
 fn bad_input_exits_nonzero_with_one_line() {
     for args in [
-        vec!["--lambda", "0"],
-        vec!["--lambda", "2"],
-        vec!["--mu", "0.3"],
+        vec!["--method", "taubin", "--lambda", "0"],
+        vec!["--method", "taubin", "--lambda", "2"],
+        vec!["--method", "taubin", "--mu", "0.3"],
         vec!["--method", "mcf", "--time-step", "-1"],
         vec!["--method", "mcf", "--time-step", "nan"],
     ] {

@@ -16,7 +16,7 @@ use meshpyr::mesh::Mesh;
 use meshpyr::metrics::{Reference, Surface};
 use meshpyr::progress::NoProgress;
 use meshpyr::smooth::{
-    Boundary, McfOptions, TaubinOptions, Weights, implicit_mcf, taubin_smoothing,
+    Boundary, DenoiseOptions, McfOptions, TaubinOptions, Weights, implicit_mcf, taubin_smoothing,
 };
 use std::path::Path;
 
@@ -60,6 +60,14 @@ fn taubin(weights: Weights) -> Step {
     })
 }
 
+fn denoise(options: DenoiseOptions) -> Step {
+    Box::new(move |m: &Mesh, _: &Context| {
+        meshpyr::smooth::denoise(m, &options, &NoProgress)
+            .map(|d| d.positions)
+            .map_err(|e| e.to_string())
+    })
+}
+
 fn mcf(time_step: f64) -> Step {
     Box::new(move |m: &Mesh, c: &Context| {
         let l = m.mean_edge_length();
@@ -98,8 +106,17 @@ fn methods() -> Vec<Method> {
         m("implicit MCF, dt = 0.25 L²", MCF_COUNTS, mcf(0.25)),
         m("implicit MCF, dt = 1 L²", MCF_COUNTS, mcf(1.0)),
         m("implicit MCF, dt = 4 L²", MCF_COUNTS, mcf(4.0)),
-        // One-pass methods go here, e.g.:
-        // m("adaptive (one pass)", &[1], Box::new(|m, _| adaptive(m, &Default::default()))),
+        // The paper's method: one default pass, no per-mesh tuning.
+        m(
+            "adaptive, one default pass",
+            &[1],
+            denoise(DenoiseOptions::adaptive()),
+        ),
+        m(
+            "anisotropic, one default pass",
+            &[1],
+            denoise(DenoiseOptions::anisotropic()),
+        ),
     ]
 }
 

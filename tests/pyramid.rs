@@ -419,6 +419,35 @@ fn mcm_relaxation_drives_the_pyramid() {
 }
 
 #[test]
+fn normal_adaptive_relaxation_drives_the_pyramid() {
+    // A linear stencil without a self weight: unit gains reproduce the input exactly, a
+    // low-pass still smooths, and the details differ from the other operators'.
+    let (p, t) = noisy_height_field(30, 0.004);
+    let mesh = Mesh::from_triangles(&p, &t).unwrap().mesh;
+    let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &NoProgress).unwrap();
+    let op = meshpyr::relax::NormalAdaptive::default();
+    let pyr = Pyramid::analyze(&pm, &op, &NoProgress).unwrap();
+    assert_eq!(pyr.relaxation(), "normal");
+    let out = pyr.synthesize(&LevelGains::unit());
+    let err = max_dist(&out, pm.original_positions());
+    assert!(err <= 1e-12 * pyr.bbox_diagonal(), "{err:e}");
+    let n = pyr.n_vertices();
+    let low = pyr.synthesize(
+        &Filter::default()
+            .lowpass(LevelSpec::Vertices(n / 2))
+            .resolve(1.0),
+    );
+    let everywhere = |_: DVec3| true;
+    let (r0, r1) = (
+        roughness(&pm, pm.original_positions(), everywhere),
+        roughness(&pm, &low, everywhere),
+    );
+    assert!(r1 < 0.7 * r0, "roughness {r0} → {r1}");
+    let (_, sd) = pyramid_of(&p, &t);
+    assert_ne!(sd.split_details(0).1, pyr.split_details(0).1);
+}
+
+#[test]
 fn memory_is_compact_and_synthesis_deterministic() {
     let (p, t) = bumpy_sphere(3, 0.01);
     let (_, pyr) = pyramid_of(&p, &t);

@@ -21,7 +21,8 @@ pub enum RelaxKind {
     SecondDifference,
     /// One Jacobi step of implicit mean-curvature motion (cotangent weights, lumped mass).
     Mcm,
-    /// Ohtake's normal-adaptive operator (not available yet).
+    /// 1-ring average with weights that fall off with the vertex-normal difference, so the
+    /// prediction does not average across creases.
     Normal,
 }
 
@@ -33,9 +34,9 @@ impl RelaxKind {
             RelaxKind::Mcm => Ok(RelaxationSpec::of_mean_curvature(
                 &crate::subdiv::MeanCurvatureStep::default(),
             )),
-            RelaxKind::Normal => anyhow::bail!(
-                "--relax normal: the normal-adaptive relaxation operator is not available yet (it lands with the denoising work); use --relax second-difference or --relax mcm"
-            ),
+            RelaxKind::Normal => Ok(RelaxationSpec::of_normal_adaptive(
+                &crate::relax::NormalAdaptive::default(),
+            )),
         }
     }
 }

@@ -99,7 +99,8 @@ enum Command {
     Build(build::BuildArgs),
     /// Write a level of a .pyr file (the finest: the original mesh, exactly) as a mesh file.
     Extract(extract::ExtractArgs),
-    /// Denoise a mesh (Taubin λ|μ or implicit mean-curvature flow), keeping its vertex layout.
+    /// Denoise a mesh, keeping its vertex layout: adaptive or anisotropic normal filtering
+    /// with vertex fitting (Ohtake et al.), or the Taubin λ|μ and implicit MCF baselines.
     Smooth(smooth::SmoothArgs),
     /// Error of a processed mesh against a reference: E_v, E_n, Hausdorff.
     Compare(compare::CompareArgs),

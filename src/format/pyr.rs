@@ -57,6 +57,11 @@ pub enum RelaxationSpec {
         /// [`MeanCurvatureStep::damping`](crate::subdiv::MeanCurvatureStep::damping).
         damping: f64,
     },
+    /// The normal-adaptive 1-ring average ([`NormalAdaptive`](crate::relax::NormalAdaptive)).
+    NormalAdaptive {
+        /// [`NormalAdaptive::normal_scale`](crate::relax::NormalAdaptive::normal_scale).
+        normal_scale: f64,
+    },
 }
 
 impl RelaxationSpec {
@@ -70,6 +75,9 @@ impl RelaxationSpec {
             }),
             RelaxationSpec::MeanCurvature { width, damping } => {
                 Box::new(crate::subdiv::MeanCurvatureStep { width, damping })
+            }
+            RelaxationSpec::NormalAdaptive { normal_scale } => {
+                Box::new(crate::relax::NormalAdaptive { normal_scale })
             }
         }
     }
@@ -89,11 +97,19 @@ impl RelaxationSpec {
         }
     }
 
-    /// The operator's command-line name (`second-difference`, `mcm`).
+    /// The spec of a normal-adaptive operator.
+    pub fn of_normal_adaptive(op: &crate::relax::NormalAdaptive) -> Self {
+        RelaxationSpec::NormalAdaptive {
+            normal_scale: op.normal_scale,
+        }
+    }
+
+    /// The operator's command-line name (`second-difference`, `mcm`, `normal`).
     pub fn name(&self) -> &'static str {
         match self {
             RelaxationSpec::SecondDifference { .. } => "second-difference",
             RelaxationSpec::MeanCurvature { .. } => "mcm",
+            RelaxationSpec::NormalAdaptive { .. } => "normal",
         }
     }
 
@@ -106,6 +122,9 @@ impl RelaxationSpec {
             } => (0.0..1.0).contains(&degenerate_area_ratio),
             RelaxationSpec::MeanCurvature { width, damping } => {
                 width > 0.0 && width.is_finite() && damping > 0.0 && damping <= 1.0
+            }
+            RelaxationSpec::NormalAdaptive { normal_scale } => {
+                normal_scale > 0.0 && normal_scale.is_finite()
             }
         };
         (!ok).then_some("relaxation options out of range")

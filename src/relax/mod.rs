@@ -8,8 +8,10 @@
 use crate::mesh::{Mesh, VertexId};
 use glam::DVec3;
 
+pub mod normal_adaptive;
 pub mod second_difference;
 
+pub use normal_adaptive::NormalAdaptive;
 pub use second_difference::SecondDifference;
 
 /// A local smoothing operator on mesh vertices.

@@ -2,18 +2,30 @@
 //! plain function over a [`Mesh`](crate::mesh::Mesh) that returns new positions indexed like
 //! [`Mesh::positions`](crate::mesh::Mesh::positions) (vertex slot order).
 //!
-//! Baselines from the comparisons of Ohtake–Belyaev–Seidel 2002 (algorithms.md §2, §5):
-//! - [`taubin`]: λ|μ smoothing with uniform, inverse-edge-length or cotangent weights;
-//! - [`mcf`]: implicit mean-curvature flow (Desbrun et al. 1999).
+//! - Ohtake–Belyaev–Seidel feature-preserving smoothing ([`denoise`]): an adaptive (or
+//!   anisotropic) Gaussian filter of the face normals followed by fitting the vertices to them.
+//!   One concept per file: [`kernel`], [`dual`] (geodesic neighbourhoods), [`normal_filter`]
+//!   (scale selection and smoothed normals), [`fitting`] (vertex update), [`surface`] (flat
+//!   arrays), [`ohtake`] (the pipeline).
+//! - Baselines from the paper's comparisons (algorithms.md §2, §5): [`taubin`] (λ|μ smoothing
+//!   with uniform, inverse-edge-length or cotangent weights) and [`mcf`] (implicit
+//!   mean-curvature flow, Desbrun et al. 1999).
 //!
 //! Measure results with [`crate::metrics::error`] (E_v, E_n, Hausdorff).
 
+pub mod dual;
+pub mod fitting;
+pub mod kernel;
 pub mod mcf;
+pub mod normal_filter;
+pub mod ohtake;
+pub mod surface;
 pub mod taubin;
 #[cfg(test)]
 mod testutil;
 
 pub use mcf::{McfOptions, implicit_mcf};
+pub use ohtake::{DenoiseOptions, Denoised, denoise};
 pub use taubin::{TaubinOptions, Weights, taubin_smoothing};
 
 /// What the smoothers do with boundary vertices (those on a hole's rim).
@@ -35,6 +47,9 @@ pub enum SmoothError {
     /// A parameter is out of its range.
     #[error("{0}")]
     InvalidParameter(String),
+    /// A vertex position is NaN or infinite.
+    #[error("vertex {0} has a non-finite coordinate")]
+    NonFinite(usize),
     /// The linear solve of an implicit step failed.
     #[error("linear solve of iteration {iteration}: {reason}")]
     Solver {

@@ -1,0 +1,341 @@
+//! Geodesic neighbourhoods on the dual mesh (`algorithms.md` §2.2, §2.5).
+//!
+//! The dual vertices are the triangle centroids; two are joined when their triangles share an
+//! interior edge, at length `d(P, Q) = |P − M| + |M − Q|` through the edge midpoint `M`
+//! (eq. 3). Distances from a source triangle are shortest paths in that graph (Dijkstra), cut
+//! at the kernel support. Nothing crosses a boundary edge: boundary and repaired non-manifold
+//! edges have no dual edge. The anisotropic variant lengthens each dual edge by how much the
+//! normals around it disagree with each other and with the source ([`edge_weight`]).
+
+use super::surface::{FaceFrames, FlatSurface, NO_FACE};
+use glam::DVec3;
+
+/// The dual graph: for each face, its (up to) three neighbours and the dual edge lengths.
+#[derive(Clone, Debug, Default)]
+pub struct DualGraph {
+    /// `neighbors[f][k]`: the face across edge `k` of `f`, or [`NO_FACE`].
+    pub neighbors: Vec<[u32; 3]>,
+    /// `lengths[f][k]`: `|C_f − M_k| + |M_k − C_g|`, with `M_k` the midpoint of edge `k`
+    /// (0 where there is no neighbour).
+    pub lengths: Vec<[f64; 3]>,
+}
+
+impl DualGraph {
+    /// The dual graph of `surface` at `positions`, with centroids from `frames`.
+    pub fn new(surface: &FlatSurface, positions: &[DVec3], frames: &FaceFrames) -> DualGraph {
+        let mut lengths = Vec::with_capacity(surface.n_faces());
+        for (f, t) in surface.triangles.iter().enumerate() {
+            let mut l = [0.0; 3];
+            for k in 0..3 {
+                let g = surface.adjacency[f][k];
+                if g == NO_FACE {
+                    continue;
+                }
+                let m = 0.5 * (positions[t[k] as usize] + positions[t[(k + 1) % 3] as usize]);
+                l[k] = (frames.centroids[f] - m).length()
+                    + (m - frames.centroids[g as usize]).length();
+            }
+            lengths.push(l);
+        }
+        DualGraph {
+            neighbors: surface.adjacency.clone(),
+            lengths,
+        }
+    }
+
+    /// Number of dual vertices (faces).
+    pub fn len(&self) -> usize {
+        self.neighbors.len()
+    }
+
+    /// True without faces.
+    pub fn is_empty(&self) -> bool {
+        self.neighbors.is_empty()
+    }
+}
+
+/// Length of the dual edge `P–Q` (base length `length`) in the metric centred at the source
+/// triangle `O`, §2.5:
+///
+/// ```text
+/// D_O(P, Q) = d(P, Q) · [1 + (ρ/2)(‖n_P − n_Q‖² + ‖n_O − n_P‖² + ‖n_O − n_Q‖²)]
+/// ```
+///
+/// `rho = 0` gives the isotropic length. The reading of the garbled source is reconstructed;
+/// this function is the one place that fixes how the three terms combine.
+#[inline]
+pub fn edge_weight(length: f64, rho: f64, n_o: DVec3, n_p: DVec3, n_q: DVec3) -> f64 {
+    if rho == 0.0 {
+        return length;
+    }
+    let spread =
+        (n_p - n_q).length_squared() + (n_o - n_p).length_squared() + (n_o - n_q).length_squared();
+    length * (1.0 + 0.5 * rho * spread)
+}
+
+/// Reusable Dijkstra workspace for one thread: distances stamped with a generation counter so
+/// a new search needs no clearing, a binary min-heap, and the result ball.
+#[derive(Clone, Debug, Default)]
+pub struct DualBall {
+    /// Tentative distance and the generation that wrote it, side by side for one cache miss.
+    dist: Vec<(f64, u32)>,
+    generation: u32,
+    heap: Vec<(f64, u32)>,
+    /// The faces within the radius of the last search with their distances, in the order
+    /// Dijkstra settled them (non-decreasing distance; the source first at 0).
+    pub ball: Vec<(f64, u32)>,
+}
+
+impl DualBall {
+    /// A workspace for graphs of up to `n_faces` dual vertices.
+    pub fn new(n_faces: usize) -> DualBall {
+        DualBall {
+            dist: vec![(0.0, 0); n_faces],
+            generation: 0,
+            heap: Vec::with_capacity(256),
+            ball: Vec::with_capacity(1024),
+        }
+    }
+
+    /// Fills [`DualBall::ball`] with every face at distance `< radius` from `source`, in the
+    /// metric of [`edge_weight`] with `rho` and the face normals `normals` (isotropic for
+    /// `rho = 0`).
+    pub fn grow(
+        &mut self,
+        graph: &DualGraph,
+        normals: &[DVec3],
+        rho: f64,
+        source: u32,
+        radius: f64,
+    ) {
+        if self.dist.len() < graph.len() {
+            self.dist.resize(graph.len(), (0.0, 0));
+        }
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            // The counter wrapped: old stamps could collide with new ones.
+            self.dist.fill((0.0, 0));
+            self.generation = 1;
+        }
+        let generation = self.generation;
+        self.ball.clear();
+        self.heap.clear();
+        let n_o = normals[source as usize];
+        self.dist[source as usize] = (0.0, generation);
+        heap_push(&mut self.heap, (0.0, source));
+        while let Some((d, p)) = heap_pop(&mut self.heap) {
+            let pi = p as usize;
+            if d > self.dist[pi].0 {
+                continue; // stale entry; p was reached more cheaply
+            }
+            self.ball.push((d, p));
+            let n_p = normals[pi];
+            let nbrs = graph.neighbors[pi];
+            let lens = graph.lengths[pi];
+            for k in 0..3 {
+                let q = nbrs[k];
+                if q == NO_FACE {
+                    continue;
+                }
+                let qi = q as usize;
+                let nd = d + edge_weight(lens[k], rho, n_o, n_p, normals[qi]);
+                if nd >= radius {
+                    continue;
+                }
+                let slot = &mut self.dist[qi];
+                if slot.1 != generation || nd < slot.0 {
+                    *slot = (nd, generation);
+                    heap_push(&mut self.heap, (nd, q));
+                }
+            }
+        }
+    }
+}
+
+/// Heap order: by distance, ties by face index, so the settle order is fully deterministic.
+#[inline]
+fn less(a: (f64, u32), b: (f64, u32)) -> bool {
+    a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
+}
+
+#[inline]
+fn heap_push(heap: &mut Vec<(f64, u32)>, item: (f64, u32)) {
+    let mut i = heap.len();
+    heap.push(item);
+    while i > 0 {
+        let parent = (i - 1) / 2;
+        if !less(item, heap[parent]) {
+            break;
+        }
+        heap[i] = heap[parent];
+        i = parent;
+    }
+    heap[i] = item;
+}
+
+#[inline]
+fn heap_pop(heap: &mut Vec<(f64, u32)>) -> Option<(f64, u32)> {
+    let last = heap.pop()?;
+    if heap.is_empty() {
+        return Some(last);
+    }
+    let top = heap[0];
+    let n = heap.len();
+    let mut i = 0;
+    loop {
+        let l = 2 * i + 1;
+        if l >= n {
+            break;
+        }
+        let r = l + 1;
+        let c = if r < n && less(heap[r], heap[l]) {
+            r
+        } else {
+            l
+        };
+        if !less(heap[c], last) {
+            break;
+        }
+        heap[i] = heap[c];
+        i = c;
+    }
+    heap[i] = last;
+    Some(top)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::Mesh;
+
+    /// An n×n grid of unit squares in the plane z = 0, each split along the same diagonal.
+    fn grid(n: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+        let mut p = Vec::new();
+        for j in 0..=n {
+            for i in 0..=n {
+                p.push(DVec3::new(i as f64, j as f64, 0.0));
+            }
+        }
+        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+        let mut t = Vec::new();
+        for j in 0..n {
+            for i in 0..n {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        (p, t)
+    }
+
+    fn setup(p: &[DVec3], t: &[[u32; 3]]) -> (FlatSurface, FaceFrames, DualGraph, Vec<DVec3>) {
+        let built = Mesh::from_triangles(p, t).expect("valid mesh");
+        let s = FlatSurface::new(&built.mesh);
+        let pos = built.mesh.positions();
+        let frames = s.face_frames(&pos);
+        let g = DualGraph::new(&s, &pos, &frames);
+        (s, frames, g, pos)
+    }
+
+    #[test]
+    fn distances_on_a_regular_grid() {
+        let (p, t) = grid(8);
+        let (_, frames, g, _) = setup(&p, &t);
+        // Centroid to a leg midpoint: the lower triangle of square (i, j) has centroid
+        // (i + 2/3, j + 1/3); the diagonal's midpoint is (i + 1/2, j + 1/2).
+        let to_diag = (DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0) - DVec3::new(0.5, 0.5, 0.0)).length();
+        let to_leg = (DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0) - DVec3::new(1.0, 0.5, 0.0)).length();
+        let src = (2 * (4 * 8 + 4)) as u32; // lower triangle of square (4, 4)
+        let mut ball = DualBall::new(g.len());
+        ball.grow(&g, &frames.normals, 0.0, src, 100.0);
+        assert_eq!(
+            ball.ball.len(),
+            g.len(),
+            "a large radius reaches every face"
+        );
+        assert_eq!(ball.ball[0], (0.0, src));
+        let dist = |f: u32| ball.ball.iter().find(|e| e.1 == f).map(|e| e.0);
+        // Its upper partner, across the diagonal.
+        assert!((dist(src + 1).unwrap_or(-1.0) - 2.0 * to_diag).abs() < 1e-12);
+        // The upper triangle of square (5, 4), across the right leg.
+        assert!((dist(src + 3).unwrap_or(-1.0) - 2.0 * to_leg).abs() < 1e-12);
+        // Two steps: lower of (4,4) → upper of (4,4) → lower of (4,5) across the top leg.
+        let up = src + 2 * 8;
+        assert!((dist(up).unwrap_or(-1.0) - 2.0 * to_diag - 2.0 * to_leg).abs() < 1e-12);
+        // Sorted, and the cut is strict.
+        assert!(ball.ball.windows(2).all(|w| w[0].0 <= w[1].0));
+        ball.grow(&g, &frames.normals, 0.0, src, 2.0 * to_diag);
+        assert_eq!(
+            ball.ball.len(),
+            1,
+            "the partner at exactly the radius is cut"
+        );
+        ball.grow(&g, &frames.normals, 0.0, src, 2.0 * to_leg + 1e-9);
+        assert_eq!(ball.ball.len(), 4, "the source and its three neighbours");
+    }
+
+    #[test]
+    fn nothing_crosses_a_boundary() {
+        // Two separate squares: the ball of one never reaches the other.
+        let (mut p, mut t) = grid(1);
+        let (p2, t2) = grid(1);
+        let off = p.len() as u32;
+        p.extend(p2.iter().map(|q| *q + DVec3::new(1.5, 0.0, 0.0)));
+        t.extend(t2.iter().map(|f| f.map(|v| v + off)));
+        let (_, frames, g, _) = setup(&p, &t);
+        let mut ball = DualBall::new(g.len());
+        ball.grow(&g, &frames.normals, 0.0, 0, 1e9);
+        let mut faces: Vec<u32> = ball.ball.iter().map(|e| e.1).collect();
+        faces.sort_unstable();
+        assert_eq!(faces, vec![0, 1]);
+    }
+
+    #[test]
+    fn the_anisotropic_metric_stretches_across_a_crease() {
+        // A grid folded by 90° along x = 4.
+        let (mut p, t) = grid(8);
+        for q in &mut p {
+            if q.x > 4.0 {
+                *q = DVec3::new(4.0, q.y, q.x - 4.0);
+            }
+        }
+        let (_, frames, g, _) = setup(&p, &t);
+        let src = (2 * (4 * 8 + 3)) as u32; // lower triangle of square (3, 4), left of the fold
+        let mut iso = DualBall::new(g.len());
+        iso.grow(&g, &frames.normals, 0.0, src, 100.0);
+        let mut aniso = DualBall::new(g.len());
+        aniso.grow(&g, &frames.normals, 20.0, src, 100.0);
+        let d = |b: &DualBall, f: u32| b.ball.iter().find(|e| e.1 == f).map_or(-1.0, |e| e.0);
+        // On the same flat side distances agree; across the fold they grow by 1 + ρ/2·(2+2) = 41
+        // on the crossing edge (the two normals are orthogonal: ‖Δn‖² = 2).
+        let same_side = src - 2;
+        assert!((d(&iso, same_side) - d(&aniso, same_side)).abs() < 1e-12);
+        let across = src + 3; // upper triangle of square (4, 4): on the other side
+        assert!(
+            d(&aniso, across) > 10.0 * d(&iso, across),
+            "{} vs {}",
+            d(&aniso, across),
+            d(&iso, across)
+        );
+        assert!((edge_weight(2.0, 20.0, DVec3::Z, DVec3::Z, DVec3::X) - 2.0 * 41.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_heap_pops_in_order() {
+        let mut h = Vec::new();
+        let vals = [5.0, 1.0, 3.0, 1.0, 9.0, 0.5, 7.0, 2.0];
+        for (i, &v) in vals.iter().enumerate() {
+            heap_push(&mut h, (v, i as u32));
+        }
+        let mut out = Vec::new();
+        while let Some(x) = heap_pop(&mut h) {
+            out.push(x);
+        }
+        let mut sorted: Vec<(f64, u32)> = vals
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| (v, i as u32))
+            .collect();
+        sorted.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        assert_eq!(out, sorted);
+    }
+}

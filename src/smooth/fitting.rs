@@ -1,0 +1,431 @@
+//! Vertex fitting to a smoothed normal field (`algorithms.md` §2.6):
+//!
+//! ```text
+//! E(P) = Σ_T A(T) ‖n(T) − m(T)‖² = Σ_T (2A(T) − N_T · m(T)),   N_T = (P1 − P0) × (P2 − P0)
+//! ∇_P E = Σ_{T ∋ P} (n(T) − m(T)) × (Pb − Pa)      for T = (P, Pa, Pb) counter-clockwise
+//! ```
+//!
+//! minimised with nonlinear conjugate gradients (Polak–Ribière+, restarted on loss of descent)
+//! and an Armijo backtracking line search. Each step moves no vertex further than a cap, and a
+//! step that turns any face over (`N_T^new · N_T^old ≤ 0`) is rejected like one that fails the
+//! Armijo test: the energy's `2A` term rewards shrinking faces whose normal is off target, and
+//! a folded face would satisfy it spuriously.
+//!
+//! Determinism: per-face and per-vertex terms are computed independently in parallel; every
+//! global sum adds fixed-size chunks sequentially in a fixed order, so results are bitwise the
+//! same for any number of threads.
+
+use super::surface::{FlatSurface, unit_normal};
+use crate::progress::Progress;
+use glam::DVec3;
+use rayon::prelude::*;
+
+/// Consecutive small decreases that end the fitting: a single short step (capped, or cut
+/// back by the flip test) is not convergence.
+pub const STALL_ITERATIONS: usize = 5;
+
+/// Chunk length of the fixed-order parallel sums.
+const CHUNK: usize = 4096;
+
+/// Parameters of the optimiser.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FitOptions {
+    /// Most CG iterations.
+    pub max_iterations: usize,
+    /// Stop when [`STALL_ITERATIONS`] iterations in a row each lower the energy by less than
+    /// this fraction of it.
+    pub tolerance: f64,
+    /// Largest move of any vertex in one step, in absolute length.
+    pub step_cap: f64,
+    /// Armijo sufficient-decrease constant c₁.
+    pub armijo: f64,
+    /// Most halvings of the step in one line search.
+    pub max_halvings: usize,
+}
+
+impl Default for FitOptions {
+    fn default() -> Self {
+        FitOptions {
+            max_iterations: 200,
+            tolerance: 1e-6,
+            step_cap: 0.1,
+            armijo: 1e-4,
+            max_halvings: 30,
+        }
+    }
+}
+
+/// What the optimiser did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FitReport {
+    /// Iterations that moved the vertices.
+    pub iterations: usize,
+    /// Energy at the start.
+    pub initial_energy: f64,
+    /// Energy at the end (never above the start).
+    pub final_energy: f64,
+    /// Trial steps rejected because a face would have flipped.
+    pub rejected_flips: usize,
+}
+
+/// The fitting problem: connectivity, targets and the vertex → corner incidence for gradients.
+pub struct Fitting<'a> {
+    surface: &'a FlatSurface,
+    targets: &'a [DVec3],
+    /// CSR of corners per vertex slot: `corners[starts[v]..starts[v + 1]]` are `(face, k)`
+    /// with `triangles[face][k] == v`, in face order.
+    starts: Vec<u32>,
+    corners: Vec<(u32, u8)>,
+}
+
+impl<'a> Fitting<'a> {
+    /// The energy of `surface` against the target normals `targets` (one per face; a zero
+    /// target leaves its face out of the energy).
+    pub fn new(surface: &'a FlatSurface, targets: &'a [DVec3]) -> Fitting<'a> {
+        let nv = surface.vertex_slots;
+        let mut starts = vec![0u32; nv + 1];
+        for t in &surface.triangles {
+            for &v in t {
+                starts[v as usize + 1] += 1;
+            }
+        }
+        for i in 0..nv {
+            starts[i + 1] += starts[i];
+        }
+        let mut fill = starts.clone();
+        let mut corners = vec![(0u32, 0u8); starts[nv] as usize];
+        for (f, t) in surface.triangles.iter().enumerate() {
+            for (k, &v) in t.iter().enumerate() {
+                corners[fill[v as usize] as usize] = (f as u32, k as u8);
+                fill[v as usize] += 1;
+            }
+        }
+        Fitting {
+            surface,
+            targets,
+            starts,
+            corners,
+        }
+    }
+
+    /// `E = Σ_T (2A(T) − N_T·m(T))` over faces with a target.
+    pub fn energy(&self, positions: &[DVec3]) -> f64 {
+        fixed_sum(self.surface.n_faces(), |f| self.face_energy(positions, f))
+    }
+
+    #[inline]
+    fn face_energy(&self, positions: &[DVec3], f: usize) -> f64 {
+        let m = self.targets[f];
+        if m == DVec3::ZERO {
+            return 0.0;
+        }
+        let nt = self.surface.area_vector(positions, f);
+        nt.length() - nt.dot(m)
+    }
+
+    /// The gradient of [`Fitting::energy`] into `out` (indexed by vertex slot).
+    pub fn gradient(&self, positions: &[DVec3], out: &mut [DVec3]) {
+        let tris = &self.surface.triangles;
+        out.par_iter_mut()
+            .with_min_len(1024)
+            .enumerate()
+            .for_each(|(v, g)| {
+                let mut acc = DVec3::ZERO;
+                for &(f, k) in &self.corners[self.starts[v] as usize..self.starts[v + 1] as usize] {
+                    let f = f as usize;
+                    let m = self.targets[f];
+                    if m == DVec3::ZERO {
+                        continue;
+                    }
+                    let t = tris[f];
+                    let k = k as usize;
+                    let a = positions[t[(k + 1) % 3] as usize];
+                    let b = positions[t[(k + 2) % 3] as usize];
+                    let (n, _) = unit_normal(self.surface.area_vector(positions, f));
+                    acc += (n - m).cross(b - a);
+                }
+                *g = acc;
+            });
+    }
+
+    /// Minimises the energy starting from `positions`, which receive the result. Vertices in
+    /// no face have zero gradient and stay put. `progress` goes 0 → 1.
+    pub fn minimise(
+        &self,
+        positions: &mut [DVec3],
+        options: &FitOptions,
+        progress: &dyn Progress,
+    ) -> FitReport {
+        let nv = positions.len();
+        let mut report = FitReport::default();
+        let mut energy = self.energy(positions);
+        report.initial_energy = energy;
+        report.final_energy = energy;
+        if !(energy.is_finite() && options.step_cap > 0.0) {
+            return report;
+        }
+        let mut old_normals: Vec<DVec3> = vec![DVec3::ZERO; self.surface.n_faces()];
+        let mut grad = vec![DVec3::ZERO; nv];
+        let mut dir = vec![DVec3::ZERO; nv];
+        let mut trial = positions.to_vec();
+        self.gradient(positions, &mut grad);
+        for (d, g) in dir.iter_mut().zip(&grad) {
+            *d = -*g;
+        }
+        let mut grad_sq = dot(&grad, &grad);
+        let mut alpha_guess = f64::INFINITY;
+        let mut steepest = true;
+        let mut stalled = 0;
+        while report.iterations < options.max_iterations && grad_sq > 0.0 {
+            let mut slope = dot(&grad, &dir);
+            if slope.is_nan() || slope >= 0.0 {
+                for (d, g) in dir.iter_mut().zip(&grad) {
+                    *d = -*g;
+                }
+                slope = -grad_sq;
+                steepest = true;
+            }
+            let longest = max_length(&dir);
+            if !(longest > 0.0 && longest.is_finite()) {
+                break;
+            }
+            let alpha_max = options.step_cap / longest;
+            let mut alpha = alpha_guess.min(alpha_max);
+            self.surface_normals(positions, &mut old_normals);
+            let mut accepted = None;
+            for _ in 0..=options.max_halvings {
+                trial
+                    .par_iter_mut()
+                    .with_min_len(4096)
+                    .zip(positions.par_iter())
+                    .zip(dir.par_iter())
+                    .for_each(|((t, p), d)| *t = *p + alpha * *d);
+                match self.trial_energy(&trial, &old_normals) {
+                    Some(e) if e <= energy + options.armijo * alpha * slope => {
+                        accepted = Some(e);
+                        break;
+                    }
+                    Some(_) => {}
+                    None => report.rejected_flips += 1,
+                }
+                alpha *= 0.5;
+            }
+            let Some(new_energy) = accepted else {
+                if steepest {
+                    break; // not even a tiny steepest-descent step helps: converged
+                }
+                // Retry the iteration along the steepest descent.
+                steepest = true;
+                for (d, g) in dir.iter_mut().zip(&grad) {
+                    *d = -*g;
+                }
+                alpha_guess = f64::INFINITY;
+                continue;
+            };
+            positions.copy_from_slice(&trial);
+            report.iterations += 1;
+            let decrease = energy - new_energy;
+            energy = new_energy;
+            report.final_energy = energy;
+            progress.update(report.iterations as f64 / options.max_iterations as f64);
+            if decrease <= options.tolerance * energy.abs() {
+                stalled += 1;
+                if stalled >= STALL_ITERATIONS {
+                    break;
+                }
+            } else {
+                stalled = 0;
+            }
+            // Polak–Ribière+: β = max(0, g⁺·(g⁺ − g)/‖g‖²).
+            let old_grad = std::mem::take(&mut grad);
+            let mut new_grad = vec![DVec3::ZERO; nv];
+            self.gradient(positions, &mut new_grad);
+            let new_sq = dot(&new_grad, &new_grad);
+            let cross = dot(&new_grad, &old_grad);
+            let beta = ((new_sq - cross) / grad_sq).max(0.0);
+            let beta = if beta.is_finite() { beta } else { 0.0 };
+            for (d, g) in dir.iter_mut().zip(&new_grad) {
+                *d = beta * *d - *g;
+            }
+            steepest = beta == 0.0;
+            grad = new_grad;
+            grad_sq = new_sq;
+            // Let the next search start a little beyond this step.
+            alpha_guess = 2.0 * alpha;
+        }
+        progress.update(1.0);
+        report
+    }
+
+    fn surface_normals(&self, positions: &[DVec3], out: &mut [DVec3]) {
+        out.par_iter_mut()
+            .with_min_len(4096)
+            .enumerate()
+            .for_each(|(f, n)| *n = self.surface.area_vector(positions, f));
+    }
+
+    /// The energy at `trial`, or `None` if a face turned over against `old_normals`.
+    fn trial_energy(&self, trial: &[DVec3], old_normals: &[DVec3]) -> Option<f64> {
+        let n = self.surface.n_faces();
+        let chunks: Vec<Option<f64>> = (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|c| {
+                let mut sum = 0.0;
+                let range = c * CHUNK..((c + 1) * CHUNK).min(n);
+                for (f, &old) in range.clone().zip(&old_normals[range]) {
+                    let nt = self.surface.area_vector(trial, f);
+                    if old != DVec3::ZERO && nt.dot(old) <= 0.0 {
+                        return None;
+                    }
+                    let m = self.targets[f];
+                    if m != DVec3::ZERO {
+                        sum += nt.length() - nt.dot(m);
+                    }
+                }
+                Some(sum)
+            })
+            .collect();
+        let mut total = 0.0;
+        for c in chunks {
+            total += c?;
+        }
+        total.is_finite().then_some(total)
+    }
+}
+
+/// `Σ_{i<n} term(i)`, summed in fixed chunks (parallel) whose partial sums are then added in
+/// order, so the result does not depend on the number of threads.
+fn fixed_sum(n: usize, term: impl Fn(usize) -> f64 + Sync) -> f64 {
+    let partial: Vec<f64> = (0..n.div_ceil(CHUNK))
+        .into_par_iter()
+        .map(|c| (c * CHUNK..((c + 1) * CHUNK).min(n)).map(&term).sum())
+        .collect();
+    partial.iter().sum()
+}
+
+fn dot(a: &[DVec3], b: &[DVec3]) -> f64 {
+    fixed_sum(a.len(), |i| a[i].dot(b[i]))
+}
+
+fn max_length(a: &[DVec3]) -> f64 {
+    // max is order-independent, so a plain parallel reduction is deterministic.
+    a.par_iter()
+        .map(|d| d.length_squared())
+        .reduce(|| 0.0, f64::max)
+        .sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::Mesh;
+    use crate::progress::NoProgress;
+
+    fn noisy_sphere() -> (FlatSurface, Vec<DVec3>) {
+        // A UV sphere with deterministic radial jitter.
+        let (nu, nv) = (16, 10);
+        let mut p = vec![DVec3::Z, -DVec3::Z];
+        for j in 1..nv {
+            let th = std::f64::consts::PI * j as f64 / nv as f64;
+            for i in 0..nu {
+                let ph = 2.0 * std::f64::consts::PI * i as f64 / nu as f64;
+                let r = 1.0 + 0.05 * ((i * 7 + j * 13) as f64).sin();
+                p.push(r * DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()));
+            }
+        }
+        let id = |i: usize, j: usize| (2 + (j - 1) * nu + i % nu) as u32;
+        let mut t = Vec::new();
+        for i in 0..nu {
+            t.push([0, id(i, 1), id(i + 1, 1)]);
+            t.push([1, id(i + 1, nv - 1), id(i, nv - 1)]);
+            for j in 1..nv - 1 {
+                t.push([id(i, j), id(i, j + 1), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
+            }
+        }
+        let built = Mesh::from_triangles(&p, &t).expect("valid sphere");
+        (FlatSurface::new(&built.mesh), built.mesh.positions())
+    }
+
+    fn targets(s: &FlatSurface, p: &[DVec3]) -> Vec<DVec3> {
+        // Radial directions at the centroids: the normals of the clean sphere.
+        s.face_frames(p)
+            .centroids
+            .iter()
+            .map(|c| c.normalize())
+            .collect()
+    }
+
+    #[test]
+    fn gradient_matches_finite_differences() {
+        let (s, p) = noisy_sphere();
+        let mut m = targets(&s, &p);
+        // Perturb the targets so the gradient is far from zero.
+        for (i, x) in m.iter_mut().enumerate() {
+            *x = (*x + 0.3 * DVec3::new((i as f64).sin(), (i as f64 * 1.7).cos(), 0.2)).normalize();
+        }
+        let fit = Fitting::new(&s, &m);
+        let mut g = vec![DVec3::ZERO; p.len()];
+        fit.gradient(&p, &mut g);
+        let h = 1e-6;
+        let mut worst = 0.0f64;
+        for v in [0usize, 5, 17, 40, 100] {
+            for c in 0..3 {
+                let mut pp = p.clone();
+                let mut pm = p.clone();
+                pp[v][c] += h;
+                pm[v][c] -= h;
+                let fd = (fit.energy(&pp) - fit.energy(&pm)) / (2.0 * h);
+                worst = worst.max((fd - g[v][c]).abs());
+            }
+        }
+        assert!(worst < 1e-7, "{worst}");
+    }
+
+    #[test]
+    fn fitting_lowers_the_energy_without_flips() {
+        let (s, p) = noisy_sphere();
+        let m = targets(&s, &p);
+        let fit = Fitting::new(&s, &m);
+        let mut x = p.clone();
+        let options = FitOptions {
+            step_cap: 0.02,
+            ..FitOptions::default()
+        };
+        let r = fit.minimise(&mut x, &options, &NoProgress);
+        assert!(r.iterations > 0);
+        assert!(r.final_energy < 0.5 * r.initial_energy, "{r:?}");
+        assert!((fit.energy(&x) - r.final_energy).abs() < 1e-12);
+        for f in 0..s.n_faces() {
+            assert!(
+                s.area_vector(&x, f).dot(s.area_vector(&p, f)) > 0.0,
+                "face {f} flipped"
+            );
+        }
+        // The fitted sphere is rounder: radii vary less than the jitter.
+        let radii: Vec<f64> = x[2..].iter().map(|q| q.length()).collect();
+        let spread = |r: &[f64]| {
+            let mean = r.iter().sum::<f64>() / r.len() as f64;
+            r.iter().map(|x| (x - mean).powi(2)).sum::<f64>()
+        };
+        let before: Vec<f64> = p[2..].iter().map(|q| q.length()).collect();
+        assert!(
+            spread(&radii) < 0.5 * spread(&before),
+            "{} vs {}",
+            spread(&radii),
+            spread(&before)
+        );
+    }
+
+    #[test]
+    fn zero_targets_and_isolated_vertices_stay_out() {
+        let (s, p) = noisy_sphere();
+        let m = vec![DVec3::ZERO; s.n_faces()];
+        let fit = Fitting::new(&s, &m);
+        assert_eq!(fit.energy(&p), 0.0);
+        let mut x = p.clone();
+        let r = fit.minimise(&mut x, &FitOptions::default(), &NoProgress);
+        assert_eq!(r.iterations, 0);
+        assert_eq!(x, p);
+    }
+}

@@ -1,0 +1,272 @@
+//! Flat arrays of a half-edge [`Mesh`] for the denoiser's hot loops: triangles as vertex slots,
+//! face adjacency across interior edges, and per-face normals, areas and centroids.
+//!
+//! Faces are numbered `0..n` in slot order of the mesh; vertices keep their slot index, so
+//! position arrays are indexed by [`SlotIndex::slot`] and dead slots simply stay unreferenced.
+
+use crate::mesh::{Mesh, SlotIndex};
+use glam::DVec3;
+
+/// "No neighbour" in [`FlatSurface::adjacency`].
+pub const NO_FACE: u32 = u32::MAX;
+
+/// Connectivity of a triangle mesh as flat arrays.
+#[derive(Clone, Debug, Default)]
+pub struct FlatSurface {
+    /// Vertex slots of each triangle, counter-clockwise.
+    pub triangles: Vec<[u32; 3]>,
+    /// `adjacency[f][k]`: the face across edge `k` (from corner `k` to corner `k+1`) of `f`,
+    /// or [`NO_FACE`] on a boundary edge.
+    pub adjacency: Vec<[u32; 3]>,
+    /// One more than the largest vertex slot: the length of slot-indexed arrays.
+    pub vertex_slots: usize,
+}
+
+impl FlatSurface {
+    /// Flattens `mesh`. Edges with a single face (boundaries, including the ones the builder
+    /// cut when repairing non-manifold input) get no neighbour, so nothing crosses them.
+    pub fn new(mesh: &Mesh) -> FlatSurface {
+        let face_slots = mesh.faces().map(|f| f.slot() + 1).max().unwrap_or(0);
+        let mut index = vec![NO_FACE; face_slots];
+        for (i, f) in mesh.faces().enumerate() {
+            index[f.slot()] = i as u32;
+        }
+        let mut triangles = Vec::with_capacity(mesh.n_faces());
+        let mut adjacency = Vec::with_capacity(mesh.n_faces());
+        for f in mesh.faces() {
+            let h0 = mesh.face_halfedge(f);
+            let hs = [h0, mesh.next(h0), mesh.prev(h0)];
+            triangles.push(hs.map(|h| mesh.from_vertex(h).slot() as u32));
+            adjacency.push(hs.map(|h| match mesh.face(mesh.twin(h)) {
+                Some(g) => index[g.slot()],
+                None => NO_FACE,
+            }));
+        }
+        FlatSurface {
+            triangles,
+            adjacency,
+            vertex_slots: mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0),
+        }
+    }
+
+    /// Renumbers the faces along a Morton (Z-order) curve of their centroids at `positions`,
+    /// so faces near on the surface are near in memory: the Dijkstra balls then stay in cache.
+    /// Ties (equal codes) keep the previous order, so the result is deterministic.
+    pub fn reorder_spatially(&mut self, positions: &[DVec3]) {
+        let n = self.n_faces();
+        if n < 2 {
+            return;
+        }
+        let centroids: Vec<DVec3> = self
+            .triangles
+            .iter()
+            .map(|t| t.iter().map(|&v| positions[v as usize]).sum::<DVec3>() / 3.0)
+            .collect();
+        let lo = centroids.iter().fold(DVec3::INFINITY, |a, &c| a.min(c));
+        let hi = centroids.iter().fold(DVec3::NEG_INFINITY, |a, &c| a.max(c));
+        let extent = (hi - lo).max_element();
+        if !(extent > 0.0 && extent.is_finite()) {
+            return;
+        }
+        let scale = ((1u64 << 21) - 1) as f64 / extent;
+        let mut keyed: Vec<(u64, u32)> = centroids
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let q = ((*c - lo) * scale)
+                    .to_array()
+                    .map(|x| x.clamp(0.0, 2097151.0) as u64);
+                (
+                    spread3(q[0]) | spread3(q[1]) << 1 | spread3(q[2]) << 2,
+                    i as u32,
+                )
+            })
+            .collect();
+        keyed.sort_unstable();
+        let mut new_index = vec![0u32; n];
+        for (new, &(_, old)) in keyed.iter().enumerate() {
+            new_index[old as usize] = new as u32;
+        }
+        let triangles = keyed
+            .iter()
+            .map(|&(_, old)| self.triangles[old as usize])
+            .collect();
+        let adjacency = keyed
+            .iter()
+            .map(|&(_, old)| {
+                self.adjacency[old as usize].map(|g| {
+                    if g == NO_FACE {
+                        g
+                    } else {
+                        new_index[g as usize]
+                    }
+                })
+            })
+            .collect();
+        self.triangles = triangles;
+        self.adjacency = adjacency;
+    }
+
+    /// Number of triangles.
+    pub fn n_faces(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// Mean length of the triangles' edges (interior edges counted twice, which weights
+    /// them like the faces they bound); 0 without faces.
+    pub fn mean_edge_length(&self, positions: &[DVec3]) -> f64 {
+        let mut sum = 0.0;
+        for t in &self.triangles {
+            for k in 0..3 {
+                sum += (positions[t[(k + 1) % 3] as usize] - positions[t[k] as usize]).length();
+            }
+        }
+        if self.triangles.is_empty() {
+            0.0
+        } else {
+            sum / (3 * self.triangles.len()) as f64
+        }
+    }
+
+    /// Unnormalised normal `(P1 − P0) × (P2 − P0)` of face `f` (twice the area, along n).
+    #[inline]
+    pub fn area_vector(&self, positions: &[DVec3], f: usize) -> DVec3 {
+        let [a, b, c] = self.triangles[f].map(|v| positions[v as usize]);
+        (b - a).cross(c - a)
+    }
+
+    /// Per-face unit normals, areas and centroids at `positions`; see [`FaceFrames`].
+    pub fn face_frames(&self, positions: &[DVec3]) -> FaceFrames {
+        let n = self.n_faces();
+        let mut frames = FaceFrames {
+            normals: Vec::with_capacity(n),
+            areas: Vec::with_capacity(n),
+            centroids: Vec::with_capacity(n),
+        };
+        for (f, t) in self.triangles.iter().enumerate() {
+            let (normal, area) = unit_normal(self.area_vector(positions, f));
+            frames.normals.push(normal);
+            frames.areas.push(area);
+            let [a, b, c] = t.map(|v| positions[v as usize]);
+            frames.centroids.push((a + b + c) / 3.0);
+        }
+        frames
+    }
+}
+
+/// Spreads the low 21 bits of `x` to every third bit (Morton interleaving).
+fn spread3(x: u64) -> u64 {
+    let mut x = x & 0x1f_ffff;
+    x = (x | x << 32) & 0x1f_0000_0000_ffff;
+    x = (x | x << 16) & 0x1f_0000_ff00_00ff;
+    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+    x = (x | x << 2) & 0x1249_2492_4924_9249;
+    x
+}
+
+/// Unit normal and area of a face from its area vector `N = 2A n`. A face whose normal is not
+/// representable (zero area, or so small that normalising would overflow) gets the zero
+/// normal and zero area: it then carries no weight anywhere and never produces a NaN.
+#[inline]
+pub fn unit_normal(area_vector: DVec3) -> (DVec3, f64) {
+    let len = area_vector.length();
+    if len > f64::MIN_POSITIVE && len.is_finite() {
+        (area_vector / len, 0.5 * len)
+    } else {
+        (DVec3::ZERO, 0.0)
+    }
+}
+
+/// Per-face geometry, indexed like [`FlatSurface::triangles`].
+#[derive(Clone, Debug, Default)]
+pub struct FaceFrames {
+    /// Unit normals (zero for a degenerate face).
+    pub normals: Vec<DVec3>,
+    /// Areas (zero for a degenerate face).
+    pub areas: Vec<f64>,
+    /// Centroids, the vertices of the dual mesh.
+    pub centroids: Vec<DVec3>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn adjacency_is_symmetric_and_stops_at_boundaries() {
+        // Two triangles sharing the diagonal of a unit square.
+        let p = [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
+        let built = Mesh::from_triangles(&p, &[[0, 1, 2], [0, 2, 3]]).expect("valid mesh");
+        let s = FlatSurface::new(&built.mesh);
+        assert_eq!(s.n_faces(), 2);
+        assert_eq!(s.vertex_slots, 4);
+        for f in 0..2 {
+            let across: Vec<u32> = s.adjacency[f]
+                .iter()
+                .copied()
+                .filter(|&g| g != NO_FACE)
+                .collect();
+            assert_eq!(across, vec![1 - f as u32]);
+        }
+        let frames = s.face_frames(&built.mesh.positions());
+        assert_eq!(frames.normals, vec![DVec3::Z, DVec3::Z]);
+        assert_eq!(frames.areas, vec![0.5, 0.5]);
+        assert!(
+            (s.mean_edge_length(&built.mesh.positions()) - (4.0 + 2.0 * 2f64.sqrt()) / 6.0).abs()
+                < 1e-15
+        );
+    }
+
+    #[test]
+    fn spatial_reordering_keeps_the_surface() {
+        let mut p = Vec::new();
+        let mut t = Vec::new();
+        for j in 0..6u32 {
+            for i in 0..6u32 {
+                p.push(DVec3::new(
+                    i as f64,
+                    j as f64,
+                    ((i * 7 + j * 3) % 5) as f64 * 0.1,
+                ));
+            }
+        }
+        for j in 0..5u32 {
+            for i in 0..5u32 {
+                let a = j * 6 + i;
+                t.push([a, a + 1, a + 7]);
+                t.push([a, a + 7, a + 6]);
+            }
+        }
+        let built = Mesh::from_triangles(&p, &t).expect("valid grid");
+        let mut s = FlatSurface::new(&built.mesh);
+        let before = s.clone();
+        s.reorder_spatially(&built.mesh.positions());
+        assert_ne!(s.triangles, before.triangles, "the order changed");
+        let mut a = s.triangles.clone();
+        let mut b = before.triangles.clone();
+        a.sort_unstable();
+        b.sort_unstable();
+        assert_eq!(a, b, "same triangles");
+        // Adjacency still names the face sharing each edge.
+        for (f, t) in s.triangles.iter().enumerate() {
+            for k in 0..3 {
+                let g = s.adjacency[f][k];
+                if g != NO_FACE {
+                    let u = s.triangles[g as usize];
+                    assert!(u.contains(&t[k]) && u.contains(&t[(k + 1) % 3]));
+                }
+            }
+        }
+        assert_eq!(spread3(0b111), 0b1001001);
+    }
+
+    #[test]
+    fn degenerate_faces_get_zero_normals() {
+        assert_eq!(unit_normal(DVec3::ZERO), (DVec3::ZERO, 0.0));
+        assert_eq!(unit_normal(DVec3::splat(f64::INFINITY)), (DVec3::ZERO, 0.0));
+        let (n, a) = unit_normal(DVec3::new(0.0, 0.0, 1e-100));
+        assert_eq!(n, DVec3::Z);
+        assert!(a > 0.0);
+    }
+}
