@@ -563,7 +563,11 @@ fn build_triangles(
     // every later stage (the PM's base mesh, the .pyr file) rebuilds from triangles. Detach
     // one endpoint into one copy per triangle (unpair all its edges) and split fans again;
     // each round removes pairings, so this ends.
-    loop {
+    // Only edges shared by more than two triangles, or cut to orient, can leave two edges
+    // on one vertex pair: each other pair of vertices has a single edge group of at most two
+    // triangles, which stays one edge whatever the fan splitting does.
+    let may_have_multi_edges = report.non_manifold_edges > 0 || report.orientation_cuts > 0;
+    while may_have_multi_edges {
         let detach = multi_edge_vertices(tris, &mate, &corner_vertex, vertex_source.len());
         if detach.is_empty() {
             break;
