@@ -567,7 +567,10 @@ fn build_triangles(
     // on one vertex pair: each other pair of vertices has a single edge group of at most two
     // triangles, which stays one edge whatever the fan splitting does.
     let may_have_multi_edges = report.non_manifold_edges > 0 || report.orientation_cuts > 0;
-    while may_have_multi_edges {
+    loop {
+        if !may_have_multi_edges {
+            break;
+        }
         let detach = multi_edge_vertices(tris, &mate, &corner_vertex, vertex_source.len());
         if detach.is_empty() {
             break;
