@@ -1,14 +1,11 @@
 //! `meshpyr compare` end to end: JSON keys and values, symmetry of the Hausdorff distance,
 //! human-readable output, error exits.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-}
+use common::data;
+use std::path::Path;
+use std::process::{Command, Output};
 
 fn compare(args: &[&Path], json: bool) -> Output {
     let mut c = Command::new(env!("CARGO_BIN_EXE_meshpyr"));

@@ -1,6 +1,9 @@
 //! `meshpyr smooth` end to end: layout kept, methods improve a noisy fandisk, determinism,
 //! error exits.
 
+mod common;
+
+use common::data;
 use meshpyr::mesh::{Attribute, AttributeData, PolygonMesh};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -9,16 +12,8 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_meshpyr"))
 }
 
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-}
-
 fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("meshpyr-cli-smooth-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
+    common::scratch("cli-smooth", name)
 }
 
 fn smooth(input: &Path, output: &Path, extra: &[&str]) -> Output {

@@ -7,65 +7,10 @@ use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
 use meshpyr::pyramid::{Filter, LevelGains, LevelSpec, MoveHandle, Pyramid};
 use meshpyr::relax::SecondDifference;
-use std::collections::HashMap;
 
 /// Icosphere with `levels` 1-to-4 subdivisions, made bumpy and (deterministically) noisy.
 fn bumpy_sphere(levels: usize, noise: f64) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let mut v: Vec<DVec3> = [
-        [-1., t, 0.],
-        [1., t, 0.],
-        [-1., -t, 0.],
-        [1., -t, 0.],
-        [0., -1., t],
-        [0., 1., t],
-        [0., -1., -t],
-        [0., 1., -t],
-        [t, 0., -1.],
-        [t, 0., 1.],
-        [-t, 0., -1.],
-        [-t, 0., 1.],
-    ]
-    .iter()
-    .map(|p| DVec3::from_array(*p).normalize())
-    .collect();
-    let mut f: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut mid = HashMap::new();
-        let mut g = Vec::new();
-        let mut m = |a: u32, b: u32, v: &mut Vec<DVec3>| {
-            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                v.push((v[a as usize] + v[b as usize]).normalize());
-                (v.len() - 1) as u32
-            })
-        };
-        for [a, b, c] in f {
-            let (ab, bc, ca) = (m(a, b, &mut v), m(b, c, &mut v), m(c, a, &mut v));
-            g.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        f = g;
-    }
+    let (v, f) = meshpyr::mesh::shapes::icosphere(levels);
     let mut state = 0x2545_f491_4f6c_dd1du64;
     let mut rnd = move || {
         state ^= state << 13;

@@ -5,6 +5,7 @@ pub mod build;
 pub mod geometry;
 pub mod halfedge;
 pub mod polygon;
+pub mod shapes;
 pub mod topology;
 pub mod validate;
 

@@ -25,65 +25,7 @@ pub fn grid(n: usize, z: f64) -> Mesh {
 /// The unit icosphere: an icosahedron, `levels` times split 1-to-4 with new vertices pushed
 /// onto the sphere.
 pub fn icosphere(levels: usize) -> Mesh {
-    let t = (1.0 + 5f64.sqrt()) / 2.0;
-    let mut p: Vec<DVec3> = [
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ]
-    .iter()
-    .map(|a| DVec3::from_array(*a).normalize())
-    .collect();
-    let mut f: Vec<[u32; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..levels {
-        let mut mid = std::collections::HashMap::new();
-        let mut split = |a: u32, b: u32, p: &mut Vec<DVec3>| {
-            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                p.push(((p[a as usize] + p[b as usize]) * 0.5).normalize());
-                (p.len() - 1) as u32
-            })
-        };
-        let mut g = Vec::with_capacity(4 * f.len());
-        for [a, b, c] in f {
-            let (ab, bc, ca) = (
-                split(a, b, &mut p),
-                split(b, c, &mut p),
-                split(c, a, &mut p),
-            );
-            g.extend([[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]);
-        }
-        f = g;
-    }
+    let (p, f) = crate::mesh::shapes::icosphere(levels);
     Mesh::from_triangles(&p, &f).expect("icosphere").mesh
 }
 

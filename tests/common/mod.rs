@@ -18,6 +18,13 @@ pub fn data(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// A fresh-per-process scratch file `name` in a temporary folder named after `test`.
+pub fn scratch(test: &str, name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("meshpyr-{test}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
 /// Bytes of a file in `tests/data`.
 pub fn data_bytes(name: &str) -> Vec<u8> {
     std::fs::read(data(name)).unwrap()
