@@ -19,6 +19,11 @@ use glam::DVec3;
 /// Relative area below which a triangle is skipped (area < ε·ℓ_max²).
 pub const DEGENERATE_AREA: f64 = 1e-12;
 
+/// Below this many rows the matrix work stays on one thread (rayon's overhead would dominate).
+const PARALLEL_ROWS: usize = 32_768;
+/// Rows per parallel task.
+const ROW_CHUNK: usize = 4096;
+
 /// A symmetric sparse matrix in CSR form with the diagonal entry stored first in every row.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SymmetricCsr {
@@ -44,16 +49,28 @@ impl SymmetricCsr {
 
     /// `y = A x` for `K` right-hand sides stored row-major.
     pub fn mul<const K: usize>(&self, x: &[[f64; K]], y: &mut [[f64; K]]) {
-        for (i, yi) in y.iter_mut().enumerate() {
-            let (s, e) = (self.row_start[i] as usize, self.row_start[i + 1] as usize);
-            let mut acc = [0.0; K];
-            for k in s..e {
-                let (c, v) = (self.col[k] as usize, self.val[k]);
-                for (a, xc) in acc.iter_mut().zip(&x[c]) {
-                    *a += v * xc;
+        // Rows are independent and each is summed in column order, so splitting the rows
+        // over threads gives the same bits as one thread.
+        let rows = |first: usize, y: &mut [[f64; K]]| {
+            for (i, yi) in (first..).zip(y.iter_mut()) {
+                let (s, e) = (self.row_start[i] as usize, self.row_start[i + 1] as usize);
+                let mut acc = [0.0; K];
+                for k in s..e {
+                    let (c, v) = (self.col[k] as usize, self.val[k]);
+                    for (a, xc) in acc.iter_mut().zip(&x[c]) {
+                        *a += v * xc;
+                    }
                 }
+                *yi = acc;
             }
-            *yi = acc;
+        };
+        if y.len() < PARALLEL_ROWS {
+            rows(0, y);
+        } else {
+            use rayon::prelude::*;
+            y.par_chunks_mut(ROW_CHUNK)
+                .enumerate()
+                .for_each(|(c, chunk)| rows(c * ROW_CHUNK, chunk));
         }
     }
 }
@@ -105,13 +122,13 @@ pub fn cotangent_stiffness(
     for i in 0..n {
         fill[i + 1] += fill[i];
     }
-    let mut entries: Vec<(u32, f64)> = vec![(0, 0.0); fill[n] as usize];
-    let mut cursor = fill.clone();
-    for (ti, t) in triangles.iter().enumerate() {
+    // w[j]: ½ a_T cot of the angle at corner j+2, which is opposite edge (j, j+1). Computed per
+    // triangle independently (in parallel on big meshes; same bits either way).
+    let weights_of = |ti: usize| {
+        let t = triangles[ti];
         let v = t.map(|i| positions[i as usize]);
         let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
         let coef = face_coefficient.map_or(1.0, |c| c[ti]);
-        // w[j]: ½ a_T cot of the angle at corner j+2, which is opposite edge (j, j+1).
         let mut w = [0.0; 3];
         if !is_degenerate(v[0], v[1], v[2], area) {
             for (j, wj) in w.iter_mut().enumerate() {
@@ -119,6 +136,20 @@ pub fn cotangent_stiffness(
                 *wj = 0.5 * coef * cotangent(v[j] - o, v[(j + 1) % 3] - o);
             }
         }
+        w
+    };
+    let tri_weights: Vec<[f64; 3]> = if triangles.len() < PARALLEL_ROWS {
+        (0..triangles.len()).map(weights_of).collect()
+    } else {
+        use rayon::prelude::*;
+        (0..triangles.len())
+            .into_par_iter()
+            .map(weights_of)
+            .collect()
+    };
+    let mut entries: Vec<(u32, f64)> = vec![(0, 0.0); fill[n] as usize];
+    let mut cursor = fill.clone();
+    for (t, w) in triangles.iter().zip(&tri_weights) {
         for j in 0..3 {
             let (a, b) = (t[j], t[(j + 1) % 3]);
             for (row, col) in [(a, b), (b, a)] {
@@ -128,13 +159,31 @@ pub fn cotangent_stiffness(
             }
         }
     }
+    drop(tri_weights);
+    // Each row by column (rows are independent: parallel on big meshes). The sort is stable,
+    // so equal columns keep their triangle order and sum in the same order as before.
+    {
+        let mut rows: Vec<&mut [(u32, f64)]> = Vec::with_capacity(n);
+        let mut rest: &mut [(u32, f64)] = &mut entries;
+        for i in 0..n {
+            let (row, tail) = rest.split_at_mut((fill[i + 1] - fill[i]) as usize);
+            rows.push(row);
+            rest = tail;
+        }
+        let sort = |row: &mut &mut [(u32, f64)]| row.sort_by_key(|e| e.0);
+        if n < PARALLEL_ROWS {
+            rows.iter_mut().for_each(sort);
+        } else {
+            use rayon::prelude::*;
+            rows.par_iter_mut().for_each(sort);
+        }
+    }
     let mut row_start = Vec::with_capacity(n + 1);
     let mut col = Vec::with_capacity(n + entries.len() / 2);
     let mut val = Vec::with_capacity(col.capacity());
     row_start.push(0u32);
     for i in 0..n {
-        let row = &mut entries[fill[i] as usize..fill[i + 1] as usize];
-        row.sort_unstable_by_key(|e| e.0);
+        let row = &entries[fill[i] as usize..fill[i + 1] as usize];
         let diag_at = val.len();
         col.push(i as u32);
         val.push(0.0);
