@@ -21,7 +21,7 @@
 //! faces keep the order of the triangles they come from. [`SourceMap`] maps mesh vertices and
 //! faces back onto the input, so processed results can be written in the user's layout.
 
-use super::halfedge::{FaceId, FaceRecord, HalfedgeRecord, Mesh, VertexId, VertexRecord};
+use super::halfedge::{FaceId, FaceRecord, HalfedgeRecord, Mesh, VertexRecord};
 use super::polygon::PolygonMesh;
 use glam::DVec3;
 use serde::Serialize;
@@ -426,7 +426,15 @@ fn build_triangles(
     let mut flags = vec![0u8; nh];
     let mut any_same_direction = false;
     {
-        let (starts, items) = bucket(nh, nv, |c| from(&tris, c).min(to(&tris, c)));
+        // Endpoints per corner, read once in order: the bucket walk below visits corners in
+        // random order, and two u32 lookups there beat re-reading the triangles.
+        let (lo_of, hi_of): (Vec<u32>, Vec<u32>) = (0..nh as u32)
+            .map(|c| {
+                let (a, b) = (from(&tris, c), to(&tris, c));
+                (a.min(b), a.max(b))
+            })
+            .unzip();
+        let (starts, items) = bucket(nh, nv, |c| lo_of[c as usize]);
         let mut scratch: Vec<(u32, u32)> = Vec::new();
         for lo in 0..nv {
             let b = &items[starts[lo] as usize..starts[lo + 1] as usize];
@@ -434,7 +442,7 @@ fn build_triangles(
                 continue;
             }
             scratch.clear();
-            scratch.extend(b.iter().map(|&c| (from(&tris, c).max(to(&tris, c)), c)));
+            scratch.extend(b.iter().map(|&c| (hi_of[c as usize], c)));
             scratch.sort_unstable();
             for group in scratch.chunk_by(|a, b| a.0 == b.0) {
                 if group.len() < 2 {
@@ -620,11 +628,21 @@ fn build_triangles(
             boundary_in[corner_vertex[c as usize] as usize] = b;
         }
     }
+    // A vertex's half-edge: its boundary out-going one, else its first corner's.
+    let mut first_corner = vec![NONE; n_total];
+    for (c, &v) in corner_vertex.iter().enumerate() {
+        let f = &mut first_corner[v as usize];
+        if *f == NONE {
+            *f = c as u32;
+        }
+    }
     let mut mesh = Mesh::new();
     mesh.vertices.reserve(n_total);
     for (i, &s) in vertex_source.iter().enumerate() {
         let halfedge = if boundary_out[i] != NONE {
             Some(fresh_key(boundary_out[i] as usize))
+        } else if first_corner[i] != NONE {
+            Some(fresh_key(first_corner[i] as usize))
         } else {
             None
         };
@@ -651,8 +669,6 @@ fn build_triangles(
             face: Some(fresh_key((c / 3) as usize)),
         });
         debug_assert_eq!(_k, fresh_key(c as usize));
-        let v = fresh_key::<VertexId>(corner_vertex[c as usize] as usize);
-        mesh.vertices[v].halfedge.get_or_insert(_k);
     }
     for c in 0..nh as u32 {
         let b = boundary_index[c as usize];
