@@ -2,7 +2,7 @@
 //! and its 1-ring with the level's relaxation weights, rebuild their frames from the prediction,
 //! and add the scaled details.
 //!
-//! The prediction step here is the one the analysis uses too ([`predict_local`]), so both passes
+//! The prediction step here is the one the analysis uses too (`predict_local`), so both passes
 //! evaluate identical arithmetic in identical order; with unit gains synthesis returns the
 //! analysed signal up to rounding.
 //!
