@@ -250,56 +250,8 @@ mod tests {
     use super::*;
 
     fn icosphere(levels: usize) -> Mesh {
-        let t = (1.0 + 5f64.sqrt()) / 2.0;
-        let mut p: Vec<DVec3> = [
-            [-1.0, t, 0.0],
-            [1.0, t, 0.0],
-            [-1.0, -t, 0.0],
-            [1.0, -t, 0.0],
-            [0.0, -1.0, t],
-            [0.0, 1.0, t],
-            [0.0, -1.0, -t],
-            [0.0, 1.0, -t],
-            [t, 0.0, -1.0],
-            [t, 0.0, 1.0],
-            [-t, 0.0, -1.0],
-            [-t, 0.0, 1.0],
-        ]
-        .iter()
-        .map(|a| DVec3::from_array(*a).normalize())
-        .collect();
-        let f: Vec<[u32; 3]> = vec![
-            [0, 11, 5],
-            [0, 5, 1],
-            [0, 1, 7],
-            [0, 7, 10],
-            [0, 10, 11],
-            [1, 5, 9],
-            [5, 11, 4],
-            [11, 10, 2],
-            [10, 7, 6],
-            [7, 1, 8],
-            [3, 9, 4],
-            [3, 4, 2],
-            [3, 2, 6],
-            [3, 6, 8],
-            [3, 8, 9],
-            [4, 9, 5],
-            [2, 4, 11],
-            [6, 2, 10],
-            [8, 6, 7],
-            [9, 8, 1],
-        ];
-        let mut m = Mesh::from_triangles(&p, &f).unwrap().mesh;
-        for _ in 0..levels {
-            m = crate::subdiv::refine::quadrisect(&m).unwrap().mesh;
-            p = m.positions().iter().map(|q| q.normalize()).collect();
-            let ids: Vec<_> = m.vertices().collect();
-            for (v, q) in ids.into_iter().zip(&p) {
-                m.set_position(v, *q);
-            }
-        }
-        m
+        let (p, f) = crate::mesh::shapes::icosphere(levels);
+        Mesh::from_triangles(&p, &f).unwrap().mesh
     }
 
     #[test]
