@@ -363,21 +363,18 @@ fn assign_fans(tris: &[[u32; 3]], mate: &[u32], nv: usize) -> (Vec<u32>, Vec<u32
     (corner_vertex, vertex_source, seen)
 }
 
-/// Mesh vertices to detach so that no two distinct edges join the same two vertices: for every
-/// vertex pair with more half-edges than one twin pair (or one boundary half-edge), its
-/// smaller endpoint. Sorted and deduplicated.
-fn multi_edge_vertices(
-    tris: &[[u32; 3]],
-    mate: &[u32],
-    corner_vertex: &[u32],
+/// Calls `f(lo, group)` for every group of two or more corners whose half-edges join the same
+/// two vertices: `lo` is the smaller vertex, `group` the `(hi, corner)` entries sorted by
+/// corner. Buckets by the smaller endpoint, then sorts each (small) bucket by the larger one:
+/// linear overall, O(k log k) at a valence-k vertex, deterministic.
+fn for_each_shared_edge(
+    n_corners: usize,
     n_vertices: usize,
-) -> Vec<u32> {
-    let nh = mate.len();
-    let head = |c: u32| corner_vertex[next_c(c) as usize];
-    let tail = |c: u32| corner_vertex[c as usize];
-    debug_assert_eq!(nh, 3 * tris.len());
-    let (starts, items) = bucket(nh, n_vertices, |c| tail(c).min(head(c)));
-    let mut out = Vec::new();
+    lo_of: impl Fn(u32) -> u32,
+    hi_of: impl Fn(u32) -> u32,
+    mut f: impl FnMut(u32, &[(u32, u32)]),
+) {
+    let (starts, items) = bucket(n_corners, n_vertices, &lo_of);
     let mut scratch: Vec<(u32, u32)> = Vec::new();
     for lo in 0..n_vertices {
         let b = &items[starts[lo] as usize..starts[lo + 1] as usize];
@@ -385,17 +382,35 @@ fn multi_edge_vertices(
             continue;
         }
         scratch.clear();
-        scratch.extend(b.iter().map(|&c| (tail(c).max(head(c)), c)));
+        scratch.extend(b.iter().map(|&c| (hi_of(c), c)));
         scratch.sort_unstable();
         for group in scratch.chunk_by(|a, b| a.0 == b.0) {
-            let clean =
-                group.len() == 1 || (group.len() == 2 && mate[group[0].1 as usize] == group[1].1);
-            if !clean {
-                out.push(lo as u32);
-                break;
+            if group.len() >= 2 {
+                f(lo as u32, group);
             }
         }
     }
+}
+
+/// Mesh vertices to detach so that no two distinct edges join the same two vertices: for every
+/// vertex pair with more half-edges than one twin pair, its smaller endpoint. Sorted and
+/// deduplicated.
+fn multi_edge_vertices(mate: &[u32], corner_vertex: &[u32], n_vertices: usize) -> Vec<u32> {
+    let head = |c: u32| corner_vertex[next_c(c) as usize];
+    let tail = |c: u32| corner_vertex[c as usize];
+    let mut out = Vec::new();
+    for_each_shared_edge(
+        mate.len(),
+        n_vertices,
+        |c| tail(c).min(head(c)),
+        |c| tail(c).max(head(c)),
+        |lo, group| {
+            let clean = group.len() == 2 && mate[group[0].1 as usize] == group[1].1;
+            if !clean && out.last() != Some(&lo) {
+                out.push(lo);
+            }
+        },
+    );
     out
 }
 
@@ -420,8 +435,7 @@ fn build_triangles(
         })
         .count();
 
-    // --- 1. pair half-edges. Bucket by the smaller endpoint, then sort each (small) bucket
-    // by the larger one: linear overall, O(k log k) at a valence-k vertex, deterministic.
+    // --- 1. pair half-edges (see `for_each_shared_edge`).
     let mut mate = vec![NONE; nh];
     let mut flags = vec![0u8; nh];
     let mut any_same_direction = false;
@@ -434,20 +448,12 @@ fn build_triangles(
                 (a.min(b), a.max(b))
             })
             .unzip();
-        let (starts, items) = bucket(nh, nv, |c| lo_of[c as usize]);
-        let mut scratch: Vec<(u32, u32)> = Vec::new();
-        for lo in 0..nv {
-            let b = &items[starts[lo] as usize..starts[lo + 1] as usize];
-            if b.len() < 2 {
-                continue;
-            }
-            scratch.clear();
-            scratch.extend(b.iter().map(|&c| (hi_of[c as usize], c)));
-            scratch.sort_unstable();
-            for group in scratch.chunk_by(|a, b| a.0 == b.0) {
-                if group.len() < 2 {
-                    continue;
-                }
+        for_each_shared_edge(
+            nh,
+            nv,
+            |c| lo_of[c as usize],
+            |c| hi_of[c as usize],
+            |lo, group| {
                 let flag = if group.len() > 2 {
                     SHARED | NON_MANIFOLD
                 } else {
@@ -460,15 +466,15 @@ fn build_triangles(
                     vec![(group[0].1, group[1].1)]
                 } else {
                     report.non_manifold_edges += 1;
-                    pair_around_edge(positions, &tris, lo as u32, group)
+                    pair_around_edge(positions, &tris, lo, group)
                 };
                 for (a, b) in pairs {
                     any_same_direction |= from(&tris, a) == from(&tris, b);
                     mate[a as usize] = b;
                     mate[b as usize] = a;
                 }
-            }
-        }
+            },
+        );
     }
 
     // --- 2. consistent orientation per component (breadth-first over paired edges). When
@@ -574,15 +580,12 @@ fn build_triangles(
     // Only edges shared by more than two triangles, or cut to orient, can leave two edges
     // on one vertex pair: each other pair of vertices has a single edge group of at most two
     // triangles, which stays one edge whatever the fan splitting does.
-    let may_have_multi_edges = report.non_manifold_edges > 0 || report.orientation_cuts > 0;
-    loop {
-        if !may_have_multi_edges {
-            break;
-        }
-        let detach = multi_edge_vertices(tris, &mate, &corner_vertex, vertex_source.len());
-        if detach.is_empty() {
-            break;
-        }
+    let mut detach = if report.non_manifold_edges > 0 || report.orientation_cuts > 0 {
+        multi_edge_vertices(&mate, &corner_vertex, vertex_source.len())
+    } else {
+        Vec::new()
+    };
+    while !detach.is_empty() {
         report.detached_vertices += detach.len();
         let mut marked = vec![false; vertex_source.len()];
         for &u in &detach {
@@ -600,6 +603,7 @@ fn build_triangles(
             }
         }
         (corner_vertex, vertex_source, seen) = assign_fans(tris, &mate, nv);
+        detach = multi_edge_vertices(&mate, &corner_vertex, vertex_source.len());
     }
     report.unreferenced_vertices = seen.iter().filter(|s| !**s).count();
     drop(seen);
