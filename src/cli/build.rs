@@ -5,8 +5,9 @@
 
 use super::filter::RelaxKind;
 use super::{BarProgress, Global};
-use crate::format::{self, BuildInfo, RelaxationSpec};
+use crate::format::{self, BuildInfo, FormatError, RelaxationSpec, SizeReport};
 use crate::io;
+use crate::mesh::PolygonMesh;
 use crate::pm::{PmOptions, ProgressiveMesh};
 use crate::pyramid::ScanPyramid;
 use anyhow::Context;
@@ -29,16 +30,13 @@ pub struct BuildArgs {
 
 /// Runs `meshpyr build`.
 pub fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
-    let info = BuildInfo {
-        pm_options: PmOptions::default(),
-        relaxation: args.relax.spec()?,
-    };
+    let relaxation = args.relax.spec()?;
     let input = io::read_mesh(&args.input)?;
     let start = Instant::now();
     let built = crate::mesh::Mesh::from_polygons(&input)
         .with_context(|| format!("cannot build the mesh of {}", args.input.display()))?;
     let bar = global.progress("build");
-    let pm = ProgressiveMesh::build(&built.mesh, &info.pm_options, &BarProgress(&bar))
+    let pm = ProgressiveMesh::build(&built.mesh, &PmOptions::default(), &BarProgress(&bar))
         .with_context(|| {
             format!(
                 "cannot build the progressive mesh of {}",
@@ -48,7 +46,7 @@ pub fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
     bar.finish_and_clear();
     let built_s = start.elapsed().as_secs_f64();
     let start = Instant::now();
-    let (bytes, sizes) = format::encode(&input, &pm, &info)
+    let (bytes, sizes) = encode_pyr(&input, &pm, relaxation)
         .with_context(|| format!("cannot encode {}", args.input.display()))?;
     let encode_s = start.elapsed().as_secs_f64();
     io::write_atomic(&args.output, &bytes)?;
@@ -119,11 +117,21 @@ pub fn save_edited(
 ) -> anyhow::Result<()> {
     let (input, pm) = format::with_positions(&scan.input, &scan.built, &scan.pm, input_positions)
         .context("cannot save the edit")?;
+    let (bytes, _) = encode_pyr(&input, &pm, relaxation).context("cannot save the edit")?;
+    io::write_atomic(path, &bytes)?;
+    Ok(())
+}
+
+/// The `.pyr` file of `input` with its hierarchy `pm` (built with the default options, as
+/// every command builds it) and the relaxation the pyramid is analysed with.
+pub fn encode_pyr(
+    input: &PolygonMesh,
+    pm: &ProgressiveMesh,
+    relaxation: RelaxationSpec,
+) -> Result<(Vec<u8>, SizeReport), FormatError> {
     let info = BuildInfo {
         pm_options: PmOptions::default(),
         relaxation,
     };
-    let (bytes, _) = format::encode(&input, &pm, &info).context("cannot save the edit")?;
-    io::write_atomic(path, &bytes)?;
-    Ok(())
+    format::encode(input, pm, &info)
 }

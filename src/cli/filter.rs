@@ -212,11 +212,8 @@ pub fn demo_filters(
     let relaxation = SecondDifference::default();
     let scan = build_pyramid(input, &relaxation, stem, global)?;
     // The hierarchy, saved: `filter`, `spectrum` and `edit` take it instead of the mesh.
-    let info = crate::format::BuildInfo {
-        pm_options: crate::pm::PmOptions::default(),
-        relaxation: RelaxationSpec::of(&relaxation),
-    };
-    let (bytes, sizes) = crate::format::encode(&scan.input, &scan.pm, &info)?;
+    let (bytes, sizes) =
+        super::build::encode_pyr(&scan.input, &scan.pm, RelaxationSpec::of(&relaxation))?;
     let pyr_path = dir.join(format!("{stem}.pyr"));
     io::write_atomic(&pyr_path, &bytes)?;
     global.say(format_args!(

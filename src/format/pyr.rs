@@ -106,11 +106,7 @@ impl RelaxationSpec {
 
     /// The operator's command-line name (`second-difference`, `mcm`, `normal`).
     pub fn name(&self) -> &'static str {
-        match self {
-            RelaxationSpec::SecondDifference { .. } => "second-difference",
-            RelaxationSpec::MeanCurvature { .. } => "mcm",
-            RelaxationSpec::NormalAdaptive { .. } => "normal",
-        }
+        self.operator().name()
     }
 
     /// `None` when every option is in its valid range, else what is wrong (a file could hold
