@@ -100,12 +100,11 @@ impl SecondDifference {
         geometry: &[DVec3],
         h: HalfedgeId,
     ) -> Option<([VertexId; 4], [f64; 4])> {
-        let t = mesh.twin(h);
-        if t.slot() < h.slot() {
-            let ([j1, j2, l1, l2], [c1, c2, d1, d2]) = self.canonical_flap(mesh, geometry, t)?;
-            return Some(([j2, j1, l2, l1], [c2, c1, d2, d1]));
-        }
-        self.canonical_flap(mesh, geometry, h)
+        let (canonical, flipped) = canonical_halfedge(mesh, h);
+        Some(orient_flap(
+            self.canonical_flap(mesh, geometry, canonical)?,
+            flipped,
+        ))
     }
 
     /// [`Self::edge_flap`] evaluated along `h` itself.
@@ -217,12 +216,7 @@ impl FlapCache {
         geometry: &[DVec3],
         h: HalfedgeId,
     ) -> Option<([VertexId; 4], [f64; 4])> {
-        let t = mesh.twin(h);
-        let (canonical, flipped) = if t.slot() < h.slot() {
-            (t, true)
-        } else {
-            (h, false)
-        };
+        let (canonical, flipped) = canonical_halfedge(mesh, h);
         let key = canonical.slot() as u32;
         // Fibonacci hashing: neighbouring slots spread over the table.
         let at =
@@ -235,12 +229,29 @@ impl FlapCache {
             self.flaps[at] = f;
             f
         };
-        let (v, c) = flap?;
-        Some(if flipped {
-            ([v[1], v[0], v[3], v[2]], [c[1], c[0], c[3], c[2]])
-        } else {
-            (v, c)
-        })
+        Some(orient_flap(flap?, flipped))
+    }
+}
+
+/// The half-edge of `h`'s edge with the smaller slot, and whether it runs against `h`.
+#[inline]
+fn canonical_halfedge(mesh: &Mesh, h: HalfedgeId) -> (HalfedgeId, bool) {
+    let t = mesh.twin(h);
+    if t.slot() < h.slot() {
+        (t, true)
+    } else {
+        (h, false)
+    }
+}
+
+/// A flap computed along the canonical half-edge, seen from its twin when `flipped`: `j1, j2`
+/// and `l1, l2` swap, with their coefficients.
+#[inline]
+fn orient_flap((v, c): ([VertexId; 4], [f64; 4]), flipped: bool) -> ([VertexId; 4], [f64; 4]) {
+    if flipped {
+        ([v[1], v[0], v[3], v[2]], [c[1], c[0], c[3], c[2]])
+    } else {
+        (v, c)
     }
 }
 
