@@ -27,15 +27,16 @@
 //! Boundaries ([`Boundary`]): `Fixed` pins the rim (Dirichlet rows, their columns moved to the
 //! right-hand side so the system stays symmetric); `Smooth` uses the natural boundary
 //! conditions of the finite-element Laplacian. Vertices whose triangles are all degenerate
-//! (zero mass, including isolated vertices) stay where they are. Everything runs sequentially
-//! in a fixed order, so results are reproducible bit for bit.
+//! (zero mass, including isolated vertices) stay where they are. Every sum runs in a fixed
+//! order (the matrix work splits only by rows), so results are the same bits with any number
+//! of threads.
 
 use super::{Boundary, SmoothError};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::subdiv::cascadic::solve_exact;
 use crate::subdiv::fem::{
-    clamp_negative_weights, cotangent_stiffness, identity_rows, lumped_mass, system_matrix,
+    clamp_negative_weights, cotangent_stiffness, lumped_mass, mass_rhs, system_matrix,
 };
 use glam::DVec3;
 
@@ -100,17 +101,7 @@ pub fn implicit_mcf(
         let mut stiffness = cotangent_stiffness(&triangles, &x, None);
         clamp_negative_weights(&mut stiffness);
         let mut a = system_matrix(&mass, stiffness, dt);
-        let zero_mass = identity_rows(&mass);
-        let mut b: Vec<[f64; 3]> = x
-            .iter()
-            .zip(&mass)
-            .map(|(p, m)| (*p * *m).to_array())
-            .collect();
-        for (i, bi) in b.iter_mut().enumerate() {
-            if zero_mass[i] {
-                *bi = x[i].to_array();
-            }
-        }
+        let mut b = mass_rhs(&mass, &x);
         pin_rows(&mut a, &mut b, &x, &pinned);
         let mut sol: Vec<[f64; 3]> = x.iter().map(|p| p.to_array()).collect();
         solve_exact(&a, &b, &mut sol, SOLVE_TOLERANCE).map_err(|reason| SmoothError::Solver {

@@ -22,7 +22,9 @@
 //!
 //! Everything runs in a fixed sequential order, so results are bit-for-bit reproducible.
 
-use super::fem::{SymmetricCsr, cotangent_stiffness, identity_rows, lumped_mass, system_matrix};
+use super::fem::{
+    SymmetricCsr, cotangent_stiffness, identity_rows, lumped_mass, mass_rhs, system_matrix,
+};
 use super::refine::{Marking, Refined, bisect, initial_marking, quadrisect};
 use super::{Refinement, Solver, SubdivError, SubdivOptions, Subdivision, compact, default_beta};
 use crate::mesh::{Mesh, SlotIndex};
@@ -354,9 +356,7 @@ pub fn subdivide_mcm(
         } else {
             let stiffness = cotangent_stiffness(&triangles, &positions, None);
             let a = system_matrix(&mass, stiffness, alpha);
-            let b: Vec<[f64; 3]> = (0..positions.len())
-                .map(|i| (x0[i] * if pinned[i] { 1.0 } else { mass[i] }).to_array())
-                .collect();
+            let b = mass_rhs(&mass, &x0);
             let mut x: Vec<[f64; 3]> = positions.iter().map(|p| p.to_array()).collect();
             let taken = run_solver(options, &a, &b, &mut x, m_l).map_err(fail)?;
             let residual = relative_residual(&a, &b, &x);

@@ -266,6 +266,16 @@ pub fn identity_rows(mass: &[f64]) -> Vec<bool> {
     mass.iter().map(|&m| m.is_nan() || m <= 0.0).collect()
 }
 
+/// The right-hand side `M x` of `(M + αL) x′ = M x`, except on the rows [`system_matrix`]
+/// turns into identity rows, which keep `x` itself.
+pub fn mass_rhs(mass: &[f64], x: &[DVec3]) -> Vec<[f64; 3]> {
+    x.iter()
+        .zip(identity_rows(mass))
+        .zip(mass)
+        .map(|((p, identity), m)| (*p * if identity { 1.0 } else { *m }).to_array())
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
