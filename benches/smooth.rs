@@ -5,7 +5,6 @@
 //! `cargo bench --bench smooth` (add `-- --quick` for a fast look).
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use glam::DVec3;
 use meshpyr::mesh::Mesh;
 use meshpyr::progress::NoProgress;
 use meshpyr::smooth::{DenoiseOptions, denoise};
@@ -17,25 +16,7 @@ fn noisy_sphere(nu: usize, nv: usize) -> Mesh {
         x - x.floor() - 0.5
     };
     let edge = std::f64::consts::PI / nv as f64;
-    let mut p = vec![DVec3::Z, -DVec3::Z];
-    for j in 1..nv {
-        let th = std::f64::consts::PI * j as f64 / nv as f64;
-        for i in 0..nu {
-            let ph = 2.0 * std::f64::consts::PI * i as f64 / nu as f64;
-            let r = 1.0 + 0.7 * edge * hash(p.len());
-            p.push(r * DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()));
-        }
-    }
-    let id = |i: usize, j: usize| (2 + (j - 1) * nu + i % nu) as u32;
-    let mut t = Vec::new();
-    for i in 0..nu {
-        t.push([0, id(i, 1), id(i + 1, 1)]);
-        t.push([1, id(i + 1, nv - 1), id(i, nv - 1)]);
-        for j in 1..nv - 1 {
-            t.push([id(i, j), id(i, j + 1), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
-        }
-    }
+    let (p, t) = meshpyr::mesh::shapes::uv_sphere(nu, nv, |k, _, _| 1.0 + 0.7 * edge * hash(k));
     Mesh::from_triangles(&p, &t).expect("valid sphere").mesh
 }
 

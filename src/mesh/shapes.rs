@@ -75,3 +75,66 @@ pub fn icosphere(levels: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     }
     (p, f)
 }
+
+/// A regular grid of `n × n` quads, each split along the same diagonal: `(n + 1)²` vertices
+/// `point(i, j)` (`i, j` in `0..=n`, vertex `j·(n+1) + i`) and `2n²` counter-clockwise
+/// triangles (seen from +z for an increasing `point`). An open disk.
+///
+/// ```
+/// use glam::DVec3;
+/// let (p, t) = meshpyr::mesh::shapes::grid(2, |i, j| DVec3::new(i as f64, j as f64, 0.0));
+/// assert_eq!((p.len(), t.len()), (9, 8));
+/// assert_eq!(t[0], [0, 1, 4]);
+/// ```
+pub fn grid(n: usize, mut point: impl FnMut(usize, usize) -> DVec3) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let mut p = Vec::with_capacity((n + 1) * (n + 1));
+    for j in 0..=n {
+        for i in 0..=n {
+            p.push(point(i, j));
+        }
+    }
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
+    let mut t = Vec::with_capacity(2 * n * n);
+    for j in 0..n {
+        for i in 0..n {
+            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    (p, t)
+}
+
+/// A closed UV sphere: the poles (vertices 0 = +z and 1 = −z) and `nv − 1` rings of `nu`
+/// vertices, `2·nu·(nv − 1)` outward-facing triangles. Vertex `k` of ring `j` (1-based) at
+/// longitude step `i` sits at distance `radius(k, i, j)` from the origin.
+///
+/// ```
+/// let (p, t) = meshpyr::mesh::shapes::uv_sphere(8, 4, |_, _, _| 1.0);
+/// assert_eq!((p.len(), t.len()), (2 + 8 * 3, 2 * 8 * 3));
+/// ```
+pub fn uv_sphere(
+    nu: usize,
+    nv: usize,
+    mut radius: impl FnMut(usize, usize, usize) -> f64,
+) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let mut p = vec![DVec3::Z, -DVec3::Z];
+    for j in 1..nv {
+        let th = std::f64::consts::PI * j as f64 / nv as f64;
+        for i in 0..nu {
+            let ph = 2.0 * std::f64::consts::PI * i as f64 / nu as f64;
+            let r = radius(p.len(), i, j);
+            p.push(r * DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()));
+        }
+    }
+    let id = |i: usize, j: usize| (2 + (j - 1) * nu + i % nu) as u32;
+    let mut t = Vec::new();
+    for i in 0..nu {
+        t.push([0, id(i, 1), id(i + 1, 1)]);
+        t.push([1, id(i + 1, nv - 1), id(i, nv - 1)]);
+        for j in 1..nv - 1 {
+            t.push([id(i, j), id(i, j + 1), id(i + 1, j + 1)]);
+            t.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
+        }
+    }
+    (p, t)
+}

@@ -76,14 +76,7 @@ impl<'a> Surface<'a> {
 
     /// Mean length over the distinct edges (0 when there are none).
     pub fn mean_edge_length(&self) -> f64 {
-        let mut edges: Vec<(u32, u32)> = self
-            .triangles
-            .iter()
-            .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
-            .map(|(a, b)| (a.min(b), a.max(b)))
-            .collect();
-        edges.sort_unstable();
-        edges.dedup();
+        let edges = distinct_edges(self.triangles);
         if edges.is_empty() {
             return 0.0;
         }
@@ -235,21 +228,27 @@ impl Reference {
     }
 }
 
+/// The distinct undirected edges of `triangles` as `(smaller, larger)` vertex pairs, sorted.
+fn distinct_edges(triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
+    let mut edges: Vec<(u32, u32)> = triangles
+        .iter()
+        .flat_map(|t| [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])])
+        .map(|(a, b)| (a.min(b), a.max(b)))
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    edges
+}
+
 fn one_sided(target: &TriangleBvh, samples: Surface<'_>) -> f64 {
     // Each sample once: the vertices some triangle uses, the midpoint of every distinct
     // edge, and every centroid (visiting them per face would query vertices six times).
     let tris = samples.triangles;
     let mut used = vec![false; samples.positions.len()];
-    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(3 * tris.len());
-    for t in tris {
-        for k in 0..3 {
-            used[t[k] as usize] = true;
-            let (a, b) = (t[k], t[(k + 1) % 3]);
-            edges.push((a.min(b), a.max(b)));
-        }
+    for &i in tris.iter().flatten() {
+        used[i as usize] = true;
     }
-    edges.sort_unstable();
-    edges.dedup();
+    let edges = distinct_edges(tris);
     let p = samples.positions;
     let points: Vec<DVec3> = (0..p.len())
         .filter(|&i| used[i])
@@ -318,21 +317,9 @@ mod tests {
 
     /// An n×n grid of the unit square at height z, two triangles per cell.
     fn grid(n: usize, z: f64) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-        let mut p = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                p.push(DVec3::new(i as f64 / n as f64, j as f64 / n as f64, z));
-            }
-        }
-        let mut t = Vec::new();
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        (p, t)
+        crate::mesh::shapes::grid(n, |i, j| {
+            DVec3::new(i as f64 / n as f64, j as f64 / n as f64, z)
+        })
     }
 
     #[test]

@@ -230,20 +230,9 @@ mod tests {
     use crate::progress::NoProgress;
 
     fn grid(n: usize) -> Mesh {
-        let mut p = Vec::new();
-        let mut t = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                p.push(DVec3::new(i as f64, j as f64, ((i * j) % 3) as f64 * 0.1));
-            }
-        }
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
+        let (p, t) = crate::mesh::shapes::grid(n, |i, j| {
+            DVec3::new(i as f64, j as f64, ((i * j) % 3) as f64 * 0.1)
+        });
         Mesh::from_triangles(&p, &t).unwrap().mesh
     }
 

@@ -22,6 +22,7 @@
 
 use crate::mesh::{Mesh, SlotIndex, VertexId};
 use crate::relax::Relaxation;
+use crate::relax::second_difference::apply_stencil;
 use glam::DVec3;
 use smallvec::SmallVec;
 
@@ -127,7 +128,7 @@ impl Relaxation for NormalAdaptive {
             *o = if w.is_empty() {
                 signal[v.slot()]
             } else {
-                w.iter().map(|&(j, wj)| wj * signal[j.slot()]).sum()
+                apply_stencil(&w, signal)
             };
         }
     }
@@ -157,24 +158,13 @@ mod tests {
 
     /// An (n+1)² grid; points with x > `fold` are bent up by 90° about the line x = fold.
     fn grid(n: usize, fold: Option<f64>) -> Mesh {
-        let mut p = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                let (x, y) = (i as f64, j as f64);
-                p.push(match fold {
-                    Some(f) if x > f => DVec3::new(f, y, x - f),
-                    _ => DVec3::new(x, y, 0.0),
-                });
+        let (p, t) = crate::mesh::shapes::grid(n, |i, j| {
+            let (x, y) = (i as f64, j as f64);
+            match fold {
+                Some(f) if x > f => DVec3::new(f, y, x - f),
+                _ => DVec3::new(x, y, 0.0),
             }
-        }
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        let mut t = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
+        });
         Mesh::from_triangles(&p, &t).expect("valid grid").mesh
     }
 

@@ -210,21 +210,7 @@ mod tests {
 
     /// An n×n grid of unit squares in the plane z = 0, each split along the same diagonal.
     fn grid(n: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-        let mut p = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                p.push(DVec3::new(i as f64, j as f64, 0.0));
-            }
-        }
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        let mut t = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        (p, t)
+        crate::mesh::shapes::grid(n, |i, j| DVec3::new(i as f64, j as f64, 0.0))
     }
 
     fn setup(p: &[DVec3], t: &[[u32; 3]]) -> (FlatSurface, FaceFrames, DualGraph, Vec<DVec3>) {

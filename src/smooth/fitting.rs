@@ -166,6 +166,8 @@ impl<'a> Fitting<'a> {
         }
         let mut old_normals: Vec<DVec3> = vec![DVec3::ZERO; self.surface.n_faces()];
         let mut grad = vec![DVec3::ZERO; nv];
+        // The previous iteration's gradient, for Polak–Ribière (buffers swap each iteration).
+        let mut prev_grad = vec![DVec3::ZERO; nv];
         let mut dir = vec![DVec3::ZERO; nv];
         let mut trial = positions.to_vec();
         self.gradient(positions, &mut grad);
@@ -237,18 +239,16 @@ impl<'a> Fitting<'a> {
                 stalled = 0;
             }
             // Polak–Ribière+: β = max(0, g⁺·(g⁺ − g)/‖g‖²).
-            let old_grad = std::mem::take(&mut grad);
-            let mut new_grad = vec![DVec3::ZERO; nv];
-            self.gradient(positions, &mut new_grad);
-            let new_sq = dot(&new_grad, &new_grad);
-            let cross = dot(&new_grad, &old_grad);
+            std::mem::swap(&mut grad, &mut prev_grad);
+            self.gradient(positions, &mut grad);
+            let new_sq = dot(&grad, &grad);
+            let cross = dot(&grad, &prev_grad);
             let beta = ((new_sq - cross) / grad_sq).max(0.0);
             let beta = if beta.is_finite() { beta } else { 0.0 };
-            for (d, g) in dir.iter_mut().zip(&new_grad) {
+            for (d, g) in dir.iter_mut().zip(&grad) {
                 *d = beta * *d - *g;
             }
             steepest = beta == 0.0;
-            grad = new_grad;
             grad_sq = new_sq;
             // Let the next search start a little beyond this step.
             alpha_guess = 2.0 * alpha;
@@ -323,26 +323,9 @@ mod tests {
 
     fn noisy_sphere() -> (FlatSurface, Vec<DVec3>) {
         // A UV sphere with deterministic radial jitter.
-        let (nu, nv) = (16, 10);
-        let mut p = vec![DVec3::Z, -DVec3::Z];
-        for j in 1..nv {
-            let th = std::f64::consts::PI * j as f64 / nv as f64;
-            for i in 0..nu {
-                let ph = 2.0 * std::f64::consts::PI * i as f64 / nu as f64;
-                let r = 1.0 + 0.05 * ((i * 7 + j * 13) as f64).sin();
-                p.push(r * DVec3::new(th.sin() * ph.cos(), th.sin() * ph.sin(), th.cos()));
-            }
-        }
-        let id = |i: usize, j: usize| (2 + (j - 1) * nu + i % nu) as u32;
-        let mut t = Vec::new();
-        for i in 0..nu {
-            t.push([0, id(i, 1), id(i + 1, 1)]);
-            t.push([1, id(i + 1, nv - 1), id(i, nv - 1)]);
-            for j in 1..nv - 1 {
-                t.push([id(i, j), id(i, j + 1), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
-            }
-        }
+        let (p, t) = crate::mesh::shapes::uv_sphere(16, 10, |_, i, j| {
+            1.0 + 0.05 * ((i * 7 + j * 13) as f64).sin()
+        });
         let built = Mesh::from_triangles(&p, &t).expect("valid sphere");
         (FlatSurface::new(&built.mesh), built.mesh.positions())
     }

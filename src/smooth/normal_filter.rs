@@ -234,21 +234,10 @@ mod tests {
     use crate::smooth::surface::FlatSurface;
 
     fn grid_mesh(n: usize, height: impl Fn(f64, f64) -> f64) -> Mesh {
-        let mut p = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                let (x, y) = (i as f64, j as f64);
-                p.push(DVec3::new(x, y, height(x, y)));
-            }
-        }
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        let mut t = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
+        let (p, t) = crate::mesh::shapes::grid(n, |i, j| {
+            let (x, y) = (i as f64, j as f64);
+            DVec3::new(x, y, height(x, y))
+        });
         Mesh::from_triangles(&p, &t).expect("valid grid").mesh
     }
 

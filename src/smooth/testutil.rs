@@ -5,20 +5,9 @@ use glam::DVec3;
 
 /// An n×n grid of the unit square at height z (open, with a boundary).
 pub fn grid(n: usize, z: f64) -> Mesh {
-    let mut p = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            p.push(DVec3::new(i as f64 / n as f64, j as f64 / n as f64, z));
-        }
-    }
-    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let mut t = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
+    let (p, t) = crate::mesh::shapes::grid(n, |i, j| {
+        DVec3::new(i as f64 / n as f64, j as f64 / n as f64, z)
+    });
     Mesh::from_triangles(&p, &t).expect("grid").mesh
 }
 

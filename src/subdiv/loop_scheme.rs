@@ -98,20 +98,8 @@ mod tests {
     #[test]
     fn planar_grid_stays_planar_and_interior_linear_functions_are_reproduced() {
         let n = 4;
-        let mut p = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                p.push(DVec3::new(i as f64, j as f64, 0.0));
-            }
-        }
+        let (p, t) = crate::mesh::shapes::grid(n, |i, j| DVec3::new(i as f64, j as f64, 0.0));
         let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        let mut t = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
         let m = Mesh::from_triangles(&p, &t).unwrap().mesh;
         let fine = loop_step(&m).unwrap();
         assert_eq!(fine.n_faces(), 4 * m.n_faces());

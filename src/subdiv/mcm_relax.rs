@@ -166,27 +166,16 @@ mod tests {
     use super::*;
 
     fn plane(n: usize, jitter: f64) -> Mesh {
-        let mut p = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                // Deterministic interior jitter keeps triangles valid but irregular.
-                let interior = i > 0 && j > 0 && i < n && j < n;
-                let d = if interior {
-                    jitter * (((i * 7 + j * 13) % 5) as f64 / 5.0 - 0.4)
-                } else {
-                    0.0
-                };
-                p.push(DVec3::new(i as f64 + d, j as f64 - 0.5 * d, 0.0));
-            }
-        }
-        let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-        let mut t = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
+        let (p, t) = crate::mesh::shapes::grid(n, |i, j| {
+            // Deterministic interior jitter keeps triangles valid but irregular.
+            let interior = i > 0 && j > 0 && i < n && j < n;
+            let d = if interior {
+                jitter * (((i * 7 + j * 13) % 5) as f64 / 5.0 - 0.4)
+            } else {
+                0.0
+            };
+            DVec3::new(i as f64 + d, j as f64 - 0.5 * d, 0.0)
+        });
         Mesh::from_triangles(&p, &t).unwrap().mesh
     }
 

@@ -194,20 +194,7 @@ pub fn stretched_octahedron() -> Mesh {
 
 /// A planar n×n grid of unit squares split into triangles (an open disk), in the z = 0 plane.
 pub fn grid(n: usize) -> Mesh {
-    let mut p = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            p.push(DVec3::new(i as f64, j as f64, 0.0));
-        }
-    }
-    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
-    let mut t = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
+    let (p, t) = meshpyr::mesh::shapes::grid(n, |i, j| DVec3::new(i as f64, j as f64, 0.0));
     Mesh::from_triangles(&p, &t).unwrap().mesh
 }
 
