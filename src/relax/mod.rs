@@ -14,6 +14,27 @@ pub mod second_difference;
 pub use normal_adaptive::NormalAdaptive;
 pub use second_difference::SecondDifference;
 
+/// [`Relaxation::relax`] for an operator whose [`Relaxation::stencil`] describes it exactly:
+/// each vertex gets `Σ w · signal[j]` over its stencil (in stencil order), or keeps its value
+/// where it has none.
+pub fn relax_by_stencils<R: Relaxation + ?Sized>(
+    op: &R,
+    mesh: &Mesh,
+    geometry: &[DVec3],
+    signal: &[DVec3],
+    vertices: &[VertexId],
+    out: &mut [DVec3],
+) {
+    let mut stencil = Vec::new();
+    for (o, &v) in out.iter_mut().zip(vertices) {
+        *o = if op.stencil(mesh, geometry, v, &mut stencil) {
+            second_difference::apply_stencil(&stencil, signal)
+        } else {
+            signal[crate::mesh::SlotIndex::slot(v)]
+        };
+    }
+}
+
 /// A local smoothing operator on mesh vertices.
 pub trait Relaxation {
     /// Short name used on the command line (`second-difference`, `mcm`, `normal`).

@@ -22,7 +22,6 @@
 
 use crate::mesh::{Mesh, SlotIndex, VertexId};
 use crate::relax::Relaxation;
-use crate::relax::second_difference::apply_stencil;
 use glam::DVec3;
 use smallvec::SmallVec;
 
@@ -123,14 +122,7 @@ impl Relaxation for NormalAdaptive {
         vertices: &[VertexId],
         out: &mut [DVec3],
     ) {
-        for (o, &v) in out.iter_mut().zip(vertices) {
-            let w = self.weights(mesh, geometry, v);
-            *o = if w.is_empty() {
-                signal[v.slot()]
-            } else {
-                apply_stencil(&w, signal)
-            };
-        }
+        crate::relax::relax_by_stencils(self, mesh, geometry, signal, vertices, out);
     }
 
     fn has_linear_stencils(&self) -> bool {

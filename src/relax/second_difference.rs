@@ -268,14 +268,7 @@ impl Relaxation for SecondDifference {
         vertices: &[VertexId],
         out: &mut [DVec3],
     ) {
-        let mut stencil = Stencil::new();
-        for (o, &v) in out.iter_mut().zip(vertices) {
-            *o = if self.stencil(mesh, geometry, v, &mut stencil) {
-                apply_stencil(&stencil, signal)
-            } else {
-                signal[v.slot()]
-            };
-        }
+        super::relax_by_stencils(self, mesh, geometry, signal, vertices, out);
     }
 
     fn has_linear_stencils(&self) -> bool {
