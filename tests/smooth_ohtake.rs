@@ -4,22 +4,18 @@
 
 use glam::DVec3;
 use meshpyr::mesh::{Mesh, SlotIndex};
+use meshpyr::metrics::{Reference, Surface};
 use meshpyr::progress::NoProgress;
 use meshpyr::smooth::{DenoiseOptions, Denoised, denoise};
-use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
-}
+mod common;
 
+use common::data;
+
+/// The half-edge mesh of `name` (with its extension) in `tests/data`.
 fn load(name: &str) -> Mesh {
-    let input = meshpyr::io::read_mesh(&data(name)).expect("readable test mesh");
-    Mesh::from_polygons(&input)
-        .expect("buildable test mesh")
-        .mesh
+    common::load(name.trim_end_matches(".ply"))
 }
 
 fn triangles(m: &Mesh) -> Vec<[u32; 3]> {
@@ -28,79 +24,14 @@ fn triangles(m: &Mesh) -> Vec<[u32; 3]> {
         .collect()
 }
 
-fn area_vector(p: &[DVec3], t: [u32; 3]) -> DVec3 {
-    (p[t[1] as usize] - p[t[0] as usize]).cross(p[t[2] as usize] - p[t[0] as usize])
-}
-
-/// E_n with the 1:1 face correspondence of a noisy copy: sqrt(Σ A' ‖n − n'‖² / Σ A').
-fn normal_error(clean: &[DVec3], x: &[DVec3], tris: &[[u32; 3]]) -> f64 {
-    let (mut sum, mut area) = (0.0, 0.0);
-    for &t in tris {
-        let a = area_vector(x, t);
-        let w = 0.5 * a.length();
-        sum += w
-            * (area_vector(clean, t).normalize_or_zero() - a.normalize_or_zero()).length_squared();
-        area += w;
-    }
-    (sum / area).sqrt()
-}
-
-/// Distance from `p` to triangle `abc` (closest point by barycentric clamping on edges).
-fn point_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    let n = (b - a).cross(c - a);
-    if n.length_squared() > 0.0 {
-        let q = p - n * (p - a).dot(n) / n.length_squared();
-        let inside = [(a, b), (b, c), (c, a)]
-            .iter()
-            .all(|&(u, v)| (v - u).cross(q - u).dot(n) >= 0.0);
-        if inside {
-            return (p - q).length();
-        }
-    }
-    [(a, b), (b, c), (c, a)]
-        .iter()
-        .map(|&(u, v)| {
-            let e = v - u;
-            let t = ((p - u).dot(e) / e.length_squared().max(f64::MIN_POSITIVE)).clamp(0.0, 1.0);
-            (p - (u + t * e)).length()
-        })
-        .fold(f64::INFINITY, f64::min)
-}
-
-/// E_v (area-weighted RMS distance of the vertices to the clean surface), with the closest
-/// triangle searched in the two-ring of the corresponding clean vertex: the displacements are
-/// a fraction of an edge, so the true closest triangle is there.
-fn vertex_error(clean: &[DVec3], x: &[DVec3], tris: &[[u32; 3]]) -> f64 {
-    let mut incident = vec![Vec::new(); clean.len()];
-    for (f, t) in tris.iter().enumerate() {
-        for &v in t {
-            incident[v as usize].push(f);
-        }
-    }
-    let mut vertex_area = vec![0.0; clean.len()];
-    for &t in tris {
-        let a = 0.5 * area_vector(x, t).length();
-        for v in t {
-            vertex_area[v as usize] += a;
-        }
-    }
-    let (mut sum, mut total) = (0.0, 0.0);
-    for v in 0..clean.len() {
-        let mut best = f64::INFINITY;
-        for &f in &incident[v] {
-            for w in tris[f] {
-                for &g in &incident[w as usize] {
-                    let [a, b, c] = tris[g].map(|i| clean[i as usize]);
-                    best = best.min(point_triangle(x[v], a, b, c));
-                }
-            }
-        }
-        if best.is_finite() {
-            sum += vertex_area[v] * best * best;
-            total += vertex_area[v];
-        }
-    }
-    (sum / total).sqrt()
+/// E_n and E_v of `x` (positions by vertex slot, triangles `tris`) against the clean surface:
+/// the library's exact metrics (`meshpyr compare`).
+fn errors(clean: &[DVec3], x: &[DVec3], tris: &[[u32; 3]]) -> (f64, f64) {
+    let reference = Reference::new(Surface::new(clean, tris)).expect("clean reference");
+    let (e_v, e_n) = reference
+        .errors(Surface::new(x, tris))
+        .expect("result has area");
+    (e_n, e_v)
 }
 
 struct Case {
@@ -128,8 +59,7 @@ fn case(noisy: &str, clean: &str) -> Case {
 fn run(c: &Case, options: &DenoiseOptions) -> (Denoised, f64, f64) {
     let r = denoise(&c.noisy, options, &NoProgress).expect("denoising runs");
     assert!(r.positions.iter().all(|p| p.is_finite()));
-    let en = normal_error(&c.clean, &r.positions, &c.tris);
-    let ev = vertex_error(&c.clean, &r.positions, &c.tris);
+    let (en, ev) = errors(&c.clean, &r.positions, &c.tris);
     (r, en, ev)
 }
 
@@ -138,8 +68,7 @@ fn fandisk_gets_closer_to_the_clean_part_and_anisotropic_keeps_the_edges() {
     for noisy in ["fandisk_noise_n020.ply", "fandisk_noise_i010.ply"] {
         let c = case(noisy, "fandisk.ply");
         let x0 = c.noisy.positions();
-        let en0 = normal_error(&c.clean, &x0, &c.tris);
-        let ev0 = vertex_error(&c.clean, &x0, &c.tris);
+        let (en0, ev0) = errors(&c.clean, &x0, &c.tris);
         let (ra, en_a, ev_a) = run(&c, &DenoiseOptions::adaptive());
         let (_, en_b, ev_b) = run(&c, &DenoiseOptions::anisotropic());
         eprintln!(
@@ -170,8 +99,7 @@ fn fandisk_gets_closer_to_the_clean_part_and_anisotropic_keeps_the_edges() {
 fn noisy_bunny_gets_closer_to_the_clean_scan() {
     let c = case("bunny_noise_i010.ply", "bunny.ply");
     let x0 = c.noisy.positions();
-    let en0 = normal_error(&c.clean, &x0, &c.tris);
-    let ev0 = vertex_error(&c.clean, &x0, &c.tris);
+    let (en0, ev0) = errors(&c.clean, &x0, &c.tris);
     let (_, en, ev) = run(&c, &DenoiseOptions::adaptive());
     eprintln!("bunny i010: noisy E_n {en0:.4} E_v {ev0:.3e}; adaptive {en:.4} {ev:.3e}");
     assert!(en < 0.4 * en0, "E_n {en} vs noisy {en0}");
@@ -207,22 +135,12 @@ fn output_is_bitwise_identical_for_any_thread_count() {
 fn dirty_input_never_panics_or_produces_nan() {
     // A noisy open grid, a second component, a zero-area triangle, a triangle on an edge
     // shared by three (non-manifold, repaired by the builder) and an isolated vertex.
-    let n = 10u32;
-    let mut p = Vec::new();
-    for j in 0..=n {
-        for i in 0..=n {
-            let z = 0.05 * (((i * 7 + j * 13) % 11) as f64 / 11.0 - 0.5);
-            p.push(DVec3::new(i as f64, j as f64, z));
-        }
-    }
-    let id = |i: u32, j: u32| j * (n + 1) + i;
-    let mut t = Vec::new();
-    for j in 0..n {
-        for i in 0..n {
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
+    let n = 10;
+    let (mut p, mut t) = meshpyr::mesh::shapes::grid(n, |i, j| {
+        let z = 0.05 * (((i * 7 + j * 13) % 11) as f64 / 11.0 - 0.5);
+        DVec3::new(i as f64, j as f64, z)
+    });
+    let id = |i: usize, j: usize| (j * (n + 1) + i) as u32;
     let base = p.len() as u32;
     // Second component: a tetrahedron.
     p.extend([
@@ -318,10 +236,8 @@ fn bin() -> Command {
     Command::new(env!("CARGO_BIN_EXE_meshpyr"))
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("meshpyr-smooth-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir.join(name)
+fn tmp(name: &str) -> std::path::PathBuf {
+    common::scratch("smooth", name)
 }
 
 #[test]
