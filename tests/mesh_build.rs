@@ -311,3 +311,41 @@ fn solids_touching_along_an_edge_become_two_closed_surfaces() {
     );
     assert_eq!(b.report.split_vertices, 2);
 }
+
+#[test]
+fn large_dirty_soup_builds_the_same_on_any_number_of_threads() {
+    // Large enough that pairing splits into several parallel chunks and pieces (135k corners),
+    // dirty enough to take every repair path: shuffled faces, flipped faces (orientation
+    // walk) and duplicated faces (non-manifold edges, fan splitting, detaching).
+    let (pos, grid_tris) = grid(150);
+    let n = grid_tris.len();
+    let mut tris = Vec::with_capacity(n + n / 50);
+    for k in 0..n {
+        let mut t = grid_tris[(k * 7919) % n]; // 7919 is prime and does not divide n
+        if k % 7 == 0 {
+            t.swap(1, 2);
+        }
+        tris.push(t);
+        if k % 50 == 0 {
+            tris.push(t);
+        }
+    }
+    let build = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| Mesh::from_triangles(&pos, &tris).unwrap())
+    };
+    let one = build(1);
+    one.mesh.validate().unwrap();
+    assert!(one.report.flipped_faces > 0, "{:?}", one.report);
+    assert!(one.report.non_manifold_edges > 0, "{:?}", one.report);
+    assert_eq!(one.mesh.n_faces(), tris.len());
+    for threads in [2, 3] {
+        let many = build(threads);
+        assert_eq!(many.report, one.report);
+        assert_eq!(many.source, one.source);
+        assert_eq!(many.mesh.to_triangles(), one.mesh.to_triangles());
+    }
+}

@@ -24,7 +24,9 @@
 use super::halfedge::{FaceId, FaceRecord, HalfedgeRecord, Mesh, VertexRecord};
 use super::polygon::PolygonMesh;
 use glam::DVec3;
+use rayon::prelude::*;
 use serde::Serialize;
+use std::sync::atomic::{AtomicU8, AtomicU32, AtomicU64, Ordering};
 
 /// What the builder changed, in counts. All zero for a clean manifold triangle mesh.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]
@@ -198,25 +200,6 @@ impl Mesh {
     }
 }
 
-/// Counting sort of `0..n` by `key(i)` into CSR form (`starts`, `items`).
-fn bucket(n: usize, n_buckets: usize, key: impl Fn(u32) -> u32) -> (Vec<u32>, Vec<u32>) {
-    let mut starts = vec![0u32; n_buckets + 1];
-    for i in 0..n as u32 {
-        starts[key(i) as usize + 1] += 1;
-    }
-    for i in 0..n_buckets {
-        starts[i + 1] += starts[i];
-    }
-    let mut fill = starts[..n_buckets].to_vec();
-    let mut items = vec![0u32; n];
-    for i in 0..n as u32 {
-        let k = key(i) as usize;
-        items[fill[k] as usize] = i;
-        fill[k] += 1;
-    }
-    (starts, items)
-}
-
 /// The handle a fresh slotmap gives its `i`-th insertion. Lets the builder wire `next`,
 /// `prev` and `twin` before the targets exist, without a handle table; every insertion is
 /// checked against it in debug builds.
@@ -363,55 +346,229 @@ fn assign_fans(tris: &[[u32; 3]], mate: &[u32], nv: usize) -> (Vec<u32>, Vec<u32
     (corner_vertex, vertex_source, seen)
 }
 
-/// Calls `f(lo, group)` for every group of two or more corners whose half-edges join the same
-/// two vertices: `lo` is the smaller vertex, `group` the `(hi, corner)` entries sorted by
-/// corner. Buckets by the smaller endpoint, then sorts each (small) bucket by the larger one:
-/// linear overall, O(k log k) at a valence-k vertex, deterministic.
-fn for_each_shared_edge(
-    n_corners: usize,
-    n_vertices: usize,
-    lo_of: impl Fn(u32) -> u32,
-    hi_of: impl Fn(u32) -> u32,
-    mut f: impl FnMut(u32, &[(u32, u32)]),
-) {
-    let (starts, items) = bucket(n_corners, n_vertices, &lo_of);
-    let mut scratch: Vec<(u32, u32)> = Vec::new();
-    for lo in 0..n_vertices {
-        let b = &items[starts[lo] as usize..starts[lo + 1] as usize];
-        if b.len() < 2 {
-            continue;
+/// Fewest corners worth a parallel task: below this a thread costs more than it saves.
+const PAR_MIN: usize = 1 << 15;
+
+/// Half-edges grouped by undirected edge: bucket `lo` holds, sorted, the keys
+/// `hi << 32 | corner` of every corner whose half-edge joins vertex `lo` to a larger vertex
+/// `hi`. Sorting the packed keys sorts each bucket by `hi`, then by corner, so equal-`hi` runs
+/// are the edges, and the layout does not depend on how the work was split between threads.
+struct EdgeBuckets {
+    /// `starts[v]..starts[v + 1]` is bucket `v` in `keys`.
+    starts: Vec<u32>,
+    keys: Vec<u64>,
+}
+
+impl EdgeBuckets {
+    /// Counting sort of the corners by smaller endpoint (`ends[c] = lo << 32 | hi`), then a
+    /// sort of each (small) bucket: linear overall, O(k log k) at a valence-k vertex. Each
+    /// chunk of corners counts into its own histogram, which fixes where the chunk writes, so
+    /// the chunks fill the buckets in parallel. The keys carry `hi`, so the walk over a bucket
+    /// reads contiguous memory instead of looking each corner's other endpoint up at random.
+    fn new(n_vertices: usize, ends: &[u64]) -> Self {
+        let chunk = ends
+            .len()
+            .div_ceil(rayon::current_num_threads().max(1))
+            .max(PAR_MIN);
+        let mut fill: Vec<Vec<u32>> = ends
+            .par_chunks(chunk)
+            .map(|ch| {
+                let mut h = vec![0u32; n_vertices];
+                for &e in ch {
+                    h[(e >> 32) as usize] += 1;
+                }
+                h
+            })
+            .collect();
+        let mut starts = vec![0u32; n_vertices + 1];
+        let mut at = 0u32;
+        for v in 0..n_vertices {
+            starts[v] = at;
+            for h in &mut fill {
+                let count = h[v];
+                h[v] = at;
+                at += count;
+            }
         }
-        scratch.clear();
-        scratch.extend(b.iter().map(|&c| (hi_of(c), c)));
-        scratch.sort_unstable();
-        for group in scratch.chunk_by(|a, b| a.0 == b.0) {
-            if group.len() >= 2 {
-                f(lo as u32, group);
+        starts[n_vertices] = at;
+        // Chunks write interleaved positions; relaxed atomic stores compile to plain stores
+        // and keep this free of `unsafe`.
+        let keys: Vec<AtomicU64> = (0..ends.len())
+            .into_par_iter()
+            .map(|_| AtomicU64::new(0))
+            .collect();
+        ends.par_chunks(chunk)
+            .zip(fill.par_iter_mut())
+            .enumerate()
+            .for_each(|(k, (ch, fill))| {
+                for (i, &e) in ch.iter().enumerate() {
+                    let slot = &mut fill[(e >> 32) as usize];
+                    let c = (k * chunk + i) as u64;
+                    keys[*slot as usize].store((e & 0xffff_ffff) << 32 | c, Ordering::Relaxed);
+                    *slot += 1;
+                }
+            });
+        drop(fill);
+        let mut keys: Vec<u64> = keys.into_iter().map(AtomicU64::into_inner).collect();
+        split_buckets(&starts, &mut keys)
+            .into_par_iter()
+            .for_each(|(v0, v1, piece)| {
+                let base = starts[v0] as usize;
+                for v in v0..v1 {
+                    let b = &mut piece[starts[v] as usize - base..starts[v + 1] as usize - base];
+                    if b.len() > 1 {
+                        b.sort_unstable();
+                    }
+                }
+            });
+        EdgeBuckets { starts, keys }
+    }
+
+    /// Calls `f(lo, group)` for every group of two or more corners whose half-edges join the
+    /// same two vertices, in order of `lo`: `group` holds the `(hi, corner)` entries sorted by
+    /// corner.
+    fn for_each_shared_edge(&self, mut f: impl FnMut(u32, &[(u32, u32)])) {
+        let mut group: Vec<(u32, u32)> = Vec::new();
+        for lo in 0..self.starts.len() - 1 {
+            let b = &self.keys[self.starts[lo] as usize..self.starts[lo + 1] as usize];
+            for run in b.chunk_by(|x, y| x >> 32 == y >> 32) {
+                if run.len() >= 2 {
+                    group.clear();
+                    group.extend(run.iter().map(|&k| ((k >> 32) as u32, k as u32)));
+                    f(lo as u32, &group);
+                }
             }
         }
     }
+}
+
+/// Splits `keys` at bucket boundaries into pieces of about `PAR_MIN` keys, as
+/// `(first vertex, end vertex, keys)`, for parallel work over whole buckets.
+fn split_buckets<'a>(starts: &[u32], keys: &'a mut [u64]) -> Vec<(usize, usize, &'a mut [u64])> {
+    let n_vertices = starts.len() - 1;
+    let mut pieces = Vec::new();
+    let mut rest = keys;
+    let (mut v0, mut offset) = (0usize, 0usize);
+    while v0 < n_vertices {
+        let target = offset + PAR_MIN;
+        let v1 = starts
+            .partition_point(|&s| (s as usize) < target)
+            .clamp(v0 + 1, n_vertices);
+        let (piece, tail) = std::mem::take(&mut rest).split_at_mut(starts[v1] as usize - offset);
+        pieces.push((v0, v1, piece));
+        rest = tail;
+        offset = starts[v1] as usize;
+        v0 = v1;
+    }
+    pieces
+}
+
+/// `lo << 32 | hi` for the half-edge of every corner, `lo < hi` its endpoints.
+fn edge_ends(n_corners: usize, endpoints: impl Fn(u32) -> (u32, u32) + Sync) -> Vec<u64> {
+    (0..n_corners as u32)
+        .into_par_iter()
+        .with_min_len(PAR_MIN)
+        .map(|c| {
+            let (a, b) = endpoints(c);
+            (a.min(b) as u64) << 32 | a.max(b) as u64
+        })
+        .collect()
 }
 
 /// Mesh vertices to detach so that no two distinct edges join the same two vertices: for every
 /// vertex pair with more half-edges than one twin pair, its smaller endpoint. Sorted and
 /// deduplicated.
 fn multi_edge_vertices(mate: &[u32], corner_vertex: &[u32], n_vertices: usize) -> Vec<u32> {
-    let head = |c: u32| corner_vertex[next_c(c) as usize];
-    let tail = |c: u32| corner_vertex[c as usize];
+    let ends = edge_ends(mate.len(), |c| {
+        (corner_vertex[c as usize], corner_vertex[next_c(c) as usize])
+    });
     let mut out = Vec::new();
-    for_each_shared_edge(
-        mate.len(),
-        n_vertices,
-        |c| tail(c).min(head(c)),
-        |c| tail(c).max(head(c)),
-        |lo, group| {
-            let clean = group.len() == 2 && mate[group[0].1 as usize] == group[1].1;
-            if !clean && out.last() != Some(&lo) {
-                out.push(lo);
-            }
-        },
-    );
+    EdgeBuckets::new(n_vertices, &ends).for_each_shared_edge(|lo, group| {
+        let clean = group.len() == 2 && mate[group[0].1 as usize] == group[1].1;
+        if !clean && out.last() != Some(&lo) {
+            out.push(lo);
+        }
+    });
     out
+}
+
+/// Step 1 of the build: pairs every half-edge with its twin. An edge of two triangles pairs
+/// them; an edge of more is paired by `pair_around_edge` (counted in the report). Returns
+/// the mate of each corner's half-edge (`NONE` if unpaired), its `SHARED`/`NON_MANIFOLD`
+/// flags, and whether some pair runs in the same direction (so orientation must be fixed).
+///
+/// Buckets are paired in parallel, each writing only its own corners; non-manifold edges are
+/// collected and paired afterwards in bucket order, so the result never depends on threads.
+fn pair_halfedges(
+    positions: &[DVec3],
+    tris: &[[u32; 3]],
+    report: &mut BuildReport,
+) -> (Vec<u32>, Vec<u8>, bool) {
+    let nh = 3 * tris.len();
+    let from = |c: u32| tris[(c / 3) as usize][(c % 3) as usize];
+    let ends = edge_ends(nh, |c| (from(c), from(next_c(c))));
+    let mut buckets = EdgeBuckets::new(positions.len(), &ends);
+    drop(ends);
+    let mate: Vec<AtomicU32> = (0..nh)
+        .into_par_iter()
+        .with_min_len(PAR_MIN)
+        .map(|_| AtomicU32::new(NONE))
+        .collect();
+    let flags: Vec<AtomicU8> = (0..nh)
+        .into_par_iter()
+        .with_min_len(PAR_MIN)
+        .map(|_| AtomicU8::new(0))
+        .collect();
+    type Crowded = Vec<(u32, Vec<(u32, u32)>)>;
+    let starts = &buckets.starts;
+    let pieces: Vec<(bool, Crowded)> = split_buckets(starts, &mut buckets.keys)
+        .into_par_iter()
+        .map(|(v0, v1, piece)| {
+            let base = starts[v0] as usize;
+            let mut same_direction = false;
+            let mut crowded: Crowded = Vec::new();
+            for lo in v0..v1 {
+                let b = &piece[starts[lo] as usize - base..starts[lo + 1] as usize - base];
+                for run in b.chunk_by(|x, y| x >> 32 == y >> 32) {
+                    match *run {
+                        [_] => {}
+                        [x, y] => {
+                            let (a, b) = (x as u32, y as u32);
+                            same_direction |= from(a) == from(b);
+                            mate[a as usize].store(b, Ordering::Relaxed);
+                            mate[b as usize].store(a, Ordering::Relaxed);
+                            flags[a as usize].store(SHARED, Ordering::Relaxed);
+                            flags[b as usize].store(SHARED, Ordering::Relaxed);
+                        }
+                        _ => crowded.push((
+                            lo as u32,
+                            run.iter().map(|&k| ((k >> 32) as u32, k as u32)).collect(),
+                        )),
+                    }
+                }
+            }
+            (same_direction, crowded)
+        })
+        .collect();
+    drop(buckets);
+    let mut mate: Vec<u32> = mate.into_iter().map(AtomicU32::into_inner).collect();
+    let mut flags: Vec<u8> = flags.into_iter().map(AtomicU8::into_inner).collect();
+    let mut any_same_direction = false;
+    for (same_direction, crowded) in pieces {
+        any_same_direction |= same_direction;
+        for (lo, group) in crowded {
+            report.non_manifold_edges += 1;
+            for g in &group {
+                flags[g.1 as usize] = SHARED | NON_MANIFOLD;
+            }
+            for (a, b) in pair_around_edge(positions, tris, lo, &group) {
+                any_same_direction |= from(a) == from(b);
+                mate[a as usize] = b;
+                mate[b as usize] = a;
+            }
+        }
+    }
+    (mate, flags, any_same_direction)
 }
 
 fn build_triangles(
@@ -425,57 +582,18 @@ fn build_triangles(
     let nh = 3 * nt;
     let mut tris = std::borrow::Cow::Borrowed(input_tris);
     let from = |tris: &[[u32; 3]], c: u32| tris[(c / 3) as usize][(c % 3) as usize];
-    let to = |tris: &[[u32; 3]], c: u32| from(tris, next_c(c));
 
     report.zero_area_faces = tris
-        .iter()
+        .par_iter()
+        .with_min_len(PAR_MIN)
         .filter(|t| {
             let [a, b, c] = t.map(|i| positions[i as usize]);
             (b - a).cross(c - a).length_squared() == 0.0
         })
         .count();
 
-    // --- 1. pair half-edges (see `for_each_shared_edge`).
-    let mut mate = vec![NONE; nh];
-    let mut flags = vec![0u8; nh];
-    let mut any_same_direction = false;
-    {
-        // Endpoints per corner, read once in order: the bucket walk below visits corners in
-        // random order, and two u32 lookups there beat re-reading the triangles.
-        let (lo_of, hi_of): (Vec<u32>, Vec<u32>) = (0..nh as u32)
-            .map(|c| {
-                let (a, b) = (from(&tris, c), to(&tris, c));
-                (a.min(b), a.max(b))
-            })
-            .unzip();
-        for_each_shared_edge(
-            nh,
-            nv,
-            |c| lo_of[c as usize],
-            |c| hi_of[c as usize],
-            |lo, group| {
-                let flag = if group.len() > 2 {
-                    SHARED | NON_MANIFOLD
-                } else {
-                    SHARED
-                };
-                for g in group {
-                    flags[g.1 as usize] = flag;
-                }
-                let pairs = if group.len() == 2 {
-                    vec![(group[0].1, group[1].1)]
-                } else {
-                    report.non_manifold_edges += 1;
-                    pair_around_edge(positions, &tris, lo, group)
-                };
-                for (a, b) in pairs {
-                    any_same_direction |= from(&tris, a) == from(&tris, b);
-                    mate[a as usize] = b;
-                    mate[b as usize] = a;
-                }
-            },
-        );
-    }
+    // --- 1. pair half-edges (see `pair_halfedges`).
+    let (mut mate, mut flags, any_same_direction) = pair_halfedges(positions, &tris, report);
 
     // --- 2. consistent orientation per component (breadth-first over paired edges). When
     // every pair already runs in opposite directions the given orientation is consistent (a
