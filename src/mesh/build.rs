@@ -758,64 +758,73 @@ fn build_triangles(
             *f = c as u32;
         }
     }
+    // The three record maps are independent: the half-edges (most of the memory, so most of
+    // the page faults) fill on one thread while the vertices and faces fill on another.
     let mut mesh = Mesh::new();
-    mesh.vertices.reserve(n_total);
-    for (i, &s) in vertex_source.iter().enumerate() {
-        let halfedge = if boundary_out[i] != NONE {
-            Some(fresh_key(boundary_out[i] as usize))
-        } else if first_corner[i] != NONE {
-            Some(fresh_key(first_corner[i] as usize))
-        } else {
-            None
-        };
-        let _k = mesh.vertices.insert(VertexRecord {
-            halfedge,
-            position: positions[s as usize],
-        });
-        debug_assert_eq!(_k, fresh_key(i));
-    }
-    mesh.halfedges.reserve(nh + n_boundary as usize);
-    mesh.faces.reserve(nt);
-    for c in 0..nh as u32 {
-        let m = mate[c as usize];
-        let twin = if m != NONE {
-            m
-        } else {
-            boundary_index[c as usize]
-        };
-        let _k = mesh.halfedges.insert(HalfedgeRecord {
-            to: fresh_key(corner_vertex[next_c(c) as usize] as usize),
-            next: fresh_key(next_c(c) as usize),
-            prev: fresh_key(prev_c(c) as usize),
-            twin: fresh_key(twin as usize),
-            face: Some(fresh_key((c / 3) as usize)),
-        });
-        debug_assert_eq!(_k, fresh_key(c as usize));
-    }
-    for c in 0..nh as u32 {
-        let b = boundary_index[c as usize];
-        if b == NONE {
-            continue;
-        }
-        // b runs from c's head back to c's tail; the boundary loop goes on from the tail
-        // and comes in at the head.
-        let tail = corner_vertex[c as usize] as usize;
-        let head = corner_vertex[next_c(c) as usize] as usize;
-        let _k = mesh.halfedges.insert(HalfedgeRecord {
-            to: fresh_key(tail),
-            next: fresh_key(boundary_out[tail] as usize),
-            prev: fresh_key(boundary_in[head] as usize),
-            twin: fresh_key(c as usize),
-            face: None,
-        });
-        debug_assert_eq!(_k, fresh_key(b as usize));
-    }
-    for t in 0..nt {
-        let _k = mesh.faces.insert(FaceRecord {
-            halfedge: fresh_key(3 * t),
-        });
-        debug_assert_eq!(_k, fresh_key::<FaceId>(t));
-    }
+    let (vertices, faces, halfedges) = (&mut mesh.vertices, &mut mesh.faces, &mut mesh.halfedges);
+    rayon::join(
+        || {
+            vertices.reserve(n_total);
+            for (i, &s) in vertex_source.iter().enumerate() {
+                let halfedge = if boundary_out[i] != NONE {
+                    Some(fresh_key(boundary_out[i] as usize))
+                } else if first_corner[i] != NONE {
+                    Some(fresh_key(first_corner[i] as usize))
+                } else {
+                    None
+                };
+                let _k = vertices.insert(VertexRecord {
+                    halfedge,
+                    position: positions[s as usize],
+                });
+                debug_assert_eq!(_k, fresh_key(i));
+            }
+            faces.reserve(nt);
+            for t in 0..nt {
+                let _k = faces.insert(FaceRecord {
+                    halfedge: fresh_key(3 * t),
+                });
+                debug_assert_eq!(_k, fresh_key::<FaceId>(t));
+            }
+        },
+        || {
+            halfedges.reserve(nh + n_boundary as usize);
+            for c in 0..nh as u32 {
+                let m = mate[c as usize];
+                let twin = if m != NONE {
+                    m
+                } else {
+                    boundary_index[c as usize]
+                };
+                let _k = halfedges.insert(HalfedgeRecord {
+                    to: fresh_key(corner_vertex[next_c(c) as usize] as usize),
+                    next: fresh_key(next_c(c) as usize),
+                    prev: fresh_key(prev_c(c) as usize),
+                    twin: fresh_key(twin as usize),
+                    face: Some(fresh_key((c / 3) as usize)),
+                });
+                debug_assert_eq!(_k, fresh_key(c as usize));
+            }
+            for c in 0..nh as u32 {
+                let b = boundary_index[c as usize];
+                if b == NONE {
+                    continue;
+                }
+                // b runs from c's head back to c's tail; the boundary loop goes on from the
+                // tail and comes in at the head.
+                let tail = corner_vertex[c as usize] as usize;
+                let head = corner_vertex[next_c(c) as usize] as usize;
+                let _k = halfedges.insert(HalfedgeRecord {
+                    to: fresh_key(tail),
+                    next: fresh_key(boundary_out[tail] as usize),
+                    prev: fresh_key(boundary_in[head] as usize),
+                    twin: fresh_key(c as usize),
+                    face: None,
+                });
+                debug_assert_eq!(_k, fresh_key(b as usize));
+            }
+        },
+    );
     (
         mesh,
         SourceMap {
