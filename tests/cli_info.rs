@@ -171,3 +171,35 @@ fn demo_writes_its_outputs() {
     let entries = std::fs::read_dir(&dir).unwrap().count();
     assert!(entries >= 2, "demo wrote {entries} files");
 }
+
+#[test]
+fn gzip_meshes_convert_and_read_by_extension() {
+    let gz = scratch("bunny.ply.gz");
+    let out = meshpyr(&["convert", &data("bunny.ply"), gz.to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(&std::fs::read(&gz).unwrap()[..2], &[0x1f, 0x8b]);
+    assert_eq!(
+        info_json(gz.to_str().unwrap()),
+        info_json(&data("bunny.ply"))
+    );
+}
+
+#[test]
+fn a_reader_that_stops_early_is_not_an_error() {
+    // `meshpyr info scan.ply | head -1`: the pipe closes before the output is written.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_meshpyr"))
+        .args(["info", &data("bunny.ply")])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

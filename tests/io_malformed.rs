@@ -405,7 +405,7 @@ fn error_display_names_file_line_and_reason() {
     assert!(matches!(e, IoError::UnknownFormat { .. }));
     assert_eq!(
         e.to_string(),
-        "mesh.xyz: unknown mesh format (expected .obj, .ply, .off or .stl)"
+        "mesh.xyz: unknown mesh format (expected .obj, .ply, .off or .stl, optionally .gz)"
     );
     assert!(MeshFormat::from_path(std::path::Path::new("noext")).is_err());
 }

@@ -49,20 +49,22 @@ pub fn run(args: CompareArgs, _global: &Global) -> anyhow::Result<()> {
         )
     })?;
     if args.json {
-        println!("{}", serde_json::to_string(&c)?);
+        outln!("{}", serde_json::to_string(&c)?);
         return Ok(());
     }
-    println!(
+    outln!(
         "{} against {}",
         args.result.display(),
         args.reference.display()
     );
-    println!(
+    outln!(
         "  E_v        {:.6e}  ({:.4e} of the bbox diagonal, {:.4} L)",
-        c.e_v, c.e_v_rel, c.e_v_over_l
+        c.e_v,
+        c.e_v_rel,
+        c.e_v_over_l
     );
-    println!("  E_n        {:.6e}", c.e_n);
-    println!(
+    outln!("  E_n        {:.6e}", c.e_n);
+    outln!(
         "  Hausdorff  {:.6e}  ({:.4e} of the bbox diagonal; result->reference {:.6e}, \
          reference->result {:.6e}; sampled at vertices, edge midpoints and centroids)",
         c.hausdorff,
@@ -70,9 +72,10 @@ pub fn run(args: CompareArgs, _global: &Global) -> anyhow::Result<()> {
         c.hausdorff_result_to_reference,
         c.hausdorff_reference_to_result
     );
-    println!(
+    outln!(
         "  reference: bbox diagonal {:.6}, mean edge length L {:.6}",
-        c.bbox_diagonal, c.mean_edge_length
+        c.bbox_diagonal,
+        c.mean_edge_length
     );
     Ok(())
 }

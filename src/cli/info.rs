@@ -106,16 +106,19 @@ pub fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
     let poly = io::read_mesh(&args.mesh)?;
     let info = mesh_info(&poly).with_context(|| args.mesh.display().to_string())?;
     if args.json {
-        println!("{}", serde_json::to_string(&info)?);
+        outln!("{}", serde_json::to_string(&info)?);
         return Ok(());
     }
     let r = &info.repairs;
-    println!("{}", args.mesh.display());
-    println!(
+    outln!("{}", args.mesh.display());
+    outln!(
         "  vertices {}  faces {} (from {} polygons)  edges {}",
-        info.vertices, info.faces, info.polygons, info.edges
+        info.vertices,
+        info.faces,
+        info.polygons,
+        info.edges
     );
-    println!(
+    outln!(
         "  components {}  boundary loops {}  euler characteristic {}  genus {}",
         info.components,
         info.boundary_loops,
@@ -123,17 +126,17 @@ pub fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
         info.genus
             .map_or("n/a (not manifold)".to_string(), |g| g.to_string())
     );
-    println!(
+    outln!(
         "  manifold {}  bbox diagonal {:.6}  mean edge length {:.6}",
         if info.manifold { "yes" } else { "no" },
         info.bbox_diagonal,
         info.mean_edge_length
     );
     if !info.vertex_attributes.is_empty() {
-        println!("  vertex attributes: {}", info.vertex_attributes.join(" "));
+        outln!("  vertex attributes: {}", info.vertex_attributes.join(" "));
     }
     if !info.face_attributes.is_empty() {
-        println!("  face attributes: {}", info.face_attributes.join(" "));
+        outln!("  face attributes: {}", info.face_attributes.join(" "));
     }
     let repairs = [
         ("polygons triangulated", r.triangulated_polygons),
@@ -156,9 +159,9 @@ pub fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
         .map(|(what, n)| format!("{n} {what}"))
         .collect();
     if done.is_empty() {
-        println!("  repairs: none needed");
+        outln!("  repairs: none needed");
     } else {
-        println!("  repairs for processing: {}", done.join(", "));
+        outln!("  repairs for processing: {}", done.join(", "));
     }
     Ok(())
 }

@@ -1,6 +1,14 @@
 //! The `meshpyr` command line: one subcommand per module. Each subcommand lives in its own file
 //! with a clap `Args` struct and a `run` function.
 
+/// `println!` for command output that returns the write error instead of panicking, so a
+/// closed pipe (`meshpyr info scan.ply | head -1`) ends the command quietly (see [`main`]).
+macro_rules! outln {
+    ($($arg:tt)*) => {
+        $crate::cli::stdout_line(format_args!($($arg)*))?
+    };
+}
+
 mod build;
 mod compare;
 mod convert;
@@ -42,12 +50,30 @@ impl Global {
         pb
     }
 
-    /// Prints a status line unless `--quiet`.
+    /// Prints a status line on stderr unless `--quiet`. Status is best effort: a closed
+    /// stderr must not fail (or panic) a command whose real output is a file.
     pub fn say(&self, line: impl std::fmt::Display) {
         if !self.quiet {
-            eprintln!("{line}");
+            use std::io::Write;
+            let _ = writeln!(std::io::stderr(), "{line}");
         }
     }
+}
+
+/// Writes one line of command output to stdout (used by `outln!`).
+pub(crate) fn stdout_line(args: std::fmt::Arguments) -> std::io::Result<()> {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    out.write_fmt(args)?;
+    out.write_all(b"\n")
+}
+
+/// True when the error comes from writing into a pipe whose reader has gone.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// Fails before any work when `path` has no mesh format we can write (the extension decides),
@@ -128,6 +154,9 @@ pub fn main() -> std::process::ExitCode {
     let cli = Cli::parse();
     match run(cli.command, &cli.global) {
         Ok(()) => std::process::ExitCode::SUCCESS,
+        // The reader of our output stopped reading (`| head`): not a failure of ours, and
+        // there is nobody left to tell.
+        Err(e) if is_broken_pipe(&e) => std::process::ExitCode::SUCCESS,
         Err(e) => {
             // One line: the error and its causes joined by ": ".
             eprintln!("error: {e:#}");

@@ -57,9 +57,15 @@ pub enum MeshFormat {
 }
 
 impl MeshFormat {
-    /// The format named by the path's extension (case-insensitive).
+    /// The format named by the path's extension (case-insensitive); a trailing `.gz` names
+    /// a gzip-compressed file of the format before it (`scan.ply.gz` is PLY).
     pub fn from_path(path: &Path) -> Result<MeshFormat, IoError> {
-        let ext = path
+        let inner = if is_gzip(path) {
+            Path::new(path.file_stem().unwrap_or_default())
+        } else {
+            path
+        };
+        let ext = inner
             .extension()
             .and_then(|e| e.to_str())
             .map(|e| e.to_ascii_lowercase());
@@ -183,8 +189,9 @@ pub enum IoError {
         /// What is wrong (one line).
         reason: String,
     },
-    /// The extension is not one of `.obj`, `.ply`, `.off`, `.stl`.
-    #[error("{}: unknown mesh format (expected .obj, .ply, .off or .stl)", path.display())]
+    /// The extension is not one of `.obj`, `.ply`, `.off`, `.stl` (optionally followed by
+    /// `.gz`).
+    #[error("{}: unknown mesh format (expected .obj, .ply, .off or .stl, optionally .gz)", path.display())]
     UnknownFormat {
         /// The file whose extension was not recognised.
         path: PathBuf,
@@ -272,14 +279,66 @@ pub(crate) fn err_invalid(format: MeshFormat, reason: impl Into<String>) -> IoEr
     }
 }
 
-/// Reads a mesh file; the format comes from the extension.
+/// True when the path ends in `.gz` (case-insensitive): the file is gzip-compressed.
+pub fn is_gzip(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gz"))
+}
+
+/// Reads a mesh file; the format comes from the extension (`.gz` files are decompressed
+/// first, see [`gunzip`]).
 pub fn read_mesh(path: &Path) -> Result<PolygonMesh, IoError> {
     let format = MeshFormat::from_path(path)?;
-    let bytes = std::fs::read(path).map_err(|error| IoError::Io {
+    let mut bytes = std::fs::read(path).map_err(|error| IoError::Io {
         path: path.to_path_buf(),
         error,
     })?;
+    if is_gzip(path) {
+        bytes = gunzip(&bytes).map_err(|e| e.with_path(path))?;
+    }
     read_mesh_bytes(&bytes, format).map_err(|e| e.with_path(path))
+}
+
+/// Decompresses gzip data (several concatenated members too, as `cat a.gz b.gz` makes).
+///
+/// Memory: DEFLATE expands at most about 1032:1, so the output is bounded by the input's size;
+/// the mesh readers then check every header count against the decompressed size. A corrupt
+/// or truncated stream is a parse error (with the offset into the decompressed data reached).
+pub fn gunzip(bytes: &[u8]) -> Result<Vec<u8>, IoError> {
+    use std::io::Read;
+    if !bytes.starts_with(&[0x1f, 0x8b]) {
+        return Err(IoError::Parse {
+            path: None,
+            location: Location::Byte(0),
+            reason: "not a gzip file (the name ends in .gz)".into(),
+        });
+    }
+    let mut out = Vec::new();
+    flate2::read::MultiGzDecoder::new(bytes)
+        .read_to_end(&mut out)
+        .map_err(|e| IoError::Parse {
+            path: None,
+            location: Location::None,
+            reason: format!(
+                "gzip data is corrupt or truncated after {} decompressed bytes: {e}",
+                out.len()
+            ),
+        })?;
+    Ok(out)
+}
+
+/// Compresses with gzip (level 6; no file name or time stamp in the header, so the same mesh
+/// always gives the same bytes).
+pub fn gzip(bytes: &[u8]) -> Vec<u8> {
+    use std::io::Write;
+    let mut enc = flate2::write::GzEncoder::new(
+        Vec::with_capacity(bytes.len() / 3),
+        flate2::Compression::default(),
+    );
+    enc.write_all(bytes)
+        .expect("writing into a Vec cannot fail");
+    enc.finish().expect("writing into a Vec cannot fail")
 }
 
 /// Parses a mesh from memory.
@@ -312,7 +371,10 @@ pub fn write_mesh_with(
     opts: &WriteOptions,
 ) -> Result<(), IoError> {
     let format = MeshFormat::from_path(path)?;
-    let bytes = write_mesh_bytes(mesh, format, opts).map_err(|e| e.with_path(path))?;
+    let mut bytes = write_mesh_bytes(mesh, format, opts).map_err(|e| e.with_path(path))?;
+    if is_gzip(path) {
+        bytes = gzip(&bytes);
+    }
     write_atomic(path, &bytes)
 }
 
