@@ -300,48 +300,114 @@ const SHARED: u8 = 1;
 /// Per half-edge flag: its undirected edge has more than two triangles.
 const NON_MANIFOLD: u8 = 2;
 
-/// Step 3 of the build: one mesh vertex per fan. Walks each fan through paired edges: across
-/// the out-going half-edge c the next corner at the same vertex is next(mate(c)); across the
-/// incoming one, prev(c), it is mate(prev(c)). The fan holding a vertex's first corner keeps
-/// the input vertex; later fans get copies, appended in order of discovery. Returns the mesh
-/// vertex of every corner, the input vertex of every mesh vertex, and which input vertices
-/// are referenced.
+/// Calls `f` on every corner of the fan around the tail vertex of corner `c0`, `c0` first.
+/// Across the out-going half-edge c the next corner at the same vertex is next(mate(c));
+/// across the incoming one, prev(c), it is mate(prev(c)). A closed fan is walked once round;
+/// an open one forward to its end, then backward from `c0`.
+#[inline]
+fn walk_fan(c0: u32, mate: &[u32], mut f: impl FnMut(u32)) {
+    f(c0);
+    let mut c = c0;
+    while mate[c as usize] != NONE {
+        c = next_c(mate[c as usize]);
+        if c == c0 {
+            return;
+        }
+        f(c);
+    }
+    let mut c = c0;
+    while mate[prev_c(c) as usize] != NONE {
+        c = mate[prev_c(c) as usize];
+        f(c);
+    }
+}
+
+/// Step 3 of the build: one mesh vertex per fan. The fan holding a vertex's first corner keeps
+/// the input vertex; later fans get copies, appended in order of their first corners. Returns
+/// the mesh vertex of every corner, the input vertex of every mesh vertex, and which input
+/// vertices are referenced.
+///
+/// Almost every vertex has a single fan, so this first checks that in parallel (a walk round
+/// one fan per vertex that sees all the vertex's corners) and walks fans in corner order only
+/// for the vertices that fail, which gives the same numbering as walking all of them.
 fn assign_fans(tris: &[[u32; 3]], mate: &[u32], nv: usize) -> (Vec<u32>, Vec<u32>, Vec<bool>) {
     let nh = mate.len();
     let from = |c: u32| tris[(c / 3) as usize][(c % 3) as usize];
-    let mut corner_vertex = vec![NONE; nh];
+    let mut corner_vertex: Vec<u32> = (0..nh as u32)
+        .into_par_iter()
+        .with_min_len(PAR_MIN)
+        .map(from)
+        .collect();
+    // Corner count and first corner of every vertex, per chunk, then combined.
+    let chunk = nh
+        .div_ceil(rayon::current_num_threads().max(1))
+        .max(PAR_MIN);
+    let parts: Vec<(Vec<u32>, Vec<u32>)> = corner_vertex
+        .par_chunks(chunk)
+        .enumerate()
+        .map(|(k, ch)| {
+            let (mut degree, mut first) = (vec![0u32; nv], vec![NONE; nv]);
+            for (i, &v) in ch.iter().enumerate() {
+                degree[v as usize] += 1;
+                if first[v as usize] == NONE {
+                    first[v as usize] = (k * chunk + i) as u32;
+                }
+            }
+            (degree, first)
+        })
+        .collect();
+    let mut parts = parts.into_iter();
+    let (mut degree, mut first) = parts
+        .next()
+        .unwrap_or_else(|| (vec![0; nv], vec![NONE; nv]));
+    for (d, f) in parts {
+        for v in 0..nv {
+            degree[v] += d[v];
+            first[v] = first[v].min(f[v]);
+        }
+    }
+    let several_fans: Vec<u32> = (0..nv as u32)
+        .into_par_iter()
+        .with_min_len(PAR_MIN / 4)
+        .filter(|&v| {
+            let c0 = first[v as usize];
+            if c0 == NONE {
+                return false;
+            }
+            let mut seen = 0u32;
+            walk_fan(c0, mate, |_| seen += 1);
+            seen != degree[v as usize]
+        })
+        .collect();
+    let seen: Vec<bool> = degree.iter().map(|&d| d > 0).collect();
+    drop((degree, first));
     let mut vertex_source: Vec<u32> = (0..nv as u32).collect();
-    let mut seen = vec![false; nv];
+    if several_fans.is_empty() {
+        return (corner_vertex, vertex_source, seen);
+    }
+    let mut split = vec![false; nv];
+    for &v in &several_fans {
+        split[v as usize] = true;
+    }
+    for cv in corner_vertex.iter_mut() {
+        if split[*cv as usize] {
+            *cv = NONE;
+        }
+    }
+    let mut kept = vec![false; nv];
     for c0 in 0..nh as u32 {
         if corner_vertex[c0 as usize] != NONE {
             continue;
         }
         let v = from(c0);
-        let id = if seen[v as usize] {
+        let id = if kept[v as usize] {
             vertex_source.push(v);
             (vertex_source.len() - 1) as u32
         } else {
-            seen[v as usize] = true;
+            kept[v as usize] = true;
             v
         };
-        corner_vertex[c0 as usize] = id;
-        let mut c = c0;
-        let mut closed = false;
-        while mate[c as usize] != NONE {
-            c = next_c(mate[c as usize]);
-            if c == c0 {
-                closed = true;
-                break;
-            }
-            corner_vertex[c as usize] = id;
-        }
-        if !closed {
-            let mut c = c0;
-            while mate[prev_c(c) as usize] != NONE {
-                c = mate[prev_c(c) as usize];
-                corner_vertex[c as usize] = id;
-            }
-        }
+        walk_fan(c0, mate, |c| corner_vertex[c as usize] = id);
     }
     (corner_vertex, vertex_source, seen)
 }
