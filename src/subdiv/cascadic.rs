@@ -92,24 +92,37 @@ pub fn conjugate_gradient<const K: usize>(
     max_steps: usize,
     tolerance: f64,
 ) -> usize {
+    // Four vectors (r, p, q and the inverse diagonal): the preconditioned residual
+    // z = D⁻¹ r is recomputed where it is needed instead of stored, and the x/r update
+    // also sums rᵀz and rᵀr for the next step, so an iteration reads the vectors three
+    // times besides the product. Every sum runs over the rows in order, as a plain dot
+    // product would, so the iterates are the textbook ones bit for bit.
     let n = x.len();
     let inv_diag: Vec<f64> = (0..n).map(|i| 1.0 / a.diagonal(i)).collect();
     let mut r = vec![[0.0; K]; n];
     a.mul(x, &mut r);
+    let mut p = vec![[0.0; K]; n];
+    let mut rz = [0.0; K];
+    let mut rr = [0.0; K];
     for i in 0..n {
         for k in 0..K {
-            r[i][k] = b[i][k] - r[i][k];
+            let ri = b[i][k] - r[i][k];
+            r[i][k] = ri;
+            let zi = ri * inv_diag[i];
+            p[i][k] = zi;
+            rz[k] += ri * zi;
         }
     }
-    let mut z: Vec<[f64; K]> = (0..n).map(|i| r[i].map(|v| v * inv_diag[i])).collect();
-    let mut p = z.clone();
+    for ri in &r {
+        for k in 0..K {
+            rr[k] += ri[k] * ri[k];
+        }
+    }
     let mut q = vec![[0.0; K]; n];
-    let mut rz = column_dot(&r, &z);
     let b_norm = column_dot(b, b).map(f64::sqrt);
     let mut active = [true; K];
     let mut steps = 0;
     while steps < max_steps {
-        let rr = column_dot(&r, &r);
         for k in 0..K {
             if rr[k].sqrt() <= tolerance * b_norm[k] || rr[k] == 0.0 {
                 active[k] = false;
@@ -129,14 +142,17 @@ pub fn conjugate_gradient<const K: usize>(
                 active[k] = false;
             }
         }
+        let mut rz_new = [0.0; K];
+        rr = [0.0; K];
         for i in 0..n {
             for k in 0..K {
                 x[i][k] += step[k] * p[i][k];
-                r[i][k] -= step[k] * q[i][k];
-                z[i][k] = r[i][k] * inv_diag[i];
+                let ri = r[i][k] - step[k] * q[i][k];
+                r[i][k] = ri;
+                rz_new[k] += ri * (ri * inv_diag[i]);
+                rr[k] += ri * ri;
             }
         }
-        let rz_new = column_dot(&r, &z);
         let mut beta = [0.0; K];
         for k in 0..K {
             if active[k] && rz[k] > 0.0 {
@@ -146,7 +162,7 @@ pub fn conjugate_gradient<const K: usize>(
         for i in 0..n {
             for k in 0..K {
                 if active[k] {
-                    p[i][k] = z[i][k] + beta[k] * p[i][k];
+                    p[i][k] = r[i][k] * inv_diag[i] + beta[k] * p[i][k];
                 }
             }
         }
@@ -369,9 +385,9 @@ pub fn subdivide_mcm(
         if solved.iter().any(|p| !p.is_finite()) {
             return Err(fail("non-finite positions".to_string()));
         }
-        let ids: Vec<_> = fine.vertices().collect();
-        for (v, p) in ids.into_iter().zip(solved) {
-            fine.set_position(v, p);
+        // `fine` is dense (fresh from refinement), so slot order is the solver's row order.
+        for (record, p) in fine.vertices.values_mut().zip(solved) {
+            record.position = p;
         }
         reports.push(LevelReport {
             level,
