@@ -104,26 +104,22 @@ fn is_degenerate(a: DVec3, b: DVec3, c: DVec3, area: f64) -> bool {
 
 /// Cotangent stiffness matrix L (positive semi-definite, rows sum to zero) of `triangles`
 /// indexing `positions`, with optional per-triangle coefficients. Rows are sorted by column
-/// after the diagonal; assembly is a counting sort over the triangle corners, so it is linear
-/// and reads memory in order.
+/// after the diagonal.
+///
+/// Assembly is a counting sort of the directed edge terms into rows, then a sort of each
+/// (short) row: linear, and every entry sums its triangles' terms in triangle order. On big
+/// meshes each stage runs on all cores — each chunk of triangles counts into its own
+/// histogram, which fixes where the chunk writes — and the result is the same bits on any
+/// number of threads.
 pub fn cotangent_stiffness(
     triangles: &[[u32; 3]],
     positions: &[DVec3],
     face_coefficient: Option<&[f64]>,
 ) -> SymmetricCsr {
+    use rayon::prelude::*;
+    use std::sync::atomic::{AtomicU64, Ordering};
     let n = positions.len();
-    // Two directed entries per triangle corner.
-    let mut fill: Vec<u32> = vec![0; n + 1];
-    for t in triangles {
-        for &i in t {
-            fill[i as usize + 1] += 2;
-        }
-    }
-    for i in 0..n {
-        fill[i + 1] += fill[i];
-    }
-    // w[j]: ½ a_T cot of the angle at corner j+2, which is opposite edge (j, j+1). Computed per
-    // triangle independently (in parallel on big meshes; same bits either way).
+    // w[j]: ½ a_T cot of the angle at corner j+2, which is opposite edge (j, j+1).
     let weights_of = |ti: usize| {
         let t = triangles[ti];
         let v = t.map(|i| positions[i as usize]);
@@ -138,78 +134,154 @@ pub fn cotangent_stiffness(
         }
         w
     };
-    let tri_weights: Vec<[f64; 3]> = if triangles.len() < PARALLEL_ROWS {
-        (0..triangles.len()).map(weights_of).collect()
-    } else {
-        use rayon::prelude::*;
-        (0..triangles.len())
-            .into_par_iter()
-            .map(weights_of)
-            .collect()
-    };
-    let mut entries: Vec<(u32, f64)> = vec![(0, 0.0); fill[n] as usize];
-    let mut cursor = fill.clone();
-    for (t, w) in triangles.iter().zip(&tri_weights) {
-        for j in 0..3 {
-            let (a, b) = (t[j], t[(j + 1) % 3]);
-            for (row, col) in [(a, b), (b, a)] {
-                let c = &mut cursor[row as usize];
-                entries[*c as usize] = (col, w[j]);
-                *c += 1;
+    let tri_weights: Vec<[f64; 3]> = (0..triangles.len())
+        .into_par_iter()
+        .with_min_len(PARALLEL_ROWS)
+        .map(weights_of)
+        .collect();
+    // Every directed entry is the key `col << 32 | 3t + j`: its column and the corner whose
+    // weight it takes, so sorting a row orders it by column and, within a column, by
+    // triangle — the order the terms are summed in.
+    let chunk = triangles
+        .len()
+        .div_ceil(rayon::current_num_threads().max(1))
+        .max(PARALLEL_ROWS);
+    let mut cursors: Vec<Vec<u32>> = triangles
+        .par_chunks(chunk)
+        .map(|ch| {
+            let mut h = vec![0u32; n];
+            for t in ch {
+                for &i in t {
+                    h[i as usize] += 2;
+                }
             }
-        }
-    }
-    drop(tri_weights);
-    // Each row by column (rows are independent: parallel on big meshes). The sort is stable,
-    // so equal columns keep their triangle order and sum in the same order as before.
-    {
-        let mut rows: Vec<&mut [(u32, f64)]> = Vec::with_capacity(n);
-        let mut rest: &mut [(u32, f64)] = &mut entries;
-        for i in 0..n {
-            let (row, tail) = rest.split_at_mut((fill[i + 1] - fill[i]) as usize);
-            rows.push(row);
-            rest = tail;
-        }
-        let sort = |row: &mut &mut [(u32, f64)]| row.sort_by_key(|e| e.0);
-        if n < PARALLEL_ROWS {
-            rows.iter_mut().for_each(sort);
-        } else {
-            use rayon::prelude::*;
-            rows.par_iter_mut().for_each(sort);
-        }
-    }
-    let mut row_start = Vec::with_capacity(n + 1);
-    let mut col = Vec::with_capacity(n + entries.len() / 2);
-    let mut val = Vec::with_capacity(col.capacity());
-    row_start.push(0u32);
+            h
+        })
+        .collect();
+    let mut fill = vec![0u32; n + 1];
+    let mut at = 0u32;
     for i in 0..n {
-        let row = &entries[fill[i] as usize..fill[i + 1] as usize];
-        let diag_at = val.len();
-        col.push(i as u32);
-        val.push(0.0);
-        let mut diag = 0.0;
-        let mut k = 0;
-        while k < row.len() {
-            let (c, mut w) = row[k];
-            k += 1;
-            // An interior edge appears twice (once per triangle); two terms add the same in
-            // either order, so the sum is deterministic.
-            while k < row.len() && row[k].0 == c {
-                w += row[k].1;
-                k += 1;
-            }
-            col.push(c);
-            val.push(-w);
-            diag += w;
+        fill[i] = at;
+        for h in &mut cursors {
+            let count = h[i];
+            h[i] = at;
+            at += count;
         }
-        val[diag_at] = diag;
-        row_start.push(col.len() as u32);
     }
+    fill[n] = at;
+    let keys: Vec<AtomicU64> = (0..at as usize)
+        .into_par_iter()
+        .with_min_len(PARALLEL_ROWS)
+        .map(|_| AtomicU64::new(0))
+        .collect();
+    triangles
+        .par_chunks(chunk)
+        .zip(cursors.par_iter_mut())
+        .enumerate()
+        .for_each(|(k, (ch, cursor))| {
+            for (i, t) in ch.iter().enumerate() {
+                let ti = k * chunk + i;
+                for j in 0..3 {
+                    let (a, b) = (t[j], t[(j + 1) % 3]);
+                    let corner = (3 * ti + j) as u64;
+                    for (row, col) in [(a, b), (b, a)] {
+                        let c = &mut cursor[row as usize];
+                        // Chunks write interleaved slots: relaxed atomic stores are plain
+                        // stores and keep this free of `unsafe`.
+                        keys[*c as usize].store((col as u64) << 32 | corner, Ordering::Relaxed);
+                        *c += 1;
+                    }
+                }
+            }
+        });
+    drop(cursors);
+    let mut keys: Vec<u64> = keys.into_iter().map(AtomicU64::into_inner).collect();
+    let weight = |key: u64| {
+        let corner = (key & 0xffff_ffff) as usize;
+        tri_weights[corner / 3][corner % 3]
+    };
+    let column = |key: u64| (key >> 32) as u32;
+    // Sort every row and count its distinct columns, whole rows per task.
+    let fill_ref = &fill;
+    let row_len: Vec<u32> = split_rows(&fill, &mut keys)
+        .into_par_iter()
+        .flat_map_iter(|(first, last, piece)| {
+            let fill = fill_ref;
+            let base = fill[first] as usize;
+            (first..last).map(move |i| {
+                let row = &mut piece[fill[i] as usize - base..fill[i + 1] as usize - base];
+                row.sort_unstable();
+                1 + row.chunk_by(|a, b| column(*a) == column(*b)).count() as u32
+            })
+        })
+        .collect();
+    let mut row_start = Vec::with_capacity(n + 1);
+    row_start.push(0u32);
+    let mut at = 0u32;
+    for &l in &row_len {
+        at += l;
+        row_start.push(at);
+    }
+    drop(row_len);
+    let mut col = vec![0u32; at as usize];
+    let mut val = vec![0.0f64; at as usize];
+    let mut pieces = Vec::with_capacity(n / ROW_CHUNK + 1);
+    let (mut col_rest, mut val_rest) = (&mut col[..], &mut val[..]);
+    for first in (0..n).step_by(ROW_CHUNK) {
+        let last = (first + ROW_CHUNK).min(n);
+        let len = (row_start[last] - row_start[first]) as usize;
+        let (c, cr) = std::mem::take(&mut col_rest).split_at_mut(len);
+        let (v, vr) = std::mem::take(&mut val_rest).split_at_mut(len);
+        pieces.push((first, last, c, v));
+        (col_rest, val_rest) = (cr, vr);
+    }
+    pieces
+        .into_par_iter()
+        .with_min_len(PARALLEL_ROWS / ROW_CHUNK)
+        .for_each(|(first, last, col, val)| {
+            let mut at = 0;
+            for i in first..last {
+                let row = &keys[fill[i] as usize..fill[i + 1] as usize];
+                let diag_at = at;
+                col[at] = i as u32;
+                at += 1;
+                let mut diag = 0.0;
+                // An interior edge appears twice (once per triangle), summed in triangle
+                // order.
+                for run in row.chunk_by(|a, b| column(*a) == column(*b)) {
+                    let mut w = weight(run[0]);
+                    for &e in &run[1..] {
+                        w += weight(e);
+                    }
+                    col[at] = column(run[0]);
+                    val[at] = -w;
+                    at += 1;
+                    diag += w;
+                }
+                val[diag_at] = diag;
+            }
+        });
     SymmetricCsr {
         row_start,
         col,
         val,
     }
+}
+
+/// Splits `keys` at row boundaries (`fill`) into pieces of about `ROW_CHUNK` rows, as
+/// `(first row, end row, keys)`, for parallel work over whole rows.
+fn split_rows<'a>(fill: &[u32], keys: &'a mut [u64]) -> Vec<(usize, usize, &'a mut [u64])> {
+    let n = fill.len() - 1;
+    let mut pieces = Vec::with_capacity(n / ROW_CHUNK + 1);
+    let mut rest = keys;
+    for first in (0..n).step_by(ROW_CHUNK) {
+        let last = (first + ROW_CHUNK).min(n);
+        let (piece, tail) =
+            std::mem::take(&mut rest).split_at_mut((fill[last] - fill[first]) as usize);
+        pieces.push((first, last, piece));
+        rest = tail;
+    }
+    pieces
 }
 
 /// Clamps negative edge weights (positive off-diagonal entries of L, on edges whose opposite
@@ -279,6 +351,116 @@ pub fn mass_rhs(mass: &[f64], x: &[DVec3]) -> Vec<[f64; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The former sequential scatter-and-sort assembly, kept as an oracle: cotangent stiffness matrix L (positive semi-definite, rows sum to zero) of `triangles`
+    /// indexing `positions`, with optional per-triangle coefficients. Rows are sorted by column
+    /// after the diagonal; assembly is a counting sort over the triangle corners, so it is linear
+    /// and reads memory in order.
+    fn scatter_stiffness(
+        triangles: &[[u32; 3]],
+        positions: &[DVec3],
+        face_coefficient: Option<&[f64]>,
+    ) -> SymmetricCsr {
+        let n = positions.len();
+        // Two directed entries per triangle corner.
+        let mut fill: Vec<u32> = vec![0; n + 1];
+        for t in triangles {
+            for &i in t {
+                fill[i as usize + 1] += 2;
+            }
+        }
+        for i in 0..n {
+            fill[i + 1] += fill[i];
+        }
+        // w[j]: ½ a_T cot of the angle at corner j+2, which is opposite edge (j, j+1). Computed per
+        // triangle independently (in parallel on big meshes; same bits either way).
+        let weights_of = |ti: usize| {
+            let t = triangles[ti];
+            let v = t.map(|i| positions[i as usize]);
+            let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+            let coef = face_coefficient.map_or(1.0, |c| c[ti]);
+            let mut w = [0.0; 3];
+            if !is_degenerate(v[0], v[1], v[2], area) {
+                for (j, wj) in w.iter_mut().enumerate() {
+                    let o = v[(j + 2) % 3];
+                    *wj = 0.5 * coef * cotangent(v[j] - o, v[(j + 1) % 3] - o);
+                }
+            }
+            w
+        };
+        let tri_weights: Vec<[f64; 3]> = if triangles.len() < PARALLEL_ROWS {
+            (0..triangles.len()).map(weights_of).collect()
+        } else {
+            use rayon::prelude::*;
+            (0..triangles.len())
+                .into_par_iter()
+                .map(weights_of)
+                .collect()
+        };
+        let mut entries: Vec<(u32, f64)> = vec![(0, 0.0); fill[n] as usize];
+        let mut cursor = fill.clone();
+        for (t, w) in triangles.iter().zip(&tri_weights) {
+            for j in 0..3 {
+                let (a, b) = (t[j], t[(j + 1) % 3]);
+                for (row, col) in [(a, b), (b, a)] {
+                    let c = &mut cursor[row as usize];
+                    entries[*c as usize] = (col, w[j]);
+                    *c += 1;
+                }
+            }
+        }
+        drop(tri_weights);
+        // Each row by column (rows are independent: parallel on big meshes). The sort is stable,
+        // so equal columns keep their triangle order and sum in the same order as before.
+        {
+            let mut rows: Vec<&mut [(u32, f64)]> = Vec::with_capacity(n);
+            let mut rest: &mut [(u32, f64)] = &mut entries;
+            for i in 0..n {
+                let (row, tail) = rest.split_at_mut((fill[i + 1] - fill[i]) as usize);
+                rows.push(row);
+                rest = tail;
+            }
+            let sort = |row: &mut &mut [(u32, f64)]| row.sort_by_key(|e| e.0);
+            if n < PARALLEL_ROWS {
+                rows.iter_mut().for_each(sort);
+            } else {
+                use rayon::prelude::*;
+                rows.par_iter_mut().for_each(sort);
+            }
+        }
+        let mut row_start = Vec::with_capacity(n + 1);
+        let mut col = Vec::with_capacity(n + entries.len() / 2);
+        let mut val = Vec::with_capacity(col.capacity());
+        row_start.push(0u32);
+        for i in 0..n {
+            let row = &entries[fill[i] as usize..fill[i + 1] as usize];
+            let diag_at = val.len();
+            col.push(i as u32);
+            val.push(0.0);
+            let mut diag = 0.0;
+            let mut k = 0;
+            while k < row.len() {
+                let (c, mut w) = row[k];
+                k += 1;
+                // An interior edge appears twice (once per triangle); two terms add the same in
+                // either order, so the sum is deterministic.
+                while k < row.len() && row[k].0 == c {
+                    w += row[k].1;
+                    k += 1;
+                }
+                col.push(c);
+                val.push(-w);
+                diag += w;
+            }
+            val[diag_at] = diag;
+            row_start.push(col.len() as u32);
+        }
+        SymmetricCsr {
+            row_start,
+            col,
+            val,
+        }
+    }
 
     fn tetra_fan() -> (Vec<[u32; 3]>, Vec<DVec3>) {
         let p = vec![
@@ -366,5 +548,47 @@ mod tests {
         let a = system_matrix(&mass, l, 2.0);
         assert_eq!(a.val, vec![1.0, 1.0]);
         assert_eq!(identity_rows(&mass), vec![true, false]);
+    }
+
+    #[test]
+    fn parallel_assembly_matches_the_sequential_oracle_bit_for_bit() {
+        // A jittered grid with degenerate, duplicated (non-manifold) and flipped triangles,
+        // large enough to take the parallel paths, with and without face coefficients, on 1
+        // and 3 threads.
+        let k = 200u32;
+        let mut p = Vec::new();
+        for j in 0..=k {
+            for i in 0..=k {
+                let h = ((i * 7919 + j * 104_729) % 1000) as f64 / 1000.0;
+                p.push(DVec3::new(i as f64 + 0.3 * h, j as f64 - 0.2 * h, h));
+            }
+        }
+        let id = |i: u32, j: u32| j * (k + 1) + i;
+        let mut t = Vec::new();
+        for j in 0..k {
+            for i in 0..k {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+                if (i + j) % 37 == 0 {
+                    t.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
+                }
+            }
+        }
+        p[5] = p[6]; // a zero-length edge: degenerate triangles
+        let coef: Vec<f64> = (0..t.len()).map(|i| 0.5 + (i % 13) as f64 / 7.0).collect();
+        let bits = |m: &SymmetricCsr| m.val.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        for c in [None, Some(&coef[..])] {
+            let old = scatter_stiffness(&t, &p, c);
+            for threads in [1, 3] {
+                let new = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap()
+                    .install(|| cotangent_stiffness(&t, &p, c));
+                assert_eq!(new.row_start, old.row_start);
+                assert_eq!(new.col, old.col);
+                assert_eq!(bits(&new), bits(&old));
+            }
+        }
     }
 }
