@@ -4,6 +4,7 @@
 
 use super::{PmError, ProgressiveMesh, VertexSplit};
 use crate::mesh::{Mesh, SlotIndex, VertexId};
+use crate::pm::FlatReplay;
 use crate::pm::collapse::vertex_split;
 use glam::DVec3;
 
@@ -155,8 +156,36 @@ impl ProgressiveMesh {
     /// Rebuilds a progressive mesh from stored parts, checking every invariant the cursor,
     /// the analysis and the synthesis rely on: the permutation, index ranges, that every split
     /// applies exactly to the base mesh, and that all splits together give exactly `faces`.
-    /// Cost: one replay of all splits.
+    /// Cost: one replay of all splits ([`FlatReplay`]).
     pub fn from_parts(parts: PmParts) -> Result<ProgressiveMesh, PmError> {
+        let mut pm = Self::unreplayed(parts)?;
+        let n_base = pm.n_base;
+        let base = pm.base_triangles();
+        let mut replay = FlatReplay::new(&pm.positions[..n_base], &base, pm.splits.len())?;
+        for s in &pm.splits {
+            replay.apply(s)?;
+        }
+        pm.finish(&replay)?;
+        Ok(pm)
+    }
+
+    /// [`Self::from_parts`] for a decoder that has already replayed `parts.splits` on `replay`
+    /// (built from `parts.base_triangles()`), so the splits are not replayed a second time.
+    /// Everything else is checked as in `from_parts`.
+    pub(crate) fn from_replayed_parts(
+        parts: PmParts,
+        replay: &FlatReplay,
+    ) -> Result<ProgressiveMesh, PmError> {
+        let mut pm = Self::unreplayed(parts)?;
+        if replay.level() != pm.n_vertices() {
+            return Err(invalid("the replay does not match the splits"));
+        }
+        pm.finish(replay)?;
+        Ok(pm)
+    }
+
+    /// The parts with every check that needs no replay.
+    fn unreplayed(parts: PmParts) -> Result<ProgressiveMesh, PmError> {
         let PmParts {
             n_base,
             positions,
@@ -198,7 +227,7 @@ impl ProgressiveMesh {
         }) {
             return Err(invalid("finest face out of range or degenerate"));
         }
-        let mut pm = ProgressiveMesh {
+        Ok(ProgressiveMesh {
             n_base,
             positions,
             pm_to_mesh,
@@ -207,19 +236,19 @@ impl ProgressiveMesh {
             faces,
             n_base_faces: 0,
             errors,
-        };
-        let base = pm.base_triangles();
-        let mut replay = SplitReplay::new(&pm.positions[..n_base], &base)?;
-        pm.n_base_faces = replay.mesh().n_faces();
-        for (i, s) in pm.splits.iter().enumerate() {
-            replay.apply(s, pm.positions[n_base + i])?;
-        }
-        let mut finest: Vec<[u32; 3]> = pm.faces.iter().map(|&t| canonical(t)).collect();
+        })
+    }
+
+    /// Takes the base face count from the replay and checks that all splits together give
+    /// exactly the finest faces.
+    fn finish(&mut self, replay: &FlatReplay) -> Result<(), PmError> {
+        self.n_base_faces = replay.n_base_faces();
+        let mut finest: Vec<[u32; 3]> = self.faces.iter().map(|&t| canonical(t)).collect();
         finest.sort_unstable();
         if finest != replay.canonical_faces() {
             return Err(invalid("the splits do not rebuild the finest faces"));
         }
-        Ok(pm)
+        Ok(())
     }
 }
 
