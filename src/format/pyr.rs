@@ -13,7 +13,7 @@ use crate::mesh::{
     Attribute, AttributeData, Built, ElementProperty, ExtraElement, ListProperty, Mesh,
     PolygonMesh, ScalarType, SlotIndex,
 };
-use crate::pm::{FlatReplay, PmOptions, PmParts, ProgressiveMesh, VertexSplit};
+use crate::pm::{FlatReplay, PmOptions, PmParts, ProgressiveMesh, VertexSplit, canonical_sorted};
 use crate::progress::Progress;
 use crate::pyramid::{Pyramid, PyramidError, ScanPyramid};
 use crate::relax::SecondDifference;
@@ -1117,15 +1117,20 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
             *m = i as u32;
         }
     }
+    // The finest faces, checked to be exactly what the splits rebuild: read off a clean
+    // triangle input, else from the builder's repaired mesh.
     let replayed = replay.canonical_faces();
     let (faces, built) = match clean_triangle_faces(&input, &mesh_to_pm, n_total, &replayed) {
         Some(faces) => (faces, None),
         None => {
             let (faces, built) = built_faces(&input, &mesh_to_pm, n_total, &positions)?;
+            if canonical_sorted(&faces, n_total) != replayed {
+                return Err(corrupt(0, "the splits do not rebuild the finest faces"));
+            }
             (faces, Some(built))
         }
     };
-    let pm = ProgressiveMesh::from_replayed_parts(
+    let pm = ProgressiveMesh::from_checked_parts(
         PmParts {
             n_base: meta.n_base as usize,
             positions,
@@ -1134,7 +1139,7 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
             faces,
             errors,
         },
-        &replay,
+        replay.n_base_faces(),
     )
     .map_err(|e| corrupt(0, e.to_string()))?;
     let info = BuildInfo {
@@ -1181,14 +1186,7 @@ fn clean_triangle_faces(
         }
         faces.push(f);
     }
-    let mut sorted: Vec<[u32; 3]> = faces
-        .iter()
-        .map(|&t| {
-            let k = (0..3).min_by_key(|&i| t[i]).unwrap_or(0);
-            [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
-        })
-        .collect();
-    sorted.sort_unstable();
+    let sorted = canonical_sorted(&faces, n_total);
     (sorted == replayed_canonical).then_some(faces)
 }
 

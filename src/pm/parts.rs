@@ -4,8 +4,8 @@
 
 use super::{PmError, ProgressiveMesh, VertexSplit};
 use crate::mesh::{Mesh, SlotIndex, VertexId};
-use crate::pm::FlatReplay;
 use crate::pm::collapse::vertex_split;
+use crate::pm::{FlatReplay, canonical_sorted};
 use glam::DVec3;
 
 /// The stored parts of a progressive mesh; everything else is derived.
@@ -165,22 +165,23 @@ impl ProgressiveMesh {
         for s in &pm.splits {
             replay.apply(s)?;
         }
-        pm.finish(&replay)?;
+        pm.n_base_faces = replay.n_base_faces();
+        if canonical_sorted(&pm.faces, n_base + pm.splits.len()) != replay.canonical_faces() {
+            return Err(invalid("the splits do not rebuild the finest faces"));
+        }
         Ok(pm)
     }
 
-    /// [`Self::from_parts`] for a decoder that has already replayed `parts.splits` on `replay`
-    /// (built from `parts.base_triangles()`), so the splits are not replayed a second time.
-    /// Everything else is checked as in `from_parts`.
-    pub(crate) fn from_replayed_parts(
+    /// [`Self::from_parts`] for a decoder that has already replayed `parts.splits` on a
+    /// [`FlatReplay`] of the base mesh (which gave `n_base_faces` base faces) and checked that
+    /// `parts.faces` are exactly the faces the replay rebuilt: everything else is checked as
+    /// in `from_parts`, without replaying or comparing the faces a second time.
+    pub(crate) fn from_checked_parts(
         parts: PmParts,
-        replay: &FlatReplay,
+        n_base_faces: usize,
     ) -> Result<ProgressiveMesh, PmError> {
         let mut pm = Self::unreplayed(parts)?;
-        if replay.level() != pm.n_vertices() {
-            return Err(invalid("the replay does not match the splits"));
-        }
-        pm.finish(replay)?;
+        pm.n_base_faces = n_base_faces;
         Ok(pm)
     }
 
@@ -237,18 +238,6 @@ impl ProgressiveMesh {
             n_base_faces: 0,
             errors,
         })
-    }
-
-    /// Takes the base face count from the replay and checks that all splits together give
-    /// exactly the finest faces.
-    fn finish(&mut self, replay: &FlatReplay) -> Result<(), PmError> {
-        self.n_base_faces = replay.n_base_faces();
-        let mut finest: Vec<[u32; 3]> = self.faces.iter().map(|&t| canonical(t)).collect();
-        finest.sort_unstable();
-        if finest != replay.canonical_faces() {
-            return Err(invalid("the splits do not rebuild the finest faces"));
-        }
-        Ok(())
     }
 }
 
