@@ -30,13 +30,13 @@ fn canonical(t: [u32; 3]) -> [u32; 3] {
     [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
 }
 
-/// One ring entry: the out-going half-edge `v → nbr` (its slot) and the face on its left
-/// (`NIL` for a boundary half-edge).
+/// One ring entry: the out-going half-edge `v → nbr` and its slot. Eight bytes, so a typical
+/// ring fits a cache line; which entry is a boundary half-edge is in [`Ring::boundary`], and
+/// faces are found from their stored half-edge's slot ([`FlatReplay::triangles`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Entry {
     nbr: u32,
     slot: u32,
-    face: u32,
 }
 
 /// Where a vertex's ring lives in the arena. `boundary`: entry 0 is the boundary out-edge.
@@ -103,16 +103,15 @@ impl FlatReplay {
             let off = arena.len() as u32;
             let mut boundary = false;
             for (k, h) in mesh.outgoing(v).enumerate() {
-                let face = mesh.face(h).map_or(NIL, |f| f.slot() as u32);
+                let face = mesh.face(h).is_some();
                 if k == 0 {
-                    boundary = face == NIL;
-                } else if face == NIL {
+                    boundary = !face;
+                } else if !face {
                     return Err(invalid("base vertex with two boundary out-edges"));
                 }
                 arena.push(Entry {
                     nbr: mesh.to_vertex(h).slot() as u32,
                     slot: h.slot() as u32,
-                    face,
                 });
             }
             let len = arena.len() as u32 - off;
@@ -121,7 +120,6 @@ impl FlatReplay {
                 arena.push(Entry {
                     nbr: NIL,
                     slot: NIL,
-                    face: NIL,
                 });
             }
             rings.push(Ring {
@@ -282,7 +280,6 @@ impl FlatReplay {
             Entry {
                 nbr: NIL,
                 slot: NIL,
-                face: NIL,
             },
         );
         self.rings[v as usize].off = off;
@@ -368,7 +365,7 @@ impl FlatReplay {
                         return Err(SplitError::Inconsistent);
                     }
                     m += 1;
-                    e = (e + 1) % n;
+                    e = if e + 1 == n { 0 } else { e + 1 };
                 }
             }
             None => {
@@ -381,11 +378,17 @@ impl FlatReplay {
                     if is_boundary(e) {
                         break;
                     }
-                    e = (e + 1) % n;
+                    e = if e + 1 == n { 0 } else { e + 1 };
                 }
             }
         }
-        let fan = |ring: &[Entry], k: usize| ring[(start + k) % n];
+        // Index of fan entry k (k < n, start < n): a wrap instead of a division, which cost
+        // more than the rest of a split's arithmetic.
+        let at = |k: usize| {
+            let j = start + k;
+            if j >= n { j - n } else { j }
+        };
+        let fan = |ring: &[Entry], k: usize| ring[at(k)];
 
         // Slots in `vertex_split`'s insertion order.
         let u = self.rings.len() as u32;
@@ -401,22 +404,18 @@ impl FlatReplay {
         let (o2, o1) = alloc2(right.is_some()).unzip();
         let (h2, h1) = alloc2(left.is_some()).unzip();
         self.n_halfedges = next;
-        let fr = right.map(|_| self.face_he.len() as u32);
-        let fl = left.map(|_| (self.face_he.len() + fr.is_some() as usize) as u32);
         if right.is_some() {
             self.face_he.push(o);
         }
         if left.is_some() {
             self.face_he.push(h);
         }
-        let fr_id = fr.unwrap_or(NIL);
-        let fl_id = fl.unwrap_or(NIL);
 
         // The fan's far ends now point at u (the edge to the left wing stays with the wing's
         // twin, which `vertex_split` re-pairs).
         for k in 0..m {
             let e = fan(&self.ring, k);
-            if Some((start + k) % n) != il {
+            if k != 0 || il.is_none() {
                 let r = self.rings[e.nbr as usize];
                 let ring = &mut self.arena[r.off as usize..(r.off + r.len) as usize];
                 let x = ring
@@ -430,20 +429,12 @@ impl FlatReplay {
         // u: (u→v) then the fan then (u→v_r); canonical: h without a left face, the old
         // boundary out-edge (the fan's last) without a right face, else the smallest slot.
         self.scratch.clear();
-        self.scratch.push(Entry {
-            nbr: v,
-            slot: h,
-            face: fl_id,
-        });
+        self.scratch.push(Entry { nbr: v, slot: h });
         for k in 0..m {
             self.scratch.push(fan(&self.ring, k));
         }
         if let (Some(r), Some(o1)) = (right, o1) {
-            self.scratch.push(Entry {
-                nbr: r,
-                slot: o1,
-                face: fr_id,
-            });
+            self.scratch.push(Entry { nbr: r, slot: o1 });
         }
         let (u_start, u_boundary) = match (left, right) {
             (None, _) => (0, true),
@@ -457,7 +448,6 @@ impl FlatReplay {
             Entry {
                 nbr: NIL,
                 slot: NIL,
-                face: NIL,
             },
         );
         self.rings.push(Ring {
@@ -477,17 +467,9 @@ impl FlatReplay {
             self.scratch.push(fan(&self.ring, k));
         }
         if let (Some(l), Some(h1)) = (left, h1) {
-            self.scratch.push(Entry {
-                nbr: l,
-                slot: h1,
-                face: fl_id,
-            });
+            self.scratch.push(Entry { nbr: l, slot: h1 });
         }
-        self.scratch.push(Entry {
-            nbr: u,
-            slot: o,
-            face: fr_id,
-        });
+        self.scratch.push(Entry { nbr: u, slot: o });
         let v_start = if right.is_none() {
             self.scratch.len() - 1
         } else if v_boundary {
@@ -503,15 +485,7 @@ impl FlatReplay {
         // The wings gain an edge to u just before their edge to v; their canonical half-edge
         // (old, or boundary) stays entry 0.
         if let (Some(l), Some(h2)) = (left, h2) {
-            self.insert_before(
-                l,
-                v,
-                Entry {
-                    nbr: u,
-                    slot: h2,
-                    face: fl_id,
-                },
-            )?;
+            self.insert_before(l, v, Entry { nbr: u, slot: h2 })?;
         }
         if let (Some(r), Some(o2)) = (right, o2) {
             // v_r's old edge to v now runs to u; the new o2 = v_r→v goes before it.
@@ -522,15 +496,7 @@ impl FlatReplay {
                 .find(|x| x.nbr == v)
                 .ok_or(SplitError::Inconsistent)?;
             x.nbr = u;
-            self.insert_before(
-                r,
-                u,
-                Entry {
-                    nbr: v,
-                    slot: o2,
-                    face: fr_id,
-                },
-            )?;
+            self.insert_before(r, u, Entry { nbr: v, slot: o2 })?;
         }
         Ok(())
     }
@@ -538,13 +504,20 @@ impl FlatReplay {
     /// The current triangles in face slot order, each starting where
     /// [`Mesh::face_vertices`] starts (what [`Mesh::to_triangles`] gives for the replayed mesh).
     pub fn triangles(&self) -> Vec<[u32; 3]> {
+        let mut face_of = vec![NIL; self.n_halfedges as usize];
+        for (f, &h) in self.face_he.iter().enumerate() {
+            face_of[h as usize] = f as u32;
+        }
         let mut out = vec![[NIL; 3]; self.face_he.len()];
         for (v, r) in self.rings.iter().enumerate() {
             let e = &self.arena[r.off as usize..(r.off + r.len) as usize];
             for (k, x) in e.iter().enumerate() {
-                // The face left of v→nbr is (v, nbr, next neighbour counter-clockwise).
-                if x.face != NIL && self.face_he[x.face as usize] == x.slot {
-                    out[x.face as usize] = [v as u32, x.nbr, e[(k + 1) % e.len()].nbr];
+                // The face left of v→nbr is (v, nbr, next neighbour counter-clockwise), listed
+                // from its stored half-edge.
+                let f = face_of[x.slot as usize];
+                if f != NIL {
+                    let next = if k + 1 == e.len() { 0 } else { k + 1 };
+                    out[f as usize] = [v as u32, x.nbr, e[next].nbr];
                 }
             }
         }
