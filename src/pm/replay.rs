@@ -39,13 +39,99 @@ struct Entry {
     slot: u32,
 }
 
-/// Where a vertex's ring lives in the arena. `boundary`: entry 0 is the boundary out-edge.
-#[derive(Clone, Copy, Debug, Default)]
-struct Ring {
-    off: u32,
-    len: u32,
-    cap: u32,
-    boundary: bool,
+/// One cache line per vertex: up to [`INLINE`] ring entries, and in the last slot the header
+/// (`nbr`: length, bit 31 set when entry 0 is a boundary out-edge; `slot`: where a longer ring
+/// lives in the overflow arena, or `NIL`). Reading a ring of a typical vertex is one miss.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Line([Entry; 8]);
+
+const INLINE: usize = 7;
+const BOUNDARY: u32 = 1 << 31;
+const BLANK: Entry = Entry {
+    nbr: NIL,
+    slot: NIL,
+};
+
+/// The rings of all vertices: inline in each vertex's line, longer ones in `over` (preceded by
+/// a cell holding their capacity).
+#[derive(Clone, Debug, Default)]
+struct Rings {
+    lines: Vec<Line>,
+    over: Vec<Entry>,
+}
+
+impl Rings {
+    fn len(&self) -> usize {
+        self.lines.len()
+    }
+
+    fn push_empty(&mut self) {
+        let mut l = Line([BLANK; 8]);
+        l.0[INLINE] = Entry { nbr: 0, slot: NIL };
+        self.lines.push(l);
+    }
+
+    fn boundary(&self, v: u32) -> bool {
+        self.lines[v as usize].0[INLINE].nbr & BOUNDARY != 0
+    }
+
+    fn get(&self, v: u32) -> &[Entry] {
+        let l = &self.lines[v as usize].0;
+        let h = l[INLINE];
+        let len = (h.nbr & !BOUNDARY) as usize;
+        if h.slot == NIL {
+            &l[..len]
+        } else {
+            &self.over[h.slot as usize..h.slot as usize + len]
+        }
+    }
+
+    fn get_mut(&mut self, v: u32) -> &mut [Entry] {
+        let l = &mut self.lines[v as usize].0;
+        let h = l[INLINE];
+        let len = (h.nbr & !BOUNDARY) as usize;
+        if h.slot == NIL {
+            &mut l[..len]
+        } else {
+            &mut self.over[h.slot as usize..h.slot as usize + len]
+        }
+    }
+
+    /// Sets `v`'s ring to `src` rotated to start at `start`.
+    fn set(&mut self, v: u32, src: &[Entry], start: usize, boundary: bool) {
+        let n = src.len();
+        let h = self.lines[v as usize].0[INLINE];
+        let dst: &mut [Entry] = if n <= INLINE {
+            &mut self.lines[v as usize].0[..n]
+        } else {
+            let fits = h.slot != NIL && self.over[h.slot as usize - 1].nbr as usize >= n;
+            let off = if fits {
+                h.slot as usize
+            } else {
+                let cap = (2 * n).max(16);
+                self.over.push(Entry {
+                    nbr: cap as u32,
+                    slot: NIL,
+                });
+                let off = self.over.len();
+                self.over.resize(off + cap, BLANK);
+                off
+            };
+            self.lines[v as usize].0[INLINE].slot = off as u32;
+            &mut self.over[off..off + n]
+        };
+        // Rings are short: an element loop beats memmove calls here.
+        for (k, d) in dst.iter_mut().enumerate() {
+            let j = k + start;
+            *d = src[if j >= n { j - n } else { j }];
+        }
+        let hdr = &mut self.lines[v as usize].0[INLINE];
+        if n <= INLINE {
+            hdr.slot = NIL;
+        }
+        hdr.nbr = n as u32 | if boundary { BOUNDARY } else { 0 };
+    }
 }
 
 fn invalid(reason: impl Into<String>) -> PmError {
@@ -59,8 +145,7 @@ fn invalid(reason: impl Into<String>) -> PmError {
 /// face `i` and half-edge slot numbers are the slots the slotmap mesh would give them).
 #[derive(Clone, Debug)]
 pub struct FlatReplay {
-    rings: Vec<Ring>,
-    arena: Vec<Entry>,
+    rings: Rings,
     /// The stored half-edge of each face, in face slot order (fixed at the face's creation;
     /// [`Mesh::face_vertices`] starts at its origin). The faces' vertices are read off the
     /// rings when asked for, so a split does not touch the faces of its fan.
@@ -97,11 +182,14 @@ impl FlatReplay {
             face_he[f.slot()] = mesh.face_halfedges(f)[0].slot() as u32;
         }
         face_he.reserve(hint * 2);
-        let mut rings = Vec::with_capacity(base_positions.len() + hint);
-        let mut arena = Vec::with_capacity(n_he + hint * 8);
-        for v in mesh.vertices() {
-            let off = arena.len() as u32;
+        let mut rings = Rings {
+            lines: Vec::with_capacity(base_positions.len() + hint),
+            over: Vec::new(),
+        };
+        let mut ring = Vec::new();
+        for (i, v) in mesh.vertices().enumerate() {
             let mut boundary = false;
+            ring.clear();
             for (k, h) in mesh.outgoing(v).enumerate() {
                 let face = mesh.face(h).is_some();
                 if k == 0 {
@@ -109,29 +197,16 @@ impl FlatReplay {
                 } else if !face {
                     return Err(invalid("base vertex with two boundary out-edges"));
                 }
-                arena.push(Entry {
+                ring.push(Entry {
                     nbr: mesh.to_vertex(h).slot() as u32,
                     slot: h.slot() as u32,
                 });
             }
-            let len = arena.len() as u32 - off;
-            // Room for a few insertions before the ring has to move.
-            for _ in 0..2 {
-                arena.push(Entry {
-                    nbr: NIL,
-                    slot: NIL,
-                });
-            }
-            rings.push(Ring {
-                off,
-                len,
-                cap: len + 2,
-                boundary,
-            });
+            rings.push_empty();
+            rings.set(i as u32, &ring, 0, boundary);
         }
         let replay = FlatReplay {
             rings,
-            arena,
             face_he,
             n_base_faces: mesh.n_faces(),
             n_halfedges: n_he as u32,
@@ -142,9 +217,10 @@ impl FlatReplay {
         };
         // The rings are built from the stored half-edges; the split rules need them canonical
         // (the builder promises it), so check.
-        for r in &replay.rings {
-            let e = &replay.arena[r.off as usize..(r.off + r.len) as usize];
-            let ok = r.boundary || e.first().is_none_or(|x| e.iter().all(|y| y.slot >= x.slot));
+        for v in 0..replay.rings.len() as u32 {
+            let e = replay.rings.get(v);
+            let ok = replay.rings.boundary(v)
+                || e.first().is_none_or(|x| e.iter().all(|y| y.slot >= x.slot));
             if !ok {
                 return Err(invalid("base mesh is not in canonical form"));
             }
@@ -167,11 +243,6 @@ impl FlatReplay {
         self.face_he.len()
     }
 
-    fn entries(&self, v: u32) -> &[Entry] {
-        let r = self.rings[v as usize];
-        &self.arena[r.off as usize..(r.off + r.len) as usize]
-    }
-
     /// The PM indices around `v` in [`Mesh::outgoing`] order (counter-clockwise from the
     /// canonical half-edge; a boundary vertex starts at its boundary out-edge) — the ring the
     /// `.pyr` format indexes wings into.
@@ -179,8 +250,7 @@ impl FlatReplay {
         if v as usize >= self.rings.len() {
             return Err(invalid(format!("survivor {v} does not exist yet")));
         }
-        let r = self.rings[v as usize];
-        let e = &self.arena[r.off as usize..(r.off + r.len) as usize];
+        let e = self.rings.get(v);
         self.ring.clear();
         self.ring_v.clear();
         for x in e {
@@ -268,64 +338,23 @@ impl FlatReplay {
         Ok(split)
     }
 
-    /// Moves `v`'s ring to the end of the arena with room for `need` entries.
-    fn grow(&mut self, v: u32, need: u32) {
-        let r = self.rings[v as usize];
-        let cap = need.max(r.cap.saturating_mul(2)).max(8);
-        let off = self.arena.len() as u32;
-        self.arena
-            .extend_from_within(r.off as usize..(r.off + r.len) as usize);
-        self.arena.resize(
-            (off + cap) as usize,
-            Entry {
-                nbr: NIL,
-                slot: NIL,
-            },
-        );
-        self.rings[v as usize].off = off;
-        self.rings[v as usize].cap = cap;
-    }
-
-    /// Replaces `v`'s ring by `self.scratch` rotated to start at `start`.
-    fn store_scratch(&mut self, v: u32, start: usize, boundary: bool) {
-        let len = self.scratch.len() as u32;
-        if self.rings[v as usize].cap < len {
-            self.grow(v, len);
-        }
-        let r = &mut self.rings[v as usize];
-        r.len = len;
-        r.boundary = boundary;
-        let off = r.off as usize;
-        // Rings are short: element loops beat memmove calls here.
-        let n = self.scratch.len();
-        let dst = &mut self.arena[off..off + n];
-        for (k, d) in dst.iter_mut().enumerate() {
-            let j = k + start;
-            *d = self.scratch[if j >= n { j - n } else { j }];
-        }
-    }
-
     /// Inserts `e` in `v`'s ring just before (counter-clockwise of) its entry to `before`,
     /// leaving entry 0 (the canonical half-edge) in place.
     fn insert_before(&mut self, v: u32, before: u32, e: Entry) -> Result<(), SplitError> {
-        let k = self
-            .entries(v)
+        let ring = self.rings.get(v);
+        let k = ring
             .iter()
             .position(|x| x.nbr == before)
             .ok_or(SplitError::Inconsistent)?;
-        let r = self.rings[v as usize];
-        if r.cap <= r.len {
-            self.grow(v, r.len + 1);
-        }
-        let r = self.rings[v as usize];
-        let (off, len) = (r.off as usize, r.len as usize);
-        let at = if k == 0 { len } else { k };
-        let ring = &mut self.arena[off..off + len + 1];
-        for j in (at..len).rev() {
-            ring[j + 1] = ring[j];
-        }
-        ring[at] = e;
-        self.rings[v as usize].len += 1;
+        let at = if k == 0 { ring.len() } else { k };
+        let mut tmp = std::mem::take(&mut self.scratch);
+        tmp.clear();
+        tmp.extend_from_slice(&ring[..at]);
+        tmp.push(e);
+        tmp.extend_from_slice(&ring[at..]);
+        let boundary = self.rings.boundary(v);
+        self.rings.set(v, &tmp, 0, boundary);
+        self.scratch = tmp;
         Ok(())
     }
 
@@ -348,7 +377,7 @@ impl FlatReplay {
         {
             return Err(SplitError::Inconsistent);
         }
-        let v_boundary = self.rings[v as usize].boundary;
+        let v_boundary = self.rings.boundary(v);
         // Only entry 0 of a boundary vertex is a boundary half-edge.
         let is_boundary = |k: usize| v_boundary && k == 0;
         if (left.is_none() || right.is_none()) && !v_boundary {
@@ -416,9 +445,9 @@ impl FlatReplay {
         for k in 0..m {
             let e = fan(&self.ring, k);
             if k != 0 || il.is_none() {
-                let r = self.rings[e.nbr as usize];
-                let ring = &mut self.arena[r.off as usize..(r.off + r.len) as usize];
-                let x = ring
+                let x = self
+                    .rings
+                    .get_mut(e.nbr)
                     .iter_mut()
                     .find(|x| x.nbr == v)
                     .ok_or(SplitError::Inconsistent)?;
@@ -441,22 +470,8 @@ impl FlatReplay {
             (_, None) => (m, true),
             _ => (min_slot(&self.scratch), false),
         };
-        let cap = (self.scratch.len() as u32 + 2).max(8);
-        let off = self.arena.len() as u32;
-        self.arena.resize(
-            (off + cap) as usize,
-            Entry {
-                nbr: NIL,
-                slot: NIL,
-            },
-        );
-        self.rings.push(Ring {
-            off,
-            len: 0,
-            cap,
-            boundary: u_boundary,
-        });
-        self.store_scratch(u, u_start, u_boundary);
+        self.rings.push_empty();
+        self.rings.set(u, &self.scratch, u_start, u_boundary);
 
         // v: what is left of its ring from the fan's end round to its start, then (v→v_l),
         // then (v→u). Canonical: o without a right face, the unchanged boundary out-edge of a
@@ -480,7 +495,7 @@ impl FlatReplay {
         } else {
             min_slot(&self.scratch)
         };
-        self.store_scratch(v, v_start, v_boundary);
+        self.rings.set(v, &self.scratch, v_start, v_boundary);
 
         // The wings gain an edge to u just before their edge to v; their canonical half-edge
         // (old, or boundary) stays entry 0.
@@ -489,9 +504,9 @@ impl FlatReplay {
         }
         if let (Some(r), Some(o2)) = (right, o2) {
             // v_r's old edge to v now runs to u; the new o2 = v_r→v goes before it.
-            let rr = self.rings[r as usize];
-            let ring = &mut self.arena[rr.off as usize..(rr.off + rr.len) as usize];
-            let x = ring
+            let x = self
+                .rings
+                .get_mut(r)
                 .iter_mut()
                 .find(|x| x.nbr == v)
                 .ok_or(SplitError::Inconsistent)?;
@@ -509,8 +524,8 @@ impl FlatReplay {
             face_of[h as usize] = f as u32;
         }
         let mut out = vec![[NIL; 3]; self.face_he.len()];
-        for (v, r) in self.rings.iter().enumerate() {
-            let e = &self.arena[r.off as usize..(r.off + r.len) as usize];
+        for v in 0..self.rings.len() {
+            let e = self.rings.get(v as u32);
             for (k, x) in e.iter().enumerate() {
                 // The face left of v→nbr is (v, nbr, next neighbour counter-clockwise), listed
                 // from its stored half-edge.
