@@ -646,6 +646,18 @@ mod tests {
             .map(|(_, t)| *t)
             .collect();
         same_as_slotmap(&Mesh::from_triangles(&p, &t).unwrap().mesh);
+        // A double cone: two vertices of valence 24, rings longer than a cache line holds.
+        let k = 24u32;
+        let mut p = vec![DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.0, 0.0, -1.0)];
+        let mut t = Vec::new();
+        for i in 0..k {
+            let a = i as f64 * std::f64::consts::TAU / k as f64;
+            p.push(DVec3::new(a.cos(), a.sin(), 0.1 * (i % 3) as f64));
+            let (x, y) = (2 + i, 2 + (i + 1) % k);
+            t.push([0, x, y]);
+            t.push([1, y, x]);
+        }
+        same_as_slotmap(&Mesh::from_triangles(&p, &t).unwrap().mesh);
     }
 
     #[test]
