@@ -1,7 +1,11 @@
 //! `.pyr` save and load speed (MB/s of file), on the bundled bunny and, when
 //! `MESHPYR_BIG_MESH` names a mesh file (e.g. the bunny Loop-subdivided twice, ~600k vertices),
-//! on that too. Load = full decode with validation (the hierarchy replayed twice and the input
-//! mesh rebuilt); the pyramid re-analysis that follows a load is measured separately.
+//! on that too. Save = `format::encode` (bytes in memory, the splits replayed once to code the
+//! wings). Load = `format::decode` from bytes in memory to the validated `ProgressiveMesh` and
+//! the user's exact `PolygonMesh` (the splits replayed once on flat arrays; the half-edge mesh
+//! is built only for inputs the builder repairs). `load_level_finest` = `read_level` (the
+//! progressive part only). File reading/writing is not included; the pyramid re-analysis
+//! that follows a load for `filter`/`spectrum`/`edit` is measured separately.
 //! Run with `cargo bench --bench pyr`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};

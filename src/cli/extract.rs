@@ -26,6 +26,13 @@ pub fn run(args: ExtractArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
     let name = args.input.display().to_string();
     let bytes = std::fs::read(&args.input).with_context(|| format!("cannot read {name}"))?;
+    if args.level.is_none() {
+        // The finest level: the user's mesh exactly, if the file is complete (one replay of
+        // the splits; only a damaged file falls back to the progressive reader below).
+        if write_original(&args, global, &bytes, &name)?.is_none() {
+            return Ok(());
+        }
+    }
     let level =
         format::read_level(&bytes, args.level).with_context(|| format!("cannot read {name}"))?;
     if let Some(n) = args.level
@@ -40,21 +47,11 @@ pub fn run(args: ExtractArgs, global: &Global) -> anyhow::Result<()> {
     let wanted = args.level.unwrap_or(level.finest);
     if level.level == level.finest && wanted == level.finest {
         // The finest level: the user's mesh exactly, if the trailing sections are intact.
-        match format::decode(&bytes) {
-            Ok(data) => {
-                io::write_mesh(&args.output, &data.input)?;
-                global.say(format_args!(
-                    "wrote {}: the original mesh, {} vertices, {} faces",
-                    args.output.display(),
-                    data.input.n_vertices(),
-                    data.input.n_faces()
-                ));
-                return Ok(());
-            }
-            Err(e @ format::FormatError::Truncated { .. }) => eprintln!(
+        match write_original(&args, global, &bytes, &name)? {
+            None => return Ok(()),
+            Some(e) => eprintln!(
                 "warning: {name}: {e}; writing the finest level in hierarchy order, without the original vertex order and attributes"
             ),
-            Err(e) => return Err(e).with_context(|| format!("cannot read {name}")),
         }
     } else if level.level < wanted {
         eprintln!(
@@ -70,4 +67,28 @@ pub fn run(args: ExtractArgs, global: &Global) -> anyhow::Result<()> {
         level.triangles.len()
     ));
     Ok(())
+}
+
+/// Writes the user's mesh exactly as it was built into the file. `Some(error)` when the file
+/// is truncated (the caller falls back to the progressive prefix); other damage is an error.
+fn write_original(
+    args: &ExtractArgs,
+    global: &Global,
+    bytes: &[u8],
+    name: &str,
+) -> anyhow::Result<Option<format::FormatError>> {
+    match format::decode(bytes) {
+        Ok(data) => {
+            io::write_mesh(&args.output, &data.input)?;
+            global.say(format_args!(
+                "wrote {}: the original mesh, {} vertices, {} faces",
+                args.output.display(),
+                data.input.n_vertices(),
+                data.input.n_faces()
+            ));
+            Ok(None)
+        }
+        Err(e @ format::FormatError::Truncated { .. }) => Ok(Some(e)),
+        Err(e) => Err(e).with_context(|| format!("cannot read {name}")),
+    }
 }

@@ -13,7 +13,7 @@ use crate::mesh::{
     Attribute, AttributeData, Built, ElementProperty, ExtraElement, ListProperty, Mesh,
     PolygonMesh, ScalarType, SlotIndex,
 };
-use crate::pm::{PmOptions, PmParts, ProgressiveMesh, SplitReplay, VertexSplit};
+use crate::pm::{FlatReplay, PmOptions, PmParts, ProgressiveMesh, VertexSplit, canonical_sorted};
 use crate::progress::Progress;
 use crate::pyramid::{Pyramid, PyramidError, ScanPyramid};
 use crate::relax::SecondDifference;
@@ -173,8 +173,10 @@ struct Meta {
 pub struct PyrData {
     /// The user's mesh exactly as it was read when the file was built.
     pub input: PolygonMesh,
-    /// The repaired half-edge mesh of `input` and its map back (recomputed, deterministic).
-    pub built: Built,
+    /// The repaired half-edge mesh of `input` when loading needed it (an input the builder
+    /// repairs); `None` for a clean triangle mesh, whose half-edge mesh is built only when a
+    /// command needs it ([`Self::into_scan`], [`Self::built`]).
+    built: Option<Built>,
     /// The hierarchy.
     pub pm: ProgressiveMesh,
     /// Build options.
@@ -187,12 +189,27 @@ impl PyrData {
     pub fn into_scan(self, progress: &dyn Progress) -> Result<ScanPyramid, PyramidError> {
         let op = self.info.relaxation.operator();
         let pyramid = Pyramid::analyze(&self.pm, op.as_ref(), progress)?;
+        let built = match self.built {
+            Some(b) => b,
+            None => Mesh::from_polygons(&self.input)?,
+        };
         Ok(ScanPyramid {
             input: self.input,
-            built: self.built,
+            built,
             pm: self.pm,
             pyramid,
         })
+    }
+}
+
+impl PyrData {
+    /// The repaired half-edge mesh of [`Self::input`] and its map back (the one `build` made;
+    /// deterministic). Built on demand unless loading already needed it.
+    pub fn built(&self) -> Result<Built, FormatError> {
+        match &self.built {
+            Some(b) => Ok(b.clone()),
+            None => Mesh::from_polygons(&self.input).map_err(|e| corrupt(0, e.to_string())),
+        }
     }
 }
 
@@ -479,36 +496,29 @@ pub fn encode(
     sizes.positions += before;
 
     // SPLT: blocks of split records, replayed on the base mesh to code wings as ring indices.
-    let mut replay =
-        SplitReplay::new(&positions[..n_base], &base_tris).map_err(|e| internal(&e.to_string()))?;
-    let mut splt = Vec::new();
-    let mut ring = Vec::new();
+    let mut replay = FlatReplay::new(&positions[..n_base], &base_tris, pm.splits().len())
+        .map_err(|e| internal(&e.to_string()))?;
+    let mut splt = Vec::with_capacity(pm.splits().len() * (4 + 4 + 3 * width) + 64);
+    let mut payload = Vec::new();
     for (b, chunk) in pm.splits().chunks(SPLITS_PER_BLOCK as usize).enumerate() {
         let first = n_base + b * SPLITS_PER_BLOCK as usize;
-        let mut payload = Vec::with_capacity(chunk.len() * (4 + 4 + 3 * width));
-        for (k, s) in chunk.iter().enumerate() {
+        payload.clear();
+        payload.reserve(chunk.len() * (4 + 4 + 3 * width));
+        for s in chunk {
             put_uvarint(&mut payload, u64::from(s.vertex - 1 - s.survivor));
-            replay
-                .ring(s.survivor, &mut ring)
+            let (il, ir) = replay
+                .wing_indices(s)
                 .map_err(|e| internal(&e.to_string()))?;
-            let find = |x: u32| ring.iter().position(|&r| r == x);
-            let il = match s.left {
-                None => None,
-                Some(l) => Some(find(l).ok_or_else(|| internal("left wing not in ring"))?),
-            };
-            let ir = match s.right {
-                None => None,
-                Some(r) => Some(find(r).ok_or_else(|| internal("right wing not in ring"))?),
-            };
+            let valence = replay.listed_ring().len();
             put_uvarint(&mut payload, il.map_or(0, |i| i as u64 + 1));
             let rc = match (il, ir) {
                 (_, None) => 0,
-                (Some(l), Some(r)) => ((r + ring.len() - l) % ring.len()) as u64 + 1,
+                (Some(l), Some(r)) => ((r + valence - l) % valence) as u64 + 1,
                 (None, Some(r)) => r as u64 + 1,
             };
             put_uvarint(&mut payload, rc);
             replay
-                .apply(s, positions[first + k])
+                .apply_indexed(s.vertex, s.survivor, il, ir)
                 .map_err(|e| internal(&e.to_string()))?;
         }
         sizes.pm_connectivity += payload.len() + 12;
@@ -625,8 +635,8 @@ fn read_positions(
 struct Progressive {
     meta: Meta,
     truncated: bool,
-    replay: SplitReplay,
-    base_faces: Vec<[u32; 3]>,
+    /// The base mesh with `splits` applied.
+    replay: FlatReplay,
     splits: Vec<VertexSplit>,
     positions: Vec<DVec3>,
     errors: Vec<f32>,
@@ -727,7 +737,10 @@ fn read_progressive(
     if !r.is_empty() {
         return Err(corrupt(r.offset(), "trailing bytes in BASE"));
     }
-    let mut replay = SplitReplay::new(&positions, &base_faces)
+    // Every split takes at least 3 record bytes and a position, so the file size caps the
+    // room reserved for the replay.
+    let hint = n_splits.min(bytes.len() / 15);
+    let mut replay = FlatReplay::new(&positions, &base_faces, hint)
         .map_err(|e| corrupt(r.offset(), e.to_string()))?;
 
     let truncated = c.is_truncated();
@@ -739,9 +752,9 @@ fn read_progressive(
     };
     let mut r = whole.ok_or_else(|| corrupt(0, "section SPLT is missing"))?;
     let want = max_level.map_or(n_splits, |l| l.saturating_sub(n_base).min(n_splits));
-    let mut splits: Vec<VertexSplit> = Vec::new();
-    let mut errors: Vec<f32> = Vec::new();
-    let mut ring = Vec::new();
+    let mut splits: Vec<VertexSplit> = Vec::with_capacity(want.min(hint));
+    let mut errors: Vec<f32> = Vec::with_capacity(want.min(hint));
+    positions.reserve(want.min(hint));
     while splits.len() < want {
         if r.remaining() < 12 && truncated {
             break;
@@ -782,9 +795,10 @@ fn read_progressive(
         let (records, fixed) = payload.split_at(payload.len() - tail);
         let mut p = ByteReader::new(records, at + 12);
         let mut q = ByteReader::new(fixed, at + 12 + records.len() as u64);
-        let first_position = positions.len();
-        read_positions(&mut q, count, f32, &mut positions)?;
-        for k in 0..count {
+        // Only the splits up to the level asked for are decoded and replayed.
+        let used = count.min(want - splits.len());
+        read_positions(&mut q, used, f32, &mut positions)?;
+        for _ in 0..used {
             let vertex = (n_base + splits.len()) as u32;
             let at = p.offset();
             if vertex == 0 {
@@ -792,10 +806,10 @@ fn read_progressive(
             }
             let back = p.count(u64::from(vertex - 1), "survivor")? as u32;
             let survivor = vertex - 1 - back;
-            replay
-                .ring(survivor, &mut ring)
-                .map_err(|e| corrupt(at, e.to_string()))?;
-            let deg = ring.len() as u64;
+            let deg = replay
+                .ring(survivor)
+                .map_err(|e| corrupt(at, e.to_string()))?
+                .len() as u64;
             let lc = p.count(MAX_RING, "left wing")? as u64;
             let rc = p.count(MAX_RING, "right wing")? as u64;
             if lc > deg || rc > deg {
@@ -805,21 +819,21 @@ fn read_progressive(
             let ir = rc
                 .checked_sub(1)
                 .map(|r| il.map_or(r, |l| (l + r) % deg.max(1)));
-            let s = VertexSplit {
-                vertex,
-                survivor,
-                left: il.map(|i| ring[i as usize]),
-                right: ir.map(|i| ring[i as usize]),
-            };
-            replay
-                .apply(&s, positions[first_position + k])
+            let s = replay
+                .apply_indexed(
+                    vertex,
+                    survivor,
+                    il.map(|i| i as usize),
+                    ir.map(|i| i as usize),
+                )
                 .map_err(|e| corrupt(at, e.to_string()))?;
             splits.push(s);
         }
-        for _ in 0..count {
+        q.take(3 * (count - used) * if f32 { 4 } else { 8 }, "positions")?;
+        for _ in 0..used {
             errors.push(f32::from_le_bytes(q.array("split error")?));
         }
-        if !p.is_empty() {
+        if used == count && !p.is_empty() {
             return Err(corrupt(p.offset(), "trailing bytes in split block"));
         }
     }
@@ -829,7 +843,6 @@ fn read_progressive(
             meta,
             truncated,
             replay,
-            base_faces,
             splits,
             positions,
             errors,
@@ -843,22 +856,12 @@ pub fn read_level(bytes: &[u8], level: Option<usize>) -> Result<LevelMesh, Forma
     let (_, p) = read_progressive(bytes, level)?;
     let n_base = p.meta.n_base as usize;
     let finest = n_base + p.meta.n_splits as usize;
-    let mut splits_needed = level.map_or(finest, |l| l.clamp(n_base, finest)) - n_base;
-    splits_needed = splits_needed.min(p.splits.len());
-    // Blocks were decoded whole; rebuild exactly the level asked for.
-    let mut replay = SplitReplay::new(&p.positions[..n_base], &p.base_faces)
-        .map_err(|e| corrupt(0, e.to_string()))?;
-    let reuse = splits_needed == p.splits.len();
-    if !reuse {
-        for (k, s) in p.splits[..splits_needed].iter().enumerate() {
-            replay
-                .apply(s, p.positions[n_base + k])
-                .map_err(|e| corrupt(0, e.to_string()))?;
-        }
-    } else {
-        replay = p.replay;
-    }
-    let (positions, triangles) = replay.mesh().to_triangles();
+    // The progressive reader stopped at the level asked for (or where the file ends).
+    let splits_needed = p.splits.len();
+    let n = n_base + splits_needed;
+    let mut positions = p.positions;
+    positions.truncate(n);
+    let triangles = p.replay.triangles();
     Ok(LevelMesh {
         level: n_base + splits_needed,
         finest,
@@ -1062,6 +1065,7 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
         mut positions,
         splits,
         errors,
+        replay,
         ..
     } = p;
     let f32 = meta.position_bits == 32;
@@ -1107,15 +1111,96 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
         .check()
         .map_err(|e| corrupt(0, format!("restored mesh: {e}")))?;
 
-    let built = Mesh::from_polygons(&input).map_err(|e| corrupt(0, e.to_string()))?;
-    if built.mesh.n_vertices() != n_total {
-        return Err(corrupt(0, "the polygons do not build the stored hierarchy"));
-    }
     let mut mesh_to_pm = vec![u32::MAX; n_total];
     for (i, &s) in pm_to_mesh.iter().enumerate() {
         if let Some(m) = mesh_to_pm.get_mut(s as usize) {
             *m = i as u32;
         }
+    }
+    // The finest faces, checked to be exactly what the splits rebuild: read off a clean
+    // triangle input, else from the builder's repaired mesh.
+    let replayed = replay.canonical_faces();
+    let (faces, built) = match clean_triangle_faces(&input, &mesh_to_pm, n_total, &replayed) {
+        Some(faces) => (faces, None),
+        None => {
+            let (faces, built) = built_faces(&input, &mesh_to_pm, n_total, &positions)?;
+            if canonical_sorted(&faces, n_total) != replayed {
+                return Err(corrupt(0, "the splits do not rebuild the finest faces"));
+            }
+            (faces, Some(built))
+        }
+    };
+    let pm = ProgressiveMesh::from_checked_parts(
+        PmParts {
+            n_base: meta.n_base as usize,
+            positions,
+            pm_to_mesh,
+            splits,
+            faces,
+            errors,
+        },
+        replay.n_base_faces(),
+    )
+    .map_err(|e| corrupt(0, e.to_string()))?;
+    let info = BuildInfo {
+        pm_options: PmOptions {
+            target_vertices: meta.target_vertices as usize,
+            target_faces: meta.target_faces as usize,
+            max_error: meta.max_error,
+            max_normal_angle_degrees: meta.max_normal_angle_degrees,
+            min_quality: meta.min_quality,
+            max_valence: meta.max_valence as usize,
+            boundary_weight: meta.boundary_weight,
+        },
+        relaxation: meta.relaxation,
+    };
+    Ok(PyrData {
+        input,
+        built,
+        pm,
+        info,
+    })
+}
+
+/// The finest faces in PM indices read straight off the input, when the input is a clean
+/// triangle mesh: every polygon a triangle of three distinct vertices, no vertex copies, and
+/// the triangles (through the vertex order) exactly the faces the splits rebuilt. Those form a
+/// consistently oriented manifold without multi-edges, on which `Mesh::from_polygons` repairs
+/// nothing, keeps vertex slots and face order and starts each face at its first corner, so
+/// this is what it would give, without building the half-edge mesh (most of a load's time on
+/// big meshes). `None` sends the caller to the builder.
+fn clean_triangle_faces(
+    input: &PolygonMesh,
+    mesh_to_pm: &[u32],
+    n_total: usize,
+    replayed_canonical: &[[u32; 3]],
+) -> Option<Vec<[u32; 3]>> {
+    if n_total != input.positions.len() || input.face_indices.len() != 3 * input.n_faces() {
+        return None;
+    }
+    let mut faces = Vec::with_capacity(input.n_faces());
+    for t in input.face_indices.chunks_exact(3) {
+        let f = [t[0], t[1], t[2]].map(|x| mesh_to_pm.get(x as usize).copied().unwrap_or(u32::MAX));
+        if f[0] == f[1] || f[1] == f[2] || f[0] == f[2] || f.contains(&u32::MAX) {
+            return None;
+        }
+        faces.push(f);
+    }
+    let sorted = canonical_sorted(&faces, n_total);
+    (sorted == replayed_canonical).then_some(faces)
+}
+
+/// The finest faces in PM indices from the repaired half-edge mesh of `input` (any polygons,
+/// any repairs), checking that the builder's vertices are the stored ones.
+fn built_faces(
+    input: &PolygonMesh,
+    mesh_to_pm: &[u32],
+    n_total: usize,
+    positions: &[DVec3],
+) -> Result<(Vec<[u32; 3]>, Built), FormatError> {
+    let built = Mesh::from_polygons(input).map_err(|e| corrupt(0, e.to_string()))?;
+    if built.mesh.n_vertices() != n_total {
+        return Err(corrupt(0, "the polygons do not build the stored hierarchy"));
     }
     let mut faces = Vec::with_capacity(built.mesh.n_faces());
     for f in built.mesh.faces() {
@@ -1136,33 +1221,7 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
             return Err(corrupt(0, "the polygons do not build the stored hierarchy"));
         }
     }
-    let pm = ProgressiveMesh::from_parts(PmParts {
-        n_base: meta.n_base as usize,
-        positions,
-        pm_to_mesh,
-        splits,
-        faces,
-        errors,
-    })
-    .map_err(|e| corrupt(0, e.to_string()))?;
-    let info = BuildInfo {
-        pm_options: PmOptions {
-            target_vertices: meta.target_vertices as usize,
-            target_faces: meta.target_faces as usize,
-            max_error: meta.max_error,
-            max_normal_angle_degrees: meta.max_normal_angle_degrees,
-            min_quality: meta.min_quality,
-            max_valence: meta.max_valence as usize,
-            boundary_weight: meta.boundary_weight,
-        },
-        relaxation: meta.relaxation,
-    };
-    Ok(PyrData {
-        input,
-        built,
-        pm,
-        info,
-    })
+    Ok((faces, built))
 }
 
 /// True when `bytes` start with the `.pyr` signature.

@@ -7,6 +7,7 @@
 //! - [`quadric`]: area-weighted plane quadrics.
 //! - `decimate`: the greedy lazy-heap decimation loop.
 //! - [`ProgressiveMesh`] / [`PmCursor`]: the hierarchy and its cursor.
+//! - [`FlatReplay`]: vertex splits replayed on flat arrays (reading and writing `.pyr` files).
 //! - [`simplify()`]: a file-level mesh cut at a level, attributes carried along.
 //! - [`fuzz_operations`]: the body of the `pm_ops` fuzz target.
 
@@ -15,6 +16,7 @@ mod decimate;
 mod fuzz;
 mod progressive;
 pub mod quadric;
+mod replay;
 pub mod simplify;
 
 pub use collapse::{
@@ -26,4 +28,5 @@ pub use fuzz::fuzz_operations;
 pub use progressive::{
     PmCursor, PmError, PmOptions, PmParts, ProgressiveMesh, SplitReplay, VertexSplit,
 };
+pub use replay::{FlatReplay, canonical_sorted};
 pub use simplify::{Simplified, SimplifyError, SimplifyTarget, simplify};

@@ -5,6 +5,7 @@
 use super::{PmError, ProgressiveMesh, VertexSplit};
 use crate::mesh::{Mesh, SlotIndex, VertexId};
 use crate::pm::collapse::vertex_split;
+use crate::pm::{FlatReplay, canonical_sorted};
 use glam::DVec3;
 
 /// The stored parts of a progressive mesh; everything else is derived.
@@ -155,8 +156,37 @@ impl ProgressiveMesh {
     /// Rebuilds a progressive mesh from stored parts, checking every invariant the cursor,
     /// the analysis and the synthesis rely on: the permutation, index ranges, that every split
     /// applies exactly to the base mesh, and that all splits together give exactly `faces`.
-    /// Cost: one replay of all splits.
+    /// Cost: one replay of all splits ([`FlatReplay`]).
     pub fn from_parts(parts: PmParts) -> Result<ProgressiveMesh, PmError> {
+        let mut pm = Self::unreplayed(parts)?;
+        let n_base = pm.n_base;
+        let base = pm.base_triangles();
+        let mut replay = FlatReplay::new(&pm.positions[..n_base], &base, pm.splits.len())?;
+        for s in &pm.splits {
+            replay.apply(s)?;
+        }
+        pm.n_base_faces = replay.n_base_faces();
+        if canonical_sorted(&pm.faces, n_base + pm.splits.len()) != replay.canonical_faces() {
+            return Err(invalid("the splits do not rebuild the finest faces"));
+        }
+        Ok(pm)
+    }
+
+    /// [`Self::from_parts`] for a decoder that has already replayed `parts.splits` on a
+    /// [`FlatReplay`] of the base mesh (which gave `n_base_faces` base faces) and checked that
+    /// `parts.faces` are exactly the faces the replay rebuilt: everything else is checked as
+    /// in `from_parts`, without replaying or comparing the faces a second time.
+    pub(crate) fn from_checked_parts(
+        parts: PmParts,
+        n_base_faces: usize,
+    ) -> Result<ProgressiveMesh, PmError> {
+        let mut pm = Self::unreplayed(parts)?;
+        pm.n_base_faces = n_base_faces;
+        Ok(pm)
+    }
+
+    /// The parts with every check that needs no replay.
+    fn unreplayed(parts: PmParts) -> Result<ProgressiveMesh, PmError> {
         let PmParts {
             n_base,
             positions,
@@ -198,7 +228,7 @@ impl ProgressiveMesh {
         }) {
             return Err(invalid("finest face out of range or degenerate"));
         }
-        let mut pm = ProgressiveMesh {
+        Ok(ProgressiveMesh {
             n_base,
             positions,
             pm_to_mesh,
@@ -207,19 +237,7 @@ impl ProgressiveMesh {
             faces,
             n_base_faces: 0,
             errors,
-        };
-        let base = pm.base_triangles();
-        let mut replay = SplitReplay::new(&pm.positions[..n_base], &base)?;
-        pm.n_base_faces = replay.mesh().n_faces();
-        for (i, s) in pm.splits.iter().enumerate() {
-            replay.apply(s, pm.positions[n_base + i])?;
-        }
-        let mut finest: Vec<[u32; 3]> = pm.faces.iter().map(|&t| canonical(t)).collect();
-        finest.sort_unstable();
-        if finest != replay.canonical_faces() {
-            return Err(invalid("the splits do not rebuild the finest faces"));
-        }
-        Ok(pm)
+        })
     }
 }
 

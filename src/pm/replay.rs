@@ -1,0 +1,697 @@
+//! Replaying vertex splits on flat arrays: the rings [`Mesh::outgoing`] would list, the faces
+//! and their stored corners, and the half-edge slot numbers as [`vertex_split`](super::vertex_split)
+//! on a [`Mesh`] would leave them — without the half-edge mesh.
+//!
+//! Why it exists: the `.pyr` format codes a split's wings as indices into the survivor's ring
+//! *as `Mesh::outgoing` lists it* after replaying the earlier splits, so reading and writing a
+//! file replay every split. On the slotmap mesh each split cost about 6 µs (seven pointer-chasing
+//! walks around the survivor), which capped `.pyr` input/output near 20 MB/s. Here every vertex
+//! keeps its ring as one contiguous list of `(neighbour, out-going half-edge slot, face on its
+//! left)` in `outgoing` order, so listing a ring is one read and a split rewrites a handful of
+//! short lists (survivor, new vertex, the two wings, the fan's vertices) instead of walking
+//! linked records.
+//!
+//! Exactness rests on two facts the tests check against [`SplitReplay`](super::SplitReplay):
+//! a replay only inserts (no slot is ever freed), so a new half-edge's slot is the current
+//! count, in `vertex_split`'s insertion order `o, h, o2, o1, h2, h1`, and a new face's slot
+//! follows `fr, fl`; and the mesh is in canonical form (a ring starts at the vertex's boundary
+//! out-edge, else at its out-edge of smallest slot), which the builder produces and every split
+//! preserves.
+
+use super::{PmError, SplitError, VertexSplit};
+use crate::mesh::{Mesh, SlotIndex};
+use glam::DVec3;
+
+const NIL: u32 = u32::MAX;
+
+/// Rotates a triangle so that its smallest index comes first (orientation kept).
+fn canonical(t: [u32; 3]) -> [u32; 3] {
+    let k = (0..3).min_by_key(|&i| t[i]).unwrap_or(0);
+    [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+}
+
+/// One ring entry: the out-going half-edge `v → nbr` and its slot. Eight bytes, so a typical
+/// ring fits a cache line; which entry is a boundary half-edge is in [`Ring::boundary`], and
+/// faces are found from their stored half-edge's slot ([`FlatReplay::triangles`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Entry {
+    nbr: u32,
+    slot: u32,
+}
+
+/// One cache line per vertex: up to [`INLINE`] ring entries, and in the last slot the header
+/// (`nbr`: length, bit 31 set when entry 0 is a boundary out-edge; `slot`: where a longer ring
+/// lives in the overflow arena, or `NIL`). Reading a ring of a typical vertex is one miss.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Line([Entry; 8]);
+
+const INLINE: usize = 7;
+const BOUNDARY: u32 = 1 << 31;
+const BLANK: Entry = Entry {
+    nbr: NIL,
+    slot: NIL,
+};
+
+/// The rings of all vertices: inline in each vertex's line, longer ones in `over` (preceded by
+/// a cell holding their capacity).
+#[derive(Clone, Debug, Default)]
+struct Rings {
+    lines: Vec<Line>,
+    over: Vec<Entry>,
+}
+
+impl Rings {
+    fn len(&self) -> usize {
+        self.lines.len()
+    }
+
+    fn push_empty(&mut self) {
+        let mut l = Line([BLANK; 8]);
+        l.0[INLINE] = Entry { nbr: 0, slot: NIL };
+        self.lines.push(l);
+    }
+
+    fn boundary(&self, v: u32) -> bool {
+        self.lines[v as usize].0[INLINE].nbr & BOUNDARY != 0
+    }
+
+    fn get(&self, v: u32) -> &[Entry] {
+        let l = &self.lines[v as usize].0;
+        let h = l[INLINE];
+        let len = (h.nbr & !BOUNDARY) as usize;
+        if h.slot == NIL {
+            &l[..len]
+        } else {
+            &self.over[h.slot as usize..h.slot as usize + len]
+        }
+    }
+
+    fn get_mut(&mut self, v: u32) -> &mut [Entry] {
+        let l = &mut self.lines[v as usize].0;
+        let h = l[INLINE];
+        let len = (h.nbr & !BOUNDARY) as usize;
+        if h.slot == NIL {
+            &mut l[..len]
+        } else {
+            &mut self.over[h.slot as usize..h.slot as usize + len]
+        }
+    }
+
+    /// Sets `v`'s ring to `src` rotated to start at `start`.
+    fn set(&mut self, v: u32, src: &[Entry], start: usize, boundary: bool) {
+        let n = src.len();
+        let h = self.lines[v as usize].0[INLINE];
+        let dst: &mut [Entry] = if n <= INLINE {
+            &mut self.lines[v as usize].0[..n]
+        } else {
+            let fits = h.slot != NIL && self.over[h.slot as usize - 1].nbr as usize >= n;
+            let off = if fits {
+                h.slot as usize
+            } else {
+                let cap = (2 * n).max(16);
+                self.over.push(Entry {
+                    nbr: cap as u32,
+                    slot: NIL,
+                });
+                let off = self.over.len();
+                self.over.resize(off + cap, BLANK);
+                off
+            };
+            self.lines[v as usize].0[INLINE].slot = off as u32;
+            &mut self.over[off..off + n]
+        };
+        // Rings are short: an element loop beats memmove calls here.
+        for (k, d) in dst.iter_mut().enumerate() {
+            let j = k + start;
+            *d = src[if j >= n { j - n } else { j }];
+        }
+        let hdr = &mut self.lines[v as usize].0[INLINE];
+        if n <= INLINE {
+            hdr.slot = NIL;
+        }
+        hdr.nbr = n as u32 | if boundary { BOUNDARY } else { 0 };
+    }
+}
+
+fn invalid(reason: impl Into<String>) -> PmError {
+    PmError::Internal(format!(
+        "inconsistent progressive mesh data: {}",
+        reason.into()
+    ))
+}
+
+/// The base mesh and the splits applied so far, on flat arrays (vertex `i` is PM vertex `i`,
+/// face `i` and half-edge slot numbers are the slots the slotmap mesh would give them).
+#[derive(Clone, Debug)]
+pub struct FlatReplay {
+    rings: Rings,
+    /// The stored half-edge of each face, in face slot order (fixed at the face's creation;
+    /// [`Mesh::face_vertices`] starts at its origin). The faces' vertices are read off the
+    /// rings when asked for, so a split does not touch the faces of its fan.
+    face_he: Vec<u32>,
+    n_base_faces: usize,
+    n_halfedges: u32,
+    /// The ring last listed by [`Self::ring`], and whose it is.
+    ring_v: Vec<u32>,
+    ring: Vec<Entry>,
+    ring_of: u32,
+    scratch: Vec<Entry>,
+}
+
+impl FlatReplay {
+    /// Builds the base mesh from its triangles with the same checks as
+    /// [`SplitReplay::new`](super::SplitReplay::new) (clean manifold, every vertex used), then
+    /// copies it into flat arrays. `splits_hint` reserves room for that many splits.
+    pub fn new(
+        base_positions: &[DVec3],
+        base_faces: &[[u32; 3]],
+        splits_hint: usize,
+    ) -> Result<Self, PmError> {
+        let base = super::SplitReplay::new(base_positions, base_faces)?;
+        let mesh: &Mesh = base.mesh();
+        let n_he = mesh.n_halfedges();
+        if !mesh.halfedges().all(|h| h.slot() < n_he)
+            || !mesh.faces().all(|f| f.slot() < mesh.n_faces())
+        {
+            return Err(invalid("base mesh slots are not dense"));
+        }
+        let hint = splits_hint.min(1 << 26);
+        let mut face_he = vec![NIL; mesh.n_faces()];
+        for f in mesh.faces() {
+            face_he[f.slot()] = mesh.face_halfedges(f)[0].slot() as u32;
+        }
+        face_he.reserve(hint * 2);
+        let mut rings = Rings {
+            lines: Vec::with_capacity(base_positions.len() + hint),
+            over: Vec::new(),
+        };
+        let mut ring = Vec::new();
+        for (i, v) in mesh.vertices().enumerate() {
+            let mut boundary = false;
+            ring.clear();
+            for (k, h) in mesh.outgoing(v).enumerate() {
+                let face = mesh.face(h).is_some();
+                if k == 0 {
+                    boundary = !face;
+                } else if !face {
+                    return Err(invalid("base vertex with two boundary out-edges"));
+                }
+                ring.push(Entry {
+                    nbr: mesh.to_vertex(h).slot() as u32,
+                    slot: h.slot() as u32,
+                });
+            }
+            rings.push_empty();
+            rings.set(i as u32, &ring, 0, boundary);
+        }
+        let replay = FlatReplay {
+            rings,
+            face_he,
+            n_base_faces: mesh.n_faces(),
+            n_halfedges: n_he as u32,
+            ring_v: Vec::new(),
+            ring: Vec::new(),
+            ring_of: NIL,
+            scratch: Vec::new(),
+        };
+        // The rings are built from the stored half-edges; the split rules need them canonical
+        // (the builder promises it), so check.
+        for v in 0..replay.rings.len() as u32 {
+            let e = replay.rings.get(v);
+            let ok = replay.rings.boundary(v)
+                || e.first().is_none_or(|x| e.iter().all(|y| y.slot >= x.slot));
+            if !ok {
+                return Err(invalid("base mesh is not in canonical form"));
+            }
+        }
+        Ok(replay)
+    }
+
+    /// Number of vertices so far.
+    pub fn level(&self) -> usize {
+        self.rings.len()
+    }
+
+    /// Number of faces of the base mesh.
+    pub fn n_base_faces(&self) -> usize {
+        self.n_base_faces
+    }
+
+    /// Number of faces so far.
+    pub fn n_faces(&self) -> usize {
+        self.face_he.len()
+    }
+
+    /// The PM indices around `v` in [`Mesh::outgoing`] order (counter-clockwise from the
+    /// canonical half-edge; a boundary vertex starts at its boundary out-edge) — the ring the
+    /// `.pyr` format indexes wings into.
+    pub fn ring(&mut self, v: u32) -> Result<&[u32], PmError> {
+        if v as usize >= self.rings.len() {
+            return Err(invalid(format!("survivor {v} does not exist yet")));
+        }
+        let e = self.rings.get(v);
+        self.ring.clear();
+        self.ring_v.clear();
+        for x in e {
+            self.ring.push(*x);
+            self.ring_v.push(x.nbr);
+        }
+        self.ring_of = v;
+        Ok(&self.ring_v)
+    }
+
+    /// The ring [`Self::ring`] or [`Self::wing_indices`] listed last.
+    pub fn listed_ring(&self) -> &[u32] {
+        &self.ring_v
+    }
+
+    /// Applies `s` (which must create vertex `level()`), finding its wings in the survivor's
+    /// ring. Equivalent to [`SplitReplay::apply`](super::SplitReplay::apply).
+    pub fn apply(&mut self, s: &VertexSplit) -> Result<(), PmError> {
+        let (il, ir) = self.wing_indices(s)?;
+        self.apply_indexed(s.vertex, s.survivor, il, ir)?;
+        Ok(())
+    }
+
+    /// The positions of `s`'s wings in its survivor's ring (listing the ring), for coding the
+    /// split; [`Self::apply_indexed`] with the same indices then applies it.
+    pub fn wing_indices(
+        &mut self,
+        s: &VertexSplit,
+    ) -> Result<(Option<usize>, Option<usize>), PmError> {
+        let level = self.level();
+        for x in [Some(s.survivor), s.left, s.right].into_iter().flatten() {
+            if x as usize >= level {
+                return Err(invalid(format!(
+                    "split {level} refers to future vertex {x}"
+                )));
+            }
+        }
+        let ring = self.ring(s.survivor)?;
+        let find = |w: Option<u32>| match w {
+            None => Ok(None),
+            Some(x) => ring.iter().position(|&r| r == x).map(Some).ok_or_else(|| {
+                invalid(format!(
+                    "split creating vertex {level}: {}",
+                    SplitError::Inconsistent
+                ))
+            }),
+        };
+        Ok((find(s.left)?, find(s.right)?))
+    }
+
+    /// Applies the split creating vertex `vertex` (which must be `level()`) at `survivor`, with
+    /// wings given as indices into the survivor's ring. Returns the record.
+    pub fn apply_indexed(
+        &mut self,
+        vertex: u32,
+        survivor: u32,
+        il: Option<usize>,
+        ir: Option<usize>,
+    ) -> Result<VertexSplit, PmError> {
+        let level = self.level();
+        if vertex as usize != level {
+            return Err(invalid(format!(
+                "split creates vertex {vertex}, expected {level}"
+            )));
+        }
+        if self.ring_of != survivor {
+            self.ring(survivor)?;
+        }
+        let n = self.ring.len();
+        if il.is_some_and(|i| i >= n) || ir.is_some_and(|i| i >= n) {
+            return Err(invalid(format!(
+                "split creating vertex {level}: {}",
+                SplitError::Inconsistent
+            )));
+        }
+        let split = VertexSplit {
+            vertex,
+            survivor,
+            left: il.map(|i| self.ring[i].nbr),
+            right: ir.map(|i| self.ring[i].nbr),
+        };
+        let result = self.split(il, ir);
+        self.ring_of = NIL;
+        result.map_err(|e| invalid(format!("split creating vertex {level}: {e}")))?;
+        Ok(split)
+    }
+
+    /// Inserts `e` in `v`'s ring just before (counter-clockwise of) its entry to `before`,
+    /// leaving entry 0 (the canonical half-edge) in place.
+    fn insert_before(&mut self, v: u32, before: u32, e: Entry) -> Result<(), SplitError> {
+        let ring = self.rings.get(v);
+        let k = ring
+            .iter()
+            .position(|x| x.nbr == before)
+            .ok_or(SplitError::Inconsistent)?;
+        let at = if k == 0 { ring.len() } else { k };
+        let mut tmp = std::mem::take(&mut self.scratch);
+        tmp.clear();
+        tmp.extend_from_slice(&ring[..at]);
+        tmp.push(e);
+        tmp.extend_from_slice(&ring[at..]);
+        let boundary = self.rings.boundary(v);
+        self.rings.set(v, &tmp, 0, boundary);
+        self.scratch = tmp;
+        Ok(())
+    }
+
+    /// `vertex_split` on the listed ring of the survivor `v`: same checks, same resulting
+    /// rings, faces and slots. The fan (the ring entries that move to the new vertex) runs
+    /// from the left wing (or the entry after the boundary out-edge) counter-clockwise to the
+    /// right wing (exclusive; or through the boundary out-edge).
+    fn split(&mut self, il: Option<usize>, ir: Option<usize>) -> Result<(), SplitError> {
+        let v = self.ring_of;
+        let n = self.ring.len();
+        if n == 0 {
+            return Err(SplitError::Inconsistent);
+        }
+        let left = il.map(|i| self.ring[i].nbr);
+        let right = ir.map(|i| self.ring[i].nbr);
+        if (left.is_none() && right.is_none())
+            || (left.is_some() && left == right)
+            || left == Some(v)
+            || right == Some(v)
+        {
+            return Err(SplitError::Inconsistent);
+        }
+        let v_boundary = self.rings.boundary(v);
+        // Only entry 0 of a boundary vertex is a boundary half-edge.
+        let is_boundary = |k: usize| v_boundary && k == 0;
+        if (left.is_none() || right.is_none()) && !v_boundary {
+            return Err(SplitError::Inconsistent);
+        }
+        let start = il.unwrap_or(1 % n);
+        // The fan as a count of entries from `start`.
+        let mut m = 0;
+        match ir {
+            Some(ir) => {
+                let mut e = start;
+                while e != ir {
+                    if m > n || is_boundary(e) {
+                        return Err(SplitError::Inconsistent);
+                    }
+                    m += 1;
+                    e = if e + 1 == n { 0 } else { e + 1 };
+                }
+            }
+            None => {
+                let mut e = start;
+                loop {
+                    if m > n {
+                        return Err(SplitError::Inconsistent);
+                    }
+                    m += 1;
+                    if is_boundary(e) {
+                        break;
+                    }
+                    e = if e + 1 == n { 0 } else { e + 1 };
+                }
+            }
+        }
+        // Index of fan entry k (k < n, start < n): a wrap instead of a division, which cost
+        // more than the rest of a split's arithmetic.
+        let at = |k: usize| {
+            let j = start + k;
+            if j >= n { j - n } else { j }
+        };
+        let fan = |ring: &[Entry], k: usize| ring[at(k)];
+
+        // Slots in `vertex_split`'s insertion order.
+        let u = self.rings.len() as u32;
+        let base = self.n_halfedges;
+        let (o, h) = (base, base + 1);
+        let mut next = base + 2;
+        let mut alloc2 = |yes: bool| {
+            yes.then(|| {
+                next += 2;
+                (next - 2, next - 1)
+            })
+        };
+        let (o2, o1) = alloc2(right.is_some()).unzip();
+        let (h2, h1) = alloc2(left.is_some()).unzip();
+        self.n_halfedges = next;
+        if right.is_some() {
+            self.face_he.push(o);
+        }
+        if left.is_some() {
+            self.face_he.push(h);
+        }
+
+        // The fan's far ends now point at u (the edge to the left wing stays with the wing's
+        // twin, which `vertex_split` re-pairs).
+        for k in 0..m {
+            let e = fan(&self.ring, k);
+            if k != 0 || il.is_none() {
+                let x = self
+                    .rings
+                    .get_mut(e.nbr)
+                    .iter_mut()
+                    .find(|x| x.nbr == v)
+                    .ok_or(SplitError::Inconsistent)?;
+                x.nbr = u;
+            }
+        }
+
+        // u: (u→v) then the fan then (u→v_r); canonical: h without a left face, the old
+        // boundary out-edge (the fan's last) without a right face, else the smallest slot.
+        self.scratch.clear();
+        self.scratch.push(Entry { nbr: v, slot: h });
+        for k in 0..m {
+            self.scratch.push(fan(&self.ring, k));
+        }
+        if let (Some(r), Some(o1)) = (right, o1) {
+            self.scratch.push(Entry { nbr: r, slot: o1 });
+        }
+        let (u_start, u_boundary) = match (left, right) {
+            (None, _) => (0, true),
+            (_, None) => (m, true),
+            _ => (min_slot(&self.scratch), false),
+        };
+        self.rings.push_empty();
+        self.rings.set(u, &self.scratch, u_start, u_boundary);
+
+        // v: what is left of its ring from the fan's end round to its start, then (v→v_l),
+        // then (v→u). Canonical: o without a right face, the unchanged boundary out-edge of a
+        // boundary v, else the smallest slot.
+        let old_first = self.ring[0].slot;
+        self.scratch.clear();
+        for k in m..n {
+            self.scratch.push(fan(&self.ring, k));
+        }
+        if let (Some(l), Some(h1)) = (left, h1) {
+            self.scratch.push(Entry { nbr: l, slot: h1 });
+        }
+        self.scratch.push(Entry { nbr: u, slot: o });
+        let v_start = if right.is_none() {
+            self.scratch.len() - 1
+        } else if v_boundary {
+            self.scratch
+                .iter()
+                .position(|x| x.slot == old_first)
+                .ok_or(SplitError::Inconsistent)?
+        } else {
+            min_slot(&self.scratch)
+        };
+        self.rings.set(v, &self.scratch, v_start, v_boundary);
+
+        // The wings gain an edge to u just before their edge to v; their canonical half-edge
+        // (old, or boundary) stays entry 0.
+        if let (Some(l), Some(h2)) = (left, h2) {
+            self.insert_before(l, v, Entry { nbr: u, slot: h2 })?;
+        }
+        if let (Some(r), Some(o2)) = (right, o2) {
+            // v_r's old edge to v now runs to u; the new o2 = v_r→v goes before it.
+            let x = self
+                .rings
+                .get_mut(r)
+                .iter_mut()
+                .find(|x| x.nbr == v)
+                .ok_or(SplitError::Inconsistent)?;
+            x.nbr = u;
+            self.insert_before(r, u, Entry { nbr: v, slot: o2 })?;
+        }
+        Ok(())
+    }
+
+    /// The current triangles in face slot order, each starting where
+    /// [`Mesh::face_vertices`] starts (what [`Mesh::to_triangles`] gives for the replayed mesh).
+    pub fn triangles(&self) -> Vec<[u32; 3]> {
+        let mut face_of = vec![NIL; self.n_halfedges as usize];
+        for (f, &h) in self.face_he.iter().enumerate() {
+            face_of[h as usize] = f as u32;
+        }
+        let mut out = vec![[NIL; 3]; self.face_he.len()];
+        for v in 0..self.rings.len() {
+            let e = self.rings.get(v as u32);
+            for (k, x) in e.iter().enumerate() {
+                // The face left of v→nbr is (v, nbr, next neighbour counter-clockwise), listed
+                // from its stored half-edge.
+                let f = face_of[x.slot as usize];
+                if f != NIL {
+                    let next = if k + 1 == e.len() { 0 } else { k + 1 };
+                    out[f as usize] = [v as u32, x.nbr, e[next].nbr];
+                }
+            }
+        }
+        out
+    }
+
+    /// The current triangles in PM indices, canonically rotated (smallest index first) and
+    /// sorted.
+    pub fn canonical_faces(&self) -> Vec<[u32; 3]> {
+        canonical_sorted(&self.triangles(), self.level())
+    }
+}
+
+/// `faces` canonically rotated (smallest index first) and sorted, for faces on vertices
+/// `0..n_vertices`: a counting sort by first index, then a sort of each bucket (about two faces
+/// per vertex), which is several times faster than a comparison sort of a million faces.
+pub fn canonical_sorted(faces: &[[u32; 3]], n_vertices: usize) -> Vec<[u32; 3]> {
+    let mut starts = vec![0u32; n_vertices + 1];
+    let mut out = vec![[0u32; 3]; faces.len()];
+    let key = |t: &[u32; 3]| (t[0].min(t[1]).min(t[2]) as usize).min(n_vertices.saturating_sub(1));
+    if n_vertices == 0 {
+        out.copy_from_slice(faces);
+        out.iter_mut().for_each(|t| *t = canonical(*t));
+        out.sort_unstable();
+        return out;
+    }
+    for t in faces {
+        starts[key(t) + 1] += 1;
+    }
+    for i in 0..n_vertices {
+        starts[i + 1] += starts[i];
+    }
+    let mut fill = starts.clone();
+    for t in faces {
+        let k = key(t);
+        out[fill[k] as usize] = canonical(*t);
+        fill[k] += 1;
+    }
+    for w in starts.windows(2) {
+        let b = &mut out[w[0] as usize..w[1] as usize];
+        if b.len() > 1 {
+            b.sort_unstable();
+        }
+    }
+    out
+}
+
+/// Index of the entry with the smallest half-edge slot.
+fn min_slot(e: &[Entry]) -> usize {
+    let mut best = 0;
+    for (k, x) in e.iter().enumerate() {
+        if x.slot < e[best].slot {
+            best = k;
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pm::{PmOptions, ProgressiveMesh, SplitReplay};
+    use crate::progress::NoProgress;
+
+    /// Replays every split on both the slotmap mesh and the flat arrays and compares every
+    /// ring the format would index after each split, and the faces at the end.
+    fn same_as_slotmap(mesh: &Mesh) {
+        let pm = ProgressiveMesh::build(mesh, &PmOptions::default(), &NoProgress).unwrap();
+        let nb = pm.n_base_vertices();
+        let pos = pm.original_positions();
+        let base = pm.base_triangles();
+        let mut slow = SplitReplay::new(&pos[..nb], &base).unwrap();
+        let mut fast = FlatReplay::new(&pos[..nb], &base, pm.splits().len()).unwrap();
+        let mut ring = Vec::new();
+        for (i, s) in pm.splits().iter().enumerate() {
+            slow.ring(s.survivor, &mut ring).unwrap();
+            assert_eq!(fast.ring(s.survivor).unwrap(), &ring[..], "split {i}");
+            let (il, ir) = fast.wing_indices(s).unwrap();
+            let rec = fast.apply_indexed(s.vertex, s.survivor, il, ir).unwrap();
+            assert_eq!(&rec, s);
+            slow.apply(s, pos[nb + i]).unwrap();
+            for x in [Some(s.vertex), Some(s.survivor), s.left, s.right]
+                .into_iter()
+                .flatten()
+            {
+                slow.ring(x, &mut ring).unwrap();
+                assert_eq!(fast.ring(x).unwrap(), &ring[..], "split {i} vertex {x}");
+            }
+        }
+        assert_eq!(fast.triangles(), slow.mesh().to_triangles().1);
+        assert_eq!(fast.canonical_faces(), slow.canonical_faces());
+        for v in 0..fast.level() as u32 {
+            slow.ring(v, &mut ring).unwrap();
+            assert_eq!(fast.ring(v).unwrap(), &ring[..]);
+        }
+    }
+
+    #[test]
+    fn flat_replay_matches_the_slotmap_mesh() {
+        // Closed, with boundary, and with holes.
+        let (p, t) = crate::mesh::shapes::icosphere(3);
+        same_as_slotmap(&Mesh::from_triangles(&p, &t).unwrap().mesh);
+        let (p, t) = crate::mesh::shapes::grid(12, |i, j| {
+            DVec3::new(i as f64, j as f64, ((i * 7 + j * 3) % 5) as f64 * 0.1)
+        });
+        same_as_slotmap(&Mesh::from_triangles(&p, &t).unwrap().mesh);
+        let t: Vec<[u32; 3]> = t
+            .iter()
+            .enumerate()
+            .filter(|(k, _)| k % 17 != 5)
+            .map(|(_, t)| *t)
+            .collect();
+        same_as_slotmap(&Mesh::from_triangles(&p, &t).unwrap().mesh);
+        // A double cone: two vertices of valence 24, rings longer than a cache line holds.
+        let k = 24u32;
+        let mut p = vec![DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.0, 0.0, -1.0)];
+        let mut t = Vec::new();
+        for i in 0..k {
+            let a = i as f64 * std::f64::consts::TAU / k as f64;
+            p.push(DVec3::new(a.cos(), a.sin(), 0.1 * (i % 3) as f64));
+            let (x, y) = (2 + i, 2 + (i + 1) % k);
+            t.push([0, x, y]);
+            t.push([1, y, x]);
+        }
+        same_as_slotmap(&Mesh::from_triangles(&p, &t).unwrap().mesh);
+    }
+
+    #[test]
+    fn bad_splits_are_errors() {
+        let (p, t) = crate::mesh::shapes::icosphere(1);
+        let m = Mesh::from_triangles(&p, &t).unwrap().mesh;
+        let pm = ProgressiveMesh::build(&m, &PmOptions::default(), &NoProgress).unwrap();
+        let nb = pm.n_base_vertices();
+        let pos = pm.original_positions();
+        let base = pm.base_triangles();
+        let mut r = FlatReplay::new(&pos[..nb], &base, 0).unwrap();
+        let s = pm.splits()[0];
+        assert!(
+            r.apply_indexed(s.vertex + 1, s.survivor, Some(0), Some(1))
+                .is_err()
+        );
+        assert!(
+            r.apply_indexed(s.vertex, s.survivor, Some(0), Some(0))
+                .is_err()
+        );
+        assert!(
+            r.apply_indexed(s.vertex, s.survivor, Some(99), None)
+                .is_err()
+        );
+        // An interior survivor needs both wings.
+        assert!(
+            r.apply_indexed(s.vertex, s.survivor, Some(0), None)
+                .is_err()
+        );
+        assert!(
+            r.apply_indexed(s.vertex, s.vertex, Some(0), Some(1))
+                .is_err()
+        );
+        r.apply(&s).unwrap();
+        assert_eq!(r.level(), nb + 1);
+    }
+}
