@@ -55,9 +55,8 @@ impl SymmetricCsr {
             for (i, yi) in (first..).zip(y.iter_mut()) {
                 let (s, e) = (self.row_start[i] as usize, self.row_start[i + 1] as usize);
                 let mut acc = [0.0; K];
-                for k in s..e {
-                    let (c, v) = (self.col[k] as usize, self.val[k]);
-                    for (a, xc) in acc.iter_mut().zip(&x[c]) {
+                for (&c, &v) in self.col[s..e].iter().zip(&self.val[s..e]) {
+                    for (a, xc) in acc.iter_mut().zip(&x[c as usize]) {
                         *a += v * xc;
                     }
                 }
