@@ -144,13 +144,18 @@ pub fn conjugate_gradient<const K: usize>(
         }
         let mut rz_new = [0.0; K];
         rr = [0.0; K];
-        for i in 0..n {
+        // Zipped slices rather than indices: no bounds checks in the hot passes.
+        for ((xi, ri), ((pi, qi), &d)) in x
+            .iter_mut()
+            .zip(r.iter_mut())
+            .zip(p.iter().zip(&q).zip(&inv_diag))
+        {
             for k in 0..K {
-                x[i][k] += step[k] * p[i][k];
-                let ri = r[i][k] - step[k] * q[i][k];
-                r[i][k] = ri;
-                rz_new[k] += ri * (ri * inv_diag[i]);
-                rr[k] += ri * ri;
+                xi[k] += step[k] * pi[k];
+                let rk = ri[k] - step[k] * qi[k];
+                ri[k] = rk;
+                rz_new[k] += rk * (rk * d);
+                rr[k] += rk * rk;
             }
         }
         let mut beta = [0.0; K];
@@ -159,10 +164,10 @@ pub fn conjugate_gradient<const K: usize>(
                 beta[k] = rz_new[k] / rz[k];
             }
         }
-        for i in 0..n {
+        for ((pi, ri), &d) in p.iter_mut().zip(&r).zip(&inv_diag) {
             for k in 0..K {
                 if active[k] {
-                    p[i][k] = r[i][k] * inv_diag[i] + beta[k] * p[i][k];
+                    pi[k] = ri[k] * d + beta[k] * pi[k];
                 }
             }
         }
