@@ -554,25 +554,20 @@ mod tests {
         // A jittered grid with degenerate, duplicated (non-manifold) and flipped triangles,
         // large enough to take the parallel paths, with and without face coefficients, on 1
         // and 3 threads.
-        let k = 200u32;
-        let mut p = Vec::new();
-        for j in 0..=k {
-            for i in 0..=k {
-                let h = ((i * 7919 + j * 104_729) % 1000) as f64 / 1000.0;
-                p.push(DVec3::new(i as f64 + 0.3 * h, j as f64 - 0.2 * h, h));
-            }
-        }
-        let id = |i: u32, j: u32| j * (k + 1) + i;
-        let mut t = Vec::new();
-        for j in 0..k {
-            for i in 0..k {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-                if (i + j) % 37 == 0 {
-                    t.push([id(i, j), id(i + 1, j + 1), id(i + 1, j)]);
-                }
-            }
-        }
+        let k = 200;
+        let (mut p, mut t) = crate::mesh::shapes::grid(k, |i, j| {
+            let h = ((i * 7919 + j * 104_729) % 1000) as f64 / 1000.0;
+            DVec3::new(i as f64 + 0.3 * h, j as f64 - 0.2 * h, h)
+        });
+        // Quad q's first triangle again, flipped, on every 37th diagonal: non-manifold edges.
+        let flipped: Vec<[u32; 3]> = t
+            .iter()
+            .step_by(2)
+            .enumerate()
+            .filter(|(q, _)| (q % k + q / k) % 37 == 0)
+            .map(|(_, f)| [f[0], f[2], f[1]])
+            .collect();
+        t.extend(flipped);
         p[5] = p[6]; // a zero-length edge: degenerate triangles
         let coef: Vec<f64> = (0..t.len()).map(|i| 0.5 + (i % 13) as f64 / 7.0).collect();
         let bits = |m: &SymmetricCsr| m.val.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
