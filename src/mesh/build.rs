@@ -149,6 +149,54 @@ impl Mesh {
     /// Fails only on geometry the mesh cannot hold: a non-finite coordinate or an index out
     /// of range (readers already reject both, so this guards programmatic input).
     pub fn from_polygons(input: &PolygonMesh) -> Result<Built, BuildError> {
+        let repaired = CornerTable::from_polygons(input)?;
+        let mesh = assemble(&input.positions, &repaired.corners, &repaired.source);
+        Ok(Built {
+            mesh,
+            report: repaired.report,
+            source: repaired.source,
+        })
+    }
+
+    /// Builds from positions and triangles (a convenience over [`Mesh::from_polygons`]).
+    pub fn from_triangles(
+        positions: &[DVec3],
+        triangles: &[[u32; 3]],
+    ) -> Result<Built, BuildError> {
+        Mesh::from_polygons(&PolygonMesh::from_triangles(positions.to_vec(), triangles))
+    }
+}
+
+/// The builder's result before any half-edge record exists: the repaired triangles as a corner
+/// table. Corner `c = 3t + k` is corner `k` of triangle `t` (the input's triangle order, each
+/// oriented consistently); half-edge `c` runs from corner `c` to the next corner of its
+/// triangle. [`Mesh::from_polygons`] turns it into records one to one: half-edge slot `c` is
+/// half-edge `c`, face slot `t` is triangle `t`, vertex slot `i` is vertex `i`, and the boundary
+/// half-edges follow in the order of their interior twins. Flat consumers (the decimator behind
+/// `meshpyr simplify`) use it directly and skip the records.
+#[derive(Clone, Debug)]
+pub struct CornerTable {
+    /// Mesh vertex of every corner.
+    pub corner_vertex: Vec<u32>,
+    /// The twin half-edge of every half-edge, `u32::MAX` on a boundary.
+    pub mate: Vec<u32>,
+}
+
+/// A [`CornerTable`] with the repair report and the map back onto the input.
+#[derive(Clone, Debug)]
+pub struct Repaired {
+    /// The repaired triangles.
+    pub corners: CornerTable,
+    /// What the builder changed.
+    pub report: BuildReport,
+    /// Mesh → input correspondence (mesh vertex `i` sits at input vertex `vertex_source[i]`).
+    pub source: SourceMap,
+}
+
+impl CornerTable {
+    /// Runs the builder's repairs (see the module docs) without making half-edge records.
+    /// Fails like [`Mesh::from_polygons`].
+    pub fn from_polygons(input: &PolygonMesh) -> Result<Repaired, BuildError> {
         let mut report = BuildReport::default();
         let nv = input.positions.len();
         if let Some(vertex) = input.positions.iter().position(|p| !p.is_finite()) {
@@ -183,20 +231,21 @@ impl Mesh {
         if tris.len() >= (NONE / 3) as usize {
             return Err(BuildError::TooLarge);
         }
-        let (mesh, source) = build_triangles(&input.positions, &tris, &tri_source, &mut report);
-        Ok(Built {
-            mesh,
+        let (corners, vertex_source) = repair_triangles(&input.positions, &tris, &mut report);
+        Ok(Repaired {
+            corners,
             report,
-            source,
+            source: SourceMap {
+                vertex_source,
+                face_source: tri_source,
+                input_vertices: nv,
+            },
         })
     }
 
-    /// Builds from positions and triangles (a convenience over [`Mesh::from_polygons`]).
-    pub fn from_triangles(
-        positions: &[DVec3],
-        triangles: &[[u32; 3]],
-    ) -> Result<Built, BuildError> {
-        Mesh::from_polygons(&PolygonMesh::from_triangles(positions.to_vec(), triangles))
+    /// Number of triangles.
+    pub fn n_triangles(&self) -> usize {
+        self.corner_vertex.len() / 3
     }
 }
 
@@ -637,12 +686,13 @@ fn pair_halfedges(
     (mate, flags, any_same_direction)
 }
 
-fn build_triangles(
+/// Steps 1–3 of the build (pairing, orientation, fan splitting): the corner table and the
+/// input vertex of every mesh vertex.
+fn repair_triangles(
     positions: &[DVec3],
     input_tris: &[[u32; 3]],
-    tri_source: &[u32],
     report: &mut BuildReport,
-) -> (Mesh, SourceMap) {
+) -> (CornerTable, Vec<u32>) {
     let nv = positions.len();
     let nt = input_tris.len();
     let nh = 3 * nt;
@@ -793,9 +843,26 @@ fn build_triangles(
     drop(seen);
     report.split_vertices = vertex_source.len() - nv;
     drop(flags);
+    (
+        CornerTable {
+            corner_vertex,
+            mate,
+        },
+        vertex_source,
+    )
+}
 
-    // --- 4. assemble. Handles are predicted with `fresh_key`: half-edge c is insertion c,
-    // boundary half-edges follow in order of their interior twins.
+/// Step 4 of the build: the half-edge records of a corner table. Handles are predicted with
+/// `fresh_key`: half-edge c is insertion c, boundary half-edges follow in order of their
+/// interior twins.
+fn assemble(positions: &[DVec3], corners: &CornerTable, source: &SourceMap) -> Mesh {
+    let CornerTable {
+        corner_vertex,
+        mate,
+    } = corners;
+    let vertex_source = &source.vertex_source;
+    let nh = corner_vertex.len();
+    let nt = nh / 3;
     let n_total = vertex_source.len();
     let mut boundary_index = vec![NONE; nh];
     let mut n_boundary = 0u32;
@@ -891,12 +958,5 @@ fn build_triangles(
             }
         },
     );
-    (
-        mesh,
-        SourceMap {
-            vertex_source,
-            face_source: tri_source.to_vec(),
-            input_vertices: nv,
-        },
-    )
+    mesh
 }

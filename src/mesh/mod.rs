@@ -9,7 +9,7 @@ pub mod shapes;
 pub mod topology;
 pub mod validate;
 
-pub use build::{BuildError, BuildReport, Built, SourceMap};
+pub use build::{BuildError, BuildReport, Built, CornerTable, Repaired, SourceMap};
 pub use geometry::{BoundingBox, cotangent};
 pub use halfedge::{FaceId, HalfedgeId, Mesh, Outgoing, SlotIndex, VertexId};
 pub use polygon::{

@@ -528,7 +528,7 @@ pub fn is_collapse_topologically_legal(
 
 /// Triangle quality `4√3·A / Σ l²` from its doubled-area normal.
 #[inline]
-fn quality(n: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
+pub(crate) fn quality(n: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
     let s = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
     if s > 0.0 {
         2.0 * 3f64.sqrt() * n.length() / s

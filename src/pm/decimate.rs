@@ -1,5 +1,5 @@
 //! Greedy quadric-error decimation by half-edge collapses: the engine behind
-//! [`ProgressiveMesh::build`](super::ProgressiveMesh::build).
+//! [`ProgressiveMesh::build`](super::ProgressiveMesh::build) and `meshpyr simplify`.
 //!
 //! Every edge is evaluated in both directions (`u→v` keeps `v`'s original position, so the
 //! cost is `(Q_u + Q_v)(p_v)`, normalised to a squared distance). The priority queue is
@@ -12,16 +12,26 @@
 //! cheaper direction falls back to the other one. The build ends when a pass without the cost
 //! cut finds no legal collapse, so "no legal collapse left" really means none.
 //!
-//! All per-element state lives in flat arrays indexed by slot (the working mesh only loses
-//! elements, so slots are stable); passes reuse their buffers.
+//! **Why a corner table.** The collapses visit the mesh in cost order, i.e. at random, so the
+//! time goes into cache misses on the records a legality test walks. The decimator therefore
+//! works on a flat corner table instead of the slotmap half-edge [`Mesh`]: triangle `t` owns
+//! corners `3t..3t+3`, half-edge `c` runs from corner `c` to the next corner of its triangle
+//! (`next`/`prev` are arithmetic), and one `twin` array pairs half-edges. Boundary half-edges,
+//! which have no corner, get ids after the corners; they only ever need their twin. A ring walk
+//! then reads two `u32` arrays instead of 24-byte records plus slotmap versions.
+//!
+//! **Same result as on the half-edge mesh.** Half-edge ids keep the order of the source mesh's
+//! half-edge slots ([`FlatMesh::from_mesh`]; for the builder's own output ids *are* the slots),
+//! ties are broken by slot, and the legality tests are those of [`super::collapse`] written for
+//! the corner table, so the collapse sequence is identical to collapsing the [`Mesh`] itself
+//! (a test replays it against the half-edge implementation).
 
-use super::collapse::{
-    Legality, Marks, half_edge_collapse, is_collapse_geometrically_legal,
-    is_collapse_topologically_legal,
-};
+use super::collapse::Legality;
 use super::quadric::Quadric;
-use crate::mesh::{HalfedgeId, Mesh, SlotIndex};
+use crate::mesh::{CornerTable, Mesh, SlotIndex};
 use crate::progress::Progress;
+use glam::DVec3;
+use rayon::prelude::*;
 
 /// What to stop at and what to forbid (the library-level subset of `PmOptions`).
 #[derive(Clone, Copy, Debug)]
@@ -34,8 +44,8 @@ pub(crate) struct DecimateParams {
     pub boundary_weight: f64,
 }
 
-/// One performed collapse, as mesh slots (`u32::MAX` = none), and its error.
-#[derive(Clone, Copy, Debug)]
+/// One performed collapse, as vertex slots (`u32::MAX` = none), and its error.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct Collapse {
     pub from: u32,
     pub to: u32,
@@ -46,37 +56,490 @@ pub(crate) struct Collapse {
 
 const NONE: u32 = u32::MAX;
 
-/// A candidate collapse: the cheaper allowed direction of an edge, and the other direction's
-/// cost (`f64::INFINITY` if not allowed).
+/// Below this many triangles a pass's candidate scan and sort stay on one thread.
+const PAR_MIN: usize = 1 << 14;
+
+#[inline]
+fn next_c(c: u32) -> u32 {
+    if c % 3 == 2 { c - 2 } else { c + 1 }
+}
+
+#[inline]
+fn prev_c(c: u32) -> u32 {
+    if c.is_multiple_of(3) { c + 2 } else { c - 1 }
+}
+
+/// The decimator's working mesh: a corner table with per-vertex state. Vertices are the source
+/// mesh's vertex slots; removed and isolated vertices have no corner.
+#[derive(Clone, Debug)]
+pub(crate) struct FlatMesh {
+    positions: Vec<DVec3>,
+    /// Vertex of every corner; all three corners of a removed triangle are `NONE`.
+    corner_vertex: Vec<u32>,
+    /// Twin of every half-edge id: corners first, then boundary half-edges (`NONE` once the
+    /// collapse of a boundary edge removed one).
+    twin: Vec<u32>,
+    /// Source slot of every half-edge id, for tie-breaking; `None` when ids are the slots.
+    slot: Option<Vec<u32>>,
+    /// A live corner at every vertex, `NONE` for isolated and removed vertices.
+    vertex_corner: Vec<u32>,
+    /// Number of out-going half-edges (= neighbours) of every vertex.
+    valence: Vec<u32>,
+    /// Whether a vertex lies on a boundary (collapses never change it: a boundary vertex only
+    /// slides along its boundary and the link condition keeps the surface manifold).
+    boundary: Vec<bool>,
+    n_faces: usize,
+    /// Vertices with at least one face.
+    n_vertices: usize,
+}
+
+impl FlatMesh {
+    /// The working mesh of the builder's output: vertex `i` at `positions[i]`, half-edge ids
+    /// equal to the slots [`Mesh::from_polygons`] would give (`CornerTable` docs).
+    pub fn from_corners(positions: Vec<DVec3>, corners: &CornerTable) -> FlatMesh {
+        let nh = corners.corner_vertex.len();
+        let nb = corners.mate.iter().filter(|&&m| m == NONE).count();
+        let mut twin = Vec::with_capacity(nh + nb);
+        twin.extend_from_slice(&corners.mate);
+        for c in 0..nh as u32 {
+            if twin[c as usize] == NONE {
+                twin[c as usize] = twin.len() as u32;
+                twin.push(c);
+            }
+        }
+        FlatMesh::with_vertex_state(positions, corners.corner_vertex.clone(), twin, None)
+    }
+
+    /// The working mesh of any valid half-edge mesh: triangle `t` is the `t`-th face in slot
+    /// order with corners starting at its stored half-edge (as [`Mesh::face_vertices`]), and
+    /// boundary half-edges are numbered in slot order.
+    pub fn from_mesh(mesh: &Mesh) -> FlatMesh {
+        let n_vslots = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
+        let n_hslots = mesh.halfedges().map(|h| h.slot() + 1).max().unwrap_or(0);
+        let mut positions = vec![DVec3::ZERO; n_vslots];
+        for v in mesh.vertices() {
+            positions[v.slot()] = mesh.position(v);
+        }
+        let mut id_of_slot = vec![NONE; n_hslots];
+        let mut slot: Vec<u32> = Vec::with_capacity(n_hslots);
+        let mut corner_vertex = Vec::with_capacity(3 * mesh.n_faces());
+        for f in mesh.faces() {
+            for h in mesh.face_halfedges(f) {
+                id_of_slot[h.slot()] = slot.len() as u32;
+                slot.push(h.slot() as u32);
+                corner_vertex.push(mesh.from_vertex(h).slot() as u32);
+            }
+        }
+        let boundary: Vec<_> = mesh
+            .halfedges()
+            .filter(|&h| mesh.is_boundary_halfedge(h))
+            .collect();
+        for &h in &boundary {
+            id_of_slot[h.slot()] = slot.len() as u32;
+            slot.push(h.slot() as u32);
+        }
+        let mut twin = Vec::with_capacity(slot.len());
+        for f in mesh.faces() {
+            for h in mesh.face_halfedges(f) {
+                twin.push(id_of_slot[mesh.twin(h).slot()]);
+            }
+        }
+        for &h in &boundary {
+            twin.push(id_of_slot[mesh.twin(h).slot()]);
+        }
+        let identity = slot.iter().enumerate().all(|(i, &s)| i as u32 == s);
+        let slot = (!identity).then_some(slot);
+        FlatMesh::with_vertex_state(positions, corner_vertex, twin, slot)
+    }
+
+    fn with_vertex_state(
+        positions: Vec<DVec3>,
+        corner_vertex: Vec<u32>,
+        twin: Vec<u32>,
+        slot: Option<Vec<u32>>,
+    ) -> FlatMesh {
+        let nv = positions.len();
+        let nh = corner_vertex.len();
+        let mut vertex_corner = vec![NONE; nv];
+        let mut valence = vec![0u32; nv];
+        let mut boundary = vec![false; nv];
+        for (c, &v) in corner_vertex.iter().enumerate() {
+            let v = v as usize;
+            if vertex_corner[v] == NONE {
+                vertex_corner[v] = c as u32;
+            }
+            valence[v] += 1;
+            if twin[c] as usize >= nh {
+                // The boundary twin of c leaves c's head.
+                let head = corner_vertex[next_c(c as u32) as usize] as usize;
+                valence[head] += 1;
+                boundary[head] = true;
+                boundary[v] = true;
+            }
+        }
+        let n_vertices = vertex_corner.iter().filter(|&&c| c != NONE).count();
+        FlatMesh {
+            positions,
+            corner_vertex,
+            twin,
+            slot,
+            vertex_corner,
+            valence,
+            boundary,
+            n_faces: nh / 3,
+            n_vertices,
+        }
+    }
+
+    /// Number of live triangles.
+    pub fn n_faces(&self) -> usize {
+        self.n_faces
+    }
+
+    /// The vertices that still have faces, in slot order.
+    pub fn survivors(&self) -> Vec<u32> {
+        (0..self.vertex_corner.len() as u32)
+            .filter(|&v| self.vertex_corner[v as usize] != NONE)
+            .collect()
+    }
+
+    /// The live triangles in triangle order, each starting at its first corner.
+    pub fn triangles(&self) -> Vec<[u32; 3]> {
+        self.corner_vertex
+            .chunks_exact(3)
+            .filter(|t| t[0] != NONE)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect()
+    }
+
+    #[inline]
+    fn n_corners(&self) -> u32 {
+        self.corner_vertex.len() as u32
+    }
+
+    #[inline]
+    fn is_boundary_halfedge(&self, h: u32) -> bool {
+        h >= self.n_corners()
+    }
+
+    #[inline]
+    fn slot_of(&self, h: u32) -> u32 {
+        match &self.slot {
+            None => h,
+            Some(s) => s[h as usize],
+        }
+    }
+
+    #[inline]
+    fn is_live(&self, h: u32) -> bool {
+        if self.is_boundary_halfedge(h) {
+            self.twin[h as usize] != NONE
+        } else {
+            self.corner_vertex[h as usize] != NONE
+        }
+    }
+
+    #[inline]
+    fn tail_vertex(&self, h: u32) -> u32 {
+        if self.is_boundary_halfedge(h) {
+            self.corner_vertex[next_c(self.twin[h as usize]) as usize]
+        } else {
+            self.corner_vertex[h as usize]
+        }
+    }
+
+    #[inline]
+    fn head_vertex(&self, h: u32) -> u32 {
+        if self.is_boundary_halfedge(h) {
+            self.corner_vertex[self.twin[h as usize] as usize]
+        } else {
+            self.corner_vertex[next_c(h) as usize]
+        }
+    }
+
+    #[inline]
+    fn position(&self, v: u32) -> DVec3 {
+        self.positions[v as usize]
+    }
+
+    /// Calls `f` on every corner at `v` (the faces around it).
+    #[inline]
+    fn for_each_corner(&self, v: u32, mut f: impl FnMut(u32)) {
+        let c0 = self.vertex_corner[v as usize];
+        let nh = self.n_corners();
+        let mut c = c0;
+        loop {
+            f(c);
+            // Counter-clockwise: the twin of the in-coming half-edge leaves v.
+            let t = self.twin[prev_c(c) as usize];
+            if t >= nh {
+                break;
+            }
+            c = t;
+            if c == c0 {
+                return;
+            }
+        }
+        // An open fan: go clockwise from the start to the other boundary edge.
+        let mut c = c0;
+        loop {
+            let t = self.twin[c as usize];
+            if t >= nh {
+                return;
+            }
+            c = next_c(t);
+            f(c);
+        }
+    }
+
+    /// Calls `f` on every neighbour of `v`.
+    #[inline]
+    fn for_each_neighbour(&self, v: u32, mut f: impl FnMut(u32)) {
+        let nh = self.n_corners();
+        let cv = &self.corner_vertex;
+        self.for_each_corner(v, |c| {
+            f(cv[next_c(c) as usize]);
+            // The corner whose in-coming edge is on the boundary also sees the neighbour
+            // across that edge, which no corner's out-going edge reaches.
+            if self.twin[prev_c(c) as usize] >= nh {
+                f(cv[prev_c(c) as usize]);
+            }
+        });
+    }
+
+    /// Costs of collapsing the edge of `h` in both directions (`h`'s direction first); `None`
+    /// for a direction that is never allowed (a boundary vertex may only slide along its
+    /// boundary).
+    #[inline]
+    fn edge_costs(&self, quadric: &[Quadric], h: u32, o: u32) -> (Option<f64>, Option<f64>) {
+        let boundary_edge = self.is_boundary_halfedge(h) || self.is_boundary_halfedge(o);
+        let (a, b) = (self.tail_vertex(h), self.head_vertex(h));
+        let q = quadric[a as usize].sum(&quadric[b as usize]);
+        let ab = (boundary_edge || !self.boundary[a as usize]).then(|| q.error(self.position(b)));
+        let ba = (boundary_edge || !self.boundary[b as usize]).then(|| q.error(self.position(a)));
+        (ab, ba)
+    }
+
+    /// The candidate of the edge of corner `c`, if `c` represents it (it has the smaller slot
+    /// of the two half-edges, or its twin is a boundary half-edge, which has no corner to
+    /// represent it) and some direction is allowed within `max_error_sq`.
+    #[inline]
+    fn candidate(&self, quadric: &[Quadric], c: u32, max_error_sq: f64) -> Option<Candidate> {
+        let t = self.twin[c as usize];
+        let (sc, st) = (self.slot_of(c), self.slot_of(t));
+        let (h, o) = if sc < st {
+            (c, t)
+        } else if self.is_boundary_halfedge(t) {
+            (t, c)
+        } else {
+            return None;
+        };
+        let (ch, co) = self.edge_costs(quadric, h, o);
+        let (cost, h, alt_cost) = match (ch, co) {
+            (Some(a), Some(b)) if b < a => (b, o, a),
+            (Some(a), Some(b)) => (a, h, b),
+            (Some(a), None) => (a, h, f64::INFINITY),
+            (None, Some(b)) => (b, o, f64::INFINITY),
+            (None, None) => return None,
+        };
+        (cost <= max_error_sq).then(|| Candidate {
+            cost,
+            alt_cost,
+            key: self.slot_of(h),
+            h,
+        })
+    }
+
+    /// The topological rules of [`super::is_collapse_topologically_legal`] on the corner
+    /// table. Returns the valence the survivor would have, or `None` if illegal.
+    fn topologically_legal(&self, h: u32, max_valence: usize, marks: &mut Stamps) -> Option<u32> {
+        let o = self.twin[h as usize];
+        let (u, v) = (self.tail_vertex(h), self.head_vertex(h));
+        let has_l = !self.is_boundary_halfedge(h);
+        let has_r = !self.is_boundary_halfedge(o);
+        if self.boundary[u as usize] && has_l && has_r {
+            return None;
+        }
+        let mut wings = [NONE; 2];
+        let mut n_wings = 0;
+        for (has, e) in [(has_l, h), (has_r, o)] {
+            if !has {
+                continue;
+            }
+            let (e1, e2) = (next_c(e), prev_c(e));
+            // Both outer edges on the boundary: the face would dangle.
+            if self.is_boundary_halfedge(self.twin[e1 as usize])
+                && self.is_boundary_halfedge(self.twin[e2 as usize])
+            {
+                return None;
+            }
+            let w = self.corner_vertex[e2 as usize];
+            // An interior wing vertex loses an edge; valence 3 would leave a degenerate pillow.
+            if !self.boundary[w as usize] && self.valence[w as usize] <= 3 {
+                return None;
+            }
+            wings[n_wings] = w;
+            n_wings += 1;
+        }
+        if n_wings == 2 && wings[0] == wings[1] {
+            return None;
+        }
+        // Link condition: the common neighbours of u and v are exactly the wings.
+        let stamp = marks.next_round();
+        self.for_each_neighbour(u, |w| marks.stamp[w as usize] = stamp);
+        let mut common = 0;
+        let mut legal = true;
+        self.for_each_neighbour(v, |w| {
+            if marks.stamp[w as usize] == stamp {
+                common += 1;
+                legal &= wings[..n_wings].contains(&w);
+            }
+        });
+        if !legal || common != n_wings {
+            return None;
+        }
+        let new_valence =
+            (self.valence[u as usize] + self.valence[v as usize]) as usize - 2 - n_wings;
+        (new_valence <= max_valence).then_some(new_valence as u32)
+    }
+
+    /// The geometric rules of [`super::is_collapse_geometrically_legal`]: no face around `u`
+    /// other than the two that vanish may rotate its normal by more than the bound or become a
+    /// sliver it was not before.
+    fn geometrically_legal(&self, h: u32, legality: &Legality) -> bool {
+        let o = self.twin[h as usize];
+        let (u, v) = (self.tail_vertex(h), self.head_vertex(h));
+        let (pu, pv) = (self.position(u), self.position(v));
+        let dead = |c: u32| {
+            (!self.is_boundary_halfedge(h) && c / 3 == h / 3)
+                || (!self.is_boundary_halfedge(o) && c / 3 == o / 3)
+        };
+        let cv = &self.corner_vertex;
+        let mut legal = true;
+        self.for_each_corner(u, |c| {
+            if !legal || dead(c) {
+                return;
+            }
+            let a = self.position(cv[next_c(c) as usize]);
+            let b = self.position(cv[prev_c(c) as usize]);
+            let n_old = (a - pu).cross(b - pu);
+            let n_new = (a - pv).cross(b - pv);
+            let q_old = super::collapse::quality(n_old, pu, a, b);
+            let q_new = super::collapse::quality(n_new, pv, a, b);
+            if q_new < legality.min_quality && q_new <= q_old {
+                legal = false;
+            }
+            // A (near-)degenerate face has no trustworthy normal; only the quality rule applies.
+            if q_old > 1e-6
+                && n_old.dot(n_new) <= legality.min_normal_cos * n_old.length() * n_new.length()
+            {
+                legal = false;
+            }
+        });
+        legal
+    }
+
+    #[inline]
+    fn set_twins(&mut self, a: u32, b: u32) {
+        self.twin[a as usize] = b;
+        self.twin[b as usize] = a;
+    }
+
+    /// Collapses `h = u→v` (legal, giving `v` valence `new_valence`); returns `(u, v, v_l,
+    /// v_r)` with `NONE` for a missing wing.
+    fn collapse(&mut self, h: u32, new_valence: u32) -> [u32; 4] {
+        let o = self.twin[h as usize];
+        let (u, v) = (self.tail_vertex(h), self.head_vertex(h));
+        // Everything at u is now at v (the two dying faces included; they go below).
+        let mut at_u: smallvec::SmallVec<[u32; 16]> = smallvec::SmallVec::new();
+        self.for_each_corner(u, |c| at_u.push(c));
+        for c in at_u {
+            self.corner_vertex[c as usize] = v;
+        }
+        let mut wings = [NONE; 2];
+        for (side, e) in [h, o].into_iter().enumerate() {
+            if self.is_boundary_halfedge(e) {
+                self.twin[e as usize] = NONE;
+                continue;
+            }
+            // e runs x→y in the face (x, y, w); its outer half-edges e1 = y→w and e2 = w→x
+            // die, and their twins t1 = w→y and t2 = x→w (now v→w on both sides) are glued.
+            let (e1, e2) = (next_c(e), prev_c(e));
+            let w = self.corner_vertex[e2 as usize];
+            let (t1, t2) = (self.twin[e1 as usize], self.twin[e2 as usize]);
+            self.set_twins(t1, t2);
+            // The glued edge joins w and v on both sides (t1 = w→v, t2 = v→w); at most one
+            // of its half-edges is a boundary one, so each end keeps a live corner: t1 leaves
+            // w, else the corner after t2 does; t2 leaves v, else the corner after t1 does.
+            self.vertex_corner[w as usize] = if self.is_boundary_halfedge(t1) {
+                next_c(t2)
+            } else {
+                t1
+            };
+            self.vertex_corner[v as usize] = if self.is_boundary_halfedge(t2) {
+                next_c(t1)
+            } else {
+                t2
+            };
+            self.valence[w as usize] -= 1;
+            wings[side] = w;
+            let t = (e / 3 * 3) as usize;
+            self.corner_vertex[t..t + 3].fill(NONE);
+            self.n_faces -= 1;
+        }
+        self.vertex_corner[u as usize] = NONE;
+        self.valence[u as usize] = 0;
+        self.valence[v as usize] = new_valence;
+        self.n_vertices -= 1;
+        [u, v, wings[0], wings[1]]
+    }
+}
+
+/// Per-vertex stamps for the link-condition test: a vertex is marked in the current round iff
+/// its stamp equals the round's number, so nothing needs clearing between tests.
+struct Stamps {
+    stamp: Vec<u32>,
+    current: u32,
+}
+
+impl Stamps {
+    fn new(n: usize) -> Stamps {
+        Stamps {
+            stamp: vec![0; n],
+            current: 0,
+        }
+    }
+
+    fn next_round(&mut self) -> u32 {
+        self.current = self.current.wrapping_add(1);
+        if self.current == 0 {
+            self.stamp.fill(0);
+            self.current = 1;
+        }
+        self.current
+    }
+}
+
+/// A candidate collapse: the cheaper allowed direction of an edge (half-edge id `h`, its slot
+/// `key` for ties), and the other direction's cost (`f64::INFINITY` if not allowed).
 #[derive(Clone, Copy)]
 struct Candidate {
     cost: f64,
-    h: u32,
     alt_cost: f64,
+    key: u32,
+    h: u32,
 }
 
-/// Costs of collapsing the edge of `h` in both directions (`h`'s direction first); `None` for
-/// a direction that is never allowed (a boundary vertex may only slide along its boundary).
 #[inline]
-fn edge_costs(
-    mesh: &Mesh,
-    quadric: &[Quadric],
-    h: HalfedgeId,
-    o: HalfedgeId,
-) -> (Option<f64>, Option<f64>) {
-    let boundary_edge = mesh.is_boundary_halfedge(h) || mesh.is_boundary_halfedge(o);
-    let (a, b) = (mesh.to_vertex(o), mesh.to_vertex(h));
-    let q = quadric[a.slot()].sum(&quadric[b.slot()]);
-    let ab = (boundary_edge || !mesh.is_boundary_vertex(a)).then(|| q.error(mesh.position(b)));
-    let ba = (boundary_edge || !mesh.is_boundary_vertex(b)).then(|| q.error(mesh.position(a)));
-    (ab, ba)
+fn by_cost(a: &Candidate, b: &Candidate) -> std::cmp::Ordering {
+    a.cost.total_cmp(&b.cost).then(a.key.cmp(&b.key))
 }
 
-fn initial_quadrics(mesh: &Mesh, boundary_weight: f64) -> Vec<Quadric> {
-    let n = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
-    let mut q = vec![Quadric::default(); n];
-    for f in mesh.faces() {
-        let [a, b, c] = mesh.face_vertices(f);
+fn initial_quadrics(mesh: &FlatMesh, boundary_weight: f64) -> Vec<Quadric> {
+    let mut q = vec![Quadric::default(); mesh.positions.len()];
+    let cv = &mesh.corner_vertex;
+    for t in cv.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]];
         let (pa, pb, pc) = (mesh.position(a), mesh.position(b), mesh.position(c));
         let nrm = (pb - pa).cross(pc - pa);
         let len = nrm.length();
@@ -86,164 +549,144 @@ fn initial_quadrics(mesh: &Mesh, boundary_weight: f64) -> Vec<Quadric> {
         let area = 0.5 * len;
         let fq = Quadric::from_plane(nrm / len, pa, area, area);
         for x in [a, b, c] {
-            q[x.slot()].add(&fq);
+            q[x as usize].add(&fq);
         }
     }
     if boundary_weight > 0.0 {
-        for h in mesh.halfedges() {
-            if !mesh.is_boundary_halfedge(h) {
-                continue;
-            }
+        let nh = mesh.n_corners();
+        for h in nh..mesh.twin.len() as u32 {
             // The face is on the twin's side; the constraint plane contains the edge and is
             // perpendicular to that face.
-            let t = mesh.twin(h);
-            let Some(f) = mesh.face(t) else { continue };
-            let (a, b) = (mesh.from_vertex(h), mesh.to_vertex(h));
+            let t = mesh.twin[h as usize];
+            let (a, b) = (mesh.tail_vertex(h), mesh.head_vertex(h));
             let (pa, pb) = (mesh.position(a), mesh.position(b));
+            let f = (t / 3 * 3) as usize;
+            let [fa, fb, fc] = [cv[f], cv[f + 1], cv[f + 2]].map(|x| mesh.position(x));
+            let face_normal = (fb - fa).cross(fc - fa).normalize_or_zero();
             let e = pb - pa;
-            let n = e.cross(mesh.face_normal(f)).normalize_or_zero();
-            if n == glam::DVec3::ZERO {
+            let n = e.cross(face_normal).normalize_or_zero();
+            if n == DVec3::ZERO {
                 continue;
             }
             let cq = Quadric::from_plane(n, pa, boundary_weight * e.length_squared(), 0.0);
-            q[a.slot()].add(&cq);
-            q[b.slot()].add(&cq);
+            q[a as usize].add(&cq);
+            q[b as usize].add(&cq);
         }
     }
     q
 }
 
-/// Runs the decimation on a copy of `input`; returns the collapses in order and the final mesh.
+/// Decimates `mesh`; returns the collapses in order and the final mesh.
 pub(crate) fn decimate(
-    input: &Mesh,
+    mut mesh: FlatMesh,
     params: &DecimateParams,
     progress: &dyn Progress,
-) -> (Vec<Collapse>, Mesh) {
-    let mut mesh = input.clone();
-    let n_he = mesh.halfedges().map(|h| h.slot() + 1).max().unwrap_or(0);
-    let n_v = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
-    let mut hid = vec![HalfedgeId::default(); n_he];
-    for h in mesh.halfedges() {
-        hid[h.slot()] = h;
-    }
+) -> (Vec<Collapse>, FlatMesh) {
+    let nv = mesh.positions.len();
     let mut quadric = initial_quadrics(&mesh, params.boundary_weight);
-    let mut marks = Marks::default();
-    let mut locked = vec![false; n_v];
+    let mut marks = Stamps::new(nv);
+    let mut locked = vec![false; nv];
     let mut locked_list: Vec<u32> = Vec::new();
-    let mut seen = vec![false; n_he];
-    // One half-edge per live edge (may hold dead or duplicate entries; cleaned every pass).
-    let mut edges: Vec<u32> = mesh.edges().map(|h| h.slot() as u32).collect();
-    let mut next_edges: Vec<u32> = Vec::with_capacity(edges.len());
-    let mut cands: Vec<Candidate> = Vec::with_capacity(edges.len());
+    let mut cands: Vec<Candidate> = Vec::new();
     let mut collapses: Vec<Collapse> = Vec::new();
 
-    let isolated = mesh.vertices().filter(|&v| mesh.is_isolated(v)).count();
-    let start_faces = mesh.n_faces();
+    let start_faces = mesh.n_faces;
     let work = start_faces.saturating_sub(params.target_faces).max(1);
-    let done = |m: &Mesh| {
-        m.n_faces() <= params.target_faces || m.n_vertices() - isolated <= params.target_vertices
-    };
+    let done =
+        |m: &FlatMesh| m.n_faces <= params.target_faces || m.n_vertices <= params.target_vertices;
     let mut use_goal = true;
     while !done(&mesh) {
-        // Live, deduplicated edges, each by the smaller slot of its two half-edges.
-        next_edges.clear();
-        for &s in &edges {
-            let h = hid[s as usize];
-            if !mesh.contains_halfedge(h) {
-                continue;
-            }
-            let t = mesh.twin(h);
-            let r = if t.slot() < h.slot() {
-                t.slot()
-            } else {
-                h.slot()
-            };
-            if !seen[r] {
-                seen[r] = true;
-                next_edges.push(r as u32);
-            }
-        }
-        for &r in &next_edges {
-            seen[r as usize] = false;
-        }
-        std::mem::swap(&mut edges, &mut next_edges);
-
+        // Every live edge once, by the corner that represents it. Costs are independent, so
+        // they are computed in parallel; the order of `cands` does not matter (sorted below by
+        // a key that is unique per candidate).
         cands.clear();
-        for &s in &edges {
-            let h = hid[s as usize];
-            let o = mesh.twin(h);
-            let (ch, co) = edge_costs(&mesh, &quadric, h, o);
-            let (cost, hs, alt_cost) = match (ch, co) {
-                (Some(a), Some(b)) if b < a => (b, o.slot(), a),
-                (Some(a), Some(b)) => (a, h.slot(), b),
-                (Some(a), None) => (a, h.slot(), f64::INFINITY),
-                (None, Some(b)) => (b, o.slot(), f64::INFINITY),
-                (None, None) => continue,
-            };
-            if cost <= params.max_error_sq {
-                cands.push(Candidate {
-                    cost,
-                    h: hs as u32,
-                    alt_cost,
-                });
+        let nt = mesh.corner_vertex.len() / 3;
+        let scan = |t: usize, out: &mut Vec<Candidate>| {
+            if mesh.corner_vertex[3 * t] == NONE {
+                return;
+            }
+            for c in 3 * t as u32..3 * t as u32 + 3 {
+                if let Some(x) = mesh.candidate(&quadric, c, params.max_error_sq) {
+                    out.push(x);
+                }
+            }
+        };
+        if nt >= PAR_MIN {
+            cands.par_extend(
+                (0..nt)
+                    .into_par_iter()
+                    .with_min_len(PAR_MIN / 4)
+                    .fold(Vec::new, |mut out, t| {
+                        scan(t, &mut out);
+                        out
+                    })
+                    .flatten_iter(),
+            );
+        } else {
+            for t in 0..nt {
+                scan(t, &mut cands);
             }
         }
         if cands.is_empty() {
             break;
         }
-        cands.sort_unstable_by(|a, b| a.cost.total_cmp(&b.cost).then(a.h.cmp(&b.h)));
         // Each collapse removes about two faces; aim for this pass's share of the target and
-        // allow 1.5× the cost of the candidate that would meet it (many get locked).
-        let faces_left = mesh.n_faces() - params.target_faces.min(mesh.n_faces());
+        // allow 1.5× the cost of the candidate that would meet it (many get locked). Only the
+        // candidates under the cut are ever visited, so only they are sorted.
+        let faces_left = mesh.n_faces - params.target_faces.min(mesh.n_faces);
         let goal = (faces_left / 2).max(1);
         let error_cut = if use_goal && goal < cands.len() {
-            1.5 * cands[goal].cost
+            let (_, nth, _) = cands.select_nth_unstable_by(goal, by_cost);
+            1.5 * nth.cost
         } else {
             f64::INFINITY
         }
         .min(params.max_error_sq);
+        if error_cut < f64::INFINITY {
+            cands.retain(|c| c.cost <= error_cut);
+        }
+        if cands.len() >= PAR_MIN {
+            cands.par_sort_unstable_by(by_cost);
+        } else {
+            cands.sort_unstable_by(by_cost);
+        }
         let before = collapses.len();
         for c in &cands {
-            if done(&mesh) || c.cost > error_cut {
+            if done(&mesh) {
                 break;
             }
-            let h0 = hid[c.h as usize];
-            if !mesh.contains_halfedge(h0) {
+            let h0 = c.h;
+            if !mesh.is_live(h0) {
                 continue;
             }
-            let o0 = mesh.twin(h0);
-            let (a, b) = (mesh.to_vertex(o0), mesh.to_vertex(h0));
-            if locked[a.slot()] || locked[b.slot()] {
+            let o0 = mesh.twin[h0 as usize];
+            let (a, b) = (mesh.tail_vertex(h0), mesh.head_vertex(h0));
+            if locked[a as usize] || locked[b as usize] {
                 continue;
             }
-            let legal = |mesh: &Mesh, marks: &mut Marks, h: HalfedgeId| {
-                is_collapse_topologically_legal(mesh, h, params.legality.max_valence, marks)
-                    .is_some()
-                    && is_collapse_geometrically_legal(mesh, h, &params.legality)
+            let mut legal = |h: u32| {
+                mesh.topologically_legal(h, params.legality.max_valence, &mut marks)
+                    .filter(|_| mesh.geometrically_legal(h, &params.legality))
             };
-            let (h, cost) = if legal(&mesh, &mut marks, h0) {
-                (h0, c.cost)
-            } else if c.alt_cost <= error_cut && legal(&mesh, &mut marks, o0) {
-                (o0, c.alt_cost)
+            let (h, cost, valence) = if let Some(val) = legal(h0) {
+                (h0, c.cost, val)
+            } else if c.alt_cost <= error_cut
+                && let Some(val) = legal(o0)
+            {
+                (o0, c.alt_cost, val)
             } else {
                 continue;
             };
-            let o = mesh.twin(h);
-            let (u, v) = (mesh.to_vertex(o), mesh.to_vertex(h));
-            let topo = half_edge_collapse(&mut mesh, h);
-            let qu = quadric[u.slot()];
-            quadric[v.slot()].add(&qu);
-            locked[v.slot()] = true;
-            locked_list.push(v.slot() as u32);
-            // Glued edges may have lost their representative: re-list v's edges.
-            for g in mesh.outgoing(v) {
-                edges.push(g.slot() as u32);
-            }
+            let [u, v, left, right] = mesh.collapse(h, valence);
+            let qu = quadric[u as usize];
+            quadric[v as usize].add(&qu);
+            locked[v as usize] = true;
+            locked_list.push(v);
             collapses.push(Collapse {
-                from: u.slot() as u32,
-                to: v.slot() as u32,
-                left: topo.left.map_or(NONE, |x| x.slot() as u32),
-                right: topo.right.map_or(NONE, |x| x.slot() as u32),
+                from: u,
+                to: v,
+                left,
+                right,
                 error_sq: cost,
             });
         }
@@ -251,7 +694,7 @@ pub(crate) fn decimate(
             locked[v as usize] = false;
         }
         locked_list.clear();
-        progress.update((start_faces - mesh.n_faces()) as f64 / work as f64);
+        progress.update((start_faces - mesh.n_faces) as f64 / work as f64);
         if collapses.len() == before {
             if !use_goal || error_cut.is_infinite() || error_cut >= params.max_error_sq {
                 break; // a full pass found no legal collapse
@@ -263,4 +706,171 @@ pub(crate) fn decimate(
     }
     progress.update(1.0);
     (collapses, mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::collapse::{Legality, Marks, half_edge_collapse, is_collapse_legal};
+    use super::super::decimate_reference;
+    use super::*;
+    use crate::mesh::{PolygonMesh, shapes};
+    use crate::progress::NoProgress;
+
+    fn params(target_faces: usize, max_error_sq: f64, boundary_weight: f64) -> DecimateParams {
+        DecimateParams {
+            target_vertices: 0,
+            target_faces,
+            max_error_sq,
+            legality: Legality {
+                max_valence: 32,
+                min_normal_cos: 45f64.to_radians().cos(),
+                min_quality: 0.05,
+            },
+            boundary_weight,
+        }
+    }
+
+    /// Decimates `mesh` with both implementations and checks that they collapse the same
+    /// edges in the same order with the same errors, and end in the same mesh.
+    fn assert_same_as_reference(mesh: &Mesh, p: &DecimateParams) -> usize {
+        let (want, coarse) = decimate_reference::decimate(mesh, p, &NoProgress);
+        let (got, flat) = decimate(FlatMesh::from_mesh(mesh), p, &NoProgress);
+        assert_eq!(got.len(), want.len(), "number of collapses");
+        for (i, (g, w)) in got.iter().zip(&want).enumerate() {
+            assert_eq!(g, w, "collapse {i}");
+            assert_eq!(g.error_sq.to_bits(), w.error_sq.to_bits());
+        }
+        let survivors: Vec<u32> = coarse
+            .vertices()
+            .filter(|&v| !coarse.is_isolated(v))
+            .map(|v| v.slot() as u32)
+            .collect();
+        assert_eq!(flat.survivors(), survivors);
+        let faces: Vec<[u32; 3]> = coarse
+            .faces()
+            .map(|f| coarse.face_vertices(f).map(|v| v.slot() as u32))
+            .collect();
+        assert_eq!(flat.triangles(), faces);
+        assert_eq!(flat.n_faces(), coarse.n_faces());
+        got.len()
+    }
+
+    fn built(positions: Vec<DVec3>, tris: &[[u32; 3]]) -> Mesh {
+        Mesh::from_polygons(&PolygonMesh::from_triangles(positions, tris))
+            .unwrap()
+            .mesh
+    }
+
+    fn bumpy_grid(n: usize) -> Mesh {
+        let (p, t) = shapes::grid(n, |i, j| {
+            let (x, y) = (i as f64, j as f64);
+            DVec3::new(x, y, 0.3 * (0.7 * x).sin() * (0.9 * y).cos())
+        });
+        built(p, &t)
+    }
+
+    #[test]
+    fn closed_and_open_meshes_match_the_half_edge_decimator() {
+        let (p, t) = shapes::icosphere(3);
+        let sphere = built(p, &t);
+        let grid = bumpy_grid(24);
+        for mesh in [&sphere, &grid] {
+            for p in [
+                params(0, f64::INFINITY, 100.0),
+                params(mesh.n_faces() / 10, f64::INFINITY, 100.0),
+                params(0, 1e-4, 0.0),
+            ] {
+                assert!(assert_same_as_reference(mesh, &p) > 0);
+            }
+        }
+    }
+
+    #[test]
+    fn dirty_scans_match_the_half_edge_decimator() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+        let mut total = 0;
+        for name in [
+            "bunny.ply",
+            "snowden_lo.ply",
+            "elephant_holes.ply",
+            "spider_assimp.ply",
+            "cube_degenerate_om.obj",
+            "planar_pymeshfix_vtk.ply",
+            "back_to_back_scad.stl",
+            "sphere_highval.ply",
+        ] {
+            let input = crate::io::read_mesh(&dir.join(name)).unwrap();
+            let mesh = Mesh::from_polygons(&input).unwrap().mesh;
+            let target = mesh.n_faces() / 50;
+            total += assert_same_as_reference(&mesh, &params(target, f64::INFINITY, 100.0));
+        }
+        assert!(total > 10_000);
+    }
+
+    #[test]
+    fn meshes_with_free_slots_match_the_half_edge_decimator() {
+        // After some collapses the slots have holes, so half-edge ids are no longer slots and
+        // ties go through the slot table.
+        let mut mesh = bumpy_grid(16);
+        let mut marks = Marks::default();
+        let legality = Legality::default();
+        let mut done = 0;
+        let hs: Vec<_> = mesh.halfedges().collect();
+        for h in hs.into_iter().step_by(7) {
+            if mesh.contains_halfedge(h) && is_collapse_legal(&mesh, h, &legality, &mut marks) {
+                half_edge_collapse(&mut mesh, h);
+                done += 1;
+            }
+        }
+        assert!(done > 10);
+        assert!(FlatMesh::from_mesh(&mesh).slot.is_some());
+        assert!(assert_same_as_reference(&mesh, &params(0, f64::INFINITY, 100.0)) > 0);
+    }
+
+    #[test]
+    fn random_soups_match_the_half_edge_decimator() {
+        // Non-manifold, multiply connected, flipped, degenerate: whatever the builder repairs.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |n: u64| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state % n
+        };
+        for _ in 0..200 {
+            let nv = 4 + next(40) as usize;
+            let positions: Vec<DVec3> = (0..nv)
+                .map(|_| DVec3::new(next(8) as f64, next(8) as f64, next(3) as f64))
+                .collect();
+            let tris: Vec<[u32; 3]> = (0..next(80) + 1)
+                .map(|_| [0; 3].map(|_| next(nv as u64) as u32))
+                .collect();
+            let mesh = built(positions, &tris);
+            let target = next(mesh.n_faces() as u64 + 1) as usize;
+            assert_same_as_reference(&mesh, &params(target, f64::INFINITY, 100.0));
+        }
+    }
+
+    #[test]
+    fn builder_corner_table_equals_the_mesh_it_builds() {
+        let input = crate::io::read_mesh(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/snowden_lo.ply"),
+        )
+        .unwrap();
+        let repaired = CornerTable::from_polygons(&input).unwrap();
+        let positions = repaired
+            .source
+            .vertex_source
+            .iter()
+            .map(|&s| input.positions[s as usize])
+            .collect();
+        let a = FlatMesh::from_corners(positions, &repaired.corners);
+        let b = FlatMesh::from_mesh(&Mesh::from_polygons(&input).unwrap().mesh);
+        assert!(b.slot.is_none(), "builder slots are the corner ids");
+        assert_eq!(a.corner_vertex, b.corner_vertex);
+        assert_eq!(a.twin, b.twin);
+        assert_eq!(a.vertex_corner, b.vertex_corner);
+        assert_eq!(a.valence, b.valence);
+        assert_eq!(a.boundary, b.boundary);
+    }
 }

@@ -5,7 +5,7 @@
 //!
 //! - [`collapse`]: the half-edge collapse / vertex split primitives and the legality tests.
 //! - [`quadric`]: area-weighted plane quadrics.
-//! - `decimate`: the greedy lazy-heap decimation loop.
+//! - `decimate`: the greedy batched decimation loop, on a flat corner table.
 //! - [`ProgressiveMesh`] / [`PmCursor`]: the hierarchy and its cursor.
 //! - [`FlatReplay`]: vertex splits replayed on flat arrays (reading and writing `.pyr` files).
 //! - [`simplify()`]: a file-level mesh cut at a level, attributes carried along.
@@ -13,6 +13,8 @@
 
 pub mod collapse;
 mod decimate;
+#[cfg(test)]
+mod decimate_reference;
 mod fuzz;
 mod progressive;
 pub mod quadric;

@@ -2,7 +2,7 @@
 //! that walks the levels one split at a time.
 
 use super::collapse::{half_edge_collapse, vertex_split};
-use super::decimate::{DecimateParams, decimate};
+use super::decimate::{DecimateParams, FlatMesh, decimate};
 use crate::mesh::{Mesh, SlotIndex, VertexId};
 use crate::progress::Progress;
 use glam::DVec3;
@@ -123,63 +123,17 @@ impl ProgressiveMesh {
         opts: &PmOptions,
         progress: &dyn Progress,
     ) -> Result<ProgressiveMesh, PmError> {
-        let angle = opts.max_normal_angle_degrees;
-        if !(angle > 0.0 && angle <= 180.0) {
-            return Err(PmError::InvalidOption(format!(
-                "max normal angle must be in (0, 180] degrees, got {angle}"
-            )));
-        }
-        if !(opts.min_quality >= 0.0 && opts.min_quality < 1.0) {
-            return Err(PmError::InvalidOption(format!(
-                "min quality must be in [0, 1), got {}",
-                opts.min_quality
-            )));
-        }
-        if !(opts.boundary_weight >= 0.0 && opts.boundary_weight.is_finite()) {
-            return Err(PmError::InvalidOption(
-                "boundary weight must be finite and >= 0".into(),
-            ));
-        }
-        if opts.max_valence < 3 {
-            return Err(PmError::InvalidOption(
-                "max valence must be at least 3".into(),
-            ));
-        }
-        let max_error_sq = match opts.max_error {
-            None => f64::INFINITY,
-            Some(e) if e >= 0.0 && e.is_finite() => {
-                let d = e * mesh.bbox_diagonal();
-                d * d
-            }
-            Some(e) => {
-                return Err(PmError::InvalidOption(format!(
-                    "max error must be >= 0, got {e}"
-                )));
-            }
-        };
-        let params = DecimateParams {
-            target_vertices: opts.target_vertices,
-            target_faces: opts.target_faces,
-            max_error_sq,
-            legality: super::collapse::Legality {
-                max_valence: opts.max_valence,
-                min_normal_cos: angle.to_radians().cos(),
-                min_quality: opts.min_quality,
-            },
-            boundary_weight: opts.boundary_weight,
-        };
-        let (collapses, coarse) = decimate(mesh, &params, progress);
+        let params = decimate_params(opts, mesh.bbox_diagonal())?;
+        let (collapses, coarse) = decimate(FlatMesh::from_mesh(mesh), &params, progress);
 
         // PM order: surviving referenced vertices (slot order), removed vertices in reverse
         // collapse order, then isolated vertices (slot order).
         let n_slots = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
         let mut mesh_to_pm = vec![NONE; n_slots];
         let mut pm_to_mesh: Vec<u32> = Vec::with_capacity(mesh.n_vertices());
-        for v in coarse.vertices() {
-            if !coarse.is_isolated(v) {
-                mesh_to_pm[v.slot()] = pm_to_mesh.len() as u32;
-                pm_to_mesh.push(v.slot() as u32);
-            }
+        for v in coarse.survivors() {
+            mesh_to_pm[v as usize] = pm_to_mesh.len() as u32;
+            pm_to_mesh.push(v);
         }
         let n_base = pm_to_mesh.len();
         for c in collapses.iter().rev() {
@@ -452,4 +406,58 @@ impl PmCursor<'_> {
         let level = self.pm.level_for_faces(faces);
         self.seek(level);
     }
+}
+
+/// Checks `opts` and turns them into the decimator's parameters (the error bound relative to
+/// `bbox_diagonal`).
+pub(crate) fn decimate_params(
+    opts: &PmOptions,
+    bbox_diagonal: f64,
+) -> Result<DecimateParams, PmError> {
+    let angle = opts.max_normal_angle_degrees;
+    if !(angle > 0.0 && angle <= 180.0) {
+        return Err(PmError::InvalidOption(format!(
+            "max normal angle must be in (0, 180] degrees, got {angle}"
+        )));
+    }
+    if !(opts.min_quality >= 0.0 && opts.min_quality < 1.0) {
+        return Err(PmError::InvalidOption(format!(
+            "min quality must be in [0, 1), got {}",
+            opts.min_quality
+        )));
+    }
+    if !(opts.boundary_weight >= 0.0 && opts.boundary_weight.is_finite()) {
+        return Err(PmError::InvalidOption(
+            "boundary weight must be finite and >= 0".into(),
+        ));
+    }
+    if opts.max_valence < 3 {
+        return Err(PmError::InvalidOption(
+            "max valence must be at least 3".into(),
+        ));
+    }
+    let max_error_sq = match opts.max_error {
+        None => f64::INFINITY,
+        Some(e) if e >= 0.0 && e.is_finite() => {
+            let d = e * bbox_diagonal;
+            d * d
+        }
+        Some(e) => {
+            return Err(PmError::InvalidOption(format!(
+                "max error must be >= 0, got {e}"
+            )));
+        }
+    };
+    let params = DecimateParams {
+        target_vertices: opts.target_vertices,
+        target_faces: opts.target_faces,
+        max_error_sq,
+        legality: super::collapse::Legality {
+            max_valence: opts.max_valence,
+            min_normal_cos: angle.to_radians().cos(),
+            min_quality: opts.min_quality,
+        },
+        boundary_weight: opts.boundary_weight,
+    };
+    Ok(params)
 }

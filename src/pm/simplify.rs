@@ -1,9 +1,11 @@
 //! Simplification of a file-level mesh: the progressive mesh cut at a level, written with the
 //! input's per-vertex attributes carried along (the behaviour of `meshpyr simplify`).
 
-use super::progressive::{PmError, PmOptions, ProgressiveMesh};
-use crate::mesh::{BuildError, Mesh, PolygonMesh};
+use super::decimate::{FlatMesh, decimate};
+use super::progressive::{PmError, PmOptions, decimate_params};
+use crate::mesh::{BoundingBox, BuildError, CornerTable, PolygonMesh};
 use crate::progress::Progress;
+use glam::DVec3;
 
 /// When to stop simplifying.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -44,7 +46,8 @@ pub struct Simplified {
     pub source_rows: Vec<u32>,
 }
 
-/// Simplifies `input` by quadric-error half-edge collapses (see [`ProgressiveMesh::build`]);
+/// Simplifies `input` by quadric-error half-edge collapses (the base level
+/// [`ProgressiveMesh::build`](super::ProgressiveMesh::build) would reach);
 /// the stopping rule in `opts` is replaced by `target`.
 pub fn simplify(
     input: &PolygonMesh,
@@ -52,8 +55,17 @@ pub fn simplify(
     opts: &PmOptions,
     progress: &dyn Progress,
 ) -> Result<Simplified, SimplifyError> {
-    let built = Mesh::from_polygons(input)?;
-    let n_faces = built.mesh.n_faces();
+    // The decimator works on the builder's corner table directly: the half-edge records a
+    // `Mesh` would add are never needed for a single cut (see `decimate`'s module docs).
+    let repaired = CornerTable::from_polygons(input)?;
+    let n_faces = repaired.corners.n_triangles();
+    let positions: Vec<DVec3> = repaired
+        .source
+        .vertex_source
+        .iter()
+        .map(|&s| input.positions[s as usize])
+        .collect();
+    let bbox_diagonal = BoundingBox::of(positions.iter().copied()).map_or(0.0, |b| b.diagonal());
     let mut o = PmOptions {
         target_vertices: 0,
         target_faces: 0,
@@ -79,12 +91,24 @@ pub fn simplify(
             o.max_error = Some(e);
         }
     }
-    let pm = ProgressiveMesh::build(&built.mesh, &o, progress)?;
-    let n0 = pm.n_base_vertices();
-    let tris = pm.level_triangles(n0);
-    let source_rows: Vec<u32> = pm.pm_to_mesh()[..n0]
+    let params = decimate_params(&o, bbox_diagonal)?;
+    let flat = FlatMesh::from_corners(positions, &repaired.corners);
+    let (_, coarse) = decimate(flat, &params, progress);
+    // The cut is the progressive mesh's base level: survivors in slot order, live triangles in
+    // input order (exactly what `ProgressiveMesh::level_triangles` gives there).
+    let survivors = coarse.survivors();
+    let mut compact = vec![u32::MAX; repaired.source.vertex_source.len()];
+    for (i, &v) in survivors.iter().enumerate() {
+        compact[v as usize] = i as u32;
+    }
+    let tris: Vec<[u32; 3]> = coarse
+        .triangles()
+        .into_iter()
+        .map(|t| t.map(|v| compact[v as usize]))
+        .collect();
+    let source_rows: Vec<u32> = survivors
         .iter()
-        .map(|&slot| built.source.vertex_source[slot as usize])
+        .map(|&v| repaired.source.vertex_source[v as usize])
         .collect();
     let mut mesh = PolygonMesh::from_triangles(
         source_rows
