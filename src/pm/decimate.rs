@@ -16,7 +16,7 @@
 //! time goes into cache misses on the records a legality test walks. The decimator therefore
 //! works on a flat corner table instead of the slotmap half-edge [`Mesh`]: triangle `t` owns
 //! corners `3t..3t+3`, half-edge `c` runs from corner `c` to the next corner of its triangle
-//! (`next`/`prev` are arithmetic), and one `twin` array pairs half-edges. Boundary half-edges,
+//! (`next`/`prev` are arithmetic), and each corner stores its vertex and its half-edge's twin. Boundary half-edges,
 //! which have no corner, get ids after the corners; they only ever need their twin. A ring walk
 //! then reads two `u32` arrays instead of 24-byte records plus slotmap versions.
 //!
@@ -56,6 +56,31 @@ pub(crate) struct Collapse {
 
 const NONE: u32 = u32::MAX;
 
+/// A vertex of the working mesh.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Vertex {
+    position: DVec3,
+    /// A live corner at the vertex, `NONE` for isolated and removed vertices.
+    corner: u32,
+    /// Number of out-going half-edges (= neighbours) in the low bits, and the `BOUNDARY` and
+    /// `LOCKED` flags. Whether a vertex lies on a boundary never changes: a boundary vertex
+    /// only slides along its boundary and the link condition keeps the surface manifold.
+    valence_flags: u32,
+}
+
+const BOUNDARY: u32 = 1 << 31;
+/// The survivor of a collapse in the current pass: its quadric changed, so its edges wait for
+/// the next pass.
+const LOCKED: u32 = 1 << 30;
+const VALENCE: u32 = LOCKED - 1;
+
+/// A corner: its vertex and the twin of the half-edge that leaves it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+struct Corner {
+    vertex: u32,
+    twin: u32,
+}
+
 /// Below this many triangles a pass's candidate scan and sort stay on one thread.
 const PAR_MIN: usize = 1 << 14;
 
@@ -73,21 +98,18 @@ fn prev_c(c: u32) -> u32 {
 /// mesh's vertex slots; removed and isolated vertices have no corner.
 #[derive(Clone, Debug)]
 pub(crate) struct FlatMesh {
-    positions: Vec<DVec3>,
-    /// Vertex of every corner; all three corners of a removed triangle are `NONE`.
-    corner_vertex: Vec<u32>,
-    /// Twin of every half-edge id: corners first, then boundary half-edges (`NONE` once the
-    /// collapse of a boundary edge removed one).
-    twin: Vec<u32>,
+    /// Per-vertex state, one 32-byte record per vertex so that a legality test pays one
+    /// cache miss per vertex it touches.
+    vertices: Vec<Vertex>,
+    /// Vertex and twin of every corner, a triangle's three corners next to each other so that
+    /// a ring walk touches one cache line per face. All three vertices of a removed triangle
+    /// are `NONE`.
+    corners: Vec<Corner>,
+    /// Twin of every boundary half-edge (id `n_corners + i` at `i`), `NONE` once the collapse
+    /// of its edge removed it.
+    boundary_twin: Vec<u32>,
     /// Source slot of every half-edge id, for tie-breaking; `None` when ids are the slots.
     slot: Option<Vec<u32>>,
-    /// A live corner at every vertex, `NONE` for isolated and removed vertices.
-    vertex_corner: Vec<u32>,
-    /// Number of out-going half-edges (= neighbours) of every vertex.
-    valence: Vec<u32>,
-    /// Whether a vertex lies on a boundary (collapses never change it: a boundary vertex only
-    /// slides along its boundary and the link condition keeps the surface manifold).
-    boundary: Vec<bool>,
     n_faces: usize,
     /// Vertices with at least one face.
     n_vertices: usize,
@@ -107,7 +129,7 @@ impl FlatMesh {
                 twin.push(c);
             }
         }
-        FlatMesh::with_vertex_state(positions, corners.corner_vertex.clone(), twin, None)
+        FlatMesh::with_vertex_state(positions, &corners.corner_vertex, twin, None)
     }
 
     /// The working mesh of any valid half-edge mesh: triangle `t` is the `t`-th face in slot
@@ -149,43 +171,48 @@ impl FlatMesh {
         }
         let identity = slot.iter().enumerate().all(|(i, &s)| i as u32 == s);
         let slot = (!identity).then_some(slot);
-        FlatMesh::with_vertex_state(positions, corner_vertex, twin, slot)
+        FlatMesh::with_vertex_state(positions, &corner_vertex, twin, slot)
     }
 
     fn with_vertex_state(
         positions: Vec<DVec3>,
-        corner_vertex: Vec<u32>,
+        corner_vertex: &[u32],
         twin: Vec<u32>,
         slot: Option<Vec<u32>>,
     ) -> FlatMesh {
-        let nv = positions.len();
         let nh = corner_vertex.len();
-        let mut vertex_corner = vec![NONE; nv];
-        let mut valence = vec![0u32; nv];
-        let mut boundary = vec![false; nv];
+        let mut vertices: Vec<Vertex> = positions
+            .iter()
+            .map(|&position| Vertex {
+                position,
+                corner: NONE,
+                valence_flags: 0,
+            })
+            .collect();
         for (c, &v) in corner_vertex.iter().enumerate() {
-            let v = v as usize;
-            if vertex_corner[v] == NONE {
-                vertex_corner[v] = c as u32;
+            let x = &mut vertices[v as usize];
+            if x.corner == NONE {
+                x.corner = c as u32;
             }
-            valence[v] += 1;
+            x.valence_flags += 1;
             if twin[c] as usize >= nh {
                 // The boundary twin of c leaves c's head.
-                let head = corner_vertex[next_c(c as u32) as usize] as usize;
-                valence[head] += 1;
-                boundary[head] = true;
-                boundary[v] = true;
+                x.valence_flags |= BOUNDARY;
+                let head = &mut vertices[corner_vertex[next_c(c as u32) as usize] as usize];
+                head.valence_flags = (head.valence_flags + 1) | BOUNDARY;
             }
         }
-        let n_vertices = vertex_corner.iter().filter(|&&c| c != NONE).count();
+        let n_vertices = vertices.iter().filter(|x| x.corner != NONE).count();
+        let corners = corner_vertex
+            .iter()
+            .zip(&twin)
+            .map(|(&vertex, &twin)| Corner { vertex, twin })
+            .collect();
         FlatMesh {
-            positions,
-            corner_vertex,
-            twin,
+            vertices,
+            corners,
+            boundary_twin: twin[nh..].to_vec(),
             slot,
-            vertex_corner,
-            valence,
-            boundary,
             n_faces: nh / 3,
             n_vertices,
         }
@@ -198,23 +225,47 @@ impl FlatMesh {
 
     /// The vertices that still have faces, in slot order.
     pub fn survivors(&self) -> Vec<u32> {
-        (0..self.vertex_corner.len() as u32)
-            .filter(|&v| self.vertex_corner[v as usize] != NONE)
+        (0..self.vertices.len() as u32)
+            .filter(|&v| self.vertices[v as usize].corner != NONE)
             .collect()
     }
 
     /// The live triangles in triangle order, each starting at its first corner.
     pub fn triangles(&self) -> Vec<[u32; 3]> {
-        self.corner_vertex
+        self.corners
             .chunks_exact(3)
-            .filter(|t| t[0] != NONE)
-            .map(|t| [t[0], t[1], t[2]])
+            .filter(|t| t[0].vertex != NONE)
+            .map(|t| [t[0].vertex, t[1].vertex, t[2].vertex])
             .collect()
     }
 
     #[inline]
     fn n_corners(&self) -> u32 {
-        self.corner_vertex.len() as u32
+        self.corners.len() as u32
+    }
+
+    /// Vertex of corner `c`.
+    #[inline]
+    fn cv(&self, c: u32) -> u32 {
+        self.corners[c as usize].vertex
+    }
+
+    /// Twin of half-edge `h` (a corner or a boundary half-edge).
+    #[inline]
+    fn twin(&self, h: u32) -> u32 {
+        match self.corners.get(h as usize) {
+            Some(c) => c.twin,
+            None => self.boundary_twin[(h - self.n_corners()) as usize],
+        }
+    }
+
+    #[inline]
+    fn set_twin(&mut self, h: u32, t: u32) {
+        let nh = self.n_corners();
+        match self.corners.get_mut(h as usize) {
+            Some(c) => c.twin = t,
+            None => self.boundary_twin[(h - nh) as usize] = t,
+        }
     }
 
     #[inline]
@@ -233,45 +284,72 @@ impl FlatMesh {
     #[inline]
     fn is_live(&self, h: u32) -> bool {
         if self.is_boundary_halfedge(h) {
-            self.twin[h as usize] != NONE
+            self.twin(h) != NONE
         } else {
-            self.corner_vertex[h as usize] != NONE
+            self.cv(h) != NONE
         }
     }
 
     #[inline]
     fn tail_vertex(&self, h: u32) -> u32 {
         if self.is_boundary_halfedge(h) {
-            self.corner_vertex[next_c(self.twin[h as usize]) as usize]
+            self.cv(next_c(self.twin(h)))
         } else {
-            self.corner_vertex[h as usize]
+            self.cv(h)
         }
     }
 
     #[inline]
     fn head_vertex(&self, h: u32) -> u32 {
         if self.is_boundary_halfedge(h) {
-            self.corner_vertex[self.twin[h as usize] as usize]
+            self.cv(self.twin(h))
         } else {
-            self.corner_vertex[next_c(h) as usize]
+            self.cv(next_c(h))
         }
     }
 
     #[inline]
     fn position(&self, v: u32) -> DVec3 {
-        self.positions[v as usize]
+        self.vertices[v as usize].position
+    }
+
+    #[inline]
+    fn valence(&self, v: u32) -> u32 {
+        self.vertices[v as usize].valence_flags & VALENCE
+    }
+
+    #[inline]
+    fn is_boundary_vertex(&self, v: u32) -> bool {
+        self.vertices[v as usize].valence_flags & BOUNDARY != 0
+    }
+
+    #[inline]
+    fn is_locked(&self, v: u32) -> bool {
+        self.vertices[v as usize].valence_flags & LOCKED != 0
+    }
+
+    #[inline]
+    fn set_locked(&mut self, v: u32, locked: bool) {
+        let x = &mut self.vertices[v as usize].valence_flags;
+        *x = if locked { *x | LOCKED } else { *x & !LOCKED };
+    }
+
+    #[inline]
+    fn set_valence(&mut self, v: u32, valence: u32) {
+        let x = &mut self.vertices[v as usize].valence_flags;
+        *x = (*x & !VALENCE) | valence;
     }
 
     /// Calls `f` on every corner at `v` (the faces around it).
     #[inline]
     fn for_each_corner(&self, v: u32, mut f: impl FnMut(u32)) {
-        let c0 = self.vertex_corner[v as usize];
+        let c0 = self.vertices[v as usize].corner;
         let nh = self.n_corners();
         let mut c = c0;
         loop {
             f(c);
             // Counter-clockwise: the twin of the in-coming half-edge leaves v.
-            let t = self.twin[prev_c(c) as usize];
+            let t = self.corners[prev_c(c) as usize].twin;
             if t >= nh {
                 break;
             }
@@ -283,7 +361,7 @@ impl FlatMesh {
         // An open fan: go clockwise from the start to the other boundary edge.
         let mut c = c0;
         loop {
-            let t = self.twin[c as usize];
+            let t = self.corners[c as usize].twin;
             if t >= nh {
                 return;
             }
@@ -296,13 +374,13 @@ impl FlatMesh {
     #[inline]
     fn for_each_neighbour(&self, v: u32, mut f: impl FnMut(u32)) {
         let nh = self.n_corners();
-        let cv = &self.corner_vertex;
         self.for_each_corner(v, |c| {
-            f(cv[next_c(c) as usize]);
+            f(self.cv(next_c(c)));
             // The corner whose in-coming edge is on the boundary also sees the neighbour
             // across that edge, which no corner's out-going edge reaches.
-            if self.twin[prev_c(c) as usize] >= nh {
-                f(cv[prev_c(c) as usize]);
+            let p = self.corners[prev_c(c) as usize];
+            if p.twin >= nh {
+                f(p.vertex);
             }
         });
     }
@@ -315,8 +393,8 @@ impl FlatMesh {
         let boundary_edge = self.is_boundary_halfedge(h) || self.is_boundary_halfedge(o);
         let (a, b) = (self.tail_vertex(h), self.head_vertex(h));
         let q = quadric[a as usize].sum(&quadric[b as usize]);
-        let ab = (boundary_edge || !self.boundary[a as usize]).then(|| q.error(self.position(b)));
-        let ba = (boundary_edge || !self.boundary[b as usize]).then(|| q.error(self.position(a)));
+        let ab = (boundary_edge || !self.is_boundary_vertex(a)).then(|| q.error(self.position(b)));
+        let ba = (boundary_edge || !self.is_boundary_vertex(b)).then(|| q.error(self.position(a)));
         (ab, ba)
     }
 
@@ -325,7 +403,7 @@ impl FlatMesh {
     /// represent it) and some direction is allowed within `max_error_sq`.
     #[inline]
     fn candidate(&self, quadric: &[Quadric], c: u32, max_error_sq: f64) -> Option<Candidate> {
-        let t = self.twin[c as usize];
+        let t = self.corners[c as usize].twin;
         let (sc, st) = (self.slot_of(c), self.slot_of(t));
         let (h, o) = if sc < st {
             (c, t)
@@ -352,12 +430,12 @@ impl FlatMesh {
 
     /// The topological rules of [`super::is_collapse_topologically_legal`] on the corner
     /// table. Returns the valence the survivor would have, or `None` if illegal.
-    fn topologically_legal(&self, h: u32, max_valence: usize, marks: &mut Stamps) -> Option<u32> {
-        let o = self.twin[h as usize];
+    fn topologically_legal(&self, h: u32, max_valence: usize) -> Option<u32> {
+        let o = self.twin(h);
         let (u, v) = (self.tail_vertex(h), self.head_vertex(h));
         let has_l = !self.is_boundary_halfedge(h);
         let has_r = !self.is_boundary_halfedge(o);
-        if self.boundary[u as usize] && has_l && has_r {
+        if self.is_boundary_vertex(u) && has_l && has_r {
             return None;
         }
         let mut wings = [NONE; 2];
@@ -368,14 +446,14 @@ impl FlatMesh {
             }
             let (e1, e2) = (next_c(e), prev_c(e));
             // Both outer edges on the boundary: the face would dangle.
-            if self.is_boundary_halfedge(self.twin[e1 as usize])
-                && self.is_boundary_halfedge(self.twin[e2 as usize])
+            if self.is_boundary_halfedge(self.corners[e1 as usize].twin)
+                && self.is_boundary_halfedge(self.corners[e2 as usize].twin)
             {
                 return None;
             }
-            let w = self.corner_vertex[e2 as usize];
+            let w = self.cv(e2);
             // An interior wing vertex loses an edge; valence 3 would leave a degenerate pillow.
-            if !self.boundary[w as usize] && self.valence[w as usize] <= 3 {
+            if !self.is_boundary_vertex(w) && self.valence(w) <= 3 {
                 return None;
             }
             wings[n_wings] = w;
@@ -384,44 +462,45 @@ impl FlatMesh {
         if n_wings == 2 && wings[0] == wings[1] {
             return None;
         }
-        // Link condition: the common neighbours of u and v are exactly the wings.
-        let stamp = marks.next_round();
-        self.for_each_neighbour(u, |w| marks.stamp[w as usize] = stamp);
+        // The valence cap first: it is cheap, and it bounds both rings for the link test.
+        let new_valence = (self.valence(u) + self.valence(v)) as usize - 2 - n_wings;
+        if new_valence > max_valence {
+            return None;
+        }
+        // Link condition: the common neighbours of u and v are exactly the wings. The rings
+        // are small (the cap above), so a linear search in u's ring beats per-vertex marks,
+        // which cost a cache miss per neighbour.
+        let mut ring_u: smallvec::SmallVec<[u32; 40]> = smallvec::SmallVec::new();
+        self.for_each_neighbour(u, |w| ring_u.push(w));
         let mut common = 0;
         let mut legal = true;
         self.for_each_neighbour(v, |w| {
-            if marks.stamp[w as usize] == stamp {
+            if ring_u.contains(&w) {
                 common += 1;
                 legal &= wings[..n_wings].contains(&w);
             }
         });
-        if !legal || common != n_wings {
-            return None;
-        }
-        let new_valence =
-            (self.valence[u as usize] + self.valence[v as usize]) as usize - 2 - n_wings;
-        (new_valence <= max_valence).then_some(new_valence as u32)
+        (legal && common == n_wings).then_some(new_valence as u32)
     }
 
     /// The geometric rules of [`super::is_collapse_geometrically_legal`]: no face around `u`
     /// other than the two that vanish may rotate its normal by more than the bound or become a
     /// sliver it was not before.
     fn geometrically_legal(&self, h: u32, legality: &Legality) -> bool {
-        let o = self.twin[h as usize];
+        let o = self.twin(h);
         let (u, v) = (self.tail_vertex(h), self.head_vertex(h));
         let (pu, pv) = (self.position(u), self.position(v));
         let dead = |c: u32| {
             (!self.is_boundary_halfedge(h) && c / 3 == h / 3)
                 || (!self.is_boundary_halfedge(o) && c / 3 == o / 3)
         };
-        let cv = &self.corner_vertex;
         let mut legal = true;
         self.for_each_corner(u, |c| {
             if !legal || dead(c) {
                 return;
             }
-            let a = self.position(cv[next_c(c) as usize]);
-            let b = self.position(cv[prev_c(c) as usize]);
+            let a = self.position(self.cv(next_c(c)));
+            let b = self.position(self.cv(prev_c(c)));
             let n_old = (a - pu).cross(b - pu);
             let n_new = (a - pv).cross(b - pv);
             let q_old = super::collapse::quality(n_old, pu, a, b);
@@ -439,84 +518,83 @@ impl FlatMesh {
         legal
     }
 
+    /// Asks the cache for what testing and collapsing the edge of half-edge `h` reads first:
+    /// both vertices' records and quadrics and the twin's triangle.
+    #[inline]
+    fn prefetch_edge(&self, quadric: &[Quadric], h: u32) {
+        let (Some(c), Some(n)) = (
+            self.corners.get(h as usize),
+            self.corners.get(next_c(h) as usize),
+        ) else {
+            return; // a boundary half-edge: rare, not worth a second chain
+        };
+        prefetch(self.corners.as_ptr().wrapping_add(c.twin as usize));
+        for v in [c.vertex, n.vertex] {
+            prefetch(self.vertices.as_ptr().wrapping_add(v as usize));
+            let q = quadric.as_ptr().wrapping_add(v as usize);
+            prefetch(q);
+            prefetch((q as *const u8).wrapping_add(64)); // a quadric spans two lines
+        }
+    }
+
     #[inline]
     fn set_twins(&mut self, a: u32, b: u32) {
-        self.twin[a as usize] = b;
-        self.twin[b as usize] = a;
+        self.set_twin(a, b);
+        self.set_twin(b, a);
     }
 
     /// Collapses `h = u→v` (legal, giving `v` valence `new_valence`); returns `(u, v, v_l,
     /// v_r)` with `NONE` for a missing wing.
     fn collapse(&mut self, h: u32, new_valence: u32) -> [u32; 4] {
-        let o = self.twin[h as usize];
+        let o = self.twin(h);
         let (u, v) = (self.tail_vertex(h), self.head_vertex(h));
         // Everything at u is now at v (the two dying faces included; they go below).
         let mut at_u: smallvec::SmallVec<[u32; 16]> = smallvec::SmallVec::new();
         self.for_each_corner(u, |c| at_u.push(c));
         for c in at_u {
-            self.corner_vertex[c as usize] = v;
+            self.corners[c as usize].vertex = v;
         }
         let mut wings = [NONE; 2];
         for (side, e) in [h, o].into_iter().enumerate() {
             if self.is_boundary_halfedge(e) {
-                self.twin[e as usize] = NONE;
+                self.set_twin(e, NONE);
                 continue;
             }
             // e runs x→y in the face (x, y, w); its outer half-edges e1 = y→w and e2 = w→x
             // die, and their twins t1 = w→y and t2 = x→w (now v→w on both sides) are glued.
             let (e1, e2) = (next_c(e), prev_c(e));
-            let w = self.corner_vertex[e2 as usize];
-            let (t1, t2) = (self.twin[e1 as usize], self.twin[e2 as usize]);
+            let w = self.cv(e2);
+            let (t1, t2) = (
+                self.corners[e1 as usize].twin,
+                self.corners[e2 as usize].twin,
+            );
             self.set_twins(t1, t2);
             // The glued edge joins w and v on both sides (t1 = w→v, t2 = v→w); at most one
             // of its half-edges is a boundary one, so each end keeps a live corner: t1 leaves
             // w, else the corner after t2 does; t2 leaves v, else the corner after t1 does.
-            self.vertex_corner[w as usize] = if self.is_boundary_halfedge(t1) {
+            self.vertices[w as usize].corner = if self.is_boundary_halfedge(t1) {
                 next_c(t2)
             } else {
                 t1
             };
-            self.vertex_corner[v as usize] = if self.is_boundary_halfedge(t2) {
+            self.vertices[v as usize].corner = if self.is_boundary_halfedge(t2) {
                 next_c(t1)
             } else {
                 t2
             };
-            self.valence[w as usize] -= 1;
+            self.vertices[w as usize].valence_flags -= 1;
             wings[side] = w;
             let t = (e / 3 * 3) as usize;
-            self.corner_vertex[t..t + 3].fill(NONE);
+            for c in &mut self.corners[t..t + 3] {
+                c.vertex = NONE;
+            }
             self.n_faces -= 1;
         }
-        self.vertex_corner[u as usize] = NONE;
-        self.valence[u as usize] = 0;
-        self.valence[v as usize] = new_valence;
+        self.vertices[u as usize].corner = NONE;
+        self.set_valence(u, 0);
+        self.set_valence(v, new_valence);
         self.n_vertices -= 1;
         [u, v, wings[0], wings[1]]
-    }
-}
-
-/// Per-vertex stamps for the link-condition test: a vertex is marked in the current round iff
-/// its stamp equals the round's number, so nothing needs clearing between tests.
-struct Stamps {
-    stamp: Vec<u32>,
-    current: u32,
-}
-
-impl Stamps {
-    fn new(n: usize) -> Stamps {
-        Stamps {
-            stamp: vec![0; n],
-            current: 0,
-        }
-    }
-
-    fn next_round(&mut self) -> u32 {
-        self.current = self.current.wrapping_add(1);
-        if self.current == 0 {
-            self.stamp.fill(0);
-            self.current = 1;
-        }
-        self.current
     }
 }
 
@@ -536,10 +614,9 @@ fn by_cost(a: &Candidate, b: &Candidate) -> std::cmp::Ordering {
 }
 
 fn initial_quadrics(mesh: &FlatMesh, boundary_weight: f64) -> Vec<Quadric> {
-    let mut q = vec![Quadric::default(); mesh.positions.len()];
-    let cv = &mesh.corner_vertex;
-    for t in cv.chunks_exact(3) {
-        let [a, b, c] = [t[0], t[1], t[2]];
+    let mut q = vec![Quadric::default(); mesh.vertices.len()];
+    for t in mesh.corners.chunks_exact(3) {
+        let [a, b, c] = [t[0].vertex, t[1].vertex, t[2].vertex];
         let (pa, pb, pc) = (mesh.position(a), mesh.position(b), mesh.position(c));
         let nrm = (pb - pa).cross(pc - pa);
         let len = nrm.length();
@@ -554,14 +631,14 @@ fn initial_quadrics(mesh: &FlatMesh, boundary_weight: f64) -> Vec<Quadric> {
     }
     if boundary_weight > 0.0 {
         let nh = mesh.n_corners();
-        for h in nh..mesh.twin.len() as u32 {
+        for h in nh..nh + mesh.boundary_twin.len() as u32 {
             // The face is on the twin's side; the constraint plane contains the edge and is
             // perpendicular to that face.
-            let t = mesh.twin[h as usize];
+            let t = mesh.twin(h);
             let (a, b) = (mesh.tail_vertex(h), mesh.head_vertex(h));
             let (pa, pb) = (mesh.position(a), mesh.position(b));
-            let f = (t / 3 * 3) as usize;
-            let [fa, fb, fc] = [cv[f], cv[f + 1], cv[f + 2]].map(|x| mesh.position(x));
+            let f = t / 3 * 3;
+            let [fa, fb, fc] = [f, f + 1, f + 2].map(|c| mesh.position(mesh.cv(c)));
             let face_normal = (fb - fa).cross(fc - fa).normalize_or_zero();
             let e = pb - pa;
             let n = e.cross(face_normal).normalize_or_zero();
@@ -582,10 +659,7 @@ pub(crate) fn decimate(
     params: &DecimateParams,
     progress: &dyn Progress,
 ) -> (Vec<Collapse>, FlatMesh) {
-    let nv = mesh.positions.len();
     let mut quadric = initial_quadrics(&mesh, params.boundary_weight);
-    let mut marks = Stamps::new(nv);
-    let mut locked = vec![false; nv];
     let mut locked_list: Vec<u32> = Vec::new();
     let mut cands: Vec<Candidate> = Vec::new();
     let mut collapses: Vec<Collapse> = Vec::new();
@@ -600,9 +674,16 @@ pub(crate) fn decimate(
         // they are computed in parallel; the order of `cands` does not matter (sorted below by
         // a key that is unique per candidate).
         cands.clear();
-        let nt = mesh.corner_vertex.len() / 3;
+        let nt = mesh.corners.len() / 3;
         let scan = |t: usize, out: &mut Vec<Candidate>| {
-            if mesh.corner_vertex[3 * t] == NONE {
+            // Triangles are read in order, their vertices' records at random.
+            if let Some(ahead) = mesh.corners.get(3 * t + 24..3 * t + 27) {
+                for x in ahead.iter().filter(|x| x.vertex != NONE) {
+                    prefetch(quadric.as_ptr().wrapping_add(x.vertex as usize));
+                    prefetch(mesh.vertices.as_ptr().wrapping_add(x.vertex as usize));
+                }
+            }
+            if mesh.corners[3 * t].vertex == NONE {
                 return;
             }
             for c in 3 * t as u32..3 * t as u32 + 3 {
@@ -651,21 +732,30 @@ pub(crate) fn decimate(
             cands.sort_unstable_by(by_cost);
         }
         let before = collapses.len();
-        for c in &cands {
+        for (i, c) in cands.iter().enumerate() {
             if done(&mesh) {
                 break;
+            }
+            // Candidates come in cost order, i.e. at random places in memory, and each one's
+            // records are a chain of dependent loads: fetch the next ones' in two steps (their
+            // triangle 16 ahead, then what it points to 8 ahead) while this one is tested.
+            if let Some(far) = cands.get(i + 16) {
+                prefetch(mesh.corners.as_ptr().wrapping_add(far.h as usize));
+            }
+            if let Some(near) = cands.get(i + 8) {
+                mesh.prefetch_edge(&quadric, near.h);
             }
             let h0 = c.h;
             if !mesh.is_live(h0) {
                 continue;
             }
-            let o0 = mesh.twin[h0 as usize];
+            let o0 = mesh.twin(h0);
             let (a, b) = (mesh.tail_vertex(h0), mesh.head_vertex(h0));
-            if locked[a as usize] || locked[b as usize] {
+            if mesh.is_locked(a) || mesh.is_locked(b) {
                 continue;
             }
-            let mut legal = |h: u32| {
-                mesh.topologically_legal(h, params.legality.max_valence, &mut marks)
+            let legal = |h: u32| {
+                mesh.topologically_legal(h, params.legality.max_valence)
                     .filter(|_| mesh.geometrically_legal(h, &params.legality))
             };
             let (h, cost, valence) = if let Some(val) = legal(h0) {
@@ -680,7 +770,7 @@ pub(crate) fn decimate(
             let [u, v, left, right] = mesh.collapse(h, valence);
             let qu = quadric[u as usize];
             quadric[v as usize].add(&qu);
-            locked[v as usize] = true;
+            mesh.set_locked(v, true);
             locked_list.push(v);
             collapses.push(Collapse {
                 from: u,
@@ -691,7 +781,7 @@ pub(crate) fn decimate(
             });
         }
         for &v in &locked_list {
-            locked[v as usize] = false;
+            mesh.set_locked(v, false);
         }
         locked_list.clear();
         progress.update((start_faces - mesh.n_faces) as f64 / work as f64);
@@ -706,6 +796,22 @@ pub(crate) fn decimate(
     }
     progress.update(1.0);
     (collapses, mesh)
+}
+
+/// A cache hint for the line at `p`. Decimation visits the mesh in cost order, so nearly every
+/// record it reads is a cache miss; hinting the next candidates' records while the current one
+/// is tested overlaps those misses (whole `simplify` of 832k triangles: about 25% faster).
+/// The address may be anything: it is never dereferenced.
+#[inline(always)]
+fn prefetch<T>(p: *const T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: `_mm_prefetch` only needs SSE, which every x86_64 CPU has; a prefetch is a hint
+    // that reads nothing into the program and never faults, whatever the address.
+    unsafe {
+        core::arch::x86_64::_mm_prefetch::<{ core::arch::x86_64::_MM_HINT_T0 }>(p as *const i8)
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = p;
 }
 
 #[cfg(test)]
@@ -867,10 +973,8 @@ mod tests {
         let a = FlatMesh::from_corners(positions, &repaired.corners);
         let b = FlatMesh::from_mesh(&Mesh::from_polygons(&input).unwrap().mesh);
         assert!(b.slot.is_none(), "builder slots are the corner ids");
-        assert_eq!(a.corner_vertex, b.corner_vertex);
-        assert_eq!(a.twin, b.twin);
-        assert_eq!(a.vertex_corner, b.vertex_corner);
-        assert_eq!(a.valence, b.valence);
-        assert_eq!(a.boundary, b.boundary);
+        assert_eq!(a.corners, b.corners);
+        assert_eq!(a.boundary_twin, b.boundary_twin);
+        assert_eq!(a.vertices, b.vertices);
     }
 }
