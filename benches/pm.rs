@@ -1,7 +1,7 @@
 //! Progressive-mesh build and simplification.
 //!
-//! `simplify_*` runs the library part of `meshpyr simplify`: half-edge build, decimation and
-//! output assembly, without file IO. Set `MESHPYR_BIG=/path/to/big.ply` (made by
+//! `simplify_*` runs the library part of `meshpyr simplify`: the builder's repairs (a corner
+//! table, no half-edge records), decimation and output assembly, without file IO. Set `MESHPYR_BIG=/path/to/big.ply` (made by
 //! `benches/compare/make_big.py`) to also time the 832k-triangle benchmark mesh; the
 //! meshoptimizer baseline is timed by `benches/compare/meshopt_simplify.py` in the same session.
 
