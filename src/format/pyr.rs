@@ -504,7 +504,12 @@ pub fn encode(
         let first = n_base + b * SPLITS_PER_BLOCK as usize;
         payload.clear();
         payload.reserve(chunk.len() * (4 + 4 + 3 * width));
-        for s in chunk {
+        for (k, s) in chunk.iter().enumerate() {
+            for ahead in [16, 8] {
+                if let Some(t) = chunk.get(k + ahead) {
+                    replay.prefetch(t.survivor, ahead);
+                }
+            }
             put_uvarint(&mut payload, u64::from(s.vertex - 1 - s.survivor));
             let (il, ir) = replay
                 .wing_indices(s)
@@ -755,6 +760,7 @@ fn read_progressive(
     let mut splits: Vec<VertexSplit> = Vec::with_capacity(want.min(hint));
     let mut errors: Vec<f32> = Vec::with_capacity(want.min(hint));
     positions.reserve(want.min(hint));
+    let mut decoded: Vec<(u32, u64, u64, u64)> = Vec::new();
     while splits.len() < want {
         if r.remaining() < 12 && truncated {
             break;
@@ -798,20 +804,31 @@ fn read_progressive(
         // Only the splits up to the level asked for are decoded and replayed.
         let used = count.min(want - splits.len());
         read_positions(&mut q, used, f32, &mut positions)?;
-        for _ in 0..used {
-            let vertex = (n_base + splits.len()) as u32;
+        // The records first (their survivors let the replay prefetch ahead), then the
+        // replay, which checks them against the rings.
+        decoded.clear();
+        for k in 0..used {
+            let vertex = (n_base + splits.len() + k) as u32;
             let at = p.offset();
             if vertex == 0 {
                 return Err(corrupt(at, "split without a survivor"));
             }
             let back = p.count(u64::from(vertex - 1), "survivor")? as u32;
-            let survivor = vertex - 1 - back;
+            let lc = p.count(MAX_RING, "left wing")? as u64;
+            let rc = p.count(MAX_RING, "right wing")? as u64;
+            decoded.push((vertex - 1 - back, lc, rc, at));
+        }
+        for (k, &(survivor, lc, rc, at)) in decoded.iter().enumerate() {
+            for ahead in [16, 8] {
+                if let Some(r) = decoded.get(k + ahead) {
+                    replay.prefetch(r.0, ahead);
+                }
+            }
+            let vertex = (n_base + splits.len()) as u32;
             let deg = replay
                 .ring(survivor)
                 .map_err(|e| corrupt(at, e.to_string()))?
                 .len() as u64;
-            let lc = p.count(MAX_RING, "left wing")? as u64;
-            let rc = p.count(MAX_RING, "right wing")? as u64;
             if lc > deg || rc > deg {
                 return Err(corrupt(at, "wing index past the survivor's ring"));
             }

@@ -16,6 +16,7 @@ mod decimate;
 #[cfg(test)]
 mod decimate_reference;
 mod fuzz;
+mod prefetch;
 mod progressive;
 pub mod quadric;
 mod replay;
