@@ -332,14 +332,16 @@ fn pair_around_edge(
     }
 }
 
-/// Half-edge `c = 3t + k` runs from corner `k` of triangle `t` to corner `k + 1`.
+/// Half-edge `c = 3t + k` runs from corner `k` of triangle `t` to corner `k + 1`: the next
+/// corner of its triangle (the corner-table arithmetic, shared with `pm::decimate`).
 #[inline]
-fn next_c(c: u32) -> u32 {
+pub(crate) fn next_c(c: u32) -> u32 {
     if c % 3 == 2 { c - 2 } else { c + 1 }
 }
 
+/// The previous corner of `c`'s triangle.
 #[inline]
-fn prev_c(c: u32) -> u32 {
+pub(crate) fn prev_c(c: u32) -> u32 {
     if c.is_multiple_of(3) { c + 2 } else { c - 1 }
 }
 

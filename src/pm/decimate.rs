@@ -29,6 +29,7 @@
 use super::collapse::Legality;
 use super::prefetch::prefetch;
 use super::quadric::Quadric;
+use crate::mesh::build::{next_c, prev_c};
 use crate::mesh::{CornerTable, Mesh, SlotIndex};
 use crate::progress::Progress;
 use glam::DVec3;
@@ -84,16 +85,6 @@ struct Corner {
 
 /// Below this many triangles a pass's candidate scan and sort stay on one thread.
 const PAR_MIN: usize = 1 << 14;
-
-#[inline]
-fn next_c(c: u32) -> u32 {
-    if c % 3 == 2 { c - 2 } else { c + 1 }
-}
-
-#[inline]
-fn prev_c(c: u32) -> u32 {
-    if c.is_multiple_of(3) { c + 2 } else { c - 1 }
-}
 
 /// The decimator's working mesh: a corner table with per-vertex state. Vertices are the source
 /// mesh's vertex slots; removed and isolated vertices have no corner.
