@@ -934,6 +934,31 @@ mod tests {
     }
 
     #[test]
+    fn the_result_does_not_depend_on_the_thread_count() {
+        // Big enough for the parallel candidate scan and sort.
+        let input = crate::io::read_mesh(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bunny.ply"),
+        )
+        .unwrap();
+        let mesh = Mesh::from_polygons(&input).unwrap().mesh;
+        assert!(mesh.n_faces() > 2 * PAR_MIN);
+        let run = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let p = params(500, f64::INFINITY, 100.0);
+                let (collapses, flat) = decimate(FlatMesh::from_mesh(&mesh), &p, &NoProgress);
+                (collapses, flat.triangles())
+            })
+        };
+        let one = run(1);
+        assert!(one.0.len() > 30_000);
+        assert!(one == run(3));
+    }
+
+    #[test]
     fn builder_corner_table_equals_the_mesh_it_builds() {
         let input = crate::io::read_mesh(
             &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/snowden_lo.ply"),
