@@ -4,8 +4,8 @@
 use glam::DVec3;
 use meshpyr::mesh::{Mesh, SlotIndex, VertexId};
 use meshpyr::pm::{
-    Legality, Marks, MeshRecords, PmOptions, ProgressiveMesh, half_edge_collapse,
-    is_collapse_legal, vertex_split,
+    Legality, Marks, MeshRecords, PmOptions, ProgressiveMesh, SimplifyTarget, half_edge_collapse,
+    is_collapse_legal, simplify, vertex_split,
 };
 use meshpyr::progress::NoProgress;
 use proptest::prelude::*;
@@ -262,6 +262,32 @@ proptest! {
         while cursor.split() { check(&cursor)?; }
         prop_assert_eq!(cursor.level(), n);
         prop_assert_eq!(MeshRecords::of(cursor.mesh()), finest);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    /// `simplify` decimates the builder's corner table without making a half-edge mesh; its
+    /// result must be the progressive mesh's base level for the same target: the same
+    /// surviving input vertices in the same order and the same triangles.
+    #[test]
+    fn simplify_is_the_progressive_mesh_cut((pos, tris) in random_mesh(), keep in 0usize..40) {
+        let input = meshpyr::mesh::PolygonMesh::from_triangles(pos.clone(), &tris);
+        let built = Mesh::from_polygons(&input).unwrap();
+        let faces = keep.min(built.mesh.n_faces());
+        let cut = simplify(&input, SimplifyTarget::Faces(faces), &PmOptions::default(), &NoProgress).unwrap();
+        let opts = PmOptions { target_faces: faces, ..PmOptions::default() };
+        let pm = ProgressiveMesh::build(&built.mesh, &opts, &NoProgress).unwrap();
+        let n0 = pm.n_base_vertices();
+        let rows: Vec<u32> = pm.pm_to_mesh()[..n0]
+            .iter()
+            .map(|&slot| built.source.vertex_source[slot as usize])
+            .collect();
+        prop_assert_eq!(&cut.source_rows, &rows);
+        let (_, cut_tris) = Mesh::from_polygons(&cut.mesh).unwrap().mesh.to_triangles();
+        prop_assert_eq!(cut_tris, pm.level_triangles(n0));
+        prop_assert!(cut.mesh.n_faces() <= faces.max(pm.n_base_faces()));
     }
 }
 
