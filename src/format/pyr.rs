@@ -496,63 +496,73 @@ pub fn encode(
     sizes.positions += before;
 
     // SPLT: blocks of split records, replayed on the base mesh to code wings as ring indices.
-    let mut replay = FlatReplay::new(&positions[..n_base], &base_tris, pm.splits().len())
-        .map_err(|e| internal(&e.to_string()))?;
-    let mut splt = Vec::with_capacity(pm.splits().len() * (4 + 4 + 3 * width) + 64);
-    let mut payload = Vec::new();
-    for (b, chunk) in pm.splits().chunks(SPLITS_PER_BLOCK as usize).enumerate() {
-        let first = n_base + b * SPLITS_PER_BLOCK as usize;
-        payload.clear();
-        payload.reserve(chunk.len() * (4 + 4 + 3 * width));
-        for (k, s) in chunk.iter().enumerate() {
-            for ahead in [16, 8] {
-                if let Some(t) = chunk.get(k + ahead) {
-                    replay.prefetch(t.survivor, ahead);
+    // The replay is sequential and most of a save; the sections after it do not depend on it,
+    // so they are encoded on another core meanwhile.
+    let encode_splits = || -> Result<(Vec<u8>, SizeReport), FormatError> {
+        let mut sizes = SizeReport::default();
+        let mut replay = FlatReplay::new(&positions[..n_base], &base_tris, pm.splits().len())
+            .map_err(|e| internal(&e.to_string()))?;
+        let mut splt = Vec::with_capacity(pm.splits().len() * (4 + 4 + 3 * width) + 64);
+        let mut payload = Vec::new();
+        for (b, chunk) in pm.splits().chunks(SPLITS_PER_BLOCK as usize).enumerate() {
+            let first = n_base + b * SPLITS_PER_BLOCK as usize;
+            payload.clear();
+            payload.reserve(chunk.len() * (4 + 4 + 3 * width));
+            for (k, s) in chunk.iter().enumerate() {
+                for ahead in [16, 8] {
+                    if let Some(t) = chunk.get(k + ahead) {
+                        replay.prefetch(t.survivor, ahead);
+                    }
                 }
+                put_uvarint(&mut payload, u64::from(s.vertex - 1 - s.survivor));
+                let (il, ir) = replay
+                    .wing_indices(s)
+                    .map_err(|e| internal(&e.to_string()))?;
+                let valence = replay.listed_ring().len();
+                put_uvarint(&mut payload, il.map_or(0, |i| i as u64 + 1));
+                let rc = match (il, ir) {
+                    (_, None) => 0,
+                    (Some(l), Some(r)) => ((r + valence - l) % valence) as u64 + 1,
+                    (None, Some(r)) => r as u64 + 1,
+                };
+                put_uvarint(&mut payload, rc);
+                replay
+                    .apply_indexed(s.vertex, s.survivor, il, ir)
+                    .map_err(|e| internal(&e.to_string()))?;
             }
-            put_uvarint(&mut payload, u64::from(s.vertex - 1 - s.survivor));
-            let (il, ir) = replay
-                .wing_indices(s)
-                .map_err(|e| internal(&e.to_string()))?;
-            let valence = replay.listed_ring().len();
-            put_uvarint(&mut payload, il.map_or(0, |i| i as u64 + 1));
-            let rc = match (il, ir) {
-                (_, None) => 0,
-                (Some(l), Some(r)) => ((r + valence - l) % valence) as u64 + 1,
-                (None, Some(r)) => r as u64 + 1,
-            };
-            put_uvarint(&mut payload, rc);
-            replay
-                .apply_indexed(s.vertex, s.survivor, il, ir)
-                .map_err(|e| internal(&e.to_string()))?;
+            sizes.pm_connectivity += payload.len() + 12;
+            for &p in &positions[first..first + chunk.len()] {
+                put_position(&mut payload, p, f32);
+            }
+            sizes.positions += chunk.len() * 3 * width;
+            let errs = &pm.split_errors()[first - n_base..first - n_base + chunk.len()];
+            for e in errs {
+                payload.extend_from_slice(&e.to_le_bytes());
+            }
+            sizes.split_errors += errs.len() * 4;
+            splt.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
+            splt.extend_from_slice(&(payload.len() as u32).to_le_bytes());
+            splt.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
+            splt.extend_from_slice(&payload);
         }
-        sizes.pm_connectivity += payload.len() + 12;
-        for &p in &positions[first..first + chunk.len()] {
-            put_position(&mut payload, p, f32);
+        Ok((splt, sizes))
+    };
+    let encode_rest = || {
+        let mut isol = Vec::new();
+        for &p in &positions[n_fin..] {
+            put_position(&mut isol, p, f32);
         }
-        sizes.positions += chunk.len() * 3 * width;
-        let errs = &pm.split_errors()[first - n_base..first - n_base + chunk.len()];
-        for e in errs {
-            payload.extend_from_slice(&e.to_le_bytes());
+        let mut ordr = Vec::with_capacity(n_total * 3);
+        for &s in pm.pm_to_mesh() {
+            put_uvarint(&mut ordr, u64::from(s));
         }
-        sizes.split_errors += errs.len() * 4;
-        splt.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
-        splt.extend_from_slice(&(payload.len() as u32).to_le_bytes());
-        splt.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
-        splt.extend_from_slice(&payload);
-    }
-
-    let mut isol = Vec::new();
-    for &p in &positions[n_fin..] {
-        put_position(&mut isol, p, f32);
-    }
-    sizes.positions += isol.len();
-    let mut ordr = Vec::with_capacity(n_total * 3);
-    for &s in pm.pm_to_mesh() {
-        put_uvarint(&mut ordr, u64::from(s));
-    }
-    let poly = encode_polygons(input);
-    let attr = encode_attributes(input);
+        (isol, ordr, encode_polygons(input), encode_attributes(input))
+    };
+    let (splits, (isol, ordr, poly, attr)) = rayon::join(encode_splits, encode_rest);
+    let (splt, split_sizes) = splits?;
+    sizes.pm_connectivity += split_sizes.pm_connectivity;
+    sizes.positions += split_sizes.positions + isol.len();
+    sizes.split_errors += split_sizes.split_errors;
     sizes.trailing = ordr.len() + poly.len() + attr.len();
 
     let sections = [
@@ -1063,10 +1073,91 @@ fn decode_polygons(
     Ok(())
 }
 
+/// What [`decode`] reads besides the hierarchy: the input's vertex order, its polygons and
+/// attributes (positions still zero: they come from the hierarchy), and, for a clean triangle
+/// input, its faces in PM indices with their canonical sorted order.
+struct InputSide {
+    pm_to_mesh: Vec<u32>,
+    mesh_to_pm: Vec<u32>,
+    input: PolygonMesh,
+    clean_faces: Option<CleanFaces>,
+}
+
+/// The faces of a clean triangle input in PM indices, in the input's order and sorted
+/// canonically (see [`clean_triangle_faces`]).
+struct CleanFaces {
+    faces: Vec<[u32; 3]>,
+    sorted: Vec<[u32; 3]>,
+}
+
+fn decode_input_side(c: &Container<'_>, meta: &Meta) -> Result<InputSide, FormatError> {
+    let n_total = meta.n_vertices as usize;
+    let mut r = required(c, ORDR)?;
+    if n_total > r.remaining() {
+        return Err(FormatError::Truncated {
+            offset: r.offset(),
+            what: "vertex order".into(),
+        });
+    }
+    let mut pm_to_mesh = Vec::with_capacity(n_total);
+    for _ in 0..n_total {
+        pm_to_mesh.push(r.count(n_total as u64, "vertex order")? as u32);
+    }
+    if !r.is_empty() {
+        return Err(corrupt(r.offset(), "trailing bytes in ORDR"));
+    }
+    let n_input = meta.n_input_vertices as usize;
+    let mut input = PolygonMesh::new();
+    input.positions = vec![DVec3::ZERO; n_input];
+    let mut seen = vec![false; n_input];
+    for &s in &pm_to_mesh {
+        if let Some(x) = seen.get_mut(s as usize) {
+            *x = true;
+        }
+    }
+    if seen.iter().any(|&x| !x) {
+        return Err(corrupt(0, "vertex order does not cover the input vertices"));
+    }
+    let mut r = required(c, POLY)?;
+    decode_polygons(&mut r, meta.n_input_faces, n_input, &mut input)?;
+    let mut r = required(c, ATTR)?;
+    decode_attributes(&mut r, &mut input)?;
+    let mut mesh_to_pm = vec![u32::MAX; n_total];
+    for (i, &s) in pm_to_mesh.iter().enumerate() {
+        if let Some(m) = mesh_to_pm.get_mut(s as usize) {
+            *m = i as u32;
+        }
+    }
+    let clean_faces = clean_triangle_faces(&input, &mesh_to_pm, n_total);
+    Ok(InputSide {
+        pm_to_mesh,
+        mesh_to_pm,
+        input,
+        clean_faces,
+    })
+}
+
 /// Decodes a complete file: the hierarchy (validated), the user's mesh, and the build options.
 /// Truncated or damaged files are errors (use [`read_level`] for the progressive prefix).
 pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
-    let (c, p) = read_progressive(bytes, None)?;
+    // The replay of the splits is sequential and about half of a load; the input's side
+    // (vertex order, polygons, attributes, its faces in canonical order) does not depend on it,
+    // so it is decoded on another core meanwhile. Errors come in the order a sequential reader
+    // meets them: the progressive part, ISOL, then the input's side.
+    let header = Container::parse(bytes).and_then(|c| {
+        check_version(&c)?;
+        Ok((read_meta(&c)?, c))
+    });
+    let (progressive, input_side) = rayon::join(
+        || read_progressive(bytes, None),
+        || {
+            header
+                .as_ref()
+                .ok()
+                .map(|(meta, c)| decode_input_side(c, meta))
+        },
+    );
+    let (c, p) = progressive?;
     if p.truncated {
         return Err(FormatError::Truncated {
             offset: bytes.len() as u64,
@@ -1093,52 +1184,27 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
     if !r.is_empty() {
         return Err(corrupt(r.offset(), "trailing bytes in ISOL"));
     }
-    let mut r = required(&c, ORDR)?;
-    if n_total > r.remaining() {
-        return Err(FormatError::Truncated {
-            offset: r.offset(),
-            what: "vertex order".into(),
-        });
-    }
-    let mut pm_to_mesh = Vec::with_capacity(n_total);
-    for _ in 0..n_total {
-        pm_to_mesh.push(r.count(n_total as u64, "vertex order")? as u32);
-    }
-    if !r.is_empty() {
-        return Err(corrupt(r.offset(), "trailing bytes in ORDR"));
-    }
-    let n_input = meta.n_input_vertices as usize;
-    let mut input = PolygonMesh::new();
-    input.positions = vec![DVec3::ZERO; n_input];
-    let mut seen = vec![false; n_input];
+    // `read_progressive` parsed the same header, so the input's side ran.
+    let InputSide {
+        pm_to_mesh,
+        mesh_to_pm,
+        mut input,
+        clean_faces,
+    } = input_side.ok_or_else(|| corrupt(0, "unreadable header"))??;
+    // Vertex copies the builder made (order entries past the input's vertices) have no row.
     for (i, &s) in pm_to_mesh.iter().enumerate() {
         if let Some(p) = input.positions.get_mut(s as usize) {
             *p = positions[i];
-            seen[s as usize] = true;
         }
     }
-    if seen.iter().any(|&x| !x) {
-        return Err(corrupt(0, "vertex order does not cover the input vertices"));
-    }
-    let mut r = required(&c, POLY)?;
-    decode_polygons(&mut r, meta.n_input_faces, n_input, &mut input)?;
-    let mut r = required(&c, ATTR)?;
-    decode_attributes(&mut r, &mut input)?;
     input
         .check()
         .map_err(|e| corrupt(0, format!("restored mesh: {e}")))?;
-
-    let mut mesh_to_pm = vec![u32::MAX; n_total];
-    for (i, &s) in pm_to_mesh.iter().enumerate() {
-        if let Some(m) = mesh_to_pm.get_mut(s as usize) {
-            *m = i as u32;
-        }
-    }
     // The finest faces, checked to be exactly what the splits rebuild: read off a clean
     // triangle input, else from the builder's repaired mesh.
     let replayed = replay.canonical_faces();
-    let (faces, built) = match clean_triangle_faces(&input, &mesh_to_pm, n_total, &replayed) {
-        Some(faces) => (faces, None),
+    let (faces, built) = match clean_faces.filter(|c| c.sorted == replayed) {
+        Some(clean) => (clean.faces, None),
         None => {
             let (faces, built) = built_faces(&input, &mesh_to_pm, n_total, &positions)?;
             if canonical_sorted(&faces, n_total) != replayed {
@@ -1180,18 +1246,17 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
 }
 
 /// The finest faces in PM indices read straight off the input, when the input is a clean
-/// triangle mesh: every polygon a triangle of three distinct vertices, no vertex copies, and
-/// the triangles (through the vertex order) exactly the faces the splits rebuilt. Those form a
-/// consistently oriented manifold without multi-edges, on which `Mesh::from_polygons` repairs
-/// nothing, keeps vertex slots and face order and starts each face at its first corner, so
-/// this is what it would give, without building the half-edge mesh (most of a load's time on
-/// big meshes). `None` sends the caller to the builder.
+/// triangle mesh (every polygon a triangle of three distinct vertices, no vertex copies), with
+/// the same faces canonically sorted. When those are exactly the faces the splits rebuilt, they
+/// form a consistently oriented manifold without multi-edges, on which `Mesh::from_polygons`
+/// repairs nothing, keeps vertex slots and face order and starts each face at its first
+/// corner, so the faces are what it would give, without building the half-edge mesh (most of
+/// a load's time on big meshes). `None`, or a mismatch, sends the caller to the builder.
 fn clean_triangle_faces(
     input: &PolygonMesh,
     mesh_to_pm: &[u32],
     n_total: usize,
-    replayed_canonical: &[[u32; 3]],
-) -> Option<Vec<[u32; 3]>> {
+) -> Option<CleanFaces> {
     if n_total != input.positions.len() || input.face_indices.len() != 3 * input.n_faces() {
         return None;
     }
@@ -1204,7 +1269,7 @@ fn clean_triangle_faces(
         faces.push(f);
     }
     let sorted = canonical_sorted(&faces, n_total);
-    (sorted == replayed_canonical).then_some(faces)
+    Some(CleanFaces { faces, sorted })
 }
 
 /// The finest faces in PM indices from the repaired half-edge mesh of `input` (any polygons,
