@@ -16,9 +16,11 @@
 //! time goes into cache misses on the records a legality test walks. The decimator therefore
 //! works on a flat corner table instead of the slotmap half-edge [`Mesh`]: triangle `t` owns
 //! corners `3t..3t+3`, half-edge `c` runs from corner `c` to the next corner of its triangle
-//! (`next`/`prev` are arithmetic), and each corner stores its vertex and its half-edge's twin. Boundary half-edges,
-//! which have no corner, get ids after the corners; they only ever need their twin. A ring walk
-//! then reads two `u32` arrays instead of 24-byte records plus slotmap versions.
+//! (`next`/`prev` are arithmetic), and each corner stores its vertex and its half-edge's twin,
+//! so a face is 24 contiguous bytes. Boundary half-edges, which have no corner, get ids after
+//! the corners; they only ever need their twin. Each vertex's position and state share one
+//! 32-byte record, and the loop prefetches the records of the candidates a few places ahead
+//! ([`super::prefetch`]).
 //!
 //! **Same result as on the half-edge mesh.** Half-edge ids keep the order of the source mesh's
 //! half-edge slots ([`FlatMesh::from_mesh`]; for the builder's own output ids *are* the slots),
@@ -64,8 +66,9 @@ struct Vertex {
     position: DVec3,
     /// A live corner at the vertex, `NONE` for isolated and removed vertices.
     corner: u32,
-    /// Number of out-going half-edges (= neighbours) in the low bits, and the `BOUNDARY` and
-    /// `LOCKED` flags. Whether a vertex lies on a boundary never changes: a boundary vertex
+    /// Number of out-going half-edges (= neighbours) in the low 30 bits (a mesh has fewer than
+    /// 2^30 triangles around one vertex in any realistic input; the builder caps meshes at
+    /// 1.4e9 triangles), and the `BOUNDARY` and `LOCKED` flags. Whether a vertex lies on a boundary never changes: a boundary vertex
     /// only slides along its boundary and the link condition keeps the surface manifold.
     valence_flags: u32,
 }
