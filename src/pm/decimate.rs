@@ -613,13 +613,9 @@ fn initial_quadrics(mesh: &FlatMesh, boundary_weight: f64) -> Vec<Quadric> {
     for t in mesh.corners.chunks_exact(3) {
         let [a, b, c] = [t[0].vertex, t[1].vertex, t[2].vertex];
         let (pa, pb, pc) = (mesh.position(a), mesh.position(b), mesh.position(c));
-        let nrm = (pb - pa).cross(pc - pa);
-        let len = nrm.length();
-        if len.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || !len.is_finite() {
+        let Some(fq) = Quadric::of_triangle(pa, pb, pc) else {
             continue; // zero-area faces carry no plane
-        }
-        let area = 0.5 * len;
-        let fq = Quadric::from_plane(nrm / len, pa, area, area);
+        };
         for x in [a, b, c] {
             q[x as usize].add(&fq);
         }
@@ -780,17 +776,31 @@ pub(crate) fn decimate(
         }
         locked_list.clear();
         progress.update((start_faces - mesh.n_faces) as f64 / work as f64);
-        if collapses.len() == before {
-            if !use_goal || error_cut.is_infinite() || error_cut >= params.max_error_sq {
-                break; // a full pass found no legal collapse
-            }
-            use_goal = false;
-        } else {
-            use_goal = true;
+        if pass_ended(collapses.len() > before, &mut use_goal, error_cut, params) {
+            break;
         }
     }
     progress.update(1.0);
     (collapses, mesh)
+}
+
+/// After a pass: whether decimation is over, i.e. a full pass (no cost cut below the error
+/// bound) found no legal collapse. A pass with a cut that found nothing is retried without it.
+pub(crate) fn pass_ended(
+    collapsed: bool,
+    use_goal: &mut bool,
+    error_cut: f64,
+    params: &DecimateParams,
+) -> bool {
+    if collapsed {
+        *use_goal = true;
+        return false;
+    }
+    if !*use_goal || error_cut.is_infinite() || error_cut >= params.max_error_sq {
+        return true;
+    }
+    *use_goal = false;
+    false
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 use super::collapse::{
     Marks, half_edge_collapse, is_collapse_geometrically_legal, is_collapse_topologically_legal,
 };
-use super::decimate::{Collapse, DecimateParams};
+use super::decimate::{Collapse, DecimateParams, pass_ended};
 use super::quadric::Quadric;
 use crate::mesh::{HalfedgeId, Mesh, SlotIndex};
 use crate::progress::Progress;
@@ -44,13 +44,9 @@ fn initial_quadrics(mesh: &Mesh, boundary_weight: f64) -> Vec<Quadric> {
     for f in mesh.faces() {
         let [a, b, c] = mesh.face_vertices(f);
         let (pa, pb, pc) = (mesh.position(a), mesh.position(b), mesh.position(c));
-        let nrm = (pb - pa).cross(pc - pa);
-        let len = nrm.length();
-        if len.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || !len.is_finite() {
+        let Some(fq) = Quadric::of_triangle(pa, pb, pc) else {
             continue; // zero-area faces carry no plane
-        }
-        let area = 0.5 * len;
-        let fq = Quadric::from_plane(nrm / len, pa, area, area);
+        };
         for x in [a, b, c] {
             q[x.slot()].add(&fq);
         }
@@ -218,13 +214,8 @@ pub(crate) fn decimate(
         }
         locked_list.clear();
         progress.update((start_faces - mesh.n_faces()) as f64 / work as f64);
-        if collapses.len() == before {
-            if !use_goal || error_cut.is_infinite() || error_cut >= params.max_error_sq {
-                break; // a full pass found no legal collapse
-            }
-            use_goal = false;
-        } else {
-            use_goal = true;
+        if pass_ended(collapses.len() > before, &mut use_goal, error_cut, params) {
+            break;
         }
     }
     progress.update(1.0);

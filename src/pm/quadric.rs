@@ -40,6 +40,19 @@ impl Quadric {
         }
     }
 
+    /// The area-weighted plane quadric of the triangle `(pa, pb, pc)` (counting its area towards
+    /// the normalisation), or `None` for a zero-area or non-finite triangle, which has no plane.
+    #[inline]
+    pub fn of_triangle(pa: DVec3, pb: DVec3, pc: DVec3) -> Option<Quadric> {
+        let nrm = (pb - pa).cross(pc - pa);
+        let len = nrm.length();
+        if len.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || !len.is_finite() {
+            return None;
+        }
+        let area = 0.5 * len;
+        Some(Quadric::from_plane(nrm / len, pa, area, area))
+    }
+
     /// Componentwise sum.
     #[inline]
     pub fn add(&mut self, o: &Quadric) {
