@@ -229,6 +229,36 @@ fn local_width_and_bisection_run_and_are_deterministic() {
 }
 
 #[test]
+fn results_do_not_depend_on_the_thread_count() {
+    // Four levels of the mushroom reach 57k vertices, past the sizes where assembly and the
+    // sparse products split over threads; the mesh build runs beside the solve.
+    let coarse = load("mushroom_quad");
+    for local_width in [false, true] {
+        let opts = SubdivOptions {
+            levels: 4,
+            local_width,
+            ..Default::default()
+        };
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| run(&coarse, opts.clone()))
+        };
+        let bits = |m: &Mesh| {
+            m.positions()
+                .iter()
+                .flat_map(|p| p.to_array().map(f64::to_bits))
+                .collect::<Vec<_>>()
+        };
+        let one = on(1);
+        assert_eq!(bits(&one), bits(&on(3)));
+        assert_eq!(one.n_faces(), coarse.n_faces() * 256);
+    }
+}
+
+#[test]
 fn bad_options_and_inputs_are_typed_errors() {
     let coarse = load("cone20");
     let err = |opts: SubdivOptions| subdivide(&coarse, &opts, &NoProgress).unwrap_err();

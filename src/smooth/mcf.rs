@@ -35,9 +35,7 @@ use super::{Boundary, SmoothError};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use crate::subdiv::cascadic::solve_exact;
-use crate::subdiv::fem::{
-    clamp_negative_weights, cotangent_stiffness, lumped_mass, mass_rhs, system_matrix,
-};
+use crate::subdiv::fem::{clamp_negative_weights, mass_and_stiffness, mass_rhs, system_matrix};
 use glam::DVec3;
 
 /// Relative residual the CG fallback (and the Cholesky check) must reach. Not tighter: after
@@ -97,8 +95,7 @@ pub fn implicit_mcf(
         .map(|v| options.boundary == Boundary::Fixed && mesh.is_boundary_vertex(v))
         .collect();
     for it in 0..options.iterations {
-        let mass = lumped_mass(&triangles, &x);
-        let mut stiffness = cotangent_stiffness(&triangles, &x, None);
+        let (mass, mut stiffness) = mass_and_stiffness(&triangles, &x, None);
         clamp_negative_weights(&mut stiffness);
         let mut a = system_matrix(&mass, stiffness, dt);
         let mut b = mass_rhs(&mass, &x);

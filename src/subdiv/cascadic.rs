@@ -20,12 +20,18 @@
 //! length of the edges at each vertex), `α_k = (c · I h_{k−1})²/2` per vertex, averaged per
 //! triangle, and h is diffused with the same matrix: `(M + L^α)[x_k, h_k] = M [I x_0, I h_0]`.
 //!
-//! Everything runs in a fixed sequential order, so results are bit-for-bit reproducible.
+//! Results are bit-for-bit reproducible on any number of threads: every sum runs in a fixed
+//! order, and what runs in parallel is independent work. With quadrisection, a level's
+//! half-edge mesh (needed only by the next refinement and the output) is built on one core
+//! while the level's system is assembled and solved from flat arrays on the other.
 
 use super::fem::{
-    SymmetricCsr, cotangent_stiffness, identity_rows, lumped_mass, mass_rhs, system_matrix,
+    SymmetricCsr, cotangent_stiffness, identity_rows, lumped_mass, mass_and_stiffness, mass_rhs,
+    system_matrix,
 };
-use super::refine::{Marking, Refined, bisect, initial_marking, quadrisect};
+use super::refine::{
+    Marking, Prolongation, bisect, build_quadrisection, initial_marking, quadrisection_parts,
+};
 use super::{Refinement, Solver, SubdivError, SubdivOptions, Subdivision, compact, default_beta};
 use crate::mesh::{Mesh, SlotIndex};
 use crate::progress::Progress;
@@ -326,67 +332,80 @@ pub fn subdivide_mcm(
             SubdivError::NotManifold { .. } => SubdivError::NotManifold { level },
             e => e,
         };
-        let Refined {
-            mesh: mut fine,
-            triangles,
-            prolongation,
-        } = match &marking {
-            None => quadrisect(&current).map_err(with_level)?,
-            Some(m) => {
-                let (r, next) = bisect(&current, m).map_err(with_level)?;
-                marking = Some(next);
-                r
+        let m_l = steps[level - 1];
+        // The level's solve needs only flat arrays: triangles, prolongation and positions.
+        let mut solve_level = |triangles: &[[u32; 3]],
+                               positions: &[DVec3],
+                               prolongation: &Prolongation|
+         -> Result<(usize, f64, Vec<DVec3>), String> {
+            x0 = prolongation.apply(&x0);
+            if options.local_width {
+                let mass = lumped_mass(triangles, positions);
+                let pinned = identity_rows(&mass);
+                h_init = prolongation.apply(&h_init);
+                h_cur = prolongation.apply(&h_cur);
+                let alpha_v: Vec<f64> = h_cur.iter().map(|h| 0.5 * (c * h) * (c * h)).collect();
+                let coef: Vec<f64> = triangles
+                    .iter()
+                    .map(|t| t.iter().map(|&v| alpha_v[v as usize]).sum::<f64>() / 3.0)
+                    .collect();
+                let stiffness = cotangent_stiffness(triangles, positions, Some(&coef));
+                let a = system_matrix(&mass, stiffness, 1.0);
+                let b: Vec<[f64; 4]> = (0..positions.len())
+                    .map(|i| {
+                        let w = if pinned[i] { 1.0 } else { mass[i] };
+                        let p = x0[i] * w;
+                        [p.x, p.y, p.z, h_init[i] * w]
+                    })
+                    .collect();
+                let mut x: Vec<[f64; 4]> = positions
+                    .iter()
+                    .zip(&h_cur)
+                    .map(|(p, &h)| [p.x, p.y, p.z, h])
+                    .collect();
+                let taken = run_solver(options, &a, &b, &mut x, m_l)?;
+                let residual = relative_residual(&a, &b, &x);
+                h_cur = x.iter().map(|v| v[3]).collect();
+                Ok((
+                    taken,
+                    residual,
+                    x.iter().map(|v| DVec3::new(v[0], v[1], v[2])).collect(),
+                ))
+            } else {
+                let (mass, stiffness) = mass_and_stiffness(triangles, positions, None);
+                let a = system_matrix(&mass, stiffness, alpha);
+                let b = mass_rhs(&mass, &x0);
+                let mut x: Vec<[f64; 3]> = positions.iter().map(|p| p.to_array()).collect();
+                let taken = run_solver(options, &a, &b, &mut x, m_l)?;
+                let residual = relative_residual(&a, &b, &x);
+                Ok((
+                    taken,
+                    residual,
+                    x.iter().map(|&v| DVec3::from_array(v)).collect(),
+                ))
             }
         };
-        x0 = prolongation.apply(&x0);
-        let positions = fine.positions();
-        let mass = lumped_mass(&triangles, &positions);
-        let pinned = identity_rows(&mass);
-        let m_l = steps[level - 1];
-        let fail = |why: String| SubdivError::SolverFailed { level, why };
-        let (taken, residual, solved): (usize, f64, Vec<DVec3>) = if options.local_width {
-            h_init = prolongation.apply(&h_init);
-            h_cur = prolongation.apply(&h_cur);
-            let alpha_v: Vec<f64> = h_cur.iter().map(|h| 0.5 * (c * h) * (c * h)).collect();
-            let coef: Vec<f64> = triangles
-                .iter()
-                .map(|t| t.iter().map(|&v| alpha_v[v as usize]).sum::<f64>() / 3.0)
-                .collect();
-            let stiffness = cotangent_stiffness(&triangles, &positions, Some(&coef));
-            let a = system_matrix(&mass, stiffness, 1.0);
-            let b: Vec<[f64; 4]> = (0..positions.len())
-                .map(|i| {
-                    let w = if pinned[i] { 1.0 } else { mass[i] };
-                    let p = x0[i] * w;
-                    [p.x, p.y, p.z, h_init[i] * w]
-                })
-                .collect();
-            let mut x: Vec<[f64; 4]> = positions
-                .iter()
-                .zip(&h_cur)
-                .map(|(p, &h)| [p.x, p.y, p.z, h])
-                .collect();
-            let taken = run_solver(options, &a, &b, &mut x, m_l).map_err(fail)?;
-            let residual = relative_residual(&a, &b, &x);
-            h_cur = x.iter().map(|v| v[3]).collect();
-            (
-                taken,
-                residual,
-                x.iter().map(|v| DVec3::new(v[0], v[1], v[2])).collect(),
-            )
-        } else {
-            let stiffness = cotangent_stiffness(&triangles, &positions, None);
-            let a = system_matrix(&mass, stiffness, alpha);
-            let b = mass_rhs(&mass, &x0);
-            let mut x: Vec<[f64; 3]> = positions.iter().map(|p| p.to_array()).collect();
-            let taken = run_solver(options, &a, &b, &mut x, m_l).map_err(fail)?;
-            let residual = relative_residual(&a, &b, &x);
-            (
-                taken,
-                residual,
-                x.iter().map(|&v| DVec3::from_array(v)).collect(),
-            )
+        let (mut fine, solution) = match &marking {
+            None => {
+                // The half-edge mesh of the new level is needed only for the next refinement
+                // and the output, so it is built on another core while this level solves.
+                let (topo, prolongation, positions) = quadrisection_parts(&current);
+                let (fine, solution) = rayon::join(
+                    || build_quadrisection(&current, &topo, &positions),
+                    || solve_level(&topo.triangles, &positions, &prolongation),
+                );
+                (fine.map_err(with_level)?, solution)
+            }
+            Some(m) => {
+                let (refined, next) = bisect(&current, m).map_err(with_level)?;
+                marking = Some(next);
+                let positions = refined.mesh.positions();
+                let solution = solve_level(&refined.triangles, &positions, &refined.prolongation);
+                (refined.mesh, solution)
+            }
         };
+        let fail = |why: String| SubdivError::SolverFailed { level, why };
+        let (taken, residual, solved) = solution.map_err(fail)?;
         if solved.iter().any(|p| !p.is_finite()) {
             return Err(fail("non-finite positions".to_string()));
         }

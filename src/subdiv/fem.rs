@@ -13,14 +13,13 @@
 //! Triangles with area below `1e-12·(longest edge)²` contribute nothing: their cotangents are
 //! meaningless and would make the element matrix indefinite.
 
-use crate::mesh::cotangent;
 use glam::DVec3;
 
 /// Relative area below which a triangle is skipped (area < ε·ℓ_max²).
 pub const DEGENERATE_AREA: f64 = 1e-12;
 
 /// Below this many rows the matrix work stays on one thread (rayon's overhead would dominate).
-const PARALLEL_ROWS: usize = 32_768;
+const PARALLEL_ROWS: usize = 8192;
 /// Rows per parallel task.
 const ROW_CHUNK: usize = 4096;
 
@@ -101,6 +100,35 @@ fn is_degenerate(a: DVec3, b: DVec3, c: DVec3, area: f64) -> bool {
     area.is_nan() || area <= DEGENERATE_AREA * l2
 }
 
+/// `½·a·cot` of the angle opposite each edge `(j, j+1)` of triangle `v`, and the triangle's
+/// area; both zero for a degenerate triangle, which counts for neither stiffness nor mass.
+///
+/// The three corners share `|a × b| = 2·area`, so one cross product and one square root give
+/// all three cotangents (`cot = a·b / 2A`), where calling [`cotangent`] per corner would take
+/// four of each; the clamp at ±1e5 is the same as [`cotangent`]'s.
+#[inline]
+fn half_cotangents(v: [DVec3; 3], coef: f64) -> ([f64; 3], f64) {
+    const MAX_COT: f64 = 1e5;
+    let (e0, e1, e2) = (v[1] - v[0], v[2] - v[1], v[0] - v[2]);
+    let twice_area = e0.cross(v[2] - v[0]).length();
+    let area = 0.5 * twice_area;
+    if is_degenerate(v[0], v[1], v[2], area) {
+        return ([0.0; 3], 0.0);
+    }
+    // Cosine terms at the corner opposite edge j: corner 2 for (0,1), 0 for (1,2), 1 for (2,0).
+    let cos = [-e2.dot(e1), -e0.dot(e2), -e1.dot(e0)];
+    let half = 0.5 * coef;
+    let w = cos.map(|c| {
+        let cot = if twice_area <= c.abs() / MAX_COT {
+            if c >= 0.0 { MAX_COT } else { -MAX_COT }
+        } else {
+            c / twice_area
+        };
+        half * cot
+    });
+    (w, area)
+}
+
 /// Cotangent stiffness matrix L (positive semi-definite, rows sum to zero) of `triangles`
 /// indexing `positions`, with optional per-triangle coefficients. Rows are sorted by column
 /// after the diagonal.
@@ -115,29 +143,49 @@ pub fn cotangent_stiffness(
     positions: &[DVec3],
     face_coefficient: Option<&[f64]>,
 ) -> SymmetricCsr {
+    assemble(triangles, positions, face_coefficient, false).1
+}
+
+/// [`lumped_mass`] and [`cotangent_stiffness`] together, the same bits as calling both, from
+/// one pass over the triangles' geometry instead of two.
+pub fn mass_and_stiffness(
+    triangles: &[[u32; 3]],
+    positions: &[DVec3],
+    face_coefficient: Option<&[f64]>,
+) -> (Vec<f64>, SymmetricCsr) {
+    assemble(triangles, positions, face_coefficient, true)
+}
+
+fn assemble(
+    triangles: &[[u32; 3]],
+    positions: &[DVec3],
+    face_coefficient: Option<&[f64]>,
+    with_mass: bool,
+) -> (Vec<f64>, SymmetricCsr) {
     use rayon::prelude::*;
     use std::sync::atomic::{AtomicU64, Ordering};
     let n = positions.len();
-    // w[j]: ½ a_T cot of the angle at corner j+2, which is opposite edge (j, j+1).
+    // w[j]: ½ a_T cot of the angle at corner j+2, which is opposite edge (j, j+1); then area.
     let weights_of = |ti: usize| {
-        let t = triangles[ti];
-        let v = t.map(|i| positions[i as usize]);
-        let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
         let coef = face_coefficient.map_or(1.0, |c| c[ti]);
-        let mut w = [0.0; 3];
-        if !is_degenerate(v[0], v[1], v[2], area) {
-            for (j, wj) in w.iter_mut().enumerate() {
-                let o = v[(j + 2) % 3];
-                *wj = 0.5 * coef * cotangent(v[j] - o, v[(j + 1) % 3] - o);
-            }
-        }
-        w
+        let (w, area) = half_cotangents(triangles[ti].map(|i| positions[i as usize]), coef);
+        [w[0], w[1], w[2], area]
     };
-    let tri_weights: Vec<[f64; 3]> = (0..triangles.len())
+    let tri_weights: Vec<[f64; 4]> = (0..triangles.len())
         .into_par_iter()
         .with_min_len(PARALLEL_ROWS)
         .map(weights_of)
         .collect();
+    let mut mass = Vec::new();
+    if with_mass {
+        // Triangle order, as `lumped_mass` sums (degenerate triangles add a zero area).
+        mass = vec![0.0; n];
+        for (t, w) in triangles.iter().zip(&tri_weights) {
+            for &i in t {
+                mass[i as usize] += w[3] / 3.0;
+            }
+        }
+    }
     // Every directed entry is the key `col << 32 | 3t + j`: its column and the corner whose
     // weight it takes, so sorting a row orders it by column and, within a column, by
     // triangle — the order the terms are summed in.
@@ -260,11 +308,14 @@ pub fn cotangent_stiffness(
                 val[diag_at] = diag;
             }
         });
-    SymmetricCsr {
-        row_start,
-        col,
-        val,
-    }
+    (
+        mass,
+        SymmetricCsr {
+            row_start,
+            col,
+            val,
+        },
+    )
 }
 
 /// Splits `keys` at row boundaries (`fill`) into pieces of about `ROW_CHUNK` rows, as
@@ -350,6 +401,7 @@ pub fn mass_rhs(mass: &[f64], x: &[DVec3]) -> Vec<[f64; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::cotangent;
 
     /// The former sequential scatter-and-sort assembly, kept as an oracle: cotangent stiffness matrix L (positive semi-definite, rows sum to zero) of `triangles`
     /// indexing `positions`, with optional per-triangle coefficients. Rows are sorted by column
@@ -374,18 +426,8 @@ mod tests {
         // w[j]: ½ a_T cot of the angle at corner j+2, which is opposite edge (j, j+1). Computed per
         // triangle independently (in parallel on big meshes; same bits either way).
         let weights_of = |ti: usize| {
-            let t = triangles[ti];
-            let v = t.map(|i| positions[i as usize]);
-            let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
             let coef = face_coefficient.map_or(1.0, |c| c[ti]);
-            let mut w = [0.0; 3];
-            if !is_degenerate(v[0], v[1], v[2], area) {
-                for (j, wj) in w.iter_mut().enumerate() {
-                    let o = v[(j + 2) % 3];
-                    *wj = 0.5 * coef * cotangent(v[j] - o, v[(j + 1) % 3] - o);
-                }
-            }
-            w
+            half_cotangents(triangles[ti].map(|i| positions[i as usize]), coef).0
         };
         let tri_weights: Vec<[f64; 3]> = if triangles.len() < PARALLEL_ROWS {
             (0..triangles.len()).map(weights_of).collect()
@@ -550,6 +592,39 @@ mod tests {
     }
 
     #[test]
+    fn shared_area_cotangents_match_the_per_corner_ones() {
+        // Acute, obtuse, right, needle (clamped) and degenerate triangles.
+        let tris = [
+            [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.3, 0.8, 0.1]],
+            [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.05, 0.0]],
+            [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0]],
+            [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 1e-7, 0.0]],
+            [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
+            [[0.2, -1.0, 3.0], [-0.7, 0.4, 2.5], [1.1, 0.9, -0.4]],
+        ];
+        for t in tris {
+            let v = t.map(DVec3::from_array);
+            let (w, area) = half_cotangents(v, 1.5);
+            let exact = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+            let degenerate = is_degenerate(v[0], v[1], v[2], exact);
+            assert_eq!(area, if degenerate { 0.0 } else { exact });
+            for j in 0..3 {
+                let o = v[(j + 2) % 3];
+                let expect = if degenerate {
+                    0.0
+                } else {
+                    0.75 * cotangent(v[j] - o, v[(j + 1) % 3] - o)
+                };
+                assert!(
+                    (w[j] - expect).abs() <= 1e-12 * expect.abs().max(1.0),
+                    "{t:?} corner {j}: {} vs {expect}",
+                    w[j]
+                );
+            }
+        }
+    }
+
+    #[test]
     fn parallel_assembly_matches_the_sequential_oracle_bit_for_bit() {
         // A jittered grid with degenerate, duplicated (non-manifold) and flipped triangles,
         // large enough to take the parallel paths, with and without face coefficients, on 1
@@ -573,6 +648,10 @@ mod tests {
         let bits = |m: &SymmetricCsr| m.val.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
         for c in [None, Some(&coef[..])] {
             let old = scatter_stiffness(&t, &p, c);
+            let (mass, fused) = mass_and_stiffness(&t, &p, c);
+            assert_eq!(bits(&fused), bits(&old));
+            let mass_bits = |m: &[f64]| m.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+            assert_eq!(mass_bits(&mass), mass_bits(&lumped_mass(&t, &p)));
             for threads in [1, 3] {
                 let new = rayon::ThreadPoolBuilder::new()
                     .num_threads(threads)

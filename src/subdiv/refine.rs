@@ -277,18 +277,27 @@ pub(crate) fn build(
 /// 1-to-4 quadrisection: every triangle splits into three corner triangles and the midpoint
 /// triangle; new vertices sit at the edge midpoints.
 pub fn quadrisect(mesh: &Mesh) -> Result<Refined, SubdivError> {
-    let topo = quad_topology(mesh);
-    let coarse_pos: Vec<DVec3> = topo.coarse.iter().map(|&v| mesh.position(v)).collect();
-    let prolongation = Prolongation {
-        parents: topo.parents.clone(),
-    };
-    let positions = prolongation.apply(&coarse_pos);
+    let (topo, prolongation, positions) = quadrisection_parts(mesh);
     let mesh = build_quadrisection(mesh, &topo, &positions)?;
     Ok(Refined {
         mesh,
         triangles: topo.triangles,
         prolongation,
     })
+}
+
+/// A quadrisection before its half-edge mesh exists: connectivity, prolongation and the
+/// interpolated positions. Flat arrays are all a finite-element solve on the new level needs,
+/// so [`subdivide_mcm`](super::cascadic::subdivide_mcm) builds the mesh
+/// ([`build_quadrisection`]) while it solves.
+pub(crate) fn quadrisection_parts(mesh: &Mesh) -> (QuadTopology, Prolongation, Vec<DVec3>) {
+    let topo = quad_topology(mesh);
+    let coarse_pos: Vec<DVec3> = topo.coarse.iter().map(|&v| mesh.position(v)).collect();
+    let prolongation = Prolongation {
+        parents: topo.parents.clone(),
+    };
+    let positions = prolongation.apply(&coarse_pos);
+    (topo, prolongation, positions)
 }
 
 /// A compatible initial marking for newest-vertex bisection.
