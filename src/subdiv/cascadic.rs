@@ -327,103 +327,110 @@ pub fn subdivide_mcm(
     let total: f64 = (1..=options.levels).map(|l| growth.powi(l as i32)).sum();
     let mut done = 0.0;
     let mut reports = Vec::with_capacity(options.levels);
-    for level in 1..=options.levels {
-        let with_level = |e: SubdivError| match e {
-            SubdivError::NotManifold { .. } => SubdivError::NotManifold { level },
-            e => e,
-        };
-        let m_l = steps[level - 1];
-        // The level's solve needs only flat arrays: triangles, prolongation and positions.
-        let mut solve_level = |triangles: &[[u32; 3]],
-                               positions: &[DVec3],
-                               prolongation: &Prolongation|
-         -> Result<(usize, f64, Vec<DVec3>), String> {
-            x0 = prolongation.apply(&x0);
-            if options.local_width {
-                let mass = lumped_mass(triangles, positions);
-                let pinned = identity_rows(&mass);
-                h_init = prolongation.apply(&h_init);
-                h_cur = prolongation.apply(&h_cur);
-                let alpha_v: Vec<f64> = h_cur.iter().map(|h| 0.5 * (c * h) * (c * h)).collect();
-                let coef: Vec<f64> = triangles
-                    .iter()
-                    .map(|t| t.iter().map(|&v| alpha_v[v as usize]).sum::<f64>() / 3.0)
-                    .collect();
-                let stiffness = cotangent_stiffness(triangles, positions, Some(&coef));
-                let a = system_matrix(&mass, stiffness, 1.0);
-                let b: Vec<[f64; 4]> = (0..positions.len())
-                    .map(|i| {
-                        let w = if pinned[i] { 1.0 } else { mass[i] };
-                        let p = x0[i] * w;
-                        [p.x, p.y, p.z, h_init[i] * w]
-                    })
-                    .collect();
-                let mut x: Vec<[f64; 4]> = positions
-                    .iter()
-                    .zip(&h_cur)
-                    .map(|(p, &h)| [p.x, p.y, p.z, h])
-                    .collect();
-                let taken = run_solver(options, &a, &b, &mut x, m_l)?;
-                let residual = relative_residual(&a, &b, &x);
-                h_cur = x.iter().map(|v| v[3]).collect();
-                Ok((
-                    taken,
-                    residual,
-                    x.iter().map(|v| DVec3::new(v[0], v[1], v[2])).collect(),
-                ))
-            } else {
-                let (mass, stiffness) = mass_and_stiffness(triangles, positions, None);
-                let a = system_matrix(&mass, stiffness, alpha);
-                let b = mass_rhs(&mass, &x0);
-                let mut x: Vec<[f64; 3]> = positions.iter().map(|p| p.to_array()).collect();
-                let taken = run_solver(options, &a, &b, &mut x, m_l)?;
-                let residual = relative_residual(&a, &b, &x);
-                Ok((
-                    taken,
-                    residual,
-                    x.iter().map(|&v| DVec3::from_array(v)).collect(),
-                ))
+    // One hand-over into rayon's pool for the whole schedule: the joins and parallel loops of
+    // every level then start from a worker, which is far cheaper than each one waking the
+    // pool from outside (measurable on small levels).
+    rayon::scope(|_| -> Result<(), SubdivError> {
+        for level in 1..=options.levels {
+            let with_level = |e: SubdivError| match e {
+                SubdivError::NotManifold { .. } => SubdivError::NotManifold { level },
+                e => e,
+            };
+            let m_l = steps[level - 1];
+            // The level's solve needs only flat arrays: triangles, prolongation and positions.
+            let mut solve_level = |triangles: &[[u32; 3]],
+                                   positions: &[DVec3],
+                                   prolongation: &Prolongation|
+             -> Result<(usize, f64, Vec<DVec3>), String> {
+                x0 = prolongation.apply(&x0);
+                if options.local_width {
+                    let mass = lumped_mass(triangles, positions);
+                    let pinned = identity_rows(&mass);
+                    h_init = prolongation.apply(&h_init);
+                    h_cur = prolongation.apply(&h_cur);
+                    let alpha_v: Vec<f64> = h_cur.iter().map(|h| 0.5 * (c * h) * (c * h)).collect();
+                    let coef: Vec<f64> = triangles
+                        .iter()
+                        .map(|t| t.iter().map(|&v| alpha_v[v as usize]).sum::<f64>() / 3.0)
+                        .collect();
+                    let stiffness = cotangent_stiffness(triangles, positions, Some(&coef));
+                    let a = system_matrix(&mass, stiffness, 1.0);
+                    let b: Vec<[f64; 4]> = (0..positions.len())
+                        .map(|i| {
+                            let w = if pinned[i] { 1.0 } else { mass[i] };
+                            let p = x0[i] * w;
+                            [p.x, p.y, p.z, h_init[i] * w]
+                        })
+                        .collect();
+                    let mut x: Vec<[f64; 4]> = positions
+                        .iter()
+                        .zip(&h_cur)
+                        .map(|(p, &h)| [p.x, p.y, p.z, h])
+                        .collect();
+                    let taken = run_solver(options, &a, &b, &mut x, m_l)?;
+                    let residual = relative_residual(&a, &b, &x);
+                    h_cur = x.iter().map(|v| v[3]).collect();
+                    Ok((
+                        taken,
+                        residual,
+                        x.iter().map(|v| DVec3::new(v[0], v[1], v[2])).collect(),
+                    ))
+                } else {
+                    let (mass, stiffness) = mass_and_stiffness(triangles, positions, None);
+                    let a = system_matrix(&mass, stiffness, alpha);
+                    let b = mass_rhs(&mass, &x0);
+                    let mut x: Vec<[f64; 3]> = positions.iter().map(|p| p.to_array()).collect();
+                    let taken = run_solver(options, &a, &b, &mut x, m_l)?;
+                    let residual = relative_residual(&a, &b, &x);
+                    Ok((
+                        taken,
+                        residual,
+                        x.iter().map(|&v| DVec3::from_array(v)).collect(),
+                    ))
+                }
+            };
+            let (mut fine, solution) = match &marking {
+                None => {
+                    // The half-edge mesh of the new level is needed only for the next refinement
+                    // and the output, so it is built on another core while this level solves.
+                    let (topo, prolongation, positions) = quadrisection_parts(&current);
+                    let (fine, solution) = rayon::join(
+                        || build_quadrisection(&current, &topo, &positions),
+                        || solve_level(&topo.triangles, &positions, &prolongation),
+                    );
+                    (fine.map_err(with_level)?, solution)
+                }
+                Some(m) => {
+                    let (refined, next) = bisect(&current, m).map_err(with_level)?;
+                    marking = Some(next);
+                    let positions = refined.mesh.positions();
+                    let solution =
+                        solve_level(&refined.triangles, &positions, &refined.prolongation);
+                    (refined.mesh, solution)
+                }
+            };
+            let fail = |why: String| SubdivError::SolverFailed { level, why };
+            let (taken, residual, solved) = solution.map_err(fail)?;
+            if solved.iter().any(|p| !p.is_finite()) {
+                return Err(fail("non-finite positions".to_string()));
             }
-        };
-        let (mut fine, solution) = match &marking {
-            None => {
-                // The half-edge mesh of the new level is needed only for the next refinement
-                // and the output, so it is built on another core while this level solves.
-                let (topo, prolongation, positions) = quadrisection_parts(&current);
-                let (fine, solution) = rayon::join(
-                    || build_quadrisection(&current, &topo, &positions),
-                    || solve_level(&topo.triangles, &positions, &prolongation),
-                );
-                (fine.map_err(with_level)?, solution)
+            // `fine` is dense (fresh from refinement), so slot order is the solver's row order.
+            for (record, p) in fine.vertices.values_mut().zip(solved) {
+                record.position = p;
             }
-            Some(m) => {
-                let (refined, next) = bisect(&current, m).map_err(with_level)?;
-                marking = Some(next);
-                let positions = refined.mesh.positions();
-                let solution = solve_level(&refined.triangles, &positions, &refined.prolongation);
-                (refined.mesh, solution)
-            }
-        };
-        let fail = |why: String| SubdivError::SolverFailed { level, why };
-        let (taken, residual, solved) = solution.map_err(fail)?;
-        if solved.iter().any(|p| !p.is_finite()) {
-            return Err(fail("non-finite positions".to_string()));
+            reports.push(LevelReport {
+                level,
+                vertices: fine.n_vertices(),
+                faces: fine.n_faces(),
+                steps: taken,
+                relative_residual: residual,
+            });
+            current = fine;
+            done += growth.powi(level as i32);
+            progress.update(done / total);
         }
-        // `fine` is dense (fresh from refinement), so slot order is the solver's row order.
-        for (record, p) in fine.vertices.values_mut().zip(solved) {
-            record.position = p;
-        }
-        reports.push(LevelReport {
-            level,
-            vertices: fine.n_vertices(),
-            faces: fine.n_faces(),
-            steps: taken,
-            relative_residual: residual,
-        });
-        current = fine;
-        done += growth.powi(level as i32);
-        progress.update(done / total);
-    }
+        Ok(())
+    })?;
     Ok(Subdivision {
         mesh: current,
         levels: reports,
