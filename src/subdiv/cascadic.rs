@@ -26,11 +26,12 @@
 //! while the level's system is assembled and solved from flat arrays on the other.
 
 use super::fem::{
-    SymmetricCsr, cotangent_stiffness, identity_rows, lumped_mass, mass_and_stiffness, mass_rhs,
-    system_matrix,
+    SymmetricCsr, identity_rows, mass_of, mass_rhs, stiffness_from_weights, system_matrix,
+    triangle_weights,
 };
 use super::refine::{
-    Marking, Prolongation, bisect, build_quadrisection, initial_marking, quadrisection_parts,
+    Marking, Prolongation, QuadTopology, bisect, build_quadrisection, initial_marking,
+    quadrisection_parts, quadrisection_stiffness,
 };
 use super::{Refinement, Solver, SubdivError, SubdivOptions, Subdivision, compact, default_beta};
 use crate::mesh::{Mesh, SlotIndex};
@@ -340,12 +341,25 @@ pub fn subdivide_mcm(
             // The level's solve needs only flat arrays: triangles, prolongation and positions.
             let mut solve_level = |triangles: &[[u32; 3]],
                                    positions: &[DVec3],
-                                   prolongation: &Prolongation|
+                                   prolongation: &Prolongation,
+                                   quad: Option<(&Mesh, &QuadTopology)>|
              -> Result<(usize, f64, Vec<DVec3>), String> {
                 x0 = prolongation.apply(&x0);
+                // Mass and stiffness from one pass over the triangles; a quadrisection reads its
+                // sparsity off the coarse mesh (the same bits as the general assembly).
+                let mass_and_stiffness = |coef: Option<&[f64]>| {
+                    let tri_weights = triangle_weights(triangles, positions, coef);
+                    let mass = mass_of(triangles, &tri_weights, positions.len());
+                    let stiffness = quad
+                        .and_then(|(coarse, topo)| {
+                            quadrisection_stiffness(coarse, topo, &tri_weights)
+                        })
+                        .unwrap_or_else(|| {
+                            stiffness_from_weights(triangles, positions.len(), &tri_weights)
+                        });
+                    (mass, stiffness)
+                };
                 if options.local_width {
-                    let mass = lumped_mass(triangles, positions);
-                    let pinned = identity_rows(&mass);
                     h_init = prolongation.apply(&h_init);
                     h_cur = prolongation.apply(&h_cur);
                     let alpha_v: Vec<f64> = h_cur.iter().map(|h| 0.5 * (c * h) * (c * h)).collect();
@@ -353,7 +367,8 @@ pub fn subdivide_mcm(
                         .iter()
                         .map(|t| t.iter().map(|&v| alpha_v[v as usize]).sum::<f64>() / 3.0)
                         .collect();
-                    let stiffness = cotangent_stiffness(triangles, positions, Some(&coef));
+                    let (mass, stiffness) = mass_and_stiffness(Some(&coef));
+                    let pinned = identity_rows(&mass);
                     let a = system_matrix(&mass, stiffness, 1.0);
                     let b: Vec<[f64; 4]> = (0..positions.len())
                         .map(|i| {
@@ -376,7 +391,7 @@ pub fn subdivide_mcm(
                         x.iter().map(|v| DVec3::new(v[0], v[1], v[2])).collect(),
                     ))
                 } else {
-                    let (mass, stiffness) = mass_and_stiffness(triangles, positions, None);
+                    let (mass, stiffness) = mass_and_stiffness(None);
                     let a = system_matrix(&mass, stiffness, alpha);
                     let b = mass_rhs(&mass, &x0);
                     let mut x: Vec<[f64; 3]> = positions.iter().map(|p| p.to_array()).collect();
@@ -396,7 +411,14 @@ pub fn subdivide_mcm(
                     let (topo, prolongation, positions) = quadrisection_parts(&current);
                     let (fine, solution) = rayon::join(
                         || build_quadrisection(&current, &topo, &positions),
-                        || solve_level(&topo.triangles, &positions, &prolongation),
+                        || {
+                            solve_level(
+                                &topo.triangles,
+                                &positions,
+                                &prolongation,
+                                Some((&current, &topo)),
+                            )
+                        },
                     );
                     (fine.map_err(with_level)?, solution)
                 }
@@ -405,7 +427,7 @@ pub fn subdivide_mcm(
                     marking = Some(next);
                     let positions = refined.mesh.positions();
                     let solution =
-                        solve_level(&refined.triangles, &positions, &refined.prolongation);
+                        solve_level(&refined.triangles, &positions, &refined.prolongation, None);
                     (refined.mesh, solution)
                 }
             };

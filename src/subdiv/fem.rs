@@ -162,30 +162,57 @@ fn assemble(
     face_coefficient: Option<&[f64]>,
     with_mass: bool,
 ) -> (Vec<f64>, SymmetricCsr) {
-    use rayon::prelude::*;
-    use std::sync::atomic::{AtomicU64, Ordering};
     let n = positions.len();
-    // w[j]: ½ a_T cot of the angle at corner j+2, which is opposite edge (j, j+1); then area.
+    let tri_weights = triangle_weights(triangles, positions, face_coefficient);
+    let mass = if with_mass {
+        mass_of(triangles, &tri_weights, n)
+    } else {
+        Vec::new()
+    };
+    (mass, stiffness_from_weights(triangles, n, &tri_weights))
+}
+
+/// Per triangle: `w[j]`, ½·a_T·cot of the angle at corner j+2 (opposite edge (j, j+1)), and
+/// the area in `w[3]` (all zero for a degenerate triangle).
+pub(crate) fn triangle_weights(
+    triangles: &[[u32; 3]],
+    positions: &[DVec3],
+    face_coefficient: Option<&[f64]>,
+) -> Vec<[f64; 4]> {
+    use rayon::prelude::*;
     let weights_of = |ti: usize| {
         let coef = face_coefficient.map_or(1.0, |c| c[ti]);
         let (w, area) = half_cotangents(triangles[ti].map(|i| positions[i as usize]), coef);
         [w[0], w[1], w[2], area]
     };
-    let tri_weights: Vec<[f64; 4]> = (0..triangles.len())
+    (0..triangles.len())
         .into_par_iter()
         .with_min_len(PARALLEL_ROWS)
         .map(weights_of)
-        .collect();
-    let mut mass = Vec::new();
-    if with_mass {
-        // Triangle order, as `lumped_mass` sums (degenerate triangles add a zero area).
-        mass = vec![0.0; n];
-        for (t, w) in triangles.iter().zip(&tri_weights) {
-            for &i in t {
-                mass[i as usize] += w[3] / 3.0;
-            }
+        .collect()
+}
+
+/// The lumped mass from [`triangle_weights`]' areas, summed in triangle order as
+/// [`lumped_mass`] does (degenerate triangles add a zero area), so the bits are the same.
+pub(crate) fn mass_of(triangles: &[[u32; 3]], tri_weights: &[[f64; 4]], n: usize) -> Vec<f64> {
+    let mut mass = vec![0.0; n];
+    for (t, w) in triangles.iter().zip(tri_weights) {
+        for &i in t {
+            mass[i as usize] += w[3] / 3.0;
         }
     }
+    mass
+}
+
+/// The stiffness of any triangle list from its [`triangle_weights`]: see
+/// [`cotangent_stiffness`].
+pub(crate) fn stiffness_from_weights(
+    triangles: &[[u32; 3]],
+    n: usize,
+    tri_weights: &[[f64; 4]],
+) -> SymmetricCsr {
+    use rayon::prelude::*;
+    use std::sync::atomic::{AtomicU64, Ordering};
     // Every directed entry is the key `col << 32 | 3t + j`: its column and the corner whose
     // weight it takes, so sorting a row orders it by column and, within a column, by
     // triangle — the order the terms are summed in.
@@ -308,14 +335,11 @@ fn assemble(
                 val[diag_at] = diag;
             }
         });
-    (
-        mass,
-        SymmetricCsr {
-            row_start,
-            col,
-            val,
-        },
-    )
+    SymmetricCsr {
+        row_start,
+        col,
+        val,
+    }
 }
 
 /// Splits `keys` at row boundaries (`fill`) into pieces of about `ROW_CHUNK` rows, as

@@ -255,6 +255,136 @@ pub(crate) fn build_quadrisection(
     Ok(fine)
 }
 
+/// The cotangent stiffness of a quadrisection, read off the coarse mesh instead of sorted out
+/// of the fine triangles: every fine edge lies in a known pair of fine triangles (corner
+/// triangles `4t + k`, centre `4t + 3`, as [`quad_topology`] lays them out), so each row is a
+/// handful of index lookups and a sort of at most a vertex's valence. `tri_weights` are the
+/// fine triangles' [`triangle_weights`](super::fem::triangle_weights).
+///
+/// Gives exactly [`cotangent_stiffness`](super::fem::cotangent_stiffness)'s matrix, bit for
+/// bit (an entry's two terms commute, the diagonal sums in column order as there). Returns
+/// `None` when the coarse mesh is not one the layout covers (non-dense slots, or two faces
+/// sharing more than one edge), and the caller falls back to the general assembly.
+pub(crate) fn quadrisection_stiffness(
+    mesh: &Mesh,
+    topo: &QuadTopology,
+    tri_weights: &[[f64; 4]],
+) -> Option<super::fem::SymmetricCsr> {
+    let dense_slots = mesh.faces().enumerate().all(|(i, f)| f.slot() == i);
+    if !dense_slots || tri_weights.len() != 4 * mesh.n_faces() {
+        return None;
+    }
+    // Face index t and position k (h = u_k → u_{k+1}) of every face half-edge, as 3t + k.
+    let mut corner = vec![NONE; slot_bound(mesh.halfedges().map(|h| h.slot()))];
+    for (t, f) in mesh.faces().enumerate() {
+        for (k, h) in mesh.face_halfedges(f).into_iter().enumerate() {
+            corner[h.slot()] = (3 * t + k) as u32;
+        }
+    }
+    let w = |tri: usize, j: usize| tri_weights[tri][j];
+    let nv = topo.coarse.len();
+    let n = nv + topo.edges.len();
+    let mut row_start = Vec::with_capacity(n + 1);
+    let mut col = Vec::with_capacity(n + 2 * (2 * topo.edges.len() + 3 * mesh.n_faces()));
+    let mut val = Vec::with_capacity(col.capacity());
+    row_start.push(0u32);
+    let mut ring: Vec<(u32, f64)> = Vec::with_capacity(16);
+    // Emits row i from `ring` (unsorted, distinct columns expected).
+    let emit = |i: usize, ring: &mut Vec<(u32, f64)>, col: &mut Vec<u32>, val: &mut Vec<f64>| {
+        ring.sort_unstable_by_key(|e| e.0);
+        if ring.windows(2).any(|p| p[0].0 == p[1].0) {
+            return false;
+        }
+        let diag_at = val.len();
+        col.push(i as u32);
+        val.push(0.0);
+        let mut diag = 0.0;
+        for &(c, x) in ring.iter() {
+            col.push(c);
+            val.push(-x);
+            diag += x;
+        }
+        val[diag_at] = diag;
+        true
+    };
+    // The fine edge from coarse vertex u_k (or u_{k+1}) to the midpoint of side s = h_k of
+    // face t: corner triangle 4t+k, edge (0,1), and corner triangle 4t+k+1, edge (2,0).
+    let at_origin = |c: u32| {
+        let (t, k) = (c as usize / 3, c as usize % 3);
+        w(4 * t + k, 0)
+    };
+    let at_head = |c: u32| {
+        let (t, k) = (c as usize / 3, c as usize % 3);
+        w(4 * t + (k + 1) % 3, 2)
+    };
+    // Coarse vertices: one fine edge to the midpoint of each coarse edge around them.
+    for (i, &v) in topo.coarse.iter().enumerate() {
+        ring.clear();
+        for h in mesh.outgoing(v) {
+            let (own, twin) = (corner[h.slot()], corner[mesh.twin(h).slot()]);
+            // v is the origin of h and the head of its twin.
+            let x = match (own != NONE, twin != NONE) {
+                (true, true) => at_origin(own) + at_head(twin),
+                (true, false) => at_origin(own),
+                (false, true) => at_head(twin),
+                (false, false) => 0.0,
+            };
+            ring.push((topo.mid[h.slot()], x));
+        }
+        if !emit(i, &mut ring, &mut col, &mut val) {
+            return None;
+        }
+        row_start.push(col.len() as u32);
+    }
+    // Midpoints: the two endpoints, and the two other midpoints of each adjacent face.
+    for (e, &h) in topo.edges.iter().enumerate() {
+        ring.clear();
+        let g = mesh.twin(h);
+        let (own, twin) = (corner[h.slot()], corner[g.slot()]);
+        let (a, b) = (
+            topo.dense[mesh.from_vertex(h).slot()],
+            topo.dense[mesh.to_vertex(h).slot()],
+        );
+        // a is the origin of h and the head of g; b the reverse.
+        let sum = |p: Option<f64>, q: Option<f64>| match (p, q) {
+            (Some(p), Some(q)) => p + q,
+            (Some(p), None) | (None, Some(p)) => p,
+            (None, None) => 0.0,
+        };
+        let on = |c: u32, f: &dyn Fn(u32) -> f64| (c != NONE).then(|| f(c));
+        ring.push((a, sum(on(own, &at_origin), on(twin, &at_head))));
+        ring.push((b, sum(on(own, &at_head), on(twin, &at_origin))));
+        for (side, c) in [(h, own), (g, twin)] {
+            if c == NONE {
+                continue;
+            }
+            let (t, k) = (c as usize / 3, c as usize % 3);
+            // Next side m_{k+1,k+2}: corner triangle at u_{k+1}, edge (1,2), and the centre,
+            // edge k. Previous side m_{k+2,k}: corner triangle at u_k, edge (1,2), centre
+            // edge k+2.
+            let next = mesh.next(side);
+            let prev = mesh.prev(side);
+            ring.push((
+                topo.mid[next.slot()],
+                w(4 * t + (k + 1) % 3, 1) + w(4 * t + 3, k),
+            ));
+            ring.push((
+                topo.mid[prev.slot()],
+                w(4 * t + k, 1) + w(4 * t + 3, (k + 2) % 3),
+            ));
+        }
+        if !emit(nv + e, &mut ring, &mut col, &mut val) {
+            return None;
+        }
+        row_start.push(col.len() as u32);
+    }
+    Some(super::fem::SymmetricCsr {
+        row_start,
+        col,
+        val,
+    })
+}
+
 fn slot_bound(slots: impl Iterator<Item = usize>) -> usize {
     slots.max().map_or(0, |m| m + 1)
 }
@@ -606,6 +736,44 @@ pub fn bisect(mesh: &Mesh, marking: &Marking) -> Result<(Refined, Marking), Subd
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn quadrisection_stiffness_is_the_general_assembly_bit_for_bit() {
+        use crate::subdiv::fem::{cotangent_stiffness, triangle_weights};
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        // Closed with a valence-4 vertex (octahedron), open with boundary corners (a jittered
+        // grid with a hole), each refined twice and checked at every level, with and without
+        // face coefficients.
+        let (mut p, t) = crate::mesh::shapes::grid(6, |i, j| {
+            let h = ((i * 7 + j * 13) % 5) as f64 / 10.0;
+            DVec3::new(i as f64 + 0.2 * h, j as f64 - 0.1 * h, h)
+        });
+        p.push(DVec3::new(50.0, 50.0, 50.0)); // an isolated vertex
+        let holed: Vec<[u32; 3]> = t
+            .into_iter()
+            .enumerate()
+            .filter(|(i, _)| *i != 31)
+            .map(|(_, f)| f)
+            .collect();
+        let grid = Mesh::from_triangles(&p, &holed).unwrap().mesh;
+        for mut mesh in [octahedron(), grid] {
+            for _ in 0..2 {
+                let (topo, _, positions) = quadrisection_parts(&mesh);
+                let coef: Vec<f64> = (0..topo.triangles.len())
+                    .map(|i| 0.5 + (i % 7) as f64)
+                    .collect();
+                for c in [None, Some(&coef[..])] {
+                    let w = triangle_weights(&topo.triangles, &positions, c);
+                    let fast = quadrisection_stiffness(&mesh, &topo, &w).expect("covered layout");
+                    let general = cotangent_stiffness(&topo.triangles, &positions, c);
+                    assert_eq!(fast.row_start, general.row_start);
+                    assert_eq!(fast.col, general.col);
+                    assert_eq!(bits(&fast.val), bits(&general.val));
+                }
+                mesh = build_quadrisection(&mesh, &topo, &positions).unwrap();
+            }
+        }
+    }
 
     fn octahedron() -> Mesh {
         let p = [
