@@ -284,29 +284,6 @@ pub(crate) fn quadrisection_stiffness(
     let w = |tri: usize, j: usize| tri_weights[tri][j];
     let nv = topo.coarse.len();
     let n = nv + topo.edges.len();
-    let mut row_start = Vec::with_capacity(n + 1);
-    let mut col = Vec::with_capacity(n + 2 * (2 * topo.edges.len() + 3 * mesh.n_faces()));
-    let mut val = Vec::with_capacity(col.capacity());
-    row_start.push(0u32);
-    let mut ring: Vec<(u32, f64)> = Vec::with_capacity(16);
-    // Emits row i from `ring` (unsorted, distinct columns expected).
-    let emit = |i: usize, ring: &mut Vec<(u32, f64)>, col: &mut Vec<u32>, val: &mut Vec<f64>| {
-        ring.sort_unstable_by_key(|e| e.0);
-        if ring.windows(2).any(|p| p[0].0 == p[1].0) {
-            return false;
-        }
-        let diag_at = val.len();
-        col.push(i as u32);
-        val.push(0.0);
-        let mut diag = 0.0;
-        for &(c, x) in ring.iter() {
-            col.push(c);
-            val.push(-x);
-            diag += x;
-        }
-        val[diag_at] = diag;
-        true
-    };
     // The fine edge from coarse vertex u_k (or u_{k+1}) to the midpoint of side s = h_k of
     // face t: corner triangle 4t+k, edge (0,1), and corner triangle 4t+k+1, edge (2,0).
     let at_origin = |c: u32| {
@@ -317,41 +294,35 @@ pub(crate) fn quadrisection_stiffness(
         let (t, k) = (c as usize / 3, c as usize % 3);
         w(4 * t + (k + 1) % 3, 2)
     };
-    // Coarse vertices: one fine edge to the midpoint of each coarse edge around them.
-    for (i, &v) in topo.coarse.iter().enumerate() {
+    let sum = |p: Option<f64>, q: Option<f64>| match (p, q) {
+        (Some(p), Some(q)) => p + q,
+        (Some(p), None) | (None, Some(p)) => p,
+        (None, None) => 0.0,
+    };
+    // Row i's off-diagonal terms, unsorted.
+    let ring_of = |i: usize, ring: &mut Vec<(u32, f64)>| {
         ring.clear();
-        for h in mesh.outgoing(v) {
-            let (own, twin) = (corner[h.slot()], corner[mesh.twin(h).slot()]);
-            // v is the origin of h and the head of its twin.
-            let x = match (own != NONE, twin != NONE) {
-                (true, true) => at_origin(own) + at_head(twin),
-                (true, false) => at_origin(own),
-                (false, true) => at_head(twin),
-                (false, false) => 0.0,
-            };
-            ring.push((topo.mid[h.slot()], x));
+        if i < nv {
+            // A coarse vertex: one fine edge to the midpoint of each coarse edge around it;
+            // it is the origin of each out-going h and the head of its twin.
+            for h in mesh.outgoing(topo.coarse[i]) {
+                let (own, twin) = (corner[h.slot()], corner[mesh.twin(h).slot()]);
+                let x = sum(
+                    (own != NONE).then(|| at_origin(own)),
+                    (twin != NONE).then(|| at_head(twin)),
+                );
+                ring.push((topo.mid[h.slot()], x));
+            }
+            return;
         }
-        if !emit(i, &mut ring, &mut col, &mut val) {
-            return None;
-        }
-        row_start.push(col.len() as u32);
-    }
-    // Midpoints: the two endpoints, and the two other midpoints of each adjacent face.
-    for (e, &h) in topo.edges.iter().enumerate() {
-        ring.clear();
+        // A midpoint: the edge's two ends, and the two other midpoints of each adjacent face.
+        let h = topo.edges[i - nv];
         let g = mesh.twin(h);
         let (own, twin) = (corner[h.slot()], corner[g.slot()]);
-        let (a, b) = (
-            topo.dense[mesh.from_vertex(h).slot()],
-            topo.dense[mesh.to_vertex(h).slot()],
-        );
-        // a is the origin of h and the head of g; b the reverse.
-        let sum = |p: Option<f64>, q: Option<f64>| match (p, q) {
-            (Some(p), Some(q)) => p + q,
-            (Some(p), None) | (None, Some(p)) => p,
-            (None, None) => 0.0,
-        };
         let on = |c: u32, f: &dyn Fn(u32) -> f64| (c != NONE).then(|| f(c));
+        // a is the origin of h and the head of g; b the reverse.
+        let a = topo.dense[mesh.from_vertex(h).slot()];
+        let b = topo.dense[mesh.to_vertex(h).slot()];
         ring.push((a, sum(on(own, &at_origin), on(twin, &at_head))));
         ring.push((b, sum(on(own, &at_head), on(twin, &at_origin))));
         for (side, c) in [(h, own), (g, twin)] {
@@ -362,21 +333,59 @@ pub(crate) fn quadrisection_stiffness(
             // Next side m_{k+1,k+2}: corner triangle at u_{k+1}, edge (1,2), and the centre,
             // edge k. Previous side m_{k+2,k}: corner triangle at u_k, edge (1,2), centre
             // edge k+2.
-            let next = mesh.next(side);
-            let prev = mesh.prev(side);
-            ring.push((
-                topo.mid[next.slot()],
-                w(4 * t + (k + 1) % 3, 1) + w(4 * t + 3, k),
-            ));
-            ring.push((
-                topo.mid[prev.slot()],
-                w(4 * t + k, 1) + w(4 * t + 3, (k + 2) % 3),
-            ));
+            let next = w(4 * t + (k + 1) % 3, 1) + w(4 * t + 3, k);
+            let prev = w(4 * t + k, 1) + w(4 * t + 3, (k + 2) % 3);
+            ring.push((topo.mid[mesh.next(side).slot()], next));
+            ring.push((topo.mid[mesh.prev(side).slot()], prev));
         }
-        if !emit(nv + e, &mut ring, &mut col, &mut val) {
-            return None;
+    };
+    // Rows `rows` as (row lengths, columns, values); `None` on a repeated column.
+    let build = |rows: std::ops::Range<usize>| {
+        let mut len = Vec::with_capacity(rows.len());
+        let mut col = Vec::with_capacity(7 * rows.len());
+        let mut val = Vec::with_capacity(7 * rows.len());
+        let mut ring: Vec<(u32, f64)> = Vec::with_capacity(16);
+        for i in rows {
+            ring_of(i, &mut ring);
+            ring.sort_unstable_by_key(|e| e.0);
+            if ring.windows(2).any(|p| p[0].0 == p[1].0) {
+                return None;
+            }
+            col.push(i as u32);
+            val.push(ring.iter().map(|e| e.1).fold(0.0, |d, x| d + x));
+            for &(c, x) in &ring {
+                col.push(c);
+                val.push(-x);
+            }
+            len.push(1 + ring.len() as u32);
         }
-        row_start.push(col.len() as u32);
+        Some((len, col, val))
+    };
+    const CHUNK: usize = 4096;
+    let pieces: Option<Vec<_>> = if n < 2 * CHUNK {
+        vec![build(0..n)].into_iter().collect()
+    } else {
+        use rayon::prelude::*;
+        (0..n.div_ceil(CHUNK))
+            .into_par_iter()
+            .map(|k| build(k * CHUNK..((k + 1) * CHUNK).min(n)))
+            .collect()
+    };
+    let pieces = pieces?;
+    let mut row_start = Vec::with_capacity(n + 1);
+    row_start.push(0u32);
+    let mut at = 0u32;
+    for (len, _, _) in &pieces {
+        for &l in len {
+            at += l;
+            row_start.push(at);
+        }
+    }
+    let mut col = Vec::with_capacity(at as usize);
+    let mut val = Vec::with_capacity(at as usize);
+    for (_, c, v) in pieces {
+        col.extend_from_slice(&c);
+        val.extend_from_slice(&v);
     }
     Some(super::fem::SymmetricCsr {
         row_start,
@@ -742,8 +751,8 @@ mod tests {
         use crate::subdiv::fem::{cotangent_stiffness, triangle_weights};
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         // Closed with a valence-4 vertex (octahedron), open with boundary corners (a jittered
-        // grid with a hole), each refined twice and checked at every level, with and without
-        // face coefficients.
+        // grid with a hole and an isolated vertex), checked at every level, with and without
+        // face coefficients, on 1 and 3 threads.
         let (mut p, t) = crate::mesh::shapes::grid(6, |i, j| {
             let h = ((i * 7 + j * 13) % 5) as f64 / 10.0;
             DVec3::new(i as f64 + 0.2 * h, j as f64 - 0.1 * h, h)
@@ -756,19 +765,28 @@ mod tests {
             .map(|(_, f)| f)
             .collect();
         let grid = Mesh::from_triangles(&p, &holed).unwrap().mesh;
-        for mut mesh in [octahedron(), grid] {
-            for _ in 0..2 {
+        // Six octahedron levels reach 16k fine rows, past the size where rows split over
+        // threads.
+        for (mut mesh, levels) in [(octahedron(), 6), (grid, 2)] {
+            for _ in 0..levels {
                 let (topo, _, positions) = quadrisection_parts(&mesh);
                 let coef: Vec<f64> = (0..topo.triangles.len())
                     .map(|i| 0.5 + (i % 7) as f64)
                     .collect();
                 for c in [None, Some(&coef[..])] {
                     let w = triangle_weights(&topo.triangles, &positions, c);
-                    let fast = quadrisection_stiffness(&mesh, &topo, &w).expect("covered layout");
                     let general = cotangent_stiffness(&topo.triangles, &positions, c);
-                    assert_eq!(fast.row_start, general.row_start);
-                    assert_eq!(fast.col, general.col);
-                    assert_eq!(bits(&fast.val), bits(&general.val));
+                    for threads in [1, 3] {
+                        let fast = rayon::ThreadPoolBuilder::new()
+                            .num_threads(threads)
+                            .build()
+                            .unwrap()
+                            .install(|| quadrisection_stiffness(&mesh, &topo, &w))
+                            .expect("covered layout");
+                        assert_eq!(fast.row_start, general.row_start);
+                        assert_eq!(fast.col, general.col);
+                        assert_eq!(bits(&fast.val), bits(&general.val));
+                    }
                 }
                 mesh = build_quadrisection(&mesh, &topo, &positions).unwrap();
             }
