@@ -259,6 +259,39 @@ fn results_do_not_depend_on_the_thread_count() {
 }
 
 #[test]
+fn bisection_names_a_folded_two_triangle_component() {
+    // A tetrahedron next to a "pillow": two triangles on the same three vertices, oppositely
+    // oriented, which is what repairing a flipped duplicate face can leave. Its bisection
+    // would need two edges between the same pair of vertices.
+    let p = [
+        [0.0, 0.0, 0.0],
+        [1.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [0.0, 0.0, 1.0],
+        [3.0, 0.0, 0.0],
+        [4.0, 0.0, 0.0],
+        [3.0, 1.0, 0.0],
+    ]
+    .map(DVec3::from_array);
+    let t = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2], [4, 5, 6], [5, 4, 6]];
+    let mesh = Mesh::from_triangles(&p, &t).unwrap().mesh;
+    let opts = SubdivOptions {
+        levels: 1,
+        refinement: Refinement::Bisection,
+        ..Default::default()
+    };
+    let err = subdivide(&mesh, &opts, &NoProgress).unwrap_err();
+    assert!(matches!(err, SubdivError::FoldedPair { .. }), "{err}");
+    assert!(err.to_string().contains("--refine quad"));
+    // Quadrisection refines it.
+    let quad = SubdivOptions {
+        refinement: Refinement::Quadrisection,
+        ..opts
+    };
+    assert_eq!(run(&mesh, quad).n_faces(), 4 * t.len());
+}
+
+#[test]
 fn bad_options_and_inputs_are_typed_errors() {
     let coarse = load("cone20");
     let err = |opts: SubdivOptions| subdivide(&coarse, &opts, &NoProgress).unwrap_err();

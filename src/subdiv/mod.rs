@@ -189,6 +189,17 @@ pub enum SubdivError {
         /// Face index (slot order) that stayed unpaired.
         face: usize,
     },
+    /// Bisection would join the midpoint of a refinement edge to the same apex from both
+    /// sides: the two triangles across that edge share all three vertices (a closed
+    /// two-triangle component, often what repairing duplicated faces leaves), and no manifold
+    /// bisection of it exists. Quadrisection handles it.
+    #[error(
+        "bisection: face {face} and the face across its refinement edge share all three vertices (a closed two-triangle component); use --refine quad, or remove that component"
+    )]
+    FoldedPair {
+        /// Face index (slot order) of one of the two triangles.
+        face: usize,
+    },
     /// A refinement produced a mesh the half-edge builder had to repair, which means the
     /// input mesh violated an invariant.
     #[error("refinement produced a non-manifold mesh at level {level}")]

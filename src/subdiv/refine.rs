@@ -704,6 +704,10 @@ pub fn bisect(mesh: &Mesh, marking: &Marking) -> Result<(Refined, Marking), Subd
             if !partner_ok {
                 return Err(SubdivError::NoCompatibleMarking { face: t });
             }
+            // Both sides' new edges would join the midpoint to the same apex.
+            if mesh.to_vertex(mesh.next(h)) == mesh.to_vertex(mesh.next(twin)) {
+                return Err(SubdivError::FoldedPair { face: t });
+            }
         }
     }
     let mut triangles = Vec::with_capacity(2 * faces.len());
