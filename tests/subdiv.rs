@@ -273,7 +273,14 @@ fn bisection_names_a_folded_two_triangle_component() {
         [3.0, 1.0, 0.0],
     ]
     .map(DVec3::from_array);
-    let t = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2], [4, 5, 6], [5, 4, 6]];
+    let t = [
+        [0, 2, 1],
+        [0, 1, 3],
+        [1, 2, 3],
+        [0, 3, 2],
+        [4, 5, 6],
+        [5, 4, 6],
+    ];
     let mesh = Mesh::from_triangles(&p, &t).unwrap().mesh;
     let opts = SubdivOptions {
         levels: 1,
