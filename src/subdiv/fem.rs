@@ -143,7 +143,8 @@ pub fn cotangent_stiffness(
     positions: &[DVec3],
     face_coefficient: Option<&[f64]>,
 ) -> SymmetricCsr {
-    assemble(triangles, positions, face_coefficient, false).1
+    let tri_weights = triangle_weights(triangles, positions, face_coefficient);
+    stiffness_from_weights(triangles, positions.len(), &tri_weights)
 }
 
 /// [`lumped_mass`] and [`cotangent_stiffness`] together, the same bits as calling both, from
@@ -153,23 +154,11 @@ pub fn mass_and_stiffness(
     positions: &[DVec3],
     face_coefficient: Option<&[f64]>,
 ) -> (Vec<f64>, SymmetricCsr) {
-    assemble(triangles, positions, face_coefficient, true)
-}
-
-fn assemble(
-    triangles: &[[u32; 3]],
-    positions: &[DVec3],
-    face_coefficient: Option<&[f64]>,
-    with_mass: bool,
-) -> (Vec<f64>, SymmetricCsr) {
-    let n = positions.len();
     let tri_weights = triangle_weights(triangles, positions, face_coefficient);
-    let mass = if with_mass {
-        mass_of(triangles, &tri_weights, n)
-    } else {
-        Vec::new()
-    };
-    (mass, stiffness_from_weights(triangles, n, &tri_weights))
+    (
+        mass_of(triangles, &tri_weights, positions.len()),
+        stiffness_from_weights(triangles, positions.len(), &tri_weights),
+    )
 }
 
 /// Per triangle: `w[j]`, ½·a_T·cot of the angle at corner j+2 (opposite edge (j, j+1)), and

@@ -286,13 +286,14 @@ pub(crate) fn quadrisection_stiffness(
     let n = nv + topo.edges.len();
     // The fine edge from coarse vertex u_k (or u_{k+1}) to the midpoint of side s = h_k of
     // face t: corner triangle 4t+k, edge (0,1), and corner triangle 4t+k+1, edge (2,0).
+    // `None` for a boundary half-edge (no face, no term).
     let at_origin = |c: u32| {
         let (t, k) = (c as usize / 3, c as usize % 3);
-        w(4 * t + k, 0)
+        (c != NONE).then(|| w(4 * t + k, 0))
     };
     let at_head = |c: u32| {
         let (t, k) = (c as usize / 3, c as usize % 3);
-        w(4 * t + (k + 1) % 3, 2)
+        (c != NONE).then(|| w(4 * t + (k + 1) % 3, 2))
     };
     let sum = |p: Option<f64>, q: Option<f64>| match (p, q) {
         (Some(p), Some(q)) => p + q,
@@ -307,11 +308,7 @@ pub(crate) fn quadrisection_stiffness(
             // it is the origin of each out-going h and the head of its twin.
             for h in mesh.outgoing(topo.coarse[i]) {
                 let (own, twin) = (corner[h.slot()], corner[mesh.twin(h).slot()]);
-                let x = sum(
-                    (own != NONE).then(|| at_origin(own)),
-                    (twin != NONE).then(|| at_head(twin)),
-                );
-                ring.push((topo.mid[h.slot()], x));
+                ring.push((topo.mid[h.slot()], sum(at_origin(own), at_head(twin))));
             }
             return;
         }
@@ -319,12 +316,11 @@ pub(crate) fn quadrisection_stiffness(
         let h = topo.edges[i - nv];
         let g = mesh.twin(h);
         let (own, twin) = (corner[h.slot()], corner[g.slot()]);
-        let on = |c: u32, f: &dyn Fn(u32) -> f64| (c != NONE).then(|| f(c));
         // a is the origin of h and the head of g; b the reverse.
         let a = topo.dense[mesh.from_vertex(h).slot()];
         let b = topo.dense[mesh.to_vertex(h).slot()];
-        ring.push((a, sum(on(own, &at_origin), on(twin, &at_head))));
-        ring.push((b, sum(on(own, &at_head), on(twin, &at_origin))));
+        ring.push((a, sum(at_origin(own), at_head(twin))));
+        ring.push((b, sum(at_head(own), at_origin(twin))));
         for (side, c) in [(h, own), (g, twin)] {
             if c == NONE {
                 continue;
