@@ -12,6 +12,7 @@
 //! reconstructs exactly whatever the presmoothing does (the Burt–Adelson property).
 
 use super::synthesis::{Scratch, decode, predict_local, presmooth_local};
+use super::waves::Waves;
 use super::{Codes, Pyramid, PyramidError, SplitOffsets};
 use crate::mesh::{Mesh, SlotIndex, VertexId};
 use crate::pm::ProgressiveMesh;
@@ -56,7 +57,7 @@ impl Pyramid {
         let (surface_area, bbox_diagonal) = surface_stats(cursor.mesh());
 
         // Records are written finest split first (the order of the collapses), with wide
-        // codes, then reversed into synthesis order and narrowed at the end.
+        // codes, then copied into storage order (wave by wave) and narrowed at the end.
         let mut offsets = Vec::with_capacity(n_splits + 1);
         let mut locals: Vec<u32> = Vec::with_capacity(32 * n_splits);
         let mut codes: Vec<u32> = Vec::with_capacity(128 * n_splits);
@@ -205,14 +206,20 @@ impl Pyramid {
         );
         progress.update(1.0);
 
-        // Synthesis order: coarsest split first.
-        let offsets = reverse_records(
-            &mut offsets,
-            &mut locals,
-            &mut codes,
-            &mut weights,
-            &mut details,
-        );
+        // Storage order: wave by wave (see `waves`); analysis wrote split k at n_splits − 1 − k.
+        let waves = Waves::schedule(n_splits, signal.len(), |k| {
+            let (o, next) = (offsets[n_splits - 1 - k], offsets[n_splits - k]);
+            (&locals[o.locals..next.locals], next.details - o.details)
+        });
+        let slotted = Records {
+            offsets,
+            locals,
+            codes,
+            weights,
+            details,
+        }
+        .in_slot_order(&waves);
+        let codes = slotted.codes;
         let widest = codes.iter().copied().max().unwrap_or(0);
         let codes = if widest <= u8::MAX as u32 {
             Codes::Byte(codes.iter().map(|&c| c as u8).collect())
@@ -226,11 +233,12 @@ impl Pyramid {
             n_finest,
             passthrough: signal[n_finest..].to_vec(),
             base: f[..n_base].to_vec(),
-            offsets,
-            locals,
+            offsets: slotted.offsets,
+            locals: slotted.locals,
             codes,
-            weights,
-            details,
+            weights: slotted.weights,
+            details: slotted.details,
+            waves,
             relaxation: relaxation.name(),
             surface_area,
             bbox_diagonal,
@@ -238,45 +246,64 @@ impl Pyramid {
     }
 }
 
-/// Reverses the order of the split records in every stream in place (each record keeps its
-/// internal order) and returns the offsets of the reversed layout.
-fn reverse_records(
-    offsets: &mut [SplitOffsets],
-    locals: &mut [u32],
-    codes: &mut [u32],
-    weights: &mut [f64],
-    details: &mut [DVec3],
-) -> Vec<SplitOffsets> {
-    fn reverse<T>(v: &mut [T], starts: impl Iterator<Item = (usize, usize)>) {
-        // Reversing the whole stream reverses the record order and each record; reversing
-        // every record back restores their contents.
-        let total = v.len();
-        v.reverse();
-        for (a, b) in starts {
-            v[total - b..total - a].reverse();
+/// The per-split streams of a pyramid being built (codes still 32-bit).
+struct Records {
+    offsets: Vec<SplitOffsets>,
+    locals: Vec<u32>,
+    codes: Vec<u32>,
+    weights: Vec<f64>,
+    details: Vec<DVec3>,
+}
+
+impl Records {
+    /// The records, written by the analysis finest split first, copied into the slots `waves`
+    /// assigns them. Streams are copied one at a time, so the peak memory is the records plus
+    /// the largest stream.
+    fn in_slot_order(self, waves: &Waves) -> Records {
+        let offsets = &self.offsets;
+        let n_splits = offsets.len().saturating_sub(1);
+        // The analysis position of the record stored at each slot.
+        let position = |slot: usize| n_splits - 1 - waves.split_at(slot);
+        fn gather<T: Copy>(
+            from: Vec<T>,
+            n_splits: usize,
+            range: impl Fn(usize) -> std::ops::Range<usize>,
+        ) -> Vec<T> {
+            let mut to = Vec::with_capacity(from.len());
+            for slot in 0..n_splits {
+                to.extend_from_slice(&from[range(slot)]);
+            }
+            to
+        }
+        let field = |get: fn(&SplitOffsets) -> usize| {
+            move |slot: usize| {
+                let i = position(slot);
+                get(&offsets[i])..get(&offsets[i + 1])
+            }
+        };
+        let locals = gather(self.locals, n_splits, field(|o| o.locals));
+        let codes = gather(self.codes, n_splits, field(|o| o.codes));
+        let weights = gather(self.weights, n_splits, field(|o| o.weights));
+        let details = gather(self.details, n_splits, field(|o| o.details));
+        let mut at = SplitOffsets::default();
+        let mut slotted = Vec::with_capacity(n_splits + 1);
+        slotted.push(at);
+        for slot in 0..n_splits {
+            let (o, next) = (offsets[position(slot)], offsets[position(slot) + 1]);
+            at.locals += next.locals - o.locals;
+            at.codes += next.codes - o.codes;
+            at.weights += next.weights - o.weights;
+            at.details += next.details - o.details;
+            slotted.push(at);
+        }
+        Records {
+            offsets: slotted,
+            locals,
+            codes,
+            weights,
+            details,
         }
     }
-    let pairs = |get: fn(&SplitOffsets) -> usize| {
-        offsets
-            .windows(2)
-            .map(move |w| (get(&w[0]), get(&w[1])))
-            .collect::<Vec<_>>()
-    };
-    reverse(locals, pairs(|o| o.locals).into_iter());
-    reverse(codes, pairs(|o| o.codes).into_iter());
-    reverse(weights, pairs(|o| o.weights).into_iter());
-    reverse(details, pairs(|o| o.details).into_iter());
-    let last = offsets.last().copied().unwrap_or_default();
-    offsets
-        .iter()
-        .rev()
-        .map(|o| SplitOffsets {
-            locals: last.locals - o.locals,
-            codes: last.codes - o.codes,
-            weights: last.weights - o.weights,
-            details: last.details - o.details,
-        })
-        .collect()
 }
 
 /// Total area and bounding-box diagonal of a mesh.

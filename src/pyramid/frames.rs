@@ -56,7 +56,7 @@ const DEGENERATE_TANGENT: f64 = 1e-12;
 
 /// An integer index into a signal array: the pyramid stores local indices in the narrowest of
 /// `u8`, `u16`, `u32` that fits.
-pub trait LocalIndex: Copy {
+pub trait LocalIndex: Copy + Send + Sync {
     /// The index as `usize`.
     fn at(self) -> usize;
 }

@@ -32,6 +32,7 @@ pub mod gains;
 pub mod pipeline;
 pub mod spectrum;
 pub mod synthesis;
+pub(crate) mod waves;
 
 pub use edit::{MoveHandle, falloff};
 pub use gains::{Filter, GainBand, GainParseError, LevelGains, LevelSpec};
@@ -66,9 +67,9 @@ pub enum PyramidError {
 /// A Burt–Adelson detail pyramid: base signal, details, and the per-level weights and fans
 /// synthesis needs. Build one with [`Pyramid::analyze`]; see the [module docs](self).
 ///
-/// All vertex indices are PM indices. Per-split data is stored in synthesis order (split `k`,
-/// which creates vertex `n0 + k`, at slot `k`) as a few sequential streams, so synthesis reads
-/// memory front to back:
+/// All vertex indices are PM indices. Per-split data is stored wave by wave (module `waves`:
+/// the splits of a wave read nothing another writes, so synthesis may run them at once), each
+/// wave in split order, as a few sequential streams, so synthesis reads memory front to back:
 ///
 /// * `locals`: per split, its *local table* — the PM vertices the split reads or writes: the new
 ///   vertex, its 1-ring counter-clockwise (these `t` are the touched vertices), then every other
@@ -89,12 +90,14 @@ pub struct Pyramid {
     pub(crate) passthrough: Vec<DVec3>,
     /// The base signal `f^(n0)` on PM vertices `0..n_base`.
     pub(crate) base: Vec<DVec3>,
-    /// Per split (plus an end sentinel): where its records start in each stream.
+    /// Per slot (plus an end sentinel): where its records start in each stream.
     pub(crate) offsets: Vec<SplitOffsets>,
     pub(crate) locals: Vec<u32>,
     pub(crate) codes: Codes,
     pub(crate) weights: Vec<f64>,
     pub(crate) details: Vec<DVec3>,
+    /// The splits grouped into waves of independent splits (parallel synthesis).
+    pub(crate) waves: waves::Waves,
     pub(crate) relaxation: &'static str,
     pub(crate) surface_area: f64,
     pub(crate) bbox_diagonal: f64,
@@ -174,11 +177,11 @@ impl Pyramid {
         self.details.len()
     }
 
-    /// Storage slot of split `k` (split `k` creates vertex `n0 + k`, level `n0 + k + 1`). The
-    /// pyramid stores splits in synthesis order, so this is `k`.
+    /// Storage slot of split `k` (split `k` creates vertex `n0 + k`, level `n0 + k + 1`): the
+    /// pyramid stores splits wave by wave, each wave a set of splits synthesis can run at once.
     #[inline]
     pub fn split_slot(&self, k: usize) -> usize {
-        k
+        self.waves.slot_of(k)
     }
 
     /// The level (vertex count) whose details split `k` carries.
@@ -190,7 +193,8 @@ impl Pyramid {
     /// The vertices whose values split `k` sets (the new vertex first, then its 1-ring) and
     /// their details in local frames `(t1, t2, n)`.
     pub fn split_details(&self, k: usize) -> (&[u32], &[DVec3]) {
-        let (o, next) = (self.offsets[k], self.offsets[k + 1]);
+        let slot = self.split_slot(k);
+        let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
         let t = next.details - o.details;
         (
             &self.locals[o.locals..o.locals + t],
@@ -205,6 +209,7 @@ impl Pyramid {
             + self.codes.bytes()
             + 8 * self.weights.len()
             + 24 * (self.details.len() + self.base.len() + self.passthrough.len())
+            + self.waves.memory_bytes()
     }
 }
 

@@ -8,7 +8,9 @@
 //!
 //! Each split works on its *local table* (see [`Pyramid`]): the values of the few dozen vertices
 //! it reads are gathered once into a small contiguous buffer, predicted and framed there, and
-//! only the touched vertices are written back. All per-split records are read front to back.
+//! only the touched vertices are written back. All per-split records are read front to back:
+//! they are stored wave by wave (`waves`), and the splits of a large wave, which read nothing
+//! another writes, run on rayon's threads with the bits of the sequential order.
 
 use super::frames::{Frame, LocalIndex, vertex_frame};
 use super::gains::LevelGains;
@@ -157,18 +159,24 @@ pub(crate) fn predict_local<I: LocalIndex>(
     }
 }
 
+/// Waves with fewer splits than this run on the calling thread: handing a few splits to other
+/// threads costs more than it saves.
+const PARALLEL_WAVE: usize = 24;
+
 impl Pyramid {
-    /// Synthesis of split `k` on top of `f = f^(n−1)`, leaving `f^(n)`.
+    /// Appends to `out` the values the split stored at `slot` gives its touched vertices (the
+    /// new vertex, then its 1-ring), computed from `f = f^(n−1)`.
     #[inline]
-    fn synthesize_split<I: LocalIndex>(
+    fn split_values<I: LocalIndex>(
         &self,
         codes: &[I],
-        k: usize,
-        f: &mut [DVec3],
+        slot: usize,
+        f: &[DVec3],
         gains: &LevelGains,
         scratch: &mut Scratch,
+        out: &mut Vec<DVec3>,
     ) {
-        let (o, next) = (self.offsets[k], self.offsets[k + 1]);
+        let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
         let locals = &self.locals[o.locals..next.locals];
         let g = &mut scratch.g;
         g.clear();
@@ -183,18 +191,38 @@ impl Pyramid {
             &mut scratch.q,
             &mut scratch.frames,
         );
-        let (tangential, normal) = gains.split_gain(self.level_of_split(k));
+        let level = self.level_of_split(self.waves.split_at(slot));
+        let (tangential, normal) = gains.split_gain(level);
         let details = &self.details[o.details..next.details];
-        for (((&x, &q), frame), &d) in locals
-            .iter()
-            .zip(&scratch.q)
-            .zip(&scratch.frames)
-            .zip(details)
-        {
-            f[x as usize] = q + frame.to_world_scaled(d, tangential, normal);
+        out.extend(
+            scratch
+                .q
+                .iter()
+                .zip(&scratch.frames)
+                .zip(details)
+                .map(|((&q, frame), &d)| q + frame.to_world_scaled(d, tangential, normal)),
+        );
+    }
+
+    /// Writes values computed by [`Pyramid::split_values`] for `slots` (in that order) into
+    /// their touched vertices.
+    fn write_touched(&self, slots: std::ops::Range<usize>, values: &[DVec3], f: &mut [DVec3]) {
+        // Each record's touched vertices open its local table; its detail count says how many.
+        let mut values = values.iter();
+        for slot in slots {
+            let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
+            let touched = &self.locals[o.locals..o.locals + (next.details - o.details)];
+            for (&x, &v) in touched.iter().zip(values.by_ref()) {
+                f[x as usize] = v;
+            }
         }
     }
 
+    /// Synthesis of the splits `splits` on `f`: wave after wave, in storage order; the splits
+    /// of a large wave spread over rayon's threads, each block of them computing into its own
+    /// buffer, written back in block order once the wave is done. Splits of one wave read
+    /// nothing another writes, so the result has the bits of split order whatever the thread
+    /// count.
     fn synthesize_splits<I: LocalIndex>(
         &self,
         codes: &[I],
@@ -202,9 +230,49 @@ impl Pyramid {
         splits: std::ops::Range<usize>,
         gains: &LevelGains,
     ) {
-        let mut scratch = Scratch::default();
-        for k in splits {
-            self.synthesize_split(codes, k, f, gains, &mut scratch);
+        use rayon::prelude::*;
+        let threads = rayon::current_num_threads();
+        // Two blocks per thread even out splits of unequal cost.
+        let mut blocks: Vec<(Scratch, Vec<DVec3>)> =
+            (0..2 * threads).map(|_| Default::default()).collect();
+        let run = |f: &mut [DVec3], blocks: &mut [(Scratch, Vec<DVec3>)]| {
+            for w in 0..self.waves.len() {
+                let slots = self.waves.slots_in(w, &splits);
+                if threads == 1 || slots.len() < PARALLEL_WAVE {
+                    let (scratch, out) = &mut blocks[0];
+                    for slot in slots {
+                        out.clear();
+                        self.split_values(codes, slot, f, gains, scratch, out);
+                        self.write_touched(slot..slot + 1, out, f);
+                    }
+                    continue;
+                }
+                let per_block = slots.len().div_ceil(blocks.len());
+                let previous: &[DVec3] = f;
+                let block_slots = |b: usize| {
+                    let start = slots.start + b * per_block;
+                    start.min(slots.end)..(start + per_block).min(slots.end)
+                };
+                blocks
+                    .par_iter_mut()
+                    .enumerate()
+                    .for_each(|(b, (scratch, out))| {
+                        out.clear();
+                        for slot in block_slots(b) {
+                            self.split_values(codes, slot, previous, gains, scratch, out);
+                        }
+                    });
+                for (b, (_, out)) in blocks.iter().enumerate() {
+                    self.write_touched(block_slots(b), out, f);
+                }
+            }
+        };
+        if threads == 1 || splits.len() < PARALLEL_WAVE {
+            run(f, &mut blocks);
+        } else {
+            // One hand-over into rayon's pool for all waves: the wave loop runs on a worker,
+            // so each wave's blocks start without waking the pool from outside.
+            rayon::scope(|_| run(f, &mut blocks));
         }
     }
 }
