@@ -391,6 +391,36 @@ fn memory_is_compact_and_synthesis_deterministic() {
 }
 
 #[test]
+fn analysis_gives_the_same_pyramid_on_any_thread_count() {
+    // The records are cut into one range of splits per thread, each walked by its own cursor;
+    // the pyramid (storage order, base, every detail) must not depend on how many there are.
+    let (p, t) = bumpy_sphere(4, 0.01);
+    let (pm, _) = pyramid_of(&p, &t);
+    // Two ranges of at least 1024 splits (the analysis' minimum) on 2 and 3 threads.
+    assert!(pm.splits().len() >= 2 * 1024, "{}", pm.splits().len());
+    let analyse = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| Pyramid::analyze(&pm, &SecondDifference::default(), &NoProgress))
+            .unwrap()
+    };
+    let one = analyse(1);
+    for threads in [2, 3] {
+        let many = analyse(threads);
+        assert!(one.base() == many.base(), "{threads} threads: base");
+        for k in 0..one.n_splits() {
+            assert_eq!(one.split_slot(k), many.split_slot(k), "{threads} threads");
+            assert!(
+                one.split_details(k) == many.split_details(k),
+                "{threads} threads: split {k}"
+            );
+        }
+    }
+}
+
+#[test]
 fn parallel_synthesis_gives_the_bits_of_split_order() {
     // Synthesis runs waves of independent splits at once; split by split (one split per
     // call, which cannot reorder anything) must give the same bits, on 1 and 3 threads, for

@@ -10,12 +10,19 @@
 //!
 //! Presmoothing only changes vertices the synthesis overwrites with `q + d`, so the pyramid
 //! reconstructs exactly whatever the presmoothing does (the Burt–Adelson property).
+//!
+//! Step 1 never reads the signal, and it is most of the work (the hinge coefficients), so it
+//! runs first, for all splits, on rayon's threads: the hierarchy is cut into contiguous ranges
+//! of splits, and each range is walked down by its own cursor, which starts at the finest level
+//! and collapses to the top of its range — the very mesh records the single walk would have
+//! there, so the records and the pyramid do not depend on the thread count. Steps 2–5 then run
+//! over the records, finest split first.
 
 use super::synthesis::{Scratch, decode, predict_local, presmooth_local};
 use super::waves::Waves;
 use super::{Codes, Pyramid, PyramidError, SplitOffsets};
 use crate::mesh::{Mesh, SlotIndex, VertexId};
-use crate::pm::ProgressiveMesh;
+use crate::pm::{PmCursor, ProgressiveMesh};
 use crate::progress::Progress;
 use crate::relax::Relaxation;
 use glam::DVec3;
@@ -53,123 +60,48 @@ impl Pyramid {
         let n_base = pm.n_base_vertices();
         let n_finest = pm.n_vertices();
         let n_splits = n_finest - n_base;
-        let mut cursor = pm.cursor();
+        let cursor = pm.cursor();
         let (surface_area, bbox_diagonal) = surface_stats(cursor.mesh());
 
-        // Records are written finest split first (the order of the collapses), with wide
-        // codes, then copied into storage order (wave by wave) and narrowed at the end.
-        let mut offsets = Vec::with_capacity(n_splits + 1);
-        let mut locals: Vec<u32> = Vec::with_capacity(32 * n_splits);
-        let mut codes: Vec<u32> = Vec::with_capacity(128 * n_splits);
-        let mut weights: Vec<f64> = Vec::with_capacity(72 * n_splits);
-        let mut details: Vec<DVec3> = Vec::with_capacity(7 * n_splits);
-        let push_offsets = |o: &mut Vec<SplitOffsets>, l: usize, c: usize, w: usize, d: usize| {
-            o.push(SplitOffsets {
-                locals: l,
-                codes: c,
-                weights: w,
-                details: d,
-            })
+        // Step 1 for every split, then the storage order: wave by wave (see `waves`).
+        let ranges = split_ranges(n_splits, rayon::current_num_threads());
+        let records = record_ranges(pm, relaxation, cursor, &ranges, progress)?;
+        let record_of = |k: usize| {
+            let r = ranges.partition_point(|r| r.end <= k);
+            (&records[r], ranges[r].end - 1 - k)
         };
+        let waves = Waves::schedule(n_splits, signal.len(), |k| {
+            let (rec, i) = record_of(k);
+            let (o, next) = (rec.offsets[i], rec.offsets[i + 1]);
+            (&rec.locals[o.locals..next.locals], next.details - o.details)
+        });
+        let slotted = Records::in_slot_order(&records, &waves, record_of);
+        drop(records);
 
+        // Steps 2–5, finest split first: the reverse of storage order, which, like split
+        // order, runs every split after the splits it depends on.
         let mut f = signal.to_vec();
+        let mut details = vec![DVec3::ZERO; slotted.offsets.last().map_or(0, |o| o.details)];
         let mut scratch = Scratch::default();
-        let mut stencils = Vec::new();
-        let mut stencil_lens = Vec::new();
-        let mut touched: Vec<VertexId> = Vec::new();
-        // PM vertex → its index in the current split's local table (u32::MAX: not in it).
-        let mut local_of = vec![u32::MAX; geometry.len()];
-        let report_every = (n_splits / 200).max(1);
-        for (done, k) in (0..n_splits).rev().enumerate() {
-            if done % report_every == 0 {
-                progress.update(done as f64 / n_splits.max(1) as f64);
-            }
-            let v = n_base + k;
-            if cursor.level() != v + 1 {
-                return Err(PyramidError::Internal(format!(
-                    "cursor at level {} while analysing level {}",
-                    cursor.level(),
-                    v + 1
-                )));
-            }
-            let survivor = pm.splits()[k].survivor;
-            let mesh = cursor.mesh();
-            let vh = cursor.vertex(v);
-            push_offsets(
-                &mut offsets,
-                locals.len(),
-                codes.len(),
-                weights.len(),
-                details.len(),
-            );
-            let (l0, c0, w0) = (locals.len(), codes.len(), weights.len());
-            // 1. The touched vertices (v, then its ring CCW) open the local table; their
-            //    stencils and fans (indices into the table) follow, weights alongside.
-            touched.clear();
-            touched.push(vh);
-            touched.extend(mesh.outgoing(vh).map(|h| mesh.to_vertex(h)));
-            let mut local = |u: usize, locals: &mut Vec<u32>| {
-                if local_of[u] == u32::MAX {
-                    local_of[u] = (locals.len() - l0) as u32;
-                    locals.push(u as u32);
-                }
-                local_of[u]
-            };
-            for &j in &touched {
-                local(j.slot(), &mut locals);
-            }
-            let Some(survivor_local) = touched.iter().position(|j| j.slot() == survivor as usize)
-            else {
-                return Err(PyramidError::Internal(format!(
-                    "split {k}: vertex {v} is not adjacent to its survivor {survivor}"
-                )));
-            };
-            if vh.slot() != v || survivor_local == 0 {
-                return Err(PyramidError::Internal(format!(
-                    "split {k}: vertex {v} has PM slot {}",
-                    vh.slot()
-                )));
-            }
-            codes.push(touched.len() as u32);
-            codes.push(survivor_local as u32);
-            stencils.clear();
-            stencil_lens.clear();
-            relaxation.stencils(mesh, geometry, &touched, &mut stencils, &mut stencil_lens);
-            let mut next_stencil = 0;
-            for (&j, &len) in touched.iter().zip(&stencil_lens) {
-                let len_at = codes.len();
-                codes.extend([0, 0]);
-                for &(u, w) in &stencils[next_stencil..next_stencil + len] {
-                    let x = local(u.slot(), &mut locals);
-                    codes.push(x);
-                    weights.push(w);
-                }
-                next_stencil += len;
-                let mut first = None;
-                let fan_at = codes.len();
-                for h in mesh.outgoing(j) {
-                    first.get_or_insert(h);
-                    let x = local(mesh.to_vertex(h).slot(), &mut locals);
-                    codes.push(x);
-                }
-                let open = first.is_some_and(|h| mesh.is_boundary_halfedge(h));
-                codes[len_at] = (fan_at - len_at - 2) as u32;
-                codes[len_at + 1] = ((codes.len() - fan_at) as u32) << 1 | open as u32;
-            }
-            for &u in &locals[l0..] {
-                local_of[u as usize] = u32::MAX;
-            }
-            let t = touched.len();
-            let table = &locals[l0..];
-            let decoded = decode(&codes, c0, w0, &mut scratch.entries);
-            debug_assert_eq!(decoded, survivor_local);
+        for slot in (0..n_splits).rev() {
+            let (o, next) = (slotted.offsets[slot], slotted.offsets[slot + 1]);
+            let table = &slotted.locals[o.locals..next.locals];
+            let t = next.details - o.details;
+            let survivor = decode(&slotted.codes, o.codes, o.weights, &mut scratch.entries);
             // 2. Presmooth the ring from f^(n); remember f^(n) on the touched vertices.
             let g = &mut scratch.g;
             g.clear();
             g.extend(table.iter().map(|&x| f[x as usize]));
             scratch.saved.clear();
             scratch.saved.extend_from_slice(&g[..t]);
-            presmooth_local(&codes, &weights, &scratch.entries, g, &mut scratch.smoothed);
+            let weights = &slotted.weights;
+            presmooth_local(
+                &slotted.codes,
+                weights,
+                &scratch.entries,
+                g,
+                &mut scratch.smoothed,
+            );
             // 3. Downsample: f^(n−1) is the presmoothed ring; the removed vertex is gone (its
             //    value is never read again: the prediction starts it at its survivor).
             g[1..t].copy_from_slice(&scratch.smoothed);
@@ -178,47 +110,20 @@ impl Pyramid {
             }
             // 4. Predict, 5. details in the frames of the predicted geometry.
             predict_local(
-                &codes,
-                &weights,
+                &slotted.codes,
+                weights,
                 &scratch.entries,
-                survivor_local,
+                survivor,
                 g,
                 &mut scratch.q,
                 &mut scratch.frames,
             );
-            for i in 0..t {
-                let d = scratch.saved[i] - scratch.q[i];
-                details.push(scratch.frames[i].to_local(d));
-            }
-            if !cursor.collapse() {
-                return Err(PyramidError::Internal(format!(
-                    "cannot collapse level {}",
-                    v + 1
-                )));
+            for (i, d) in details[o.details..next.details].iter_mut().enumerate() {
+                *d = scratch.frames[i].to_local(scratch.saved[i] - scratch.q[i]);
             }
         }
-        push_offsets(
-            &mut offsets,
-            locals.len(),
-            codes.len(),
-            weights.len(),
-            details.len(),
-        );
         progress.update(1.0);
 
-        // Storage order: wave by wave (see `waves`); analysis wrote split k at n_splits − 1 − k.
-        let waves = Waves::schedule(n_splits, signal.len(), |k| {
-            let (o, next) = (offsets[n_splits - 1 - k], offsets[n_splits - k]);
-            (&locals[o.locals..next.locals], next.details - o.details)
-        });
-        let slotted = Records {
-            offsets,
-            locals,
-            codes,
-            weights,
-            details,
-        }
-        .in_slot_order(&waves);
         let codes = slotted.codes;
         let widest = codes.iter().copied().max().unwrap_or(0);
         let codes = if widest <= u8::MAX as u32 {
@@ -237,7 +142,7 @@ impl Pyramid {
             locals: slotted.locals,
             codes,
             weights: slotted.weights,
-            details: slotted.details,
+            details,
             waves,
             relaxation: relaxation.name(),
             surface_area,
@@ -246,62 +151,230 @@ impl Pyramid {
     }
 }
 
-/// The per-split streams of a pyramid being built (codes still 32-bit).
+/// Splits per range below which one thread records them all: a range's cursor is built at the
+/// finest level and collapses to the top of its range first, which only pays off on long ranges.
+const SPLITS_PER_RANGE: usize = 1024;
+
+/// Cuts splits `0..n_splits` into at most `threads` contiguous ranges of near-equal length,
+/// coarsest first.
+fn split_ranges(n_splits: usize, threads: usize) -> Vec<std::ops::Range<usize>> {
+    let n = threads.clamp(1, (n_splits / SPLITS_PER_RANGE).max(1));
+    (0..n)
+        .map(|r| r * n_splits / n..(r + 1) * n_splits / n)
+        .collect()
+}
+
+/// Step 1 for every range of splits (coarsest range first), each range on its own thread
+/// with its own cursor; `cursor` (at the finest level) serves the finest range. Progress is
+/// reported by the finest range's walk.
+fn record_ranges(
+    pm: &ProgressiveMesh,
+    relaxation: &dyn Relaxation,
+    cursor: PmCursor<'_>,
+    ranges: &[std::ops::Range<usize>],
+    progress: &dyn Progress,
+) -> Result<Vec<Records>, PyramidError> {
+    use rayon::prelude::*;
+    let finest = ranges.len() - 1;
+    let mut cursors: Vec<Option<PmCursor<'_>>> = ranges.iter().map(|_| None).collect();
+    cursors[finest] = Some(cursor);
+    cursors
+        .into_par_iter()
+        .zip(ranges)
+        .enumerate()
+        .map(|(r, (cursor, range))| {
+            let mut cursor = cursor.unwrap_or_else(|| pm.cursor());
+            cursor.seek(pm.n_base_vertices() + range.end);
+            let quiet = crate::progress::NoProgress;
+            let report: &dyn Progress = if r == finest { progress } else { &quiet };
+            record_range(pm, relaxation, cursor, range.clone(), report)
+        })
+        .collect()
+}
+
+/// Step 1 for splits `range` (walked finest first, `cursor` at level `n0 + range.end`): the
+/// local tables, codes and weights of each split, in that order, with `details` offsets
+/// counting the touched vertices.
+fn record_range(
+    pm: &ProgressiveMesh,
+    relaxation: &dyn Relaxation,
+    mut cursor: PmCursor<'_>,
+    range: std::ops::Range<usize>,
+    progress: &dyn Progress,
+) -> Result<Records, PyramidError> {
+    let geometry = pm.original_positions();
+    let n_base = pm.n_base_vertices();
+    let n = range.len();
+    let mut rec = Records {
+        offsets: Vec::with_capacity(n + 1),
+        locals: Vec::with_capacity(32 * n),
+        codes: Vec::with_capacity(128 * n),
+        weights: Vec::with_capacity(72 * n),
+    };
+    let mut stencils = Vec::new();
+    let mut stencil_lens = Vec::new();
+    let mut touched: Vec<VertexId> = Vec::new();
+    let mut n_touched = 0;
+    // PM vertex → its index in the current split's local table (u32::MAX: not in it).
+    let mut local_of = vec![u32::MAX; geometry.len()];
+    let report_every = (n / 200).max(1);
+    for (done, k) in range.rev().enumerate() {
+        if done % report_every == 0 {
+            progress.update(0.9 * done as f64 / n.max(1) as f64);
+        }
+        let v = n_base + k;
+        if cursor.level() != v + 1 {
+            return Err(PyramidError::Internal(format!(
+                "cursor at level {} while analysing level {}",
+                cursor.level(),
+                v + 1
+            )));
+        }
+        let survivor = pm.splits()[k].survivor;
+        let mesh = cursor.mesh();
+        let vh = cursor.vertex(v);
+        let (locals, codes, weights) = (&mut rec.locals, &mut rec.codes, &mut rec.weights);
+        rec.offsets.push(SplitOffsets {
+            locals: locals.len(),
+            codes: codes.len(),
+            weights: weights.len(),
+            details: n_touched,
+        });
+        let l0 = locals.len();
+        // The touched vertices (v, then its ring CCW) open the local table; their stencils
+        // and fans (indices into the table) follow, weights alongside.
+        touched.clear();
+        touched.push(vh);
+        touched.extend(mesh.outgoing(vh).map(|h| mesh.to_vertex(h)));
+        let mut local = |u: usize, locals: &mut Vec<u32>| {
+            if local_of[u] == u32::MAX {
+                local_of[u] = (locals.len() - l0) as u32;
+                locals.push(u as u32);
+            }
+            local_of[u]
+        };
+        for &j in &touched {
+            local(j.slot(), locals);
+        }
+        let Some(survivor_local) = touched.iter().position(|j| j.slot() == survivor as usize)
+        else {
+            return Err(PyramidError::Internal(format!(
+                "split {k}: vertex {v} is not adjacent to its survivor {survivor}"
+            )));
+        };
+        if vh.slot() != v || survivor_local == 0 {
+            return Err(PyramidError::Internal(format!(
+                "split {k}: vertex {v} has PM slot {}",
+                vh.slot()
+            )));
+        }
+        codes.push(touched.len() as u32);
+        codes.push(survivor_local as u32);
+        stencils.clear();
+        stencil_lens.clear();
+        relaxation.stencils(mesh, geometry, &touched, &mut stencils, &mut stencil_lens);
+        let mut next_stencil = 0;
+        for (&j, &len) in touched.iter().zip(&stencil_lens) {
+            let len_at = codes.len();
+            codes.extend([0, 0]);
+            for &(u, w) in &stencils[next_stencil..next_stencil + len] {
+                let x = local(u.slot(), locals);
+                codes.push(x);
+                weights.push(w);
+            }
+            next_stencil += len;
+            let mut first = None;
+            let fan_at = codes.len();
+            for h in mesh.outgoing(j) {
+                first.get_or_insert(h);
+                let x = local(mesh.to_vertex(h).slot(), locals);
+                codes.push(x);
+            }
+            let open = first.is_some_and(|h| mesh.is_boundary_halfedge(h));
+            codes[len_at] = (fan_at - len_at - 2) as u32;
+            codes[len_at + 1] = ((codes.len() - fan_at) as u32) << 1 | open as u32;
+        }
+        for &u in &locals[l0..] {
+            local_of[u as usize] = u32::MAX;
+        }
+        n_touched += touched.len();
+        if !cursor.collapse() {
+            return Err(PyramidError::Internal(format!(
+                "cannot collapse level {}",
+                v + 1
+            )));
+        }
+    }
+    rec.offsets.push(SplitOffsets {
+        locals: rec.locals.len(),
+        codes: rec.codes.len(),
+        weights: rec.weights.len(),
+        details: n_touched,
+    });
+    Ok(rec)
+}
+
+/// The signal-independent per-split streams of a pyramid being built (codes still 32-bit);
+/// the `details` offsets count the touched vertices, whose details come later.
 struct Records {
     offsets: Vec<SplitOffsets>,
     locals: Vec<u32>,
     codes: Vec<u32>,
     weights: Vec<f64>,
-    details: Vec<DVec3>,
 }
 
 impl Records {
-    /// The records, written by the analysis finest split first, copied into the slots `waves`
-    /// assigns them. Streams are copied one at a time, so the peak memory is the records plus
-    /// the largest stream.
-    fn in_slot_order(self, waves: &Waves) -> Records {
-        let offsets = &self.offsets;
-        let n_splits = offsets.len().saturating_sub(1);
-        // The analysis position of the record stored at each slot.
-        let position = |slot: usize| n_splits - 1 - waves.split_at(slot);
-        fn gather<T: Copy>(
-            from: Vec<T>,
+    /// The records of all ranges copied into the slots `waves` assigns them; `record_of(k)`
+    /// names the range record holding split `k` and its position there. Streams are copied
+    /// one at a time, so the peak memory is the records plus the largest stream.
+    fn in_slot_order<'a>(
+        ranges: &[Records],
+        waves: &Waves,
+        record_of: impl Fn(usize) -> (&'a Records, usize),
+    ) -> Records {
+        let n_splits: usize = ranges.iter().map(|r| r.offsets.len() - 1).sum();
+        let at = |slot: usize| record_of(waves.split_at(slot));
+        fn gather<'r, T: Copy + 'r>(
             n_splits: usize,
-            range: impl Fn(usize) -> std::ops::Range<usize>,
+            total: usize,
+            record: impl Fn(usize) -> &'r [T],
         ) -> Vec<T> {
-            let mut to = Vec::with_capacity(from.len());
+            let mut to = Vec::with_capacity(total);
             for slot in 0..n_splits {
-                to.extend_from_slice(&from[range(slot)]);
+                to.extend_from_slice(record(slot));
             }
             to
         }
-        let field = |get: fn(&SplitOffsets) -> usize| {
-            move |slot: usize| {
-                let i = position(slot);
-                get(&offsets[i])..get(&offsets[i + 1])
-            }
-        };
-        let locals = gather(self.locals, n_splits, field(|o| o.locals));
-        let codes = gather(self.codes, n_splits, field(|o| o.codes));
-        let weights = gather(self.weights, n_splits, field(|o| o.weights));
-        let details = gather(self.details, n_splits, field(|o| o.details));
-        let mut at = SplitOffsets::default();
-        let mut slotted = Vec::with_capacity(n_splits + 1);
-        slotted.push(at);
+        let total = |get: fn(&Records) -> usize| ranges.iter().map(get).sum::<usize>();
+        let locals = gather(n_splits, total(|r| r.locals.len()), |slot| {
+            let (r, i) = at(slot);
+            &r.locals[r.offsets[i].locals..r.offsets[i + 1].locals]
+        });
+        let codes = gather(n_splits, total(|r| r.codes.len()), |slot| {
+            let (r, i) = at(slot);
+            &r.codes[r.offsets[i].codes..r.offsets[i + 1].codes]
+        });
+        let weights = gather(n_splits, total(|r| r.weights.len()), |slot| {
+            let (r, i) = at(slot);
+            &r.weights[r.offsets[i].weights..r.offsets[i + 1].weights]
+        });
+        let mut next = SplitOffsets::default();
+        let mut offsets = Vec::with_capacity(n_splits + 1);
+        offsets.push(next);
         for slot in 0..n_splits {
-            let (o, next) = (offsets[position(slot)], offsets[position(slot) + 1]);
-            at.locals += next.locals - o.locals;
-            at.codes += next.codes - o.codes;
-            at.weights += next.weights - o.weights;
-            at.details += next.details - o.details;
-            slotted.push(at);
+            let (r, i) = at(slot);
+            let (o, end) = (r.offsets[i], r.offsets[i + 1]);
+            next.locals += end.locals - o.locals;
+            next.codes += end.codes - o.codes;
+            next.weights += end.weights - o.weights;
+            next.details += end.details - o.details;
+            offsets.push(next);
         }
         Records {
-            offsets: slotted,
+            offsets,
             locals,
             codes,
             weights,
-            details,
         }
     }
 }

@@ -36,7 +36,7 @@ pub fn relax_by_stencils<R: Relaxation + ?Sized>(
 }
 
 /// A local smoothing operator on mesh vertices.
-pub trait Relaxation {
+pub trait Relaxation: Sync {
     /// Short name used on the command line (`second-difference`, `mcm`, `normal`).
     fn name(&self) -> &'static str;
 
