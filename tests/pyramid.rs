@@ -392,8 +392,9 @@ fn memory_is_compact_and_synthesis_deterministic() {
 
 #[test]
 fn analysis_gives_the_same_pyramid_on_any_thread_count() {
-    // The records are cut into one range of splits per thread, each walked by its own cursor;
-    // the pyramid (storage order, base, every detail) must not depend on how many there are.
+    // The records are cut into one range of splits per thread, each walked by its own cursor,
+    // and large waves are downsampled in blocks on the pool; the pyramid (storage order, base,
+    // every detail) must not depend on how many threads there are.
     let (p, t) = bumpy_sphere(4, 0.01);
     let (pm, _) = pyramid_of(&p, &t);
     // Two ranges of at least 1024 splits (the analysis' minimum) on 2 and 3 threads.

@@ -16,7 +16,8 @@
 //! of splits, and each range is walked down by its own cursor, which starts at the finest level
 //! and collapses to the top of its range — the very mesh records the single walk would have
 //! there, so the records and the pyramid do not depend on the thread count. Steps 2–5 then run
-//! over the records, finest split first.
+//! over the records, finest split first; like synthesis, they run the splits of a wave (see
+//! `waves`) at once, in reverse.
 
 use super::synthesis::{Scratch, decode, predict_local, presmooth_local};
 use super::waves::Waves;
@@ -78,50 +79,11 @@ impl Pyramid {
         let slotted = Records::in_slot_order(&records, &waves, record_of);
         drop(records);
 
-        // Steps 2–5, finest split first: the reverse of storage order, which, like split
+        // Steps 2–5, finest split first: waves in reverse storage order, which, like split
         // order, runs every split after the splits it depends on.
         let mut f = signal.to_vec();
         let mut details = vec![DVec3::ZERO; slotted.offsets.last().map_or(0, |o| o.details)];
-        let mut scratch = Scratch::default();
-        for slot in (0..n_splits).rev() {
-            let (o, next) = (slotted.offsets[slot], slotted.offsets[slot + 1]);
-            let table = &slotted.locals[o.locals..next.locals];
-            let t = next.details - o.details;
-            let survivor = decode(&slotted.codes, o.codes, o.weights, &mut scratch.entries);
-            // 2. Presmooth the ring from f^(n); remember f^(n) on the touched vertices.
-            let g = &mut scratch.g;
-            g.clear();
-            g.extend(table.iter().map(|&x| f[x as usize]));
-            scratch.saved.clear();
-            scratch.saved.extend_from_slice(&g[..t]);
-            let weights = &slotted.weights;
-            presmooth_local(
-                &slotted.codes,
-                weights,
-                &scratch.entries,
-                g,
-                &mut scratch.smoothed,
-            );
-            // 3. Downsample: f^(n−1) is the presmoothed ring; the removed vertex is gone (its
-            //    value is never read again: the prediction starts it at its survivor).
-            g[1..t].copy_from_slice(&scratch.smoothed);
-            for (&x, &s) in table[1..t].iter().zip(&scratch.smoothed) {
-                f[x as usize] = s;
-            }
-            // 4. Predict, 5. details in the frames of the predicted geometry.
-            predict_local(
-                &slotted.codes,
-                weights,
-                &scratch.entries,
-                survivor,
-                g,
-                &mut scratch.q,
-                &mut scratch.frames,
-            );
-            for (i, d) in details[o.details..next.details].iter_mut().enumerate() {
-                *d = scratch.frames[i].to_local(scratch.saved[i] - scratch.q[i]);
-            }
-        }
+        slotted.downsample(&waves, &mut f, &mut details);
         progress.update(1.0);
 
         let codes = slotted.codes;
@@ -375,6 +337,130 @@ impl Records {
             locals,
             codes,
             weights,
+        }
+    }
+}
+
+/// Waves with fewer splits than this run on the calling thread (as in synthesis).
+const PARALLEL_WAVE: usize = 24;
+
+impl Records {
+    /// Steps 2–5 of the split stored at `slot`, reading `f = f^(n)`: appends the presmoothed
+    /// values of its 1-ring (`f^(n−1)` there) to `smoothed` and its details to `details`.
+    fn split_details(
+        &self,
+        slot: usize,
+        f: &[DVec3],
+        scratch: &mut Scratch,
+        smoothed: &mut Vec<DVec3>,
+        details: &mut Vec<DVec3>,
+    ) {
+        let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
+        let table = &self.locals[o.locals..next.locals];
+        let t = next.details - o.details;
+        let survivor = decode(&self.codes, o.codes, o.weights, &mut scratch.entries);
+        // 2. Presmooth the ring from f^(n); remember f^(n) on the touched vertices.
+        let g = &mut scratch.g;
+        g.clear();
+        g.extend(table.iter().map(|&x| f[x as usize]));
+        scratch.saved.clear();
+        scratch.saved.extend_from_slice(&g[..t]);
+        presmooth_local(
+            &self.codes,
+            &self.weights,
+            &scratch.entries,
+            g,
+            &mut scratch.smoothed,
+        );
+        // 3. Downsample: f^(n−1) is the presmoothed ring; the removed vertex is gone (its
+        //    value is never read again: the prediction starts it at its survivor).
+        g[1..t].copy_from_slice(&scratch.smoothed);
+        smoothed.extend_from_slice(&scratch.smoothed);
+        // 4. Predict, 5. details in the frames of the predicted geometry.
+        predict_local(
+            &self.codes,
+            &self.weights,
+            &scratch.entries,
+            survivor,
+            g,
+            &mut scratch.q,
+            &mut scratch.frames,
+        );
+        details.extend((0..t).map(|i| scratch.frames[i].to_local(scratch.saved[i] - scratch.q[i])));
+    }
+
+    /// Writes what [`Records::split_details`] computed for `slots` (in that order): the
+    /// smoothed rings into `f`, the details into their places in `details`.
+    fn write_back(
+        &self,
+        slots: std::ops::Range<usize>,
+        smoothed: &[DVec3],
+        split_details: &[DVec3],
+        f: &mut [DVec3],
+        details: &mut [DVec3],
+    ) {
+        let (first, end) = (self.offsets[slots.start], self.offsets[slots.end]);
+        details[first.details..end.details].copy_from_slice(split_details);
+        let mut smoothed = smoothed.iter();
+        for slot in slots {
+            let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
+            let ring = &self.locals[o.locals + 1..o.locals + (next.details - o.details)];
+            for (&x, &s) in ring.iter().zip(smoothed.by_ref()) {
+                f[x as usize] = s;
+            }
+        }
+    }
+
+    /// Steps 2–5 for every split, turning `f = f^(finest)` into the base signal (on the base
+    /// vertices) and filling `details`: waves from the last to the first; the splits of a large
+    /// wave, which read nothing another of them writes, spread over rayon's threads in blocks,
+    /// written back once the wave is done, so the bits are those of split order.
+    fn downsample(&self, waves: &Waves, f: &mut [DVec3], details: &mut [DVec3]) {
+        use rayon::prelude::*;
+        let n_splits = self.offsets.len() - 1;
+        let threads = rayon::current_num_threads();
+        // (scratch, smoothed rings, details) per block; two blocks per thread even out splits
+        // of unequal cost.
+        type Block = (Scratch, Vec<DVec3>, Vec<DVec3>);
+        let mut blocks: Vec<Block> = (0..2 * threads).map(|_| Default::default()).collect();
+        let run = |f: &mut [DVec3], details: &mut [DVec3], blocks: &mut [Block]| {
+            for w in (0..waves.len()).rev() {
+                let slots = waves.slots_in(w, &(0..n_splits));
+                if threads == 1 || slots.len() < PARALLEL_WAVE {
+                    let (scratch, smoothed, split_details) = &mut blocks[0];
+                    for slot in slots {
+                        smoothed.clear();
+                        split_details.clear();
+                        self.split_details(slot, f, scratch, smoothed, split_details);
+                        self.write_back(slot..slot + 1, smoothed, split_details, f, details);
+                    }
+                    continue;
+                }
+                let per_block = slots.len().div_ceil(blocks.len());
+                let block_slots = |b: usize| {
+                    let start = slots.start + b * per_block;
+                    start.min(slots.end)..(start + per_block).min(slots.end)
+                };
+                let previous: &[DVec3] = f;
+                blocks.par_iter_mut().enumerate().for_each(
+                    |(b, (scratch, smoothed, split_details))| {
+                        smoothed.clear();
+                        split_details.clear();
+                        for slot in block_slots(b) {
+                            self.split_details(slot, previous, scratch, smoothed, split_details);
+                        }
+                    },
+                );
+                for (b, (_, smoothed, split_details)) in blocks.iter().enumerate() {
+                    self.write_back(block_slots(b), smoothed, split_details, f, details);
+                }
+            }
+        };
+        if threads == 1 || n_splits < PARALLEL_WAVE {
+            run(f, details, &mut blocks);
+        } else {
+            // One hand-over into rayon's pool for all waves (see synthesis).
+            rayon::scope(|_| run(f, details, &mut blocks));
         }
     }
 }
