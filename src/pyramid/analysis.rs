@@ -20,7 +20,7 @@
 //! `waves`) at once, in reverse.
 
 use super::synthesis::{Scratch, decode, predict_local, presmooth_local};
-use super::waves::Waves;
+use super::waves::{Waves, run_waves};
 use super::{Codes, Pyramid, PyramidError, SplitOffsets};
 use crate::mesh::{Mesh, SlotIndex, VertexId};
 use crate::pm::{PmCursor, ProgressiveMesh};
@@ -341,9 +341,6 @@ impl Records {
     }
 }
 
-/// Waves with fewer splits than this run on the calling thread (as in synthesis).
-const PARALLEL_WAVE: usize = 24;
-
 impl Records {
     /// Steps 2–5 of the split stored at `slot`, reading `f = f^(n)`: appends the presmoothed
     /// values of its 1-ring (`f^(n−1)` there) to `smoothed` and its details to `details`.
@@ -412,56 +409,26 @@ impl Records {
     }
 
     /// Steps 2–5 for every split, turning `f = f^(finest)` into the base signal (on the base
-    /// vertices) and filling `details`: waves from the last to the first; the splits of a large
-    /// wave, which read nothing another of them writes, spread over rayon's threads in blocks,
-    /// written back once the wave is done, so the bits are those of split order.
+    /// vertices) and filling `details`: waves from the last to the first, large waves on
+    /// rayon's threads (see [`run_waves`]).
     fn downsample(&self, waves: &Waves, f: &mut [DVec3], details: &mut [DVec3]) {
-        use rayon::prelude::*;
         let n_splits = self.offsets.len() - 1;
-        let threads = rayon::current_num_threads();
-        // (scratch, smoothed rings, details) per block; two blocks per thread even out splits
-        // of unequal cost.
+        let all = 0..n_splits;
+        // Per block: scratch, smoothed rings, details.
         type Block = (Scratch, Vec<DVec3>, Vec<DVec3>);
-        let mut blocks: Vec<Block> = (0..2 * threads).map(|_| Default::default()).collect();
-        let run = |f: &mut [DVec3], details: &mut [DVec3], blocks: &mut [Block]| {
-            for w in (0..waves.len()).rev() {
-                let slots = waves.slots_in(w, &(0..n_splits));
-                if threads == 1 || slots.len() < PARALLEL_WAVE {
-                    let (scratch, smoothed, split_details) = &mut blocks[0];
-                    for slot in slots {
-                        smoothed.clear();
-                        split_details.clear();
-                        self.split_details(slot, f, scratch, smoothed, split_details);
-                        self.write_back(slot..slot + 1, smoothed, split_details, f, details);
-                    }
-                    continue;
-                }
-                let per_block = slots.len().div_ceil(blocks.len());
-                let block_slots = |b: usize| {
-                    let start = slots.start + b * per_block;
-                    start.min(slots.end)..(start + per_block).min(slots.end)
-                };
-                let previous: &[DVec3] = f;
-                blocks.par_iter_mut().enumerate().for_each(
-                    |(b, (scratch, smoothed, split_details))| {
-                        smoothed.clear();
-                        split_details.clear();
-                        for slot in block_slots(b) {
-                            self.split_details(slot, previous, scratch, smoothed, split_details);
-                        }
-                    },
-                );
-                for (b, (_, smoothed, split_details)) in blocks.iter().enumerate() {
-                    self.write_back(block_slots(b), smoothed, split_details, f, details);
-                }
-            }
-        };
-        if threads == 1 || n_splits < PARALLEL_WAVE {
-            run(f, details, &mut blocks);
-        } else {
-            // One hand-over into rayon's pool for all waves (see synthesis).
-            rayon::scope(|_| run(f, details, &mut blocks));
-        }
+        run_waves(
+            &mut (f, details),
+            (0..waves.len()).rev().map(|w| waves.slots_in(w, &all)),
+            n_splits,
+            |slot, (f, _), (scratch, smoothed, split_details): &mut Block| {
+                self.split_details(slot, f, scratch, smoothed, split_details)
+            },
+            |slots, (_, smoothed, split_details), (f, details)| {
+                self.write_back(slots, smoothed, split_details, f, details);
+                smoothed.clear();
+                split_details.clear();
+            },
+        );
     }
 }
 

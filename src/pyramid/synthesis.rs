@@ -14,6 +14,7 @@
 
 use super::frames::{Frame, LocalIndex, vertex_frame};
 use super::gains::LevelGains;
+use super::waves::run_waves;
 use super::{Codes, Pyramid, PyramidError};
 use glam::DVec3;
 
@@ -159,10 +160,6 @@ pub(crate) fn predict_local<I: LocalIndex>(
     }
 }
 
-/// Waves with fewer splits than this run on the calling thread: handing a few splits to other
-/// threads costs more than it saves.
-const PARALLEL_WAVE: usize = 24;
-
 impl Pyramid {
     /// Appends to `out` the values the split stored at `slot` gives its touched vertices (the
     /// new vertex, then its 1-ring), computed from `f = f^(n−1)`.
@@ -218,11 +215,8 @@ impl Pyramid {
         }
     }
 
-    /// Synthesis of the splits `splits` on `f`: wave after wave, in storage order; the splits
-    /// of a large wave spread over rayon's threads, each block of them computing into its own
-    /// buffer, written back in block order once the wave is done. Splits of one wave read
-    /// nothing another writes, so the result has the bits of split order whatever the thread
-    /// count.
+    /// Synthesis of the splits `splits` on `f`: wave after wave, in storage order, large waves
+    /// on rayon's threads (see [`run_waves`]).
     fn synthesize_splits<I: LocalIndex>(
         &self,
         codes: &[I],
@@ -230,50 +224,19 @@ impl Pyramid {
         splits: std::ops::Range<usize>,
         gains: &LevelGains,
     ) {
-        use rayon::prelude::*;
-        let threads = rayon::current_num_threads();
-        // Two blocks per thread even out splits of unequal cost.
-        let mut blocks: Vec<(Scratch, Vec<DVec3>)> =
-            (0..2 * threads).map(|_| Default::default()).collect();
-        let run = |f: &mut [DVec3], blocks: &mut [(Scratch, Vec<DVec3>)]| {
-            for w in 0..self.waves.len() {
-                let slots = self.waves.slots_in(w, &splits);
-                if threads == 1 || slots.len() < PARALLEL_WAVE {
-                    let (scratch, out) = &mut blocks[0];
-                    for slot in slots {
-                        out.clear();
-                        self.split_values(codes, slot, f, gains, scratch, out);
-                        self.write_touched(slot..slot + 1, out, f);
-                    }
-                    continue;
-                }
-                let per_block = slots.len().div_ceil(blocks.len());
-                let previous: &[DVec3] = f;
-                let block_slots = |b: usize| {
-                    let start = slots.start + b * per_block;
-                    start.min(slots.end)..(start + per_block).min(slots.end)
-                };
-                blocks
-                    .par_iter_mut()
-                    .enumerate()
-                    .for_each(|(b, (scratch, out))| {
-                        out.clear();
-                        for slot in block_slots(b) {
-                            self.split_values(codes, slot, previous, gains, scratch, out);
-                        }
-                    });
-                for (b, (_, out)) in blocks.iter().enumerate() {
-                    self.write_touched(block_slots(b), out, f);
-                }
-            }
-        };
-        if threads == 1 || splits.len() < PARALLEL_WAVE {
-            run(f, &mut blocks);
-        } else {
-            // One hand-over into rayon's pool for all waves: the wave loop runs on a worker,
-            // so each wave's blocks start without waking the pool from outside.
-            rayon::scope(|_| run(f, &mut blocks));
-        }
+        let waves = (0..self.waves.len()).map(|w| self.waves.slots_in(w, &splits));
+        run_waves(
+            f,
+            waves,
+            splits.len(),
+            |slot, f, (scratch, out): &mut (Scratch, Vec<DVec3>)| {
+                self.split_values(codes, slot, f, gains, scratch, out)
+            },
+            |slots, (_, out), f| {
+                self.write_touched(slots, out, f);
+                out.clear();
+            },
+        );
     }
 }
 

@@ -1,5 +1,5 @@
-//! Waves of independent splits, so synthesis can run on several threads and still give the
-//! bits of the sequential order.
+//! Waves of independent splits, so synthesis and analysis can run on several threads and still
+//! give the bits of the sequential order.
 //!
 //! Split `k` reads the values of its local table and writes those of its touched vertices (the
 //! first `t` entries). Two splits conflict when one writes a vertex the other reads. A split's
@@ -122,6 +122,66 @@ impl Waves {
     /// Heap memory in bytes.
     pub fn memory_bytes(&self) -> usize {
         4 * (self.split_at.len() + self.slot_of.len() + self.starts.len())
+    }
+}
+
+/// Waves with fewer splits than this run on the calling thread: handing a few splits to other
+/// threads costs more than it saves.
+const PARALLEL_WAVE: usize = 24;
+
+/// Runs the splits of `waves` (slot ranges, in the order given) over `target`, with the bits of
+/// running them one at a time in that order. `compute(slot, target, block)` appends what a
+/// split produces to `block`, reading `target` only; `write_back(slots, block, target)` stores
+/// the block's results for `slots` (computed in that order) and empties the block.
+///
+/// A wave of [`PARALLEL_WAVE`] splits or more is cut into two blocks per thread computed on
+/// rayon's pool and written back in block order once all are done: its splits read nothing
+/// another writes, so no block sees another's writes either way. Smaller waves run split by
+/// split on the calling thread.
+pub(crate) fn run_waves<T, B>(
+    target: &mut T,
+    waves: impl Iterator<Item = Range<usize>> + Send,
+    n_splits: usize,
+    compute: impl Fn(usize, &T, &mut B) + Sync,
+    write_back: impl Fn(Range<usize>, &mut B, &mut T) + Sync,
+) where
+    T: ?Sized + Send + Sync,
+    B: Default + Send,
+{
+    use rayon::prelude::*;
+    let threads = rayon::current_num_threads();
+    let mut blocks: Vec<B> = (0..2 * threads).map(|_| B::default()).collect();
+    let run = |target: &mut T, blocks: &mut [B]| {
+        for slots in waves {
+            if threads == 1 || slots.len() < PARALLEL_WAVE {
+                for slot in slots {
+                    compute(slot, target, &mut blocks[0]);
+                    write_back(slot..slot + 1, &mut blocks[0], target);
+                }
+                continue;
+            }
+            let per_block = slots.len().div_ceil(blocks.len());
+            let block_slots = |b: usize| {
+                let start = slots.start + b * per_block;
+                start.min(slots.end)..(start + per_block).min(slots.end)
+            };
+            let previous: &T = target;
+            blocks.par_iter_mut().enumerate().for_each(|(b, block)| {
+                for slot in block_slots(b) {
+                    compute(slot, previous, block);
+                }
+            });
+            for (b, block) in blocks.iter_mut().enumerate() {
+                write_back(block_slots(b), block, target);
+            }
+        }
+    };
+    if threads == 1 || n_splits < PARALLEL_WAVE {
+        run(target, &mut blocks);
+    } else {
+        // One hand-over into rayon's pool for all waves: the wave loop runs on a worker, so
+        // each wave's blocks start without waking the pool from outside.
+        rayon::scope(|_| run(target, &mut blocks));
     }
 }
 
