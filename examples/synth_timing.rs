@@ -9,6 +9,7 @@ use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
 use meshpyr::pyramid::{Filter, LevelSpec, Pyramid, PyramidOptions, ScanPyramid};
 use meshpyr::relax::SecondDifference;
+use std::io::Write;
 use std::path::PathBuf;
 
 /// User + system CPU seconds of the whole process, all threads (Linux `/proc/self/stat`,
@@ -24,6 +25,8 @@ fn cpu_seconds() -> Option<f64> {
 }
 
 fn main() -> anyhow::Result<()> {
+    // Write errors (a closed pipe) end the program with an error instead of a panic.
+    let mut out = std::io::stdout().lock();
     let input = std::env::args().nth(1).map_or_else(
         || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/bunny.ply"),
         PathBuf::from,
@@ -46,7 +49,8 @@ fn main() -> anyhow::Result<()> {
     let wall = w0.elapsed().as_secs_f64() / runs as f64;
     let cpu = cpu_seconds().zip(c0).map(|(a, b)| (a - b) / runs as f64);
     let per_million = |t: f64| t / p.n_splits() as f64 * 1e6;
-    println!(
+    writeln!(
+        out,
         "{} splits: synthesis wall {:.1} ms ({:.3} s per million), CPU {}",
         p.n_splits(),
         wall * 1e3,
@@ -56,12 +60,13 @@ fn main() -> anyhow::Result<()> {
             c * 1e3,
             per_million(c)
         ))
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "pyramid memory: {:.1} MB ({:.0} bytes per vertex)",
         p.memory_bytes() as f64 / 1e6,
         p.memory_bytes() as f64 / p.n_vertices() as f64
-    );
+    )?;
     // Analysis vs PM build, process CPU time, median of 3.
     let mesh = Mesh::from_polygons(&meshpyr::io::read_mesh(&input)?)?.mesh;
     let median = |mut t: Vec<f64>| {
@@ -91,17 +96,19 @@ fn main() -> anyhow::Result<()> {
     let analysis = time(&mut || {
         std::hint::black_box(Pyramid::analyze(&pm, &relax, &NoProgress).ok());
     });
-    println!(
+    writeln!(
+        out,
         "process CPU: PM build {:.0} ms, analysis {:.0} ms ({:.2}x the PM build)",
         build.0 * 1e3,
         analysis.0 * 1e3,
         analysis.0 / build.0
-    );
-    println!(
+    )?;
+    writeln!(
+        out,
         "wall: PM build {:.0} ms, analysis {:.0} ms ({:.2}x the PM build)",
         build.1 * 1e3,
         analysis.1 * 1e3,
         analysis.1 / build.1
-    );
+    )?;
     Ok(())
 }

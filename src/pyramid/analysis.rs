@@ -83,7 +83,7 @@ impl Pyramid {
         // order, runs every split after the splits it depends on.
         let mut f = signal.to_vec();
         let mut details = vec![DVec3::ZERO; slotted.offsets.last().map_or(0, |o| o.details)];
-        slotted.downsample(&waves, &mut f, &mut details);
+        slotted.downsample(&waves, &mut f, &mut details, progress);
         progress.update(1.0);
 
         let codes = slotted.codes;
@@ -112,6 +112,10 @@ impl Pyramid {
         })
     }
 }
+
+/// The share of the analysis' time the records take (the progress bar's split between the
+/// two phases; about two thirds with Guskov's operator).
+const RECORDS_SHARE: f64 = 0.7;
 
 /// Splits per range below which one thread records them all: a range's cursor is built at the
 /// finest level and collapses to the top of its range first, which only pays off on long ranges.
@@ -182,7 +186,7 @@ fn record_range(
     let report_every = (n / 200).max(1);
     for (done, k) in range.rev().enumerate() {
         if done % report_every == 0 {
-            progress.update(0.9 * done as f64 / n.max(1) as f64);
+            progress.update(RECORDS_SHARE * done as f64 / n.max(1) as f64);
         }
         let v = n_base + k;
         if cursor.level() != v + 1 {
@@ -411,14 +415,26 @@ impl Records {
     /// Steps 2–5 for every split, turning `f = f^(finest)` into the base signal (on the base
     /// vertices) and filling `details`: waves from the last to the first, large waves on
     /// rayon's threads (see [`run_waves`]).
-    fn downsample(&self, waves: &Waves, f: &mut [DVec3], details: &mut [DVec3]) {
+    fn downsample(
+        &self,
+        waves: &Waves,
+        f: &mut [DVec3],
+        details: &mut [DVec3],
+        progress: &dyn Progress,
+    ) {
         let n_splits = self.offsets.len() - 1;
         let all = 0..n_splits;
+        let in_order = (0..waves.len()).rev().map(|w| {
+            let slots = waves.slots_in(w, &all);
+            let done = (n_splits - slots.end) as f64 / n_splits.max(1) as f64;
+            progress.update(RECORDS_SHARE + (1.0 - RECORDS_SHARE) * done);
+            slots
+        });
         // Per block: scratch, smoothed rings, details.
         type Block = (Scratch, Vec<DVec3>, Vec<DVec3>);
         run_waves(
             &mut (f, details),
-            (0..waves.len()).rev().map(|w| waves.slots_in(w, &all)),
+            in_order,
             n_splits,
             |slot, (f, _), (scratch, smoothed, split_details): &mut Block| {
                 self.split_details(slot, f, scratch, smoothed, split_details)
