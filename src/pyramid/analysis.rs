@@ -19,6 +19,7 @@
 //! over the records, finest split first; like synthesis, they run the splits of a wave (see
 //! `waves`) at once, in reverse.
 
+use super::frames::FRAME_LENGTH_FLOOR;
 use super::synthesis::{Scratch, decode, predict_local, presmooth_local};
 use super::waves::{Waves, run_waves};
 use super::{Codes, Pyramid, PyramidError, SplitOffsets};
@@ -83,7 +84,8 @@ impl Pyramid {
         // order, runs every split after the splits it depends on.
         let mut f = signal.to_vec();
         let mut details = vec![DVec3::ZERO; slotted.offsets.last().map_or(0, |o| o.details)];
-        slotted.downsample(&waves, &mut f, &mut details, progress);
+        let min_length = FRAME_LENGTH_FLOOR * bbox_diagonal;
+        slotted.downsample(&waves, &mut f, &mut details, min_length, progress);
         progress.update(1.0);
 
         let codes = slotted.codes;
@@ -347,11 +349,13 @@ impl Records {
 
 impl Records {
     /// Steps 2–5 of the split stored at `slot`, reading `f = f^(n)`: appends the presmoothed
-    /// values of its 1-ring (`f^(n−1)` there) to `smoothed` and its details to `details`.
+    /// values of its 1-ring (`f^(n−1)` there) to `smoothed` and its details to `details`
+    /// (`min_length`: see [`vertex_frame`](super::frames::vertex_frame)).
     fn split_details(
         &self,
         slot: usize,
         f: &[DVec3],
+        min_length: f64,
         scratch: &mut Scratch,
         smoothed: &mut Vec<DVec3>,
         details: &mut Vec<DVec3>,
@@ -386,6 +390,7 @@ impl Records {
             g,
             &mut scratch.q,
             &mut scratch.frames,
+            min_length,
         );
         details.extend((0..t).map(|i| scratch.frames[i].to_local(scratch.saved[i] - scratch.q[i])));
     }
@@ -420,6 +425,7 @@ impl Records {
         waves: &Waves,
         f: &mut [DVec3],
         details: &mut [DVec3],
+        min_length: f64,
         progress: &dyn Progress,
     ) {
         let n_splits = self.offsets.len() - 1;
@@ -437,7 +443,7 @@ impl Records {
             in_order,
             n_splits,
             |slot, (f, _), (scratch, smoothed, split_details): &mut Block| {
-                self.split_details(slot, f, scratch, smoothed, split_details)
+                self.split_details(slot, f, min_length, scratch, smoothed, split_details)
             },
             |slots, (_, smoothed, split_details), (f, details)| {
                 self.write_back(slots, smoothed, split_details, f, details);

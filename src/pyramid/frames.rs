@@ -13,8 +13,16 @@
 //!   perpendicular to `n`;
 //! * `t2 = n × t1`.
 //!
-//! A fan whose normal vanishes (all triangles degenerate in `G`) gets the world frame. Any fixed
-//! rule reconstructs perfectly; these keep the frames stable.
+//! A fan whose normal vanishes (all triangles degenerate in `G`) gets the world frame.
+//!
+//! Any fixed rule reconstructs perfectly *if synthesis sees the very `G` the analysis saw*, but
+//! it sees it only up to rounding (about 1e-15 of the bounding-box diagonal per level). A frame
+//! is a discontinuous function of `G` where a fan or a reference direction has collapsed: the
+//! normal of a fan shrunk to a point is the direction of its rounding noise, and the two passes
+//! would pick unrelated frames, turning a detail of length 1 into an error of length 1. So
+//! "degenerate" is decided against an absolute length, [`FRAME_LENGTH_FLOOR`] times the
+//! diagonal, far above rounding: a normal shorter than the floor times the fan's perimeter
+//! bound, or a projected reference direction shorter than the floor, does not count.
 
 use glam::DVec3;
 
@@ -54,6 +62,10 @@ impl Frame {
 /// Relative size below which a projected reference direction counts as degenerate.
 const DEGENERATE_TANGENT: f64 = 1e-12;
 
+/// Lengths below this fraction of the bounding-box diagonal count as zero when building frames
+/// (see the module docs): a thousand times the reconstruction error synthesis guarantees.
+pub const FRAME_LENGTH_FLOOR: f64 = 1e-9;
+
 /// An integer index into a signal array: the pyramid stores local indices in the narrowest of
 /// `u8`, `u16`, `u32` that fits.
 pub trait LocalIndex: Copy + Send + Sync {
@@ -83,7 +95,9 @@ impl LocalIndex for u32 {
 }
 
 /// The frame of vertex `j` from the signal `g` (indexed by vertex), its counter-clockwise fan
-/// of neighbours (`open`: `j` is a boundary vertex) and the preferred reference neighbour.
+/// of neighbours (`open`: `j` is a boundary vertex) and the preferred reference neighbour;
+/// `min_length` ([`FRAME_LENGTH_FLOOR`] times the diagonal) is the length below which
+/// directions are not trusted.
 ///
 /// The fan's triangles are `(j, fan[k], fan[k+1 mod m])` for every `k`, except `k = 0` when the
 /// fan is open: a boundary vertex's circulation starts at its boundary edge, which has no face.
@@ -94,17 +108,21 @@ pub fn vertex_frame<I: LocalIndex>(
     fan: &[I],
     open: bool,
     reference: usize,
+    min_length: f64,
 ) -> Frame {
     let pj = g[j];
     let m = fan.len();
     let mut normal = DVec3::ZERO;
+    let mut longest2 = 0.0f64;
     if m >= 2 {
         // Triangles (fan[k], fan[k+1]) for k = 0..m-2, then the closing (fan[m-1], fan[0]);
         // an open fan's gap is the first pair. Each neighbour is loaded once, no modulo.
         let first = g[fan[0].at()] - pj;
+        longest2 = first.length_squared();
         let mut prev = first;
         for (k, &x) in fan[1..].iter().enumerate() {
             let cur = g[x.at()] - pj;
+            longest2 = longest2.max(cur.length_squared());
             // Pair (fan[k], fan[k+1]); skipped for k = 0 when open.
             if k > 0 || !open {
                 normal += prev.cross(cur);
@@ -112,6 +130,12 @@ pub fn vertex_frame<I: LocalIndex>(
             prev = cur;
         }
         normal += prev.cross(first);
+    }
+    // Rounding noise of size ε in the positions moves the normal by at most about
+    // 2·m·ε·(longest spoke); a normal within the floor's share of that bound is noise.
+    let noise = m as f64 * min_length;
+    if normal.length_squared() <= noise * noise * longest2 {
+        return Frame::WORLD;
     }
     let n = normal.normalize_or_zero();
     if n == DVec3::ZERO || !n.is_finite() {
@@ -122,6 +146,7 @@ pub fn vertex_frame<I: LocalIndex>(
         let t = r - r.dot(n) * n;
         let len2 = t.length_squared();
         let usable = len2 > (DEGENERATE_TANGENT * DEGENERATE_TANGENT) * r.length_squared()
+            && len2 > min_length * min_length
             && len2 > 0.0
             && len2.is_finite();
         usable.then(|| t / len2.sqrt())
@@ -176,7 +201,7 @@ mod tests {
             g.push(DVec3::new(a.cos(), a.sin(), 0.0));
         }
         let fan: Vec<u32> = (1..=6).collect();
-        let f = vertex_frame(&g, 0, &fan, false, 2);
+        let f = vertex_frame(&g, 0, &fan, false, 2, 0.0);
         assert!(is_orthonormal(&f));
         assert!((f.n - DVec3::Z).length() < 1e-12);
         assert!((f.t1 - g[2]).length() < 1e-12);
@@ -199,13 +224,13 @@ mod tests {
         // The circulation of a boundary vertex starts at its boundary edge: here the edge to the
         // neighbour at angle π, followed by angle 0, π/3, 2π/3 … so the gap is (fan[0], fan[1]).
         let fan = [4u32, 1, 2, 3];
-        let f = vertex_frame(&g, 0, &fan, true, 1);
+        let f = vertex_frame(&g, 0, &fan, true, 1, 0.0);
         assert!((f.n - DVec3::Z).length() < 1e-12, "{:?}", f.n);
         // Treating it as closed would add the reflex triangle (0, 4, 1) with zero area here; tilt
         // it to see the difference.
         g[4].z = 1.0;
-        let open = vertex_frame(&g, 0, &fan, true, 1);
-        let closed = vertex_frame(&g, 0, &fan, false, 1);
+        let open = vertex_frame(&g, 0, &fan, true, 1, 0.0);
+        let closed = vertex_frame(&g, 0, &fan, false, 1, 0.0);
         // The bogus triangle (0, 4, 1) would add (−1, 0, 1) × (1, 0, 0) = +y to the normal.
         assert!(closed.n.y - open.n.y > 0.1, "{:?} {:?}", closed.n, open.n);
         assert!(is_orthonormal(&open) && is_orthonormal(&closed));
@@ -220,13 +245,56 @@ mod tests {
             DVec3::new(-1.0, -1.0, 0.0),
             DVec3::new(0.0, 0.0, 2.0), // straight above: no tangential part
         ];
-        let f = vertex_frame(&g, 0, &[1u32, 2, 3], false, 4);
+        let f = vertex_frame(&g, 0, &[1u32, 2, 3], false, 4, 0.0);
         assert!(is_orthonormal(&f));
         assert!((f.t1 - DVec3::X).length() < 1e-12);
         // All neighbours coincide with the vertex: no normal → world frame.
         let z = vec![DVec3::ZERO; 4];
-        assert_eq!(vertex_frame(&z, 0, &[1u32, 2, 3], false, 1), Frame::WORLD);
+        assert_eq!(
+            vertex_frame(&z, 0, &[1u32, 2, 3], false, 1, 0.0),
+            Frame::WORLD
+        );
         let nan = vec![DVec3::splat(f64::NAN); 4];
-        assert_eq!(vertex_frame(&nan, 0, &[1u32, 2, 3], false, 1), Frame::WORLD);
+        assert_eq!(
+            vertex_frame(&nan, 0, &[1u32, 2, 3], false, 1, 0.0),
+            Frame::WORLD
+        );
+    }
+
+    #[test]
+    fn fans_collapsed_to_rounding_noise_get_the_world_frame_in_both_passes() {
+        // An isolated triangle whose corners were snapped together: the analysis sees the
+        // corners equal, synthesis sees them 1e-16 apart. Without a floor the second frame
+        // points along the noise and a detail of length 1 comes back rotated.
+        let exact = vec![DVec3::new(2.0, 0.0, 0.06); 3];
+        let mut noisy = exact.clone();
+        noisy[1].y += 3e-16;
+        noisy[2].z -= 2e-16;
+        let min_length = FRAME_LENGTH_FLOOR * 10.0;
+        for g in [&exact, &noisy] {
+            assert_eq!(
+                vertex_frame(g, 0, &[1u32, 2], true, 1, min_length),
+                Frame::WORLD
+            );
+        }
+        // Without the floor the noisy fan has a "normal".
+        assert_ne!(
+            vertex_frame(&noisy, 0, &[1u32, 2], true, 1, 0.0),
+            Frame::WORLD
+        );
+        // A sound fan whose reference neighbour sits within rounding of the vertex: the
+        // tangent comes from the next neighbour in both passes.
+        let mut g = vec![
+            DVec3::ZERO,
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(0.0, 1.0, 0.0),
+            DVec3::new(-1.0, -1.0, 0.0),
+            DVec3::ZERO,
+        ];
+        let a = vertex_frame(&g, 0, &[1u32, 2, 3], false, 4, min_length);
+        g[4] = DVec3::new(1e-16, -2e-16, 0.0);
+        let b = vertex_frame(&g, 0, &[1u32, 2, 3], false, 4, min_length);
+        assert_eq!(a, b);
+        assert!((a.t1 - DVec3::X).length() < 1e-12);
     }
 }

@@ -12,7 +12,7 @@
 //! they are stored wave by wave (`waves`), and the splits of a large wave, which read nothing
 //! another writes, run on rayon's threads with the bits of the sequential order.
 
-use super::frames::{Frame, LocalIndex, vertex_frame};
+use super::frames::{FRAME_LENGTH_FLOOR, Frame, LocalIndex, vertex_frame};
 use super::gains::LevelGains;
 use super::waves::run_waves;
 use super::{Codes, Pyramid, PyramidError};
@@ -131,8 +131,10 @@ pub(crate) fn presmooth_local<I: LocalIndex>(
 /// `f^(n−1)` on everything but the new vertex): the new vertex starts at its survivor's value
 /// (operators with a self weight read it) and is predicted, then its 1-ring simultaneously
 /// (reading the new vertex's prediction). Leaves the predicted geometry `G` in `g`, the
-/// predictions in `q` and the frames of all touched entries, built from `G`, in `frames`.
+/// predictions in `q` and the frames of all touched entries, built from `G`, in `frames`
+/// (`min_length`: see [`vertex_frame`]).
 #[inline]
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn predict_local<I: LocalIndex>(
     codes: &[I],
     weights: &[f64],
@@ -141,6 +143,7 @@ pub(crate) fn predict_local<I: LocalIndex>(
     g: &mut [DVec3],
     q: &mut Vec<DVec3>,
     frames: &mut Vec<Frame>,
+    min_length: f64,
 ) {
     let t = entries.len();
     g[0] = g[survivor];
@@ -156,11 +159,18 @@ pub(crate) fn predict_local<I: LocalIndex>(
     for (i, e) in entries.iter().enumerate() {
         let reference = if i == 0 { survivor } else { 0 };
         let fan = &codes[e.fan..e.fan + e.fan_len];
-        frames.push(vertex_frame(g, i, fan, e.open, reference));
+        frames.push(vertex_frame(g, i, fan, e.open, reference, min_length));
     }
 }
 
 impl Pyramid {
+    /// The length below which frame directions are not trusted: [`FRAME_LENGTH_FLOOR`] times
+    /// the diagonal, the same in analysis and synthesis.
+    #[inline]
+    pub(crate) fn frame_min_length(&self) -> f64 {
+        FRAME_LENGTH_FLOOR * self.bbox_diagonal
+    }
+
     /// Appends to `out` the values the split stored at `slot` gives its touched vertices (the
     /// new vertex, then its 1-ring), computed from `f = f^(n−1)`.
     #[inline]
@@ -187,6 +197,7 @@ impl Pyramid {
             g,
             &mut scratch.q,
             &mut scratch.frames,
+            self.frame_min_length(),
         );
         let level = self.level_of_split(self.waves.split_at(slot));
         let (tangential, normal) = gains.split_gain(level);
