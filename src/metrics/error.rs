@@ -17,9 +17,11 @@
 //! true Hausdorff distance; the gap is at most the distance between neighbouring samples
 //! (about half an edge) and in practice far smaller for surfaces this close.
 //!
-//! Zero-area (degenerate) triangles of M are left out of the closest-triangle queries:
-//! their normal is undefined, and they carry no surface of their own that the adjacent
-//! triangles do not already cover. Degenerate triangles of M′ get zero weight by definition.
+//! Degenerate triangles of M (twice the area at most 1e-12 of the longest edge squared) are
+//! left out of the closest-triangle queries: their normal is undefined, and they carry no
+//! surface of their own. Degenerate triangles of M′ get zero weight by definition, and neither
+//! side's Hausdorff samples come from them, so a mesh compared with a copy of itself that
+//! differs by rounding gives ~0 even where a degenerate triangle stands alone.
 //!
 //! Queries run in parallel (rayon), but every per-element value lands in its own slot and the
 //! sums and maxima are then folded sequentially in element order, so results are bit-for-bit
@@ -114,8 +116,7 @@ impl Reference {
         let mut normals = Vec::with_capacity(surface.triangles.len());
         for t in 0..surface.triangles.len() {
             let [a, b, c] = surface.corners(t);
-            let n = (b - a).cross(c - a).normalize_or_zero();
-            if n != DVec3::ZERO {
+            if let Some(n) = surface_normal(a, b, c) {
                 corners.push([a, b, c]);
                 normals.push(n);
             }
@@ -240,10 +241,39 @@ fn distinct_edges(triangles: &[[u32; 3]]) -> Vec<(u32, u32)> {
     edges
 }
 
+/// Twice-area below which a triangle counts as degenerate, relative to its longest edge
+/// squared: far above rounding, so a triangle degenerate in one mesh and off by rounding in
+/// its copy (a filtered or reloaded mesh) is treated alike in both.
+const DEGENERATE_RATIO: f64 = 1e-12;
+
+/// The unit normal of triangle `(a, b, c)`, or `None` when it is degenerate (twice its area at
+/// most [`DEGENERATE_RATIO`] times its longest edge squared) or not finite.
+fn surface_normal(a: DVec3, b: DVec3, c: DVec3) -> Option<DVec3> {
+    let cross = (b - a).cross(c - a);
+    let longest2 = (b - a)
+        .length_squared()
+        .max((c - b).length_squared())
+        .max((a - c).length_squared());
+    let double_area = cross.length();
+    let sound = double_area > DEGENERATE_RATIO * longest2 && double_area.is_finite();
+    // Normalised as `errors` normalises the compared triangles: identical ones give exactly 0.
+    sound.then(|| cross.normalize_or_zero())
+}
+
 fn one_sided(target: &TriangleBvh, samples: Surface<'_>) -> f64 {
+    // Samples come from the triangles a reference would keep (nonzero normal), so that both
+    // sides measure the same surface: a zero-area triangle off by itself (a repaired sliver's
+    // leftover) would otherwise be sampled on one side and missing on the other.
+    let tris: Vec<[u32; 3]> = (0..samples.triangles.len())
+        .filter(|&t| {
+            let [a, b, c] = samples.corners(t);
+            surface_normal(a, b, c).is_some()
+        })
+        .map(|t| samples.triangles[t])
+        .collect();
+    let tris = &tris[..];
     // Each sample once: the vertices some triangle uses, the midpoint of every distinct
     // edge, and every centroid (visiting them per face would query vertices six times).
-    let tris = samples.triangles;
     let mut used = vec![false; samples.positions.len()];
     for &i in tris.iter().flatten() {
         used[i as usize] = true;
@@ -258,8 +288,8 @@ fn one_sided(target: &TriangleBvh, samples: Surface<'_>) -> f64 {
                 .iter()
                 .map(|&(a, b)| (p[a as usize] + p[b as usize]) * 0.5),
         )
-        .chain((0..tris.len()).map(|t| {
-            let [a, b, c] = samples.corners(t);
+        .chain(tris.iter().map(|t| {
+            let [a, b, c] = t.map(|i| p[i as usize]);
             (a + b + c) / 3.0
         }))
         .collect();
@@ -398,6 +428,24 @@ mod tests {
         );
         // The bump's tip is a vertex of the second mesh, 0.25 above the plane.
         assert_eq!(ab.hausdorff, 0.25);
+    }
+
+    #[test]
+    fn a_lone_degenerate_triangle_off_by_rounding_does_not_count() {
+        // A grid plus a separate triangle with two corners snapped together (2 → 1 unit away);
+        // its copy has them 1e-15 apart, as after a filter with unit gains.
+        let (mut p, mut t) = grid(3, 0.0);
+        let n = p.len() as u32;
+        p.extend([DVec3::new(3.0, 0.0, 0.0), DVec3::new(4.0, 0.0, 0.0)]);
+        p.push(p[n as usize + 1]);
+        t.push([n, n + 1, n + 2]);
+        let mut q = p.clone();
+        q[n as usize + 2].y += 1e-15;
+        let (a, b) = (Surface::new(&p, &t), Surface::new(&q, &t));
+        for (x, y) in [(a, b), (b, a)] {
+            let c = Reference::new(y).unwrap().compare(x, y).unwrap();
+            assert!(c.hausdorff < 1e-12, "{c:?}");
+        }
     }
 
     #[test]
