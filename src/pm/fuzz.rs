@@ -9,25 +9,33 @@ use crate::mesh::{HalfedgeId, Mesh, SlotIndex};
 use crate::progress::NoProgress;
 use glam::DVec3;
 
-struct Bytes<'a> {
+/// A byte reader that yields zeros past the end (fuzz inputs are any length).
+pub(crate) struct Bytes<'a> {
     data: &'a [u8],
     pos: usize,
 }
 
-impl Bytes<'_> {
-    fn u8(&mut self) -> u8 {
+impl<'a> Bytes<'a> {
+    /// Reads `data` from the start.
+    pub(crate) fn new(data: &'a [u8]) -> Self {
+        Bytes { data, pos: 0 }
+    }
+
+    /// The next byte (0 past the end).
+    pub(crate) fn u8(&mut self) -> u8 {
         let b = self.data.get(self.pos).copied().unwrap_or(0);
         self.pos += 1;
         b
     }
-    fn more(&self) -> bool {
+    /// True while unread bytes remain.
+    pub(crate) fn more(&self) -> bool {
         self.pos < self.data.len()
     }
 }
 
 /// A small mesh from bytes: a grid (open), a torus (closed) or a grid with holes, optionally
 /// with a second component, jittered positions and shuffled vertex order.
-fn mesh_from_bytes(r: &mut Bytes) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+pub(crate) fn mesh_from_bytes(r: &mut Bytes) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     let kind = r.u8() % 4;
     let nx = 2 + (r.u8() % 6) as usize;
     let ny = 2 + (r.u8() % 6) as usize;

@@ -15,7 +15,7 @@ pub mod collapse;
 mod decimate;
 #[cfg(test)]
 mod decimate_reference;
-mod fuzz;
+pub(crate) mod fuzz;
 mod prefetch;
 mod progressive;
 pub mod quadric;

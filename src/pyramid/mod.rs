@@ -15,6 +15,7 @@
 //! * [`spectrum`]: detail energy per level band, as a table and a chart.
 //! * [`pipeline`]: file-level glue — polygon mesh in, polygon mesh out in the input's exact
 //!   vertex and face order.
+//! * [`fuzz_pyramid`]: the body of the `pyramid_ops` fuzz target.
 //!
 //! Levels are vertex counts, as in the paper: level `n` is the mesh of the first `n` PM
 //! vertices, and the details of level `n` are those stored by the split that creates vertex
@@ -28,6 +29,7 @@
 pub mod analysis;
 pub mod edit;
 pub mod frames;
+mod fuzz;
 pub mod gains;
 pub mod pipeline;
 pub mod spectrum;
@@ -35,6 +37,7 @@ pub mod synthesis;
 pub(crate) mod waves;
 
 pub use edit::{MoveHandle, falloff};
+pub use fuzz::fuzz_pyramid;
 pub use gains::{Filter, GainBand, GainParseError, LevelGains, LevelSpec};
 pub use pipeline::{PyramidOptions, ScanPyramid};
 pub use spectrum::{BandEnergy, Spectrum};
