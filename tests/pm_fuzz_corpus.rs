@@ -1,33 +1,17 @@
 //! Replays the committed `pm_ops` fuzz corpus (and any crash reproducers) through the library
 //! harness, so the fuzz invariants are checked by `cargo test` without cargo-fuzz.
 
-use std::path::Path;
+mod common;
 
 #[test]
 fn replay_pm_ops_corpus() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz");
-    let mut n = 0;
-    for dir in ["corpus/pm_ops", "regressions/pm_ops"] {
-        let Ok(entries) = std::fs::read_dir(root.join(dir)) else {
-            continue;
-        };
-        let mut files: Vec<_> = entries.filter_map(|e| e.ok()).map(|e| e.path()).collect();
-        files.sort();
-        for f in files {
-            let data = std::fs::read(&f).unwrap();
-            meshpyr::pm::fuzz_operations(&data);
-            n += 1;
-        }
-    }
+    let n = common::replay_fuzz_corpus("pm_ops", meshpyr::pm::fuzz_operations);
     assert!(n > 0, "no pm_ops corpus found");
 }
 
 #[test]
 fn fixed_byte_patterns() {
-    for seed in 0u32..64 {
-        let data: Vec<u8> = (0..200u32)
-            .map(|i| (i.wrapping_mul(2654435761).wrapping_add(seed * 97) >> 7) as u8)
-            .collect();
+    for data in common::byte_patterns(64, 200) {
         meshpyr::pm::fuzz_operations(&data);
     }
 }

@@ -213,3 +213,32 @@ pub fn volume(mesh: &Mesh) -> f64 {
         })
         .sum()
 }
+
+/// Calls `run` on every file of `fuzz/corpus/<target>` and `fuzz/regressions/<target>`, in
+/// name order, and returns how many there were.
+pub fn replay_fuzz_corpus(target: &str, run: impl Fn(&[u8])) -> usize {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fuzz");
+    let mut n = 0;
+    for dir in ["corpus", "regressions"] {
+        let Ok(entries) = std::fs::read_dir(root.join(dir).join(target)) else {
+            continue;
+        };
+        let mut files: Vec<_> = entries.filter_map(|e| e.ok()).map(|e| e.path()).collect();
+        files.sort();
+        for f in files {
+            run(&std::fs::read(&f).unwrap());
+            n += 1;
+        }
+    }
+    n
+}
+
+/// `n` fixed pseudo-random byte strings of `len` bytes (a multiplicative hash of the index),
+/// for running fuzz harnesses without a corpus.
+pub fn byte_patterns(n: u32, len: u32) -> impl Iterator<Item = Vec<u8>> {
+    (0..n).map(move |seed| {
+        (0..len)
+            .map(|i| (i.wrapping_mul(2654435761).wrapping_add(seed * 97) >> 7) as u8)
+            .collect()
+    })
+}
