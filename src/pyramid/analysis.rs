@@ -19,7 +19,7 @@
 //! over the records, finest split first; like synthesis, they run the splits of a wave (see
 //! `waves`) at once, in reverse.
 
-use super::frames::FRAME_LENGTH_FLOOR;
+use super::frames::frame_min_length;
 use super::synthesis::{Scratch, decode, predict_local, presmooth_local};
 use super::waves::{Waves, run_waves};
 use super::{Codes, Pyramid, PyramidError, SplitOffsets};
@@ -84,7 +84,7 @@ impl Pyramid {
         // order, runs every split after the splits it depends on.
         let mut f = signal.to_vec();
         let mut details = vec![DVec3::ZERO; slotted.offsets.last().map_or(0, |o| o.details)];
-        let min_length = FRAME_LENGTH_FLOOR * bbox_diagonal;
+        let min_length = frame_min_length(bbox_diagonal);
         slotted.downsample(&waves, &mut f, &mut details, min_length, progress);
         progress.update(1.0);
 
@@ -345,9 +345,7 @@ impl Records {
             weights,
         }
     }
-}
 
-impl Records {
     /// Steps 2–5 of the split stored at `slot`, reading `f = f^(n)`: appends the presmoothed
     /// values of its 1-ring (`f^(n−1)` there) to `smoothed` and its details to `details`
     /// (`min_length`: see [`vertex_frame`](super::frames::vertex_frame)).

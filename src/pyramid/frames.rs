@@ -71,6 +71,14 @@ const DEGENERATE_TANGENT: f64 = 1e-12;
 /// model, or that flat, get the world frame instead.
 pub const FRAME_LENGTH_FLOOR: f64 = 1e-6;
 
+/// The `min_length` of [`vertex_frame`] for a surface with bounding-box diagonal
+/// `bbox_diagonal`; analysis and synthesis both take it from here, so they build the same
+/// frames.
+#[inline]
+pub fn frame_min_length(bbox_diagonal: f64) -> f64 {
+    FRAME_LENGTH_FLOOR * bbox_diagonal
+}
+
 /// An integer index into a signal array: the pyramid stores local indices in the narrowest of
 /// `u8`, `u16`, `u32` that fits.
 pub trait LocalIndex: Copy + Send + Sync {
@@ -101,8 +109,8 @@ impl LocalIndex for u32 {
 
 /// The frame of vertex `j` from the signal `g` (indexed by vertex), its counter-clockwise fan
 /// of neighbours (`open`: `j` is a boundary vertex) and the preferred reference neighbour;
-/// `min_length` ([`FRAME_LENGTH_FLOOR`] times the diagonal) is the length below which
-/// directions are not trusted.
+/// `min_length` ([`frame_min_length`] of the diagonal) is the length below which directions
+/// are not trusted.
 ///
 /// The fan's triangles are `(j, fan[k], fan[k+1 mod m])` for every `k`, except `k = 0` when the
 /// fan is open: a boundary vertex's circulation starts at its boundary edge, which has no face.
@@ -275,7 +283,7 @@ mod tests {
         let mut noisy = exact.clone();
         noisy[1].y += 3e-16;
         noisy[2].z -= 2e-16;
-        let min_length = FRAME_LENGTH_FLOOR * 10.0;
+        let min_length = frame_min_length(10.0);
         for g in [&exact, &noisy] {
             assert_eq!(
                 vertex_frame(g, 0, &[1u32, 2], true, 1, min_length),

@@ -12,7 +12,7 @@
 //! they are stored wave by wave (`waves`), and the splits of a large wave, which read nothing
 //! another writes, run on rayon's threads with the bits of the sequential order.
 
-use super::frames::{FRAME_LENGTH_FLOOR, Frame, LocalIndex, vertex_frame};
+use super::frames::{Frame, LocalIndex, frame_min_length, vertex_frame};
 use super::gains::LevelGains;
 use super::waves::run_waves;
 use super::{Codes, Pyramid, PyramidError};
@@ -164,13 +164,6 @@ pub(crate) fn predict_local<I: LocalIndex>(
 }
 
 impl Pyramid {
-    /// The length below which frame directions are not trusted: [`FRAME_LENGTH_FLOOR`] times
-    /// the diagonal, the same in analysis and synthesis.
-    #[inline]
-    pub(crate) fn frame_min_length(&self) -> f64 {
-        FRAME_LENGTH_FLOOR * self.bbox_diagonal
-    }
-
     /// Appends to `out` the values the split stored at `slot` gives its touched vertices (the
     /// new vertex, then its 1-ring), computed from `f = f^(n−1)`.
     #[inline]
@@ -197,7 +190,7 @@ impl Pyramid {
             g,
             &mut scratch.q,
             &mut scratch.frames,
-            self.frame_min_length(),
+            frame_min_length(self.bbox_diagonal),
         );
         let level = self.level_of_split(self.waves.split_at(slot));
         let (tangential, normal) = gains.split_gain(level);
