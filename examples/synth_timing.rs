@@ -67,7 +67,7 @@ fn main() -> anyhow::Result<()> {
         p.memory_bytes() as f64 / 1e6,
         p.memory_bytes() as f64 / p.n_vertices() as f64
     )?;
-    // Analysis vs PM build, process CPU time, median of 3.
+    // Analysis vs PM build, process CPU and wall time, median of 3.
     let mesh = Mesh::from_polygons(&meshpyr::io::read_mesh(&input)?)?.mesh;
     let median = |mut t: Vec<f64>| {
         t.sort_by(f64::total_cmp);
