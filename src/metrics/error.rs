@@ -19,9 +19,11 @@
 //!
 //! Degenerate triangles of M (twice the area at most 1e-12 of the longest edge squared) are
 //! left out of the closest-triangle queries: their normal is undefined, and they carry no
-//! surface of their own. Degenerate triangles of M′ get zero weight by definition, and neither
-//! side's Hausdorff samples come from them, so a mesh compared with a copy of itself that
-//! differs by rounding gives ~0 even where a degenerate triangle stands alone.
+//! surface of their own. In E_v and E_n a triangle of M′ weighs by its area, so zero-area ones
+//! count for nothing. Neither side's Hausdorff samples come from degenerate triangles, so a
+//! mesh compared with a copy of itself that differs by rounding gives ~0 even where a
+//! degenerate triangle stands alone. The M → M′ direction measures to all of M′'s triangles,
+//! degenerate ones included.
 //!
 //! Queries run in parallel (rayon), but every per-element value lands in its own slot and the
 //! sums and maxima are then folded sequentially in element order, so results are bit-for-bit
