@@ -518,7 +518,7 @@ pub fn encode(
                 let (il, ir) = replay
                     .wing_indices(s)
                     .map_err(|e| internal(&e.to_string()))?;
-                let valence = replay.listed_ring().len();
+                let valence = replay.listed_valence();
                 put_uvarint(&mut payload, il.map_or(0, |i| i as u64 + 1));
                 let rc = match (il, ir) {
                     (_, None) => 0,
@@ -836,9 +836,8 @@ fn read_progressive(
             }
             let vertex = (n_base + splits.len()) as u32;
             let deg = replay
-                .ring(survivor)
-                .map_err(|e| corrupt(at, e.to_string()))?
-                .len() as u64;
+                .valence(survivor)
+                .map_err(|e| corrupt(at, e.to_string()))? as u64;
             if lc > deg || rc > deg {
                 return Err(corrupt(at, "wing index past the survivor's ring"));
             }

@@ -135,6 +135,37 @@ impl Rings {
     }
 }
 
+impl Rings {
+    /// Inserts `e` at position `at` of `v`'s ring where it already lives (the inline line, or
+    /// an overflow block with room); `false`, changing nothing, when the ring must move.
+    /// A split inserts into both wings' rings; shifting a few entries in place costs a
+    /// fraction of rebuilding the ring through [`Rings::set`].
+    fn insert_in_place(&mut self, v: u32, at: usize, e: Entry) -> bool {
+        let h = self.lines[v as usize].0[INLINE];
+        let n = (h.nbr & !BOUNDARY) as usize;
+        let ring: &mut [Entry] = if h.slot == NIL {
+            if n + 1 > INLINE {
+                return false;
+            }
+            &mut self.lines[v as usize].0[..n + 1]
+        } else {
+            let off = h.slot as usize;
+            if (self.over[off - 1].nbr as usize) < n + 1 {
+                return false;
+            }
+            &mut self.over[off..off + n + 1]
+        };
+        let mut k = n;
+        while k > at {
+            ring[k] = ring[k - 1];
+            k -= 1;
+        }
+        ring[at] = e;
+        self.lines[v as usize].0[INLINE].nbr = h.nbr + 1;
+        true
+    }
+}
+
 fn invalid(reason: impl Into<String>) -> PmError {
     PmError::Internal(format!(
         "inconsistent progressive mesh data: {}",
@@ -153,10 +184,11 @@ pub struct FlatReplay {
     face_he: Vec<u32>,
     n_base_faces: usize,
     n_halfedges: u32,
-    /// The ring last listed by [`Self::ring`], and whose it is.
-    ring_v: Vec<u32>,
+    /// The ring last listed (the entries a split works on), and whose it is; `ring_v` holds
+    /// its neighbours for [`Self::ring`].
     ring: Vec<Entry>,
     ring_of: u32,
+    ring_v: Vec<u32>,
     scratch: Vec<Entry>,
 }
 
@@ -248,18 +280,28 @@ impl FlatReplay {
     /// canonical half-edge; a boundary vertex starts at its boundary out-edge) — the ring the
     /// `.pyr` format indexes wings into.
     pub fn ring(&mut self, v: u32) -> Result<&[u32], PmError> {
+        self.list(v)?;
+        self.ring_v.clear();
+        self.ring_v.extend(self.ring.iter().map(|x| x.nbr));
+        Ok(&self.ring_v)
+    }
+
+    /// The length of `v`'s ring (its valence), listing the ring for a following
+    /// [`Self::apply_indexed`] at `v`.
+    pub fn valence(&mut self, v: u32) -> Result<usize, PmError> {
+        self.list(v)
+    }
+
+    /// Copies `v`'s ring entries into `self.ring` (the survivor's ring a split works on).
+    fn list(&mut self, v: u32) -> Result<usize, PmError> {
         if v as usize >= self.rings.len() {
             return Err(invalid(format!("survivor {v} does not exist yet")));
         }
         let e = self.rings.get(v);
         self.ring.clear();
-        self.ring_v.clear();
-        for x in e {
-            self.ring.push(*x);
-            self.ring_v.push(x.nbr);
-        }
+        self.ring.extend_from_slice(e);
         self.ring_of = v;
-        Ok(&self.ring_v)
+        Ok(self.ring.len())
     }
 
     /// Cache hint for a split at `survivor` that comes `ahead` splits later: at a long
@@ -282,9 +324,10 @@ impl FlatReplay {
         }
     }
 
-    /// The ring [`Self::ring`] or [`Self::wing_indices`] listed last.
-    pub fn listed_ring(&self) -> &[u32] {
-        &self.ring_v
+    /// The valence of the vertex [`Self::ring`], [`Self::valence`] or [`Self::wing_indices`]
+    /// listed last.
+    pub fn listed_valence(&self) -> usize {
+        self.ring.len()
     }
 
     /// Applies `s` (which must create vertex `level()`), finding its wings in the survivor's
@@ -309,15 +352,20 @@ impl FlatReplay {
                 )));
             }
         }
-        let ring = self.ring(s.survivor)?;
+        self.list(s.survivor)?;
+        let ring = &self.ring;
         let find = |w: Option<u32>| match w {
             None => Ok(None),
-            Some(x) => ring.iter().position(|&r| r == x).map(Some).ok_or_else(|| {
-                invalid(format!(
-                    "split creating vertex {level}: {}",
-                    SplitError::Inconsistent
-                ))
-            }),
+            Some(x) => ring
+                .iter()
+                .position(|r| r.nbr == x)
+                .map(Some)
+                .ok_or_else(|| {
+                    invalid(format!(
+                        "split creating vertex {level}: {}",
+                        SplitError::Inconsistent
+                    ))
+                }),
         };
         Ok((find(s.left)?, find(s.right)?))
     }
@@ -338,7 +386,7 @@ impl FlatReplay {
             )));
         }
         if self.ring_of != survivor {
-            self.ring(survivor)?;
+            self.list(survivor)?;
         }
         let n = self.ring.len();
         if il.is_some_and(|i| i >= n) || ir.is_some_and(|i| i >= n) {
@@ -368,6 +416,11 @@ impl FlatReplay {
             .position(|x| x.nbr == before)
             .ok_or(SplitError::Inconsistent)?;
         let at = if k == 0 { ring.len() } else { k };
+        if self.rings.insert_in_place(v, at, e) {
+            return Ok(());
+        }
+        // The ring outgrows its storage: rebuild it elsewhere.
+        let ring = self.rings.get(v);
         let mut tmp = std::mem::take(&mut self.scratch);
         tmp.clear();
         tmp.extend_from_slice(&ring[..at]);
@@ -603,10 +656,11 @@ pub fn canonical_sorted(faces: &[[u32; 3]], n_vertices: usize) -> Vec<[u32; 3]> 
 
 /// Index of the entry with the smallest half-edge slot.
 fn min_slot(e: &[Entry]) -> usize {
-    let mut best = 0;
-    for (k, x) in e.iter().enumerate() {
-        if x.slot < e[best].slot {
-            best = k;
+    let Some(first) = e.first() else { return 0 };
+    let (mut best, mut smallest) = (0, first.slot);
+    for (k, x) in e.iter().enumerate().skip(1) {
+        if x.slot < smallest {
+            (best, smallest) = (k, x.slot);
         }
     }
     best
