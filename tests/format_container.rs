@@ -94,6 +94,34 @@ fn overlong_varints_are_errors() {
     assert!(r.count(999, "n").is_err());
 }
 
+#[test]
+fn short_varints_decode_and_truncate_like_long_ones() {
+    // One-, two- and three-byte codes take a fast path; they must agree with the general
+    // decoder on values, lengths and truncation.
+    let edges = [
+        127,
+        128,
+        16383,
+        16384,
+        (1 << 21) - 1,
+        1 << 21,
+        (1 << 28) - 1,
+        1 << 28,
+    ];
+    for v in (0..1u64 << 22).step_by(89).chain(edges) {
+        let mut buf = Vec::new();
+        put_uvarint(&mut buf, v);
+        buf.push(0x55);
+        let mut r = ByteReader::new(&buf, 0);
+        assert_eq!(r.uvarint("v").unwrap(), v);
+        assert_eq!(r.remaining(), 1);
+        for cut in 0..buf.len() - 1 {
+            let mut r = ByteReader::new(&buf[..cut], 0);
+            assert!(matches!(r.uvarint("v"), Err(FormatError::Truncated { .. })));
+        }
+    }
+}
+
 proptest! {
     #[test]
     fn varints_round_trip(u in any::<u64>(), i in any::<i64>()) {

@@ -108,7 +108,36 @@ impl<'a> ByteReader<'a> {
     }
 
     /// Unsigned LEB128; at most 10 bytes, overlong or overflowing codes are errors.
+    #[inline]
     pub fn uvarint(&mut self, what: &str) -> Result<u64, FormatError> {
+        // Most codes of a `.pyr` file (split records, vertex order, polygon deltas) take one
+        // to three bytes: decode those without the general loop.
+        if let Some(&b0) = self.bytes.get(self.pos) {
+            if b0 < 0x80 {
+                self.pos += 1;
+                return Ok(u64::from(b0));
+            }
+            if let Some(&b1) = self.bytes.get(self.pos + 1) {
+                let v = u64::from(b0 & 0x7f) | u64::from(b1 & 0x7f) << 7;
+                if b1 < 0x80 {
+                    self.pos += 2;
+                    return Ok(v);
+                }
+                if let Some(&b2) = self.bytes.get(self.pos + 2)
+                    && b2 < 0x80
+                {
+                    self.pos += 3;
+                    return Ok(v | u64::from(b2) << 14);
+                }
+            }
+        }
+        self.uvarint_long(what)
+    }
+
+    /// [`Self::uvarint`] for codes of four or more bytes, and the errors.
+    #[cold]
+    #[inline(never)]
+    fn uvarint_long(&mut self, what: &str) -> Result<u64, FormatError> {
         let mut v = 0u64;
         for i in 0..10 {
             let Some(&b) = self.bytes.get(self.pos) else {
@@ -139,6 +168,7 @@ impl<'a> ByteReader<'a> {
 
     /// An unsigned varint that must be `<= max` (used for every count read from a file before
     /// anything is allocated from it).
+    #[inline]
     pub fn count(&mut self, max: u64, what: &str) -> Result<usize, FormatError> {
         let at = self.offset();
         let v = self.uvarint(what)?;
