@@ -122,10 +122,11 @@ impl Rings {
             self.lines[v as usize].0[INLINE].slot = off as u32;
             &mut self.over[off..off + n]
         };
-        // Rings are short: an element loop beats memmove calls here.
-        for (k, d) in dst.iter_mut().enumerate() {
-            let j = k + start;
-            *d = src[if j >= n { j - n } else { j }];
+        // Rings are short: an element loop beats memmove calls here (and the chained
+        // iterators leave no index to bounds-check).
+        let (head, tail) = src.split_at(start.min(n));
+        for (d, s) in dst.iter_mut().zip(tail.iter().chain(head)) {
+            *d = *s;
         }
         let hdr = &mut self.lines[v as usize].0[INLINE];
         if n <= INLINE {
