@@ -488,11 +488,22 @@ impl FlatReplay {
         }
         // Index of fan entry k (k < n, start < n): a wrap instead of a division, which cost
         // more than the rest of a split's arithmetic.
-        let at = |k: usize| {
-            let j = start + k;
-            if j >= n { j - n } else { j }
+        // The ring read from `start` on: the fan is its first `m` entries, v keeps the rest.
+        // Slices rather than an index with a wrap per entry (which cost more than the rest of
+        // a split's arithmetic).
+        let ring = &self.ring[..];
+        let (fan, rest) = if start + m <= n {
+            (
+                [&ring[start..start + m], &[][..]],
+                [&ring[start + m..], &ring[..start]],
+            )
+        } else {
+            let wrap = start + m - n;
+            (
+                [&ring[start..], &ring[..wrap]],
+                [&ring[wrap..start], &[][..]],
+            )
         };
-        let fan = |ring: &[Entry], k: usize| ring[at(k)];
 
         // Slots in `vertex_split`'s insertion order.
         let u = self.rings.len() as u32;
@@ -517,8 +528,7 @@ impl FlatReplay {
 
         // The fan's far ends now point at u (the edge to the left wing stays with the wing's
         // twin, which `vertex_split` re-pairs).
-        for k in 0..m {
-            let e = fan(&self.ring, k);
+        for (k, e) in fan[0].iter().chain(fan[1]).enumerate() {
             if k != 0 || il.is_none() {
                 let x = self
                     .rings
@@ -534,9 +544,8 @@ impl FlatReplay {
         // boundary out-edge (the fan's last) without a right face, else the smallest slot.
         self.scratch.clear();
         self.scratch.push(Entry { nbr: v, slot: h });
-        for k in 0..m {
-            self.scratch.push(fan(&self.ring, k));
-        }
+        self.scratch.extend_from_slice(fan[0]);
+        self.scratch.extend_from_slice(fan[1]);
         if let (Some(r), Some(o1)) = (right, o1) {
             self.scratch.push(Entry { nbr: r, slot: o1 });
         }
@@ -553,9 +562,8 @@ impl FlatReplay {
         // boundary v, else the smallest slot.
         let old_first = self.ring[0].slot;
         self.scratch.clear();
-        for k in m..n {
-            self.scratch.push(fan(&self.ring, k));
-        }
+        self.scratch.extend_from_slice(rest[0]);
+        self.scratch.extend_from_slice(rest[1]);
         if let (Some(l), Some(h1)) = (left, h1) {
             self.scratch.push(Entry { nbr: l, slot: h1 });
         }
