@@ -173,11 +173,18 @@ impl<'a> ByteReader<'a> {
         let at = self.offset();
         let v = self.uvarint(what)?;
         if v > max {
-            return Err(FormatError::Corrupt {
-                offset: at,
-                reason: format!("{what} is {v}, more than the {max} the file can hold"),
-            });
+            return Err(too_large(at, what, v, max));
         }
         Ok(v as usize)
+    }
+}
+
+/// The error of [`ByteReader::count`], out of line so that the check inlines.
+#[cold]
+#[inline(never)]
+fn too_large(offset: u64, what: &str, v: u64, max: u64) -> FormatError {
+    FormatError::Corrupt {
+        offset,
+        reason: format!("{what} is {v}, more than the {max} the file can hold"),
     }
 }
