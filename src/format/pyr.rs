@@ -13,7 +13,9 @@ use crate::mesh::{
     Attribute, AttributeData, Built, ElementProperty, ExtraElement, ListProperty, Mesh,
     PolygonMesh, ScalarType, SlotIndex,
 };
-use crate::pm::{FlatReplay, PmOptions, PmParts, ProgressiveMesh, VertexSplit, canonical_sorted};
+use crate::pm::{
+    FaceBuckets, FlatReplay, PmOptions, PmParts, ProgressiveMesh, VertexSplit, canonical_sorted,
+};
 use crate::progress::Progress;
 use crate::pyramid::{Pyramid, PyramidError, ScanPyramid};
 use crate::relax::SecondDifference;
@@ -1086,7 +1088,7 @@ struct InputSide {
 /// canonically (see [`clean_triangle_faces`]).
 struct CleanFaces {
     faces: Vec<[u32; 3]>,
-    sorted: Vec<[u32; 3]>,
+    buckets: FaceBuckets,
 }
 
 fn decode_input_side(c: &Container<'_>, meta: &Meta) -> Result<InputSide, FormatError> {
@@ -1201,12 +1203,11 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
         .map_err(|e| corrupt(0, format!("restored mesh: {e}")))?;
     // The finest faces, checked to be exactly what the splits rebuild: read off a clean
     // triangle input, else from the builder's repaired mesh.
-    let replayed = replay.canonical_faces();
-    let (faces, built) = match clean_faces.filter(|c| c.sorted == replayed) {
+    let (faces, built) = match clean_faces.filter(|c| replay.has_faces(&c.buckets)) {
         Some(clean) => (clean.faces, None),
         None => {
             let (faces, built) = built_faces(&input, &mesh_to_pm, n_total, &positions)?;
-            if canonical_sorted(&faces, n_total) != replayed {
+            if canonical_sorted(&faces, n_total) != replay.canonical_faces() {
                 return Err(corrupt(0, "the splits do not rebuild the finest faces"));
             }
             (faces, Some(built))
@@ -1246,7 +1247,7 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
 
 /// The finest faces in PM indices read straight off the input, when the input is a clean
 /// triangle mesh (every polygon a triangle of three distinct vertices, no vertex copies), with
-/// the same faces canonically sorted. When those are exactly the faces the splits rebuilt, they
+/// the same faces bucketed by smallest index. When those are exactly the faces the splits rebuilt, they
 /// form a consistently oriented manifold without multi-edges, on which `Mesh::from_polygons`
 /// repairs nothing, keeps vertex slots and face order and starts each face at its first
 /// corner, so the faces are what it would give, without building the half-edge mesh (most of
@@ -1267,8 +1268,8 @@ fn clean_triangle_faces(
         }
         faces.push(f);
     }
-    let sorted = canonical_sorted(&faces, n_total);
-    Some(CleanFaces { faces, sorted })
+    let buckets = FaceBuckets::new(&faces, n_total);
+    Some(CleanFaces { faces, buckets })
 }
 
 /// The finest faces in PM indices from the repaired half-edge mesh of `input` (any polygons,

@@ -31,5 +31,5 @@ pub use fuzz::fuzz_operations;
 pub use progressive::{
     PmCursor, PmError, PmOptions, PmParts, ProgressiveMesh, SplitReplay, VertexSplit,
 };
-pub use replay::{FlatReplay, canonical_sorted};
+pub use replay::{FaceBuckets, FlatReplay, canonical_sorted};
 pub use simplify::{Simplified, SimplifyError, SimplifyTarget, simplify};

@@ -22,6 +22,7 @@ use super::prefetch::prefetch;
 use super::{PmError, SplitError, VertexSplit};
 use crate::mesh::{Mesh, SlotIndex};
 use glam::DVec3;
+use smallvec::SmallVec;
 
 const NIL: u32 = u32::MAX;
 
@@ -627,40 +628,107 @@ impl FlatReplay {
     pub fn canonical_faces(&self) -> Vec<[u32; 3]> {
         canonical_sorted(&self.triangles(), self.level())
     }
+
+    /// Whether the current triangles are exactly `expected`'s, as a multiset of canonically
+    /// rotated triangles — [`Self::canonical_faces`]` == canonical_sorted(…)` without sorting
+    /// or listing the faces: walking the rings in vertex order meets every face once at its
+    /// smallest corner, already rotated, so vertex `v`'s faces are compared with bucket `v`
+    /// (both a handful) while both arrays are read front to back.
+    pub fn has_faces(&self, expected: &FaceBuckets) -> bool {
+        let n_buckets = expected.starts.len() - 1;
+        let mut seen = 0usize;
+        let mut mine: SmallVec<[[u32; 3]; 8]> = SmallVec::new();
+        let mut claimed: SmallVec<[bool; 8]> = SmallVec::new();
+        for v in 0..self.rings.len() as u32 {
+            let e = self.rings.get(v);
+            let skip_first = self.rings.boundary(v);
+            mine.clear();
+            for (k, x) in e.iter().enumerate() {
+                // The face left of v → x (none left of a boundary out-edge, entry 0).
+                let next = e[if k + 1 == e.len() { 0 } else { k + 1 }].nbr;
+                if (k != 0 || !skip_first) && v < x.nbr && v < next {
+                    mine.push([v, x.nbr, next]);
+                }
+            }
+            if mine.is_empty() {
+                continue;
+            }
+            let Some(w) = expected.starts.get(v as usize..v as usize + 2) else {
+                return false;
+            };
+            let theirs = &expected.faces[w[0] as usize..w[1] as usize];
+            // Faces on vertices past the last bucket share it: compare those by counting.
+            if theirs.len() != mine.len() && (v as usize) < n_buckets - 1 {
+                return false;
+            }
+            claimed.clear();
+            claimed.resize(theirs.len(), false);
+            for f in &mine {
+                match (0..theirs.len()).find(|&i| !claimed[i] && theirs[i] == *f) {
+                    Some(i) => claimed[i] = true,
+                    None => return false,
+                }
+            }
+            seen += mine.len();
+        }
+        seen == expected.faces.len()
+    }
+}
+
+/// Triangles canonically rotated (smallest index first) and bucketed by that index: a
+/// counting sort, without ordering the faces within a bucket (about two faces per vertex).
+#[derive(Clone, Debug, Default)]
+pub struct FaceBuckets {
+    /// Bucket `k` is `faces[starts[k]..starts[k + 1]]`.
+    starts: Vec<u32>,
+    faces: Vec<[u32; 3]>,
+}
+
+impl FaceBuckets {
+    /// Buckets `faces` on vertices `0..n_vertices` (a face with a larger index goes to the last
+    /// bucket, so any input is accepted).
+    pub fn new(faces: &[[u32; 3]], n_vertices: usize) -> FaceBuckets {
+        let n = n_vertices.max(1);
+        let mut starts = vec![0u32; n + 1];
+        let mut out = vec![[0u32; 3]; faces.len()];
+        for t in faces {
+            starts[bucket(t, n) + 1] += 1;
+        }
+        for i in 0..n {
+            starts[i + 1] += starts[i];
+        }
+        let mut fill = starts.clone();
+        for t in faces {
+            let k = bucket(t, n);
+            out[fill[k] as usize] = canonical(*t);
+            fill[k] += 1;
+        }
+        FaceBuckets { starts, faces: out }
+    }
+
+    /// The faces, canonically rotated, sorted.
+    pub fn into_sorted(mut self) -> Vec<[u32; 3]> {
+        for w in self.starts.windows(2) {
+            let b = &mut self.faces[w[0] as usize..w[1] as usize];
+            if b.len() > 1 {
+                b.sort_unstable();
+            }
+        }
+        self.faces
+    }
+}
+
+/// The bucket of `t` among `n` (its smallest index, clamped).
+#[inline]
+fn bucket(t: &[u32; 3], n: usize) -> usize {
+    (t[0].min(t[1]).min(t[2]) as usize).min(n - 1)
 }
 
 /// `faces` canonically rotated (smallest index first) and sorted, for faces on vertices
 /// `0..n_vertices`: a counting sort by first index, then a sort of each bucket (about two faces
 /// per vertex), which is several times faster than a comparison sort of a million faces.
 pub fn canonical_sorted(faces: &[[u32; 3]], n_vertices: usize) -> Vec<[u32; 3]> {
-    let mut starts = vec![0u32; n_vertices + 1];
-    let mut out = vec![[0u32; 3]; faces.len()];
-    let key = |t: &[u32; 3]| (t[0].min(t[1]).min(t[2]) as usize).min(n_vertices.saturating_sub(1));
-    if n_vertices == 0 {
-        out.copy_from_slice(faces);
-        out.iter_mut().for_each(|t| *t = canonical(*t));
-        out.sort_unstable();
-        return out;
-    }
-    for t in faces {
-        starts[key(t) + 1] += 1;
-    }
-    for i in 0..n_vertices {
-        starts[i + 1] += starts[i];
-    }
-    let mut fill = starts.clone();
-    for t in faces {
-        let k = key(t);
-        out[fill[k] as usize] = canonical(*t);
-        fill[k] += 1;
-    }
-    for w in starts.windows(2) {
-        let b = &mut out[w[0] as usize..w[1] as usize];
-        if b.len() > 1 {
-            b.sort_unstable();
-        }
-    }
-    out
+    FaceBuckets::new(faces, n_vertices).into_sorted()
 }
 
 /// Index of the entry with the smallest half-edge slot.
@@ -708,6 +776,23 @@ mod tests {
         }
         assert_eq!(fast.triangles(), slow.mesh().to_triangles().1);
         assert_eq!(fast.canonical_faces(), slow.canonical_faces());
+        // The streaming face check agrees, and notices a flipped, a missing or an extra face.
+        let faces = slow.mesh().to_triangles().1;
+        let n = fast.level();
+        assert!(fast.has_faces(&FaceBuckets::new(&faces, n)));
+        let mut flipped = faces.clone();
+        flipped[faces.len() / 2].swap(1, 2);
+        assert!(!fast.has_faces(&FaceBuckets::new(&flipped, n)));
+        assert!(!fast.has_faces(&FaceBuckets::new(&faces[1..], n)));
+        let mut extra = faces.clone();
+        extra.push(faces[0]);
+        assert!(!fast.has_faces(&FaceBuckets::new(&extra, n)));
+        let mut renamed = faces.clone();
+        renamed[0] = [renamed[0][0], renamed[0][1], (renamed[0][2] + 1) % n as u32];
+        assert_eq!(
+            fast.has_faces(&FaceBuckets::new(&renamed, n)),
+            canonical_sorted(&renamed, n) == fast.canonical_faces()
+        );
         for v in 0..fast.level() as u32 {
             slow.ring(v, &mut ring).unwrap();
             assert_eq!(fast.ring(v).unwrap(), &ring[..]);
