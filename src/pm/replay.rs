@@ -135,9 +135,7 @@ impl Rings {
         }
         hdr.nbr = n as u32 | if boundary { BOUNDARY } else { 0 };
     }
-}
 
-impl Rings {
     /// Inserts `e` at position `at` of `v`'s ring where it already lives (the inline line, or
     /// an overflow block with room); `false`, changing nothing, when the ring must move.
     /// A split inserts into both wings' rings; shifting a few entries in place costs a
@@ -487,8 +485,6 @@ impl FlatReplay {
                 }
             }
         }
-        // Index of fan entry k (k < n, start < n): a wrap instead of a division, which cost
-        // more than the rest of a split's arithmetic.
         // The ring read from `start` on: the fan is its first `m` entries, v keeps the rest.
         // Slices rather than an index with a wrap per entry (which cost more than the rest of
         // a split's arithmetic).
@@ -635,7 +631,6 @@ impl FlatReplay {
     /// smallest corner, already rotated, so vertex `v`'s faces are compared with bucket `v`
     /// (both a handful) while both arrays are read front to back.
     pub fn has_faces(&self, expected: &FaceBuckets) -> bool {
-        let n_buckets = expected.starts.len() - 1;
         let mut seen = 0usize;
         let mut mine: SmallVec<[[u32; 3]; 8]> = SmallVec::new();
         let mut claimed: SmallVec<[bool; 8]> = SmallVec::new();
@@ -657,8 +652,7 @@ impl FlatReplay {
                 return false;
             };
             let theirs = &expected.faces[w[0] as usize..w[1] as usize];
-            // Faces on vertices past the last bucket share it: compare those by counting.
-            if theirs.len() != mine.len() && (v as usize) < n_buckets - 1 {
+            if theirs.len() != mine.len() {
                 return false;
             }
             claimed.clear();
@@ -677,7 +671,7 @@ impl FlatReplay {
 
 /// Triangles canonically rotated (smallest index first) and bucketed by that index: a
 /// counting sort, without ordering the faces within a bucket (about two faces per vertex).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct FaceBuckets {
     /// Bucket `k` is `faces[starts[k]..starts[k + 1]]`.
     starts: Vec<u32>,
