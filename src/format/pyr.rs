@@ -1084,8 +1084,8 @@ struct InputSide {
     clean_faces: Option<CleanFaces>,
 }
 
-/// The faces of a clean triangle input in PM indices, in the input's order and sorted
-/// canonically (see [`clean_triangle_faces`]).
+/// The faces of a clean triangle input in PM indices, in the input's order and bucketed by
+/// smallest index (see [`clean_triangle_faces`]).
 struct CleanFaces {
     faces: Vec<[u32; 3]>,
     buckets: FaceBuckets,
@@ -1247,11 +1247,11 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
 
 /// The finest faces in PM indices read straight off the input, when the input is a clean
 /// triangle mesh (every polygon a triangle of three distinct vertices, no vertex copies), with
-/// the same faces bucketed by smallest index. When those are exactly the faces the splits rebuilt, they
-/// form a consistently oriented manifold without multi-edges, on which `Mesh::from_polygons`
-/// repairs nothing, keeps vertex slots and face order and starts each face at its first
-/// corner, so the faces are what it would give, without building the half-edge mesh (most of
-/// a load's time on big meshes). `None`, or a mismatch, sends the caller to the builder.
+/// the same faces bucketed by smallest index. When those are exactly the faces the splits
+/// rebuilt, they form a consistently oriented manifold without multi-edges, on which
+/// `Mesh::from_polygons` repairs nothing, keeps vertex slots and face order and starts each
+/// face at its first corner, so the faces are what it would give, without building the
+/// half-edge mesh (most of a load's time on big meshes). `None`, or a mismatch, sends the caller to the builder.
 fn clean_triangle_faces(
     input: &PolygonMesh,
     mesh_to_pm: &[u32],
