@@ -22,7 +22,6 @@ use super::prefetch::prefetch;
 use super::{PmError, SplitError, VertexSplit};
 use crate::mesh::{Mesh, SlotIndex};
 use glam::DVec3;
-use smallvec::SmallVec;
 
 const NIL: u32 = u32::MAX;
 
@@ -632,38 +631,48 @@ impl FlatReplay {
     /// (both a handful) while both arrays are read front to back.
     pub fn has_faces(&self, expected: &FaceBuckets) -> bool {
         let mut seen = 0usize;
-        let mut mine: SmallVec<[[u32; 3]; 8]> = SmallVec::new();
-        let mut claimed: SmallVec<[bool; 8]> = SmallVec::new();
+        // Which faces of the bucket are claimed: bits, or flags for a bucket of over 64.
+        let mut claimed_big: Vec<bool> = Vec::new();
         for v in 0..self.rings.len() as u32 {
             let e = self.rings.get(v);
-            let skip_first = self.rings.boundary(v);
-            mine.clear();
-            for (k, x) in e.iter().enumerate() {
-                // The face left of v → x (none left of a boundary out-edge, entry 0).
-                let next = e[if k + 1 == e.len() { 0 } else { k + 1 }].nbr;
-                if (k != 0 || !skip_first) && v < x.nbr && v < next {
-                    mine.push([v, x.nbr, next]);
-                }
-            }
-            if mine.is_empty() {
-                continue;
-            }
-            let Some(w) = expected.starts.get(v as usize..v as usize + 2) else {
-                return false;
+            let theirs = match expected.starts.get(v as usize..v as usize + 2) {
+                Some(w) => &expected.faces[w[0] as usize..w[1] as usize],
+                None => &[][..],
             };
-            let theirs = &expected.faces[w[0] as usize..w[1] as usize];
-            if theirs.len() != mine.len() {
-                return false;
+            let big = theirs.len() > 64;
+            if big {
+                claimed_big.clear();
+                claimed_big.resize(theirs.len(), false);
             }
-            claimed.clear();
-            claimed.resize(theirs.len(), false);
-            for f in &mine {
-                match (0..theirs.len()).find(|&i| !claimed[i] && theirs[i] == *f) {
-                    Some(i) => claimed[i] = true,
+            let mut claimed = 0u64;
+            let mut mine = 0;
+            let skip_first = self.rings.boundary(v);
+            for (k, x) in e.iter().enumerate() {
+                // The face left of v → x (none left of a boundary out-edge, entry 0), counted
+                // at its smallest corner.
+                let next = e[if k + 1 == e.len() { 0 } else { k + 1 }].nbr;
+                if (k == 0 && skip_first) || v > x.nbr || v > next {
+                    continue;
+                }
+                mine += 1;
+                let f = [v, x.nbr, next];
+                let free = |i: usize| {
+                    if big {
+                        !claimed_big[i]
+                    } else {
+                        claimed & 1 << i == 0
+                    }
+                };
+                match (0..theirs.len()).find(|&i| free(i) && theirs[i] == f) {
+                    Some(i) if big => claimed_big[i] = true,
+                    Some(i) => claimed |= 1 << i,
                     None => return false,
                 }
             }
-            seen += mine.len();
+            if mine != theirs.len() {
+                return false;
+            }
+            seen += mine;
         }
         seen == expected.faces.len()
     }
@@ -821,6 +830,29 @@ mod tests {
             t.push([1, y, x]);
         }
         same_as_slotmap(&Mesh::from_triangles(&p, &t).unwrap().mesh);
+    }
+
+    #[test]
+    fn face_check_handles_a_vertex_with_more_than_64_faces() {
+        // A disk of 70 triangles around vertex 0: its bucket is over the 64 bits of the fast
+        // claim mask.
+        let k = 70u32;
+        let mut p = vec![DVec3::ZERO];
+        let mut t = Vec::new();
+        for i in 0..k {
+            let a = i as f64 * std::f64::consts::TAU / k as f64;
+            p.push(DVec3::new(a.cos(), a.sin(), 0.0));
+            t.push([0, 1 + i, 1 + (i + 1) % k]);
+        }
+        let r = FlatReplay::new(&p, &t, 0).unwrap();
+        let n = p.len();
+        assert!(r.has_faces(&FaceBuckets::new(&t, n)));
+        let mut twice = t.clone();
+        twice[69] = twice[3];
+        assert!(!r.has_faces(&FaceBuckets::new(&twice, n)));
+        let mut flipped = t.clone();
+        flipped[65].swap(1, 2);
+        assert!(!r.has_faces(&FaceBuckets::new(&flipped, n)));
     }
 
     #[test]
