@@ -27,6 +27,42 @@ impl BoundingBox {
     }
 }
 
+/// Morton (Z-order) codes of `points` in their bounding cube, 21 bits per axis: points near in
+/// space mostly get near codes, so sorting by code lays out nearby items near in memory.
+/// The cube is that of the finite points; others get code 0. `None` when there are no finite
+/// points or their extent is zero (no order helps then).
+pub fn morton_codes(points: &[DVec3]) -> Option<Vec<u64>> {
+    let b = BoundingBox::of(points.iter().copied().filter(|p| p.is_finite()))?;
+    let extent = (b.max - b.min).max_element();
+    if !(extent > 0.0 && extent.is_finite()) {
+        return None;
+    }
+    let scale = ((1u64 << 21) - 1) as f64 / extent;
+    Some(
+        points
+            .iter()
+            .map(|&p| {
+                // NaN clamps to NaN, which `as` turns into 0; infinities clamp.
+                let q = ((p - b.min) * scale)
+                    .to_array()
+                    .map(|x| x.clamp(0.0, 2097151.0) as u64);
+                spread3(q[0]) | spread3(q[1]) << 1 | spread3(q[2]) << 2
+            })
+            .collect(),
+    )
+}
+
+/// Spreads the low 21 bits of `x` to every third bit (Morton interleaving).
+fn spread3(x: u64) -> u64 {
+    let mut x = x & 0x1f_ffff;
+    x = (x | x << 32) & 0x1f_0000_0000_ffff;
+    x = (x | x << 16) & 0x1f_0000_ff00_00ff;
+    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+    x = (x | x << 2) & 0x1249_2492_4924_9249;
+    x
+}
+
 /// Cotangent of the angle between `a` and `b`, clamped so that needle triangles do not give
 /// infinite weights.
 #[inline]
@@ -120,5 +156,43 @@ impl Mesh {
     /// The cotangent weight of an edge, `(cot α + cot β) / 2` over its two opposite angles.
     pub fn cotangent_weight(&self, h: HalfedgeId) -> f64 {
         0.5 * (self.opposite_cotangent(h) + self.opposite_cotangent(self.twin(h)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn morton_codes_interleave_the_axes() {
+        assert_eq!(spread3(0b111), 0b1001001);
+        // The cube's corners: x is the lowest bit of each triple, then y, then z.
+        let top = (1u64 << 63) - 1;
+        let codes = morton_codes(&[
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::Y,
+            DVec3::Z,
+            DVec3::ONE,
+            DVec3::splat(0.5),
+        ])
+        .expect("a non-degenerate cube");
+        assert_eq!(
+            codes[..5],
+            [
+                0,
+                top & 0x1249_2492_4924_9249,
+                (top & 0x1249_2492_4924_9249) << 1,
+                (top & 0x1249_2492_4924_9249) << 2,
+                top
+            ]
+        );
+        // The centre comes after the corner at the origin and before the far corner.
+        assert!(codes[0] < codes[5] && codes[5] < codes[4]);
+        assert_eq!(morton_codes(&[]), None);
+        assert_eq!(morton_codes(&[DVec3::ONE, DVec3::ONE]), None);
+        // A point that is not finite gets a code instead of breaking the order.
+        let codes = morton_codes(&[DVec3::ZERO, DVec3::ONE, DVec3::NAN, DVec3::INFINITY]);
+        assert_eq!(codes, Some(vec![0, top, 0, top]));
     }
 }

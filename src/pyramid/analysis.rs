@@ -21,8 +21,9 @@
 
 use super::frames::frame_min_length;
 use super::synthesis::{Scratch, decode, predict_local, presmooth_local};
-use super::waves::{Waves, run_waves};
+use super::waves::{SharedSignal, Waves, run_waves};
 use super::{Codes, Pyramid, PyramidError, SplitOffsets};
+use crate::mesh::geometry::morton_codes;
 use crate::mesh::{Mesh, SlotIndex, VertexId};
 use crate::pm::{PmCursor, ProgressiveMesh};
 use crate::progress::Progress;
@@ -72,11 +73,18 @@ impl Pyramid {
             let r = ranges.partition_point(|r| r.end <= k);
             (&records[r], ranges[r].end - 1 - k)
         };
-        let waves = Waves::schedule(n_splits, signal.len(), |k| {
-            let (rec, i) = record_of(k);
-            let (o, next) = (rec.offsets[i], rec.offsets[i + 1]);
-            (&rec.locals[o.locals..next.locals], next.details - o.details)
-        });
+        // Waves store their splits by the place of the new vertex (see `run_waves`).
+        let morton = morton_codes(&geometry[n_base..n_finest]);
+        let waves = Waves::schedule(
+            n_splits,
+            signal.len(),
+            |k| {
+                let (rec, i) = record_of(k);
+                let (o, next) = (rec.offsets[i], rec.offsets[i + 1]);
+                (&rec.locals[o.locals..next.locals], next.details - o.details)
+            },
+            |k| morton.as_ref().map_or(0, |m| m[k]),
+        );
         let slotted = Records::in_slot_order(&records, &waves, record_of);
         drop(records);
 
@@ -346,17 +354,16 @@ impl Records {
         }
     }
 
-    /// Steps 2–5 of the split stored at `slot`, reading `f = f^(n)`: appends the presmoothed
-    /// values of its 1-ring (`f^(n−1)` there) to `smoothed` and its details to `details`
-    /// (`min_length`: see [`vertex_frame`](super::frames::vertex_frame)).
+    /// Steps 2–5 of the split stored at `slot`, reading `f = f^(n)`: writes the presmoothed
+    /// values of its 1-ring (`f^(n−1)` there) into `f` and its details into their places in
+    /// `details` (`min_length`: see [`vertex_frame`](super::frames::vertex_frame)).
     fn split_details(
         &self,
         slot: usize,
-        f: &[DVec3],
+        f: &SharedSignal,
+        details: &SharedSignal,
         min_length: f64,
         scratch: &mut Scratch,
-        smoothed: &mut Vec<DVec3>,
-        details: &mut Vec<DVec3>,
     ) {
         let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
         let table = &self.locals[o.locals..next.locals];
@@ -365,7 +372,7 @@ impl Records {
         // 2. Presmooth the ring from f^(n); remember f^(n) on the touched vertices.
         let g = &mut scratch.g;
         g.clear();
-        g.extend(table.iter().map(|&x| f[x as usize]));
+        g.extend(table.iter().map(|&x| f.get(x as usize)));
         scratch.saved.clear();
         scratch.saved.extend_from_slice(&g[..t]);
         presmooth_local(
@@ -378,7 +385,9 @@ impl Records {
         // 3. Downsample: f^(n−1) is the presmoothed ring; the removed vertex is gone (its
         //    value is never read again: the prediction starts it at its survivor).
         g[1..t].copy_from_slice(&scratch.smoothed);
-        smoothed.extend_from_slice(&scratch.smoothed);
+        for (&x, &s) in table[1..t].iter().zip(&scratch.smoothed) {
+            f.set(x as usize, s);
+        }
         // 4. Predict, 5. details in the frames of the predicted geometry.
         predict_local(
             &self.codes,
@@ -390,28 +399,9 @@ impl Records {
             &mut scratch.frames,
             min_length,
         );
-        details.extend((0..t).map(|i| scratch.frames[i].to_local(scratch.saved[i] - scratch.q[i])));
-    }
-
-    /// Writes what [`Records::split_details`] computed for `slots` (in that order): the
-    /// smoothed rings into `f`, the details into their places in `details`.
-    fn write_back(
-        &self,
-        slots: std::ops::Range<usize>,
-        smoothed: &[DVec3],
-        split_details: &[DVec3],
-        f: &mut [DVec3],
-        details: &mut [DVec3],
-    ) {
-        let (first, end) = (self.offsets[slots.start], self.offsets[slots.end]);
-        details[first.details..end.details].copy_from_slice(split_details);
-        let mut smoothed = smoothed.iter();
-        for slot in slots {
-            let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
-            let ring = &self.locals[o.locals + 1..o.locals + (next.details - o.details)];
-            for (&x, &s) in ring.iter().zip(smoothed.by_ref()) {
-                f[x as usize] = s;
-            }
+        for i in 0..t {
+            let d = scratch.frames[i].to_local(scratch.saved[i] - scratch.q[i]);
+            details.set(o.details + i, d);
         }
     }
 
@@ -426,27 +416,12 @@ impl Records {
         min_length: f64,
         progress: &dyn Progress,
     ) {
-        let n_splits = self.offsets.len() - 1;
-        let all = 0..n_splits;
-        let in_order = (0..waves.len()).rev().map(|w| {
-            let slots = waves.slots_in(w, &all);
-            let done = (n_splits - slots.end) as f64 / n_splits.max(1) as f64;
-            progress.update(RECORDS_SHARE + (1.0 - RECORDS_SHARE) * done);
-            slots
-        });
-        // Per block: scratch, smoothed rings, details.
-        type Block = (Scratch, Vec<DVec3>, Vec<DVec3>);
+        let (f, details) = (SharedSignal::new(f), SharedSignal::new(details));
         run_waves(
-            &mut (f, details),
-            in_order,
-            n_splits,
-            |slot, (f, _), (scratch, smoothed, split_details): &mut Block| {
-                self.split_details(slot, f, min_length, scratch, smoothed, split_details)
-            },
-            |slots, (_, smoothed, split_details), (f, details)| {
-                self.write_back(slots, smoothed, split_details, f, details);
-                smoothed.clear();
-                split_details.clear();
+            (0..waves.len()).rev().map(|w| waves.wave(w)),
+            |done| progress.update(RECORDS_SHARE + (1.0 - RECORDS_SHARE) * done),
+            |slot, scratch: &mut Scratch| {
+                self.split_details(slot, &f, &details, min_length, scratch)
             },
         );
     }

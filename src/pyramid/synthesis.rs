@@ -14,7 +14,7 @@
 
 use super::frames::{Frame, LocalIndex, frame_min_length, vertex_frame};
 use super::gains::LevelGains;
-use super::waves::run_waves;
+use super::waves::{SharedSignal, run_waves};
 use super::{Codes, Pyramid, PyramidError};
 use glam::DVec3;
 
@@ -164,23 +164,22 @@ pub(crate) fn predict_local<I: LocalIndex>(
 }
 
 impl Pyramid {
-    /// Appends to `out` the values the split stored at `slot` gives its touched vertices (the
-    /// new vertex, then its 1-ring), computed from `f = f^(n−1)`.
+    /// Computes the values the split stored at `slot` gives its touched vertices (the new
+    /// vertex, then its 1-ring) from `f = f^(n−1)`, and writes them into `f`.
     #[inline]
-    fn split_values<I: LocalIndex>(
+    fn synthesize_split<I: LocalIndex>(
         &self,
         codes: &[I],
         slot: usize,
-        f: &[DVec3],
+        f: &SharedSignal,
         gains: &LevelGains,
         scratch: &mut Scratch,
-        out: &mut Vec<DVec3>,
     ) {
         let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
         let locals = &self.locals[o.locals..next.locals];
         let g = &mut scratch.g;
         g.clear();
-        g.extend(locals.iter().map(|&x| f[x as usize]));
+        g.extend(locals.iter().map(|&x| f.get(x as usize)));
         let survivor = decode(codes, o.codes, o.weights, &mut scratch.entries);
         predict_local(
             codes,
@@ -195,27 +194,14 @@ impl Pyramid {
         let level = self.level_of_split(self.waves.split_at(slot));
         let (tangential, normal) = gains.split_gain(level);
         let details = &self.details[o.details..next.details];
-        out.extend(
-            scratch
-                .q
-                .iter()
-                .zip(&scratch.frames)
-                .zip(details)
-                .map(|((&q, frame), &d)| q + frame.to_world_scaled(d, tangential, normal)),
-        );
-    }
-
-    /// Writes values computed by [`Pyramid::split_values`] for `slots` (in that order) into
-    /// their touched vertices.
-    fn write_touched(&self, slots: std::ops::Range<usize>, values: &[DVec3], f: &mut [DVec3]) {
-        // Each record's touched vertices open its local table; its detail count says how many.
-        let mut values = values.iter();
-        for slot in slots {
-            let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
-            let touched = &self.locals[o.locals..o.locals + (next.details - o.details)];
-            for (&x, &v) in touched.iter().zip(values.by_ref()) {
-                f[x as usize] = v;
-            }
+        // The touched vertices open the local table; there is one detail for each.
+        for (((&x, &q), frame), &d) in locals
+            .iter()
+            .zip(&scratch.q)
+            .zip(&scratch.frames)
+            .zip(details)
+        {
+            f.set(x as usize, q + frame.to_world_scaled(d, tangential, normal));
         }
     }
 
@@ -228,17 +214,18 @@ impl Pyramid {
         splits: std::ops::Range<usize>,
         gains: &LevelGains,
     ) {
-        let waves = (0..self.waves.len()).map(|w| self.waves.slots_in(w, &splits));
+        let f = SharedSignal::new(f);
+        let waves = (0..self.waves.len()).map(|w| self.waves.wave(w));
+        // A wave stores its splits by place, not by number: a part of the hierarchy is picked
+        // split by split.
+        let all = splits.start == 0 && splits.end == self.n_splits();
         run_waves(
-            f,
             waves,
-            splits.len(),
-            |slot, f, (scratch, out): &mut (Scratch, Vec<DVec3>)| {
-                self.split_values(codes, slot, f, gains, scratch, out)
-            },
-            |slots, (_, out), f| {
-                self.write_touched(slots, out, f);
-                out.clear();
+            |_| {},
+            |slot, scratch: &mut Scratch| {
+                if all || splits.contains(&self.waves.split_at(slot)) {
+                    self.synthesize_split(codes, slot, &f, gains, scratch);
+                }
             },
         );
     }

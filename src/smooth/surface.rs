@@ -4,6 +4,7 @@
 //! Faces are numbered `0..n` in slot order of the mesh; vertices keep their slot index, so
 //! position arrays are indexed by [`SlotIndex::slot`] and dead slots simply stay unreferenced.
 
+use crate::mesh::geometry::morton_codes;
 use crate::mesh::{Mesh, SlotIndex};
 use glam::DVec3;
 
@@ -62,25 +63,13 @@ impl FlatSurface {
             .iter()
             .map(|t| t.iter().map(|&v| positions[v as usize]).sum::<DVec3>() / 3.0)
             .collect();
-        let lo = centroids.iter().fold(DVec3::INFINITY, |a, &c| a.min(c));
-        let hi = centroids.iter().fold(DVec3::NEG_INFINITY, |a, &c| a.max(c));
-        let extent = (hi - lo).max_element();
-        if !(extent > 0.0 && extent.is_finite()) {
+        let Some(codes) = morton_codes(&centroids) else {
             return;
-        }
-        let scale = ((1u64 << 21) - 1) as f64 / extent;
-        let mut keyed: Vec<(u64, u32)> = centroids
-            .iter()
+        };
+        let mut keyed: Vec<(u64, u32)> = codes
+            .into_iter()
             .enumerate()
-            .map(|(i, c)| {
-                let q = ((*c - lo) * scale)
-                    .to_array()
-                    .map(|x| x.clamp(0.0, 2097151.0) as u64);
-                (
-                    spread3(q[0]) | spread3(q[1]) << 1 | spread3(q[2]) << 2,
-                    i as u32,
-                )
-            })
+            .map(|(i, code)| (code, i as u32))
             .collect();
         keyed.sort_unstable();
         let mut new_index = vec![0u32; n];
@@ -152,17 +141,6 @@ impl FlatSurface {
         }
         frames
     }
-}
-
-/// Spreads the low 21 bits of `x` to every third bit (Morton interleaving).
-fn spread3(x: u64) -> u64 {
-    let mut x = x & 0x1f_ffff;
-    x = (x | x << 32) & 0x1f_0000_0000_ffff;
-    x = (x | x << 16) & 0x1f_0000_ff00_00ff;
-    x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
-    x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
-    x = (x | x << 2) & 0x1249_2492_4924_9249;
-    x
 }
 
 /// Unit normal and area of a face from its area vector `N = 2A n`. A face whose normal is not
@@ -258,7 +236,6 @@ mod tests {
                 }
             }
         }
-        assert_eq!(spread3(0b111), 0b1001001);
     }
 
     #[test]
