@@ -16,7 +16,7 @@ mod decimate;
 #[cfg(test)]
 mod decimate_reference;
 pub(crate) mod fuzz;
-mod prefetch;
+pub(crate) mod prefetch;
 mod progressive;
 pub mod quadric;
 mod replay;

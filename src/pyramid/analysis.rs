@@ -369,6 +369,13 @@ impl Records {
         let table = &self.locals[o.locals..next.locals];
         let t = next.details - o.details;
         let survivor = decode(&self.codes, o.codes, o.weights, &mut scratch.entries);
+        // A split's values are scattered over `f` (PM order is not mesh order): hint the next
+        // split's while this one computes.
+        if let Some(after) = self.offsets.get(slot + 2) {
+            for &x in &self.locals[next.locals..after.locals] {
+                f.prefetch(x as usize);
+            }
+        }
         // 2. Presmooth the ring from f^(n); remember f^(n) on the touched vertices.
         let g = &mut scratch.g;
         g.clear();

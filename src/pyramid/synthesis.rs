@@ -177,6 +177,13 @@ impl Pyramid {
     ) {
         let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
         let locals = &self.locals[o.locals..next.locals];
+        // The values a split gathers are scattered over `f` (PM order is not mesh order) and
+        // miss the cache on large meshes: hint the next split's while this one computes.
+        if let Some(after) = self.offsets.get(slot + 2) {
+            for &x in &self.locals[next.locals..after.locals] {
+                f.prefetch(x as usize);
+            }
+        }
         let g = &mut scratch.g;
         g.clear();
         g.extend(locals.iter().map(|&x| f.get(x as usize)));

@@ -178,6 +178,12 @@ impl<'a> SharedSignal<'a> {
         )
     }
 
+    /// A cache hint for vertex `i`'s value (any `i`: it is never dereferenced).
+    #[inline(always)]
+    pub fn prefetch(&self, i: usize) {
+        crate::pm::prefetch::prefetch(self.cells.as_ptr().wrapping_add(i));
+    }
+
     /// Sets the value of vertex `i`.
     #[inline(always)]
     pub fn set(&self, i: usize, v: DVec3) {
