@@ -461,3 +461,38 @@ fn parallel_synthesis_gives_the_bits_of_split_order() {
         );
     }
 }
+
+#[test]
+fn syntheses_running_side_by_side_on_the_pool_give_the_bits_of_one_thread() {
+    // Each synthesis hands the waves to the pool's threads; when several run at once inside a
+    // parallel loop, a synthesis may get no helper at all (the pool is busy with the others)
+    // and must then run every block itself, with the same bits.
+    let (p, t) = bumpy_sphere(4, 0.01);
+    let (_, pyr) = pyramid_of(&p, &t);
+    let gains: Vec<LevelGains> = (0..6)
+        .map(|i| {
+            Filter::default()
+                .gain(
+                    LevelSpec::Vertices(40 + 50 * i),
+                    LevelSpec::Vertices(1500),
+                    0.5 * i as f64,
+                )
+                .resolve(pyr.surface_area())
+        })
+        .collect();
+    let single = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let expected: Vec<Vec<DVec3>> =
+        single.install(|| gains.iter().map(|g| pyr.synthesize(g)).collect());
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let got: Vec<Vec<DVec3>> = pool.install(|| {
+        use rayon::prelude::*;
+        gains.par_iter().map(|g| pyr.synthesize(g)).collect()
+    });
+    assert!(got == expected);
+}

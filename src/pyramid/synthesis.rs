@@ -222,17 +222,32 @@ impl Pyramid {
         gains: &LevelGains,
     ) {
         let f = SharedSignal::new(f);
-        let waves = (0..self.waves.len()).map(|w| self.waves.wave(w));
-        // A wave stores its splits by place, not by number: a part of the hierarchy is picked
-        // split by split.
-        let all = splits.start == 0 && splits.end == self.n_splits();
+        if splits.start == 0 && splits.end == self.n_splits() {
+            let waves = (0..self.waves.len()).map(|w| self.waves.wave(w));
+            run_waves(
+                waves,
+                |_| {},
+                |slot, scratch: &mut Scratch| {
+                    self.synthesize_split(codes, slot, &f, gains, scratch)
+                },
+            );
+            return;
+        }
+        // Part of the hierarchy: a wave stores its splits by place, not by number, so list the
+        // slots of the splits asked for. Waves occupy consecutive slots, so in increasing
+        // order the slots fall wave by wave.
+        let mut slots: Vec<u32> = splits.map(|k| self.waves.slot_of(k) as u32).collect();
+        slots.sort_unstable();
+        let waves = (0..self.waves.len()).map(|w| {
+            let wave = self.waves.wave(w);
+            slots.partition_point(|&s| (s as usize) < wave.start)
+                ..slots.partition_point(|&s| (s as usize) < wave.end)
+        });
         run_waves(
             waves,
             |_| {},
-            |slot, scratch: &mut Scratch| {
-                if all || splits.contains(&self.waves.split_at(slot)) {
-                    self.synthesize_split(codes, slot, &f, gains, scratch);
-                }
+            |i, scratch: &mut Scratch| {
+                self.synthesize_split(codes, slots[i] as usize, &f, gains, scratch)
             },
         );
     }
