@@ -214,8 +214,8 @@ pub(crate) fn run_waves<B: Default + Send>(
     run: impl Fn(usize, &mut B) + Sync,
 ) {
     let threads = rayon::current_num_threads();
-    // Blocks (slot ranges), and the stages that group them: stage `s` holds the blocks
-    // `stages[s]..stages[s + 1]`; a stage of small waves is one serial run of ranges.
+    // Blocks (slot ranges), and the stages that group them: a large wave's blocks, or the
+    // ranges of a run of small waves.
     let mut blocks: Vec<Range<usize>> = Vec::new();
     let mut stages: Vec<Stage> = Vec::new();
     let mut splits = 0;
@@ -247,8 +247,12 @@ pub(crate) fn run_waves<B: Default + Send>(
     }
     let claimed: Vec<AtomicBool> = (0..blocks.len()).map(|_| AtomicBool::new(false)).collect();
     let done = AtomicUsize::new(0);
+    // Set when a thread panics: its blocks will never be done, so the others stop waiting
+    // and the panic reaches the caller (through `rayon::scope`) instead of a hang.
+    let poisoned = AtomicBool::new(false);
     let total = splits.max(1) as f64;
     let work = |thread: usize| {
+        let _poison = PoisonOnUnwind(&poisoned);
         let mut scratch = B::default();
         for stage in &stages {
             let ids = stage.blocks.clone();
@@ -270,7 +274,9 @@ pub(crate) fn run_waves<B: Default + Send>(
                     }
                 }
             }
-            wait_until_done(&done, ids.end);
+            if !wait_until_done(&done, ids.end, &poisoned) {
+                return;
+            }
             if thread == 0 {
                 progress(stage.splits_after as f64 / total);
             }
@@ -302,12 +308,27 @@ struct Stage {
 /// can take over part of a slower one's.
 const BLOCKS_PER_THREAD: usize = 4;
 
-/// Waits until `done` reaches `target`: spinning first (a wave's blocks take microseconds),
-/// then yielding the core, which matters when threads outnumber free cores.
+/// Sets its flag when dropped during a panic.
+struct PoisonOnUnwind<'a>(&'a AtomicBool);
+
+impl Drop for PoisonOnUnwind<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.0.store(true, Release);
+        }
+    }
+}
+
+/// Waits until `done` reaches `target` (`true`) or another thread panicked (`false`):
+/// spinning first (a wave's blocks take microseconds), then yielding the core, which matters
+/// when threads outnumber free cores.
 #[inline]
-fn wait_until_done(done: &AtomicUsize, target: usize) {
+fn wait_until_done(done: &AtomicUsize, target: usize, poisoned: &AtomicBool) -> bool {
     let mut spins = 0u32;
     while done.load(Acquire) < target {
+        if poisoned.load(Acquire) {
+            return false;
+        }
         if spins < 2000 {
             std::hint::spin_loop();
             spins += 1;
@@ -315,6 +336,7 @@ fn wait_until_done(done: &AtomicUsize, target: usize) {
             std::thread::yield_now();
         }
     }
+    true
 }
 
 #[cfg(test)]
@@ -470,6 +492,34 @@ mod tests {
                 expected,
                 "{threads} threads"
             );
+        }
+    }
+
+    #[test]
+    fn a_panicking_split_reaches_the_caller_instead_of_hanging() {
+        let n = 2000;
+        let records = ring_records(n, 9000);
+        let waves = Waves::schedule(records.len(), n, |k| (&records[k][..], 1), |_| 0);
+        let bad = (0..waves.len())
+            .map(|w| waves.wave(w))
+            .find(|w| w.len() >= 4 * PARALLEL_WAVE)
+            .expect("a large wave")
+            .start;
+        for threads in [1, 2, 3] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .expect("a thread pool");
+            let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                pool.install(|| {
+                    run_waves(
+                        (0..waves.len()).map(|w| waves.wave(w)),
+                        |_| {},
+                        |slot, _: &mut ()| assert_ne!(slot, bad, "split at slot {slot} fails"),
+                    )
+                })
+            }));
+            assert!(result.is_err(), "{threads} threads: the panic is lost");
         }
     }
 }
