@@ -302,38 +302,16 @@ struct Records {
 impl Records {
     /// The records of all ranges copied into the slots `waves` assigns them; `record_of(k)`
     /// names the range record holding split `k` and its position there. Streams are copied
-    /// one at a time, so the peak memory is the records plus the largest stream.
+    /// one at a time, so the peak memory is the records plus the largest stream; each is
+    /// copied by all threads at once (the reads are scattered, so one thread would mostly
+    /// wait for memory).
     fn in_slot_order<'a>(
         ranges: &[Records],
         waves: &Waves,
-        record_of: impl Fn(usize) -> (&'a Records, usize),
+        record_of: impl Fn(usize) -> (&'a Records, usize) + Sync,
     ) -> Records {
         let n_splits: usize = ranges.iter().map(|r| r.offsets.len() - 1).sum();
         let at = |slot: usize| record_of(waves.split_at(slot));
-        fn gather<'r, T: Copy + 'r>(
-            n_splits: usize,
-            total: usize,
-            record: impl Fn(usize) -> &'r [T],
-        ) -> Vec<T> {
-            let mut to = Vec::with_capacity(total);
-            for slot in 0..n_splits {
-                to.extend_from_slice(record(slot));
-            }
-            to
-        }
-        let total = |get: fn(&Records) -> usize| ranges.iter().map(get).sum::<usize>();
-        let locals = gather(n_splits, total(|r| r.locals.len()), |slot| {
-            let (r, i) = at(slot);
-            &r.locals[r.offsets[i].locals..r.offsets[i + 1].locals]
-        });
-        let codes = gather(n_splits, total(|r| r.codes.len()), |slot| {
-            let (r, i) = at(slot);
-            &r.codes[r.offsets[i].codes..r.offsets[i + 1].codes]
-        });
-        let weights = gather(n_splits, total(|r| r.weights.len()), |slot| {
-            let (r, i) = at(slot);
-            &r.weights[r.offsets[i].weights..r.offsets[i + 1].weights]
-        });
         let mut next = SplitOffsets::default();
         let mut offsets = Vec::with_capacity(n_splits + 1);
         offsets.push(next);
@@ -346,6 +324,32 @@ impl Records {
             next.details += end.details - o.details;
             offsets.push(next);
         }
+        let chunks = 4 * rayon::current_num_threads();
+        let cuts: Vec<usize> = (0..=chunks).map(|c| n_splits * c / chunks).collect();
+        let locals = gather(
+            &cuts,
+            |slot| offsets[slot].locals,
+            |slot| {
+                let (r, i) = at(slot);
+                &r.locals[r.offsets[i].locals..r.offsets[i + 1].locals]
+            },
+        );
+        let codes = gather(
+            &cuts,
+            |slot| offsets[slot].codes,
+            |slot| {
+                let (r, i) = at(slot);
+                &r.codes[r.offsets[i].codes..r.offsets[i + 1].codes]
+            },
+        );
+        let weights = gather(
+            &cuts,
+            |slot| offsets[slot].weights,
+            |slot| {
+                let (r, i) = at(slot);
+                &r.weights[r.offsets[i].weights..r.offsets[i + 1].weights]
+            },
+        );
         Records {
             offsets,
             locals,
@@ -432,6 +436,42 @@ impl Records {
             },
         );
     }
+}
+
+/// The slices `record(slot)` of all slots `cuts[0]..cuts[last]`, concatenated; slot `s` lands
+/// at `start(s)` (`start(cuts[last])` is the total length). The chunks `cuts[c]..cuts[c + 1]`
+/// are copied on rayon's threads, each into its own part of the output.
+fn gather<'r, T: Copy + Send + Sync + 'r>(
+    cuts: &[usize],
+    start: impl Fn(usize) -> usize,
+    record: impl Fn(usize) -> &'r [T] + Sync,
+) -> Vec<T> {
+    use rayon::prelude::*;
+    let (first, last) = (cuts[0], cuts[cuts.len() - 1]);
+    let total = start(last) - start(first);
+    let mut to: Vec<T> = Vec::with_capacity(total);
+    let mut rest = &mut to.spare_capacity_mut()[..total];
+    let mut parts = Vec::with_capacity(cuts.len());
+    for w in cuts.windows(2) {
+        let (part, tail) = rest.split_at_mut(start(w[1]) - start(w[0]));
+        parts.push((w[0]..w[1], part));
+        rest = tail;
+    }
+    parts.into_par_iter().for_each(|(slots, part)| {
+        let mut at = 0;
+        for slot in slots {
+            let src = record(slot);
+            for (d, &x) in part[at..at + src.len()].iter_mut().zip(src) {
+                d.write(x);
+            }
+            at += src.len();
+        }
+        assert_eq!(at, part.len(), "record lengths disagree with their offsets");
+    });
+    // SAFETY: the parts tile `to`'s first `total` elements, and each part was written in full
+    // (asserted above; a failed assertion unwinds before this line and drops `to` empty).
+    unsafe { to.set_len(total) };
+    to
 }
 
 /// Total area and bounding-box diagonal of a mesh.
