@@ -1251,7 +1251,8 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
 /// rebuilt, they form a consistently oriented manifold without multi-edges, on which
 /// `Mesh::from_polygons` repairs nothing, keeps vertex slots and face order and starts each
 /// face at its first corner, so the faces are what it would give, without building the
-/// half-edge mesh (most of a load's time on big meshes). `None`, or a mismatch, sends the caller to the builder.
+/// half-edge mesh (most of a load's time on big meshes). `None`, or a mismatch, sends the
+/// caller to the builder.
 fn clean_triangle_faces(
     input: &PolygonMesh,
     mesh_to_pm: &[u32],

@@ -20,7 +20,7 @@
 //! `waves`) at once, in reverse.
 
 use super::frames::frame_min_length;
-use super::synthesis::{Scratch, decode, predict_local, presmooth_local};
+use super::synthesis::{Scratch, decode, predict_local, prefetch_next_split, presmooth_local};
 use super::waves::{SharedSignal, Waves, run_waves};
 use super::{Codes, Pyramid, PyramidError, SplitOffsets};
 use crate::mesh::geometry::morton_codes;
@@ -326,30 +326,9 @@ impl Records {
         }
         let chunks = 4 * rayon::current_num_threads();
         let cuts: Vec<usize> = (0..=chunks).map(|c| n_splits * c / chunks).collect();
-        let locals = gather(
-            &cuts,
-            |slot| offsets[slot].locals,
-            |slot| {
-                let (r, i) = at(slot);
-                &r.locals[r.offsets[i].locals..r.offsets[i + 1].locals]
-            },
-        );
-        let codes = gather(
-            &cuts,
-            |slot| offsets[slot].codes,
-            |slot| {
-                let (r, i) = at(slot);
-                &r.codes[r.offsets[i].codes..r.offsets[i + 1].codes]
-            },
-        );
-        let weights = gather(
-            &cuts,
-            |slot| offsets[slot].weights,
-            |slot| {
-                let (r, i) = at(slot);
-                &r.weights[r.offsets[i].weights..r.offsets[i + 1].weights]
-            },
-        );
+        let locals = stream(&cuts, &offsets, &at, |r| &r.locals, |o| o.locals);
+        let codes = stream(&cuts, &offsets, &at, |r| &r.codes, |o| o.codes);
+        let weights = stream(&cuts, &offsets, &at, |r| &r.weights, |o| o.weights);
         Records {
             offsets,
             locals,
@@ -373,13 +352,7 @@ impl Records {
         let table = &self.locals[o.locals..next.locals];
         let t = next.details - o.details;
         let survivor = decode(&self.codes, o.codes, o.weights, &mut scratch.entries);
-        // A split's values are scattered over `f` (PM order is not mesh order): hint the next
-        // split's while this one computes.
-        if let Some(after) = self.offsets.get(slot + 2) {
-            for &x in &self.locals[next.locals..after.locals] {
-                f.prefetch(x as usize);
-            }
-        }
+        prefetch_next_split(f, &self.offsets, &self.locals, slot);
         // 2. Presmooth the ring from f^(n); remember f^(n) on the touched vertices.
         let g = &mut scratch.g;
         g.clear();
@@ -436,6 +409,26 @@ impl Records {
             },
         );
     }
+}
+
+/// One stream of the records in slot order ([`Records::in_slot_order`]): `data` of the range
+/// record `at(slot)` names, each split's part found at `pos` of its offsets, copied with
+/// [`gather`] to `pos` of the slot's new `offsets`.
+fn stream<'a, T: Copy + Send + Sync + 'a>(
+    cuts: &[usize],
+    offsets: &[SplitOffsets],
+    at: &(dyn Fn(usize) -> (&'a Records, usize) + Sync),
+    data: fn(&'a Records) -> &'a [T],
+    pos: fn(&SplitOffsets) -> usize,
+) -> Vec<T> {
+    gather(
+        cuts,
+        |slot| pos(&offsets[slot]),
+        |slot| {
+            let (r, i) = at(slot);
+            &data(r)[pos(&r.offsets[i])..pos(&r.offsets[i + 1])]
+        },
+    )
 }
 
 /// The slices `record(slot)` of all slots `cuts[0]..cuts[last]`, concatenated; slot `s` lands

@@ -15,7 +15,7 @@
 use super::frames::{Frame, LocalIndex, frame_min_length, vertex_frame};
 use super::gains::LevelGains;
 use super::waves::{SharedSignal, run_waves};
-use super::{Codes, Pyramid, PyramidError};
+use super::{Codes, Pyramid, PyramidError, SplitOffsets};
 use glam::DVec3;
 
 /// One touched entry of a split record, decoded: where its stencil indices, weights and fan
@@ -73,6 +73,23 @@ pub(crate) fn decode<I: LocalIndex>(
         w += len;
     }
     survivor
+}
+
+/// Cache hints for the values the split stored after `slot` gathers: they are scattered over
+/// `f` (PM order is not mesh order) and miss the cache on large meshes, so hinting them while
+/// the split at `slot` computes overlaps the misses. Analysis and synthesis both call it.
+#[inline]
+pub(crate) fn prefetch_next_split(
+    f: &SharedSignal,
+    offsets: &[SplitOffsets],
+    locals: &[u32],
+    slot: usize,
+) {
+    if let Some(after) = offsets.get(slot + 2) {
+        for &x in &locals[offsets[slot + 1].locals..after.locals] {
+            f.prefetch(x as usize);
+        }
+    }
 }
 
 /// `Σ w g[i]` over a stencil (two interleaved accumulators: the dependency chain of the sum
@@ -177,13 +194,7 @@ impl Pyramid {
     ) {
         let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
         let locals = &self.locals[o.locals..next.locals];
-        // The values a split gathers are scattered over `f` (PM order is not mesh order) and
-        // miss the cache on large meshes: hint the next split's while this one computes.
-        if let Some(after) = self.offsets.get(slot + 2) {
-            for &x in &self.locals[next.locals..after.locals] {
-                f.prefetch(x as usize);
-            }
-        }
+        prefetch_next_split(f, &self.offsets, &self.locals, slot);
         let g = &mut scratch.g;
         g.clear();
         g.extend(locals.iter().map(|&x| f.get(x as usize)));
@@ -222,32 +233,31 @@ impl Pyramid {
         gains: &LevelGains,
     ) {
         let f = SharedSignal::new(f);
-        if splits.start == 0 && splits.end == self.n_splits() {
-            let waves = (0..self.waves.len()).map(|w| self.waves.wave(w));
-            run_waves(
-                waves,
-                |_| {},
-                |slot, scratch: &mut Scratch| {
-                    self.synthesize_split(codes, slot, &f, gains, scratch)
-                },
-            );
-            return;
-        }
         // Part of the hierarchy: a wave stores its splits by place, not by number, so list the
         // slots of the splits asked for. Waves occupy consecutive slots, so in increasing
         // order the slots fall wave by wave.
-        let mut slots: Vec<u32> = splits.map(|k| self.waves.slot_of(k) as u32).collect();
-        slots.sort_unstable();
+        let listed: Option<Vec<u32>> =
+            (splits.start != 0 || splits.end != self.n_splits()).then(|| {
+                let mut slots: Vec<u32> = splits.map(|k| self.waves.slot_of(k) as u32).collect();
+                slots.sort_unstable();
+                slots
+            });
         let waves = (0..self.waves.len()).map(|w| {
             let wave = self.waves.wave(w);
-            slots.partition_point(|&s| (s as usize) < wave.start)
-                ..slots.partition_point(|&s| (s as usize) < wave.end)
+            match &listed {
+                None => wave,
+                Some(slots) => {
+                    slots.partition_point(|&s| (s as usize) < wave.start)
+                        ..slots.partition_point(|&s| (s as usize) < wave.end)
+                }
+            }
         });
         run_waves(
             waves,
             |_| {},
             |i, scratch: &mut Scratch| {
-                self.synthesize_split(codes, slots[i] as usize, &f, gains, scratch)
+                let slot = listed.as_ref().map_or(i, |slots| slots[i] as usize);
+                self.synthesize_split(codes, slot, &f, gains, scratch)
             },
         );
     }

@@ -23,8 +23,8 @@ use std::sync::atomic::Ordering::{Acquire, Relaxed, Release};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize};
 
 /// The splits of a pyramid grouped by wave, and where each is stored: the pyramid keeps its
-/// records wave after wave (within a wave in increasing split order), so that synthesis reads
-/// them front to back.
+/// records wave after wave (within a wave by a spatial key, see [`Waves::schedule`]), so that
+/// synthesis reads them front to back.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub(crate) struct Waves {
     /// The split stored at each slot.
