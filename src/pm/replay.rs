@@ -35,9 +35,11 @@ fn canonical(t: [u32; 3]) -> [u32; 3] {
 /// ring fits a cache line; which entry is a boundary half-edge is in [`Ring::boundary`], and
 /// faces are found from their stored half-edge's slot ([`FlatReplay::triangles`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-struct Entry {
-    nbr: u32,
-    slot: u32,
+pub(crate) struct Entry {
+    /// The neighbour (PM index).
+    pub(crate) nbr: u32,
+    /// The out-going half-edge's slot.
+    pub(crate) slot: u32,
 }
 
 /// One cache line per vertex: up to [`INLINE`] ring entries, and in the last slot the header
@@ -283,6 +285,18 @@ impl FlatReplay {
         self.ring_v.clear();
         self.ring_v.extend(self.ring.iter().map(|x| x.nbr));
         Ok(&self.ring_v)
+    }
+
+    /// `v`'s ring as `(neighbour, out-going half-edge slot)` entries in [`Mesh::outgoing`]
+    /// order, and whether entry 0 is a boundary out-edge (no face on its left; the face left
+    /// of entry `k` is `v`, entry `k`, entry `k + 1`, cyclically). Empty for a vertex that does
+    /// not exist yet.
+    #[inline]
+    pub(crate) fn ring_entries(&self, v: u32) -> (&[Entry], bool) {
+        if v as usize >= self.rings.len() {
+            return (&[], false);
+        }
+        (self.rings.get(v), self.rings.boundary(v))
     }
 
     /// The length of `v`'s ring (its valence), listing the ring for a following

@@ -13,19 +13,22 @@
 //!
 //! Step 1 never reads the signal, and it is most of the work (the hinge coefficients), so it
 //! runs first, for all splits, on rayon's threads: the hierarchy is cut into contiguous ranges
-//! of splits, and each range is walked down by its own cursor, which starts at the finest level
-//! and collapses to the top of its range — the very mesh records the single walk would have
-//! there, so the records and the pyramid do not depend on the thread count. Steps 2–5 then run
-//! over the records, finest split first; like synthesis, they run the splits of a wave (see
-//! `waves`) at once, in reverse.
+//! of splits, each recorded on its own thread from the very mesh the single walk would have
+//! there, so the records and the pyramid do not depend on the thread count. Operators with
+//! ring stencils (Guskov's) walk a [`FlatReplay`] up from the base, replaying the splits
+//! before their range first: its rings are the half-edge mesh's circulations, slots included,
+//! in a line of memory per vertex instead of linked 48-byte records, and the record walk is
+//! bound by memory, not arithmetic. The others walk a half-edge cursor down from the finest
+//! level. Steps 2–5 then run over the records, finest split first; like synthesis, they run
+//! the splits of a wave (see `waves`) at once, in reverse.
 
 use super::frames::frame_min_length;
 use super::synthesis::{Scratch, decode, predict_local, prefetch_next_split, presmooth_local};
 use super::waves::{SharedSignal, Waves, run_waves};
 use super::{Codes, Pyramid, PyramidError, SplitOffsets};
 use crate::mesh::geometry::morton_codes;
-use crate::mesh::{Mesh, SlotIndex, VertexId};
-use crate::pm::{PmCursor, ProgressiveMesh};
+use crate::mesh::{SlotIndex, VertexId};
+use crate::pm::{FlatReplay, PmCursor, ProgressiveMesh};
 use crate::progress::Progress;
 use crate::relax::Relaxation;
 use glam::DVec3;
@@ -63,15 +66,21 @@ impl Pyramid {
         let n_base = pm.n_base_vertices();
         let n_finest = pm.n_vertices();
         let n_splits = n_finest - n_base;
-        let cursor = pm.cursor();
-        let (surface_area, bbox_diagonal) = surface_stats(cursor.mesh());
+        let (surface_area, bbox_diagonal) = surface_stats(&geometry[..n_finest], pm.finest_faces());
 
         // Step 1 for every split, then the storage order: wave by wave (see `waves`).
         let ranges = split_ranges(n_splits, rayon::current_num_threads());
+        let cursor = (!relaxation.has_ring_stencils()).then(|| pm.cursor());
         let records = record_ranges(pm, relaxation, cursor, &ranges, progress)?;
         let record_of = |k: usize| {
             let r = ranges.partition_point(|r| r.end <= k);
-            (&records[r], ranges[r].end - 1 - k)
+            let rec = &records[r];
+            let i = if rec.reversed {
+                rec.range.end - 1 - k
+            } else {
+                k - rec.range.start
+            };
+            (rec, i)
         };
         // Waves store their splits by the place of the new vertex (see `run_waves`).
         let morton = morton_codes(&geometry[n_base..n_finest]);
@@ -140,20 +149,33 @@ fn split_ranges(n_splits: usize, threads: usize) -> Vec<std::ops::Range<usize>> 
         .collect()
 }
 
-/// Step 1 for every range of splits (coarsest range first), each range on its own thread
-/// with its own cursor; `cursor` (at the finest level) serves the finest range. Progress is
-/// reported by the finest range's walk.
+/// Step 1 for every range of splits (coarsest range first), each range on its own thread.
+/// Operators with ring stencils walk a [`FlatReplay`] up from the base (each range replays
+/// the splits before it first, which is cheap); the others walk a half-edge cursor down from
+/// the finest level (`cursor` serves the finest range). Progress is reported by the range
+/// that ends the walk it shares with the bar.
 fn record_ranges(
     pm: &ProgressiveMesh,
     relaxation: &dyn Relaxation,
-    cursor: PmCursor<'_>,
+    cursor: Option<PmCursor<'_>>,
     ranges: &[std::ops::Range<usize>],
     progress: &dyn Progress,
 ) -> Result<Vec<Records>, PyramidError> {
     use rayon::prelude::*;
     let finest = ranges.len() - 1;
+    let quiet = crate::progress::NoProgress;
+    if relaxation.has_ring_stencils() {
+        return ranges
+            .par_iter()
+            .enumerate()
+            .map(|(r, range)| {
+                let report: &dyn Progress = if r == 0 { progress } else { &quiet };
+                record_range_on_rings(pm, relaxation, range.clone(), report)
+            })
+            .collect();
+    }
     let mut cursors: Vec<Option<PmCursor<'_>>> = ranges.iter().map(|_| None).collect();
-    cursors[finest] = Some(cursor);
+    cursors[finest] = cursor;
     cursors
         .into_par_iter()
         .zip(ranges)
@@ -161,16 +183,61 @@ fn record_ranges(
         .map(|(r, (cursor, range))| {
             let mut cursor = cursor.unwrap_or_else(|| pm.cursor());
             cursor.seek(pm.n_base_vertices() + range.end);
-            let quiet = crate::progress::NoProgress;
             let report: &dyn Progress = if r == finest { progress } else { &quiet };
             record_range(pm, relaxation, cursor, range.clone(), report)
         })
         .collect()
 }
 
-/// Step 1 for splits `range` (walked finest first, `cursor` at level `n0 + range.end`): the
-/// local tables, codes and weights of each split, in that order, with `details` offsets
-/// counting the touched vertices.
+/// Step 1 for splits `range` on a [`FlatReplay`], coarsest first: after split `k`, its new
+/// vertex, its ring and their stencils and fans are those of level `n0 + k + 1`.
+fn record_range_on_rings(
+    pm: &ProgressiveMesh,
+    relaxation: &dyn Relaxation,
+    range: std::ops::Range<usize>,
+    progress: &dyn Progress,
+) -> Result<Records, PyramidError> {
+    let geometry = pm.original_positions();
+    let n_base = pm.n_base_vertices();
+    let internal = |e: crate::pm::PmError| PyramidError::Internal(e.to_string());
+    let mut replay =
+        FlatReplay::new(&geometry[..n_base], &pm.base_triangles(), range.end).map_err(internal)?;
+    let splits = pm.splits();
+    for s in &splits[..range.start] {
+        replay.apply(s).map_err(internal)?;
+    }
+    let mut recorder = Recorder::new(range.clone(), geometry.len(), false);
+    let mut touched: Vec<u32> = Vec::new();
+    let report_every = (range.len() / 200).max(1);
+    for (done, k) in range.clone().enumerate() {
+        if done % report_every == 0 {
+            progress.update(RECORDS_SHARE * done as f64 / range.len().max(1) as f64);
+        }
+        let s = &splits[k];
+        replay.apply(s).map_err(internal)?;
+        let v = (n_base + k) as u32;
+        touched.clear();
+        touched.push(v);
+        touched.extend(replay.ring_entries(v).0.iter().map(|e| e.nbr));
+        recorder.stencils.clear();
+        recorder.stencil_lens.clear();
+        let (stencils, lens) = (&mut recorder.stencils, &mut recorder.stencil_lens);
+        if !relaxation.ring_stencils(&replay, geometry, &touched, stencils, lens) {
+            return Err(PyramidError::Internal(format!(
+                "{} has no ring stencils",
+                relaxation.name()
+            )));
+        }
+        recorder.record(k, &touched, s.survivor, |j, fan| {
+            let (ring, boundary) = replay.ring_entries(j);
+            fan.extend(ring.iter().map(|e| e.nbr));
+            boundary && !ring.is_empty()
+        })?;
+    }
+    Ok(recorder.finish())
+}
+
+/// Step 1 for splits `range` (walked finest first, `cursor` at level `n0 + range.end`).
 fn record_range(
     pm: &ProgressiveMesh,
     relaxation: &dyn Relaxation,
@@ -181,18 +248,10 @@ fn record_range(
     let geometry = pm.original_positions();
     let n_base = pm.n_base_vertices();
     let n = range.len();
-    let mut rec = Records {
-        offsets: Vec::with_capacity(n + 1),
-        locals: Vec::with_capacity(32 * n),
-        codes: Vec::with_capacity(128 * n),
-        weights: Vec::with_capacity(72 * n),
-    };
+    let mut recorder = Recorder::new(range.clone(), geometry.len(), true);
     let mut stencils = Vec::new();
-    let mut stencil_lens = Vec::new();
-    let mut touched: Vec<VertexId> = Vec::new();
-    let mut n_touched = 0;
-    // PM vertex → its index in the current split's local table (u32::MAX: not in it).
-    let mut local_of = vec![u32::MAX; geometry.len()];
+    let mut touched_handles: Vec<VertexId> = Vec::new();
+    let mut touched: Vec<u32> = Vec::new();
     let report_every = (n / 200).max(1);
     for (done, k) in range.rev().enumerate() {
         if done % report_every == 0 {
@@ -206,74 +265,40 @@ fn record_range(
                 v + 1
             )));
         }
-        let survivor = pm.splits()[k].survivor;
         let mesh = cursor.mesh();
         let vh = cursor.vertex(v);
-        let (locals, codes, weights) = (&mut rec.locals, &mut rec.codes, &mut rec.weights);
-        rec.offsets.push(SplitOffsets {
-            locals: locals.len(),
-            codes: codes.len(),
-            weights: weights.len(),
-            details: n_touched,
-        });
-        let l0 = locals.len();
-        // The touched vertices (v, then its ring CCW) open the local table; their stencils
-        // and fans (indices into the table) follow, weights alongside.
-        touched.clear();
-        touched.push(vh);
-        touched.extend(mesh.outgoing(vh).map(|h| mesh.to_vertex(h)));
-        let mut local = |u: usize, locals: &mut Vec<u32>| {
-            if local_of[u] == u32::MAX {
-                local_of[u] = (locals.len() - l0) as u32;
-                locals.push(u as u32);
-            }
-            local_of[u]
-        };
-        for &j in &touched {
-            local(j.slot(), locals);
-        }
-        let Some(survivor_local) = touched.iter().position(|j| j.slot() == survivor as usize)
-        else {
-            return Err(PyramidError::Internal(format!(
-                "split {k}: vertex {v} is not adjacent to its survivor {survivor}"
-            )));
-        };
-        if vh.slot() != v || survivor_local == 0 {
+        if vh.slot() != v {
             return Err(PyramidError::Internal(format!(
                 "split {k}: vertex {v} has PM slot {}",
                 vh.slot()
             )));
         }
-        codes.push(touched.len() as u32);
-        codes.push(survivor_local as u32);
+        touched_handles.clear();
+        touched_handles.push(vh);
+        touched_handles.extend(mesh.outgoing(vh).map(|h| mesh.to_vertex(h)));
+        touched.clear();
+        touched.extend(touched_handles.iter().map(|j| j.slot() as u32));
         stencils.clear();
-        stencil_lens.clear();
-        relaxation.stencils(mesh, geometry, &touched, &mut stencils, &mut stencil_lens);
-        let mut next_stencil = 0;
-        for (&j, &len) in touched.iter().zip(&stencil_lens) {
-            let len_at = codes.len();
-            codes.extend([0, 0]);
-            for &(u, w) in &stencils[next_stencil..next_stencil + len] {
-                let x = local(u.slot(), locals);
-                codes.push(x);
-                weights.push(w);
-            }
-            next_stencil += len;
+        recorder.stencil_lens.clear();
+        relaxation.stencils(
+            mesh,
+            geometry,
+            &touched_handles,
+            &mut stencils,
+            &mut recorder.stencil_lens,
+        );
+        recorder.stencils.clear();
+        recorder
+            .stencils
+            .extend(stencils.iter().map(|&(u, w)| (u.slot() as u32, w)));
+        recorder.record(k, &touched, pm.splits()[k].survivor, |j, fan| {
             let mut first = None;
-            let fan_at = codes.len();
-            for h in mesh.outgoing(j) {
+            for h in mesh.outgoing(cursor.vertex(j as usize)) {
                 first.get_or_insert(h);
-                let x = local(mesh.to_vertex(h).slot(), locals);
-                codes.push(x);
+                fan.push(mesh.to_vertex(h).slot() as u32);
             }
-            let open = first.is_some_and(|h| mesh.is_boundary_halfedge(h));
-            codes[len_at] = (fan_at - len_at - 2) as u32;
-            codes[len_at + 1] = ((codes.len() - fan_at) as u32) << 1 | open as u32;
-        }
-        for &u in &locals[l0..] {
-            local_of[u as usize] = u32::MAX;
-        }
-        n_touched += touched.len();
+            first.is_some_and(|h| mesh.is_boundary_halfedge(h))
+        })?;
         if !cursor.collapse() {
             return Err(PyramidError::Internal(format!(
                 "cannot collapse level {}",
@@ -281,13 +306,120 @@ fn record_range(
             )));
         }
     }
-    rec.offsets.push(SplitOffsets {
-        locals: rec.locals.len(),
-        codes: rec.codes.len(),
-        weights: rec.weights.len(),
-        details: n_touched,
-    });
-    Ok(rec)
+    Ok(recorder.finish())
+}
+
+/// Writes the records of one range of splits, split by split.
+struct Recorder {
+    rec: Records,
+    n_touched: usize,
+    /// The current split's stencils (PM indices) and their lengths, filled by the walk.
+    stencils: Vec<(u32, f64)>,
+    stencil_lens: Vec<usize>,
+    fan: Vec<u32>,
+    /// PM vertex → its index in the current split's local table (u32::MAX: not in it).
+    local_of: Vec<u32>,
+}
+
+impl Recorder {
+    fn new(range: std::ops::Range<usize>, n_vertices: usize, reversed: bool) -> Recorder {
+        let n = range.len();
+        Recorder {
+            rec: Records {
+                offsets: Vec::with_capacity(n + 1),
+                locals: Vec::with_capacity(32 * n),
+                codes: Vec::with_capacity(128 * n),
+                weights: Vec::with_capacity(72 * n),
+                range,
+                reversed,
+            },
+            n_touched: 0,
+            stencils: Vec::new(),
+            stencil_lens: Vec::new(),
+            fan: Vec::new(),
+            local_of: vec![u32::MAX; n_vertices],
+        }
+    }
+
+    /// Records split `k` at its level: the touched vertices (the new vertex, then its ring
+    /// counter-clockwise) open the local table; their stencils (from `self.stencils`) and fans
+    /// (`fan(j, out)` lists `j`'s ring and says whether it starts at a boundary out-edge)
+    /// follow as indices into the table, weights alongside.
+    fn record(
+        &mut self,
+        k: usize,
+        touched: &[u32],
+        survivor: u32,
+        mut fan: impl FnMut(u32, &mut Vec<u32>) -> bool,
+    ) -> Result<(), PyramidError> {
+        let rec = &mut self.rec;
+        let (locals, codes, weights) = (&mut rec.locals, &mut rec.codes, &mut rec.weights);
+        rec.offsets.push(SplitOffsets {
+            locals: locals.len(),
+            codes: codes.len(),
+            weights: weights.len(),
+            details: self.n_touched,
+        });
+        let l0 = locals.len();
+        let local_of = &mut self.local_of;
+        let mut local = |u: u32, locals: &mut Vec<u32>| {
+            let x = &mut local_of[u as usize];
+            if *x == u32::MAX {
+                *x = (locals.len() - l0) as u32;
+                locals.push(u);
+            }
+            *x
+        };
+        for &j in touched {
+            local(j, locals);
+        }
+        let Some(survivor_local) = touched.iter().position(|&j| j == survivor) else {
+            return Err(PyramidError::Internal(format!(
+                "split {k}: vertex {} is not adjacent to its survivor {survivor}",
+                touched[0]
+            )));
+        };
+        if survivor_local == 0 {
+            return Err(PyramidError::Internal(format!(
+                "split {k}: vertex {survivor} is its own survivor"
+            )));
+        }
+        codes.push(touched.len() as u32);
+        codes.push(survivor_local as u32);
+        let mut next_stencil = 0;
+        for (&j, &len) in touched.iter().zip(&self.stencil_lens) {
+            let len_at = codes.len();
+            codes.extend([0, 0]);
+            for &(u, w) in &self.stencils[next_stencil..next_stencil + len] {
+                codes.push(local(u, locals));
+                weights.push(w);
+            }
+            next_stencil += len;
+            self.fan.clear();
+            let open = fan(j, &mut self.fan);
+            let fan_at = codes.len();
+            for &u in &self.fan {
+                codes.push(local(u, locals));
+            }
+            codes[len_at] = (fan_at - len_at - 2) as u32;
+            codes[len_at + 1] = ((codes.len() - fan_at) as u32) << 1 | open as u32;
+        }
+        for &u in &locals[l0..] {
+            local_of[u as usize] = u32::MAX;
+        }
+        self.n_touched += touched.len();
+        Ok(())
+    }
+
+    fn finish(mut self) -> Records {
+        self.rec.offsets.push(SplitOffsets {
+            locals: self.rec.locals.len(),
+            codes: self.rec.codes.len(),
+            weights: self.rec.weights.len(),
+            details: self.n_touched,
+        });
+        self.rec
+    }
 }
 
 /// The signal-independent per-split streams of a pyramid being built (codes still 32-bit);
@@ -297,6 +429,10 @@ struct Records {
     locals: Vec<u32>,
     codes: Vec<u32>,
     weights: Vec<f64>,
+    /// The splits recorded, in the order given by `reversed` (finest first when set); after
+    /// [`Records::in_slot_order`], all splits in slot order.
+    range: std::ops::Range<usize>,
+    reversed: bool,
 }
 
 impl Records {
@@ -334,6 +470,8 @@ impl Records {
             locals,
             codes,
             weights,
+            range: 0..n_splits,
+            reversed: false,
         }
     }
 
@@ -468,7 +606,16 @@ fn gather<'r, T: Copy + Send + Sync + 'r>(
 }
 
 /// Total area and bounding-box diagonal of a mesh.
-fn surface_stats(mesh: &Mesh) -> (f64, f64) {
-    let area = mesh.faces().map(|f| mesh.face_area(f)).sum();
-    (area, mesh.bbox_diagonal())
+fn surface_stats(positions: &[DVec3], faces: &[[u32; 3]]) -> (f64, f64) {
+    // Face order and formula of `Mesh::face_area` summed over a mesh built from `faces`.
+    let area = faces
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| positions[i as usize]);
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    let diagonal = crate::mesh::geometry::BoundingBox::of(positions.iter().copied())
+        .map_or(0.0, |b| b.diagonal());
+    (area, diagonal)
 }

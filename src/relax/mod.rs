@@ -6,6 +6,7 @@
 //! indexed by [`SlotIndex::slot`](crate::mesh::SlotIndex::slot), so an operator never hashes.
 
 use crate::mesh::{Mesh, VertexId};
+use crate::pm::FlatReplay;
 use glam::DVec3;
 
 pub mod normal_adaptive;
@@ -109,5 +110,28 @@ pub trait Relaxation: Sync {
                 lens.push(0);
             }
         }
+    }
+
+    /// True when [`Relaxation::ring_stencils`] computes this operator's stencils. The detail
+    /// pyramid's analysis then records its weights on a [`FlatReplay`] walked up from the base
+    /// mesh, which is several times lighter on memory than a half-edge mesh. Default `false`.
+    fn has_ring_stencils(&self) -> bool {
+        false
+    }
+
+    /// [`Relaxation::stencils`] on the rings of `replay` (the mesh of its current level), with
+    /// vertices and stencil entries as PM indices: the weights of the half-edge mesh the replay
+    /// stands for, bit for bit when that mesh has the replay's slots. Returns `false`, appending
+    /// nothing, for an operator without this path (the default).
+    fn ring_stencils(
+        &self,
+        replay: &FlatReplay,
+        geometry: &[DVec3],
+        vertices: &[u32],
+        out: &mut Vec<(u32, f64)>,
+        lens: &mut Vec<usize>,
+    ) -> bool {
+        let _ = (replay, geometry, vertices, out, lens);
+        false
     }
 }

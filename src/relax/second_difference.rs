@@ -30,6 +30,7 @@
 
 use super::Relaxation;
 use crate::mesh::{HalfedgeId, Mesh, SlotIndex, VertexId};
+use crate::pm::FlatReplay;
 use glam::DVec3;
 use smallvec::SmallVec;
 
@@ -292,6 +293,29 @@ impl Relaxation for SecondDifference {
         true
     }
 
+    fn has_ring_stencils(&self) -> bool {
+        true
+    }
+
+    /// Shares each edge's hinge coefficients among the batch's stencils, as
+    /// [`Relaxation::stencils`] does.
+    fn ring_stencils(
+        &self,
+        replay: &FlatReplay,
+        geometry: &[DVec3],
+        vertices: &[u32],
+        out: &mut Vec<(u32, f64)>,
+        lens: &mut Vec<usize>,
+    ) -> bool {
+        let mut cache = RingFlapCache::new();
+        for &v in vertices {
+            let start = out.len();
+            self.append_ring_stencil(replay, geometry, v, out, &mut cache);
+            lens.push(out.len() - start);
+        }
+        true
+    }
+
     fn stencil(
         &self,
         mesh: &Mesh,
@@ -316,6 +340,24 @@ impl Relaxation for SecondDifference {
         out: &mut Vec<(VertexId, f64)>,
         lens: &mut Vec<usize>,
     ) {
+        // The batch's vertices lie scattered in memory (a progressive mesh's order is the
+        // collapse order), and each stencil starts with a chain of loads: the vertex record,
+        // then its first half-edge. Loading every vertex's first link up front lets those
+        // misses overlap instead of waiting for one another stencil by stencil.
+        let mut first = 0u64;
+        for &v in vertices {
+            if let Some(r) = mesh.vertices.get(v) {
+                first ^= r.halfedge.map_or(0, |h| h.slot() as u64);
+            }
+        }
+        std::hint::black_box(first);
+        for &v in vertices {
+            if let Some(h) = mesh.vertices.get(v).and_then(|r| r.halfedge)
+                && let Some(r) = mesh.halfedges.get(h)
+            {
+                std::hint::black_box((r.prev, geometry.get(v.slot())));
+            }
+        }
         let mut cache = FlapCache::new();
         let mut s = Stencil::new();
         for &v in vertices {
@@ -326,6 +368,203 @@ impl Relaxation for SecondDifference {
                 lens.push(0);
             }
         }
+    }
+}
+
+impl SecondDifference {
+    /// The flap of edge `a`–`b` on the rings of `replay`, computed along the edge's half-edge
+    /// of smaller slot as [`Self::canonical_flap`] does (so the same bits as on the half-edge
+    /// mesh with the replay's slots), or `None` for a boundary or degenerate edge and for
+    /// vertices that are not neighbours. `ka`: where `b` is in `a`'s ring, when known.
+    fn ring_flap(
+        &self,
+        replay: &FlatReplay,
+        geometry: &[DVec3],
+        a: u32,
+        b: u32,
+        ka: Option<usize>,
+    ) -> Option<RingFlap> {
+        let (ra, boundary_a) = replay.ring_entries(a);
+        let (rb, boundary_b) = replay.ring_entries(b);
+        let ka = match ka {
+            Some(k) if ra.get(k).is_some_and(|e| e.nbr == b) => k,
+            _ => ra.iter().position(|e| e.nbr == b)?,
+        };
+        let kb = rb.iter().position(|e| e.nbr == a)?;
+        // Entry 0 of a boundary vertex has no face on its left.
+        if (ka == 0 && boundary_a) || (kb == 0 && boundary_b) {
+            return None;
+        }
+        let left_ab = ra[if ka + 1 == ra.len() { 0 } else { ka + 1 }].nbr;
+        let left_ba = rb[if kb + 1 == rb.len() { 0 } else { kb + 1 }].nbr;
+        if left_ab == left_ba {
+            return None;
+        }
+        let v = if ra[ka].slot < rb[kb].slot {
+            [a, b, left_ab, left_ba]
+        } else {
+            [b, a, left_ba, left_ab]
+        };
+        let p = |x: u32| geometry.get(x as usize).copied();
+        let c = hinge_coefficients(
+            p(v[0])?,
+            p(v[1])?,
+            p(v[2])?,
+            p(v[3])?,
+            self.degenerate_area_ratio,
+        )?;
+        Some(RingFlap { v, c })
+    }
+
+    /// [`Self::stencil`] of vertex `i` on the rings of `replay`, appended to `entries` (same
+    /// order and bits as on the half-edge mesh with the replay's slots); `false`, appending
+    /// nothing, when `i` keeps its value.
+    ///
+    /// Entries appear in the order of their first contribution while circulating `i`, and
+    /// each sums its contributions in that order. Most flap vertices are ring vertices at a
+    /// known place (a spoke's apexes are the ends of the spokes before and after it, a link
+    /// edge joins the ends of two consecutive spokes), so their entry is remembered per spoke
+    /// and only the far apexes across the link edges are searched for.
+    fn append_ring_stencil(
+        &self,
+        replay: &FlatReplay,
+        geometry: &[DVec3],
+        i: u32,
+        entries: &mut Vec<(u32, f64)>,
+        cache: &mut RingFlapCache,
+    ) -> bool {
+        let start = entries.len();
+        let (ring, boundary) = replay.ring_entries(i);
+        let n = ring.len();
+        let mut ring_entry: SmallVec<[u32; 16]> = SmallVec::from_elem(u32::MAX, n);
+        let ring_entry = ring_entry.as_mut_slice();
+        let mut den = 0.0;
+        for k in 0..n {
+            let r = ring[k].nbr;
+            let after = if k + 1 == n { 0 } else { k + 1 };
+            let before = if k == 0 { n - 1 } else { k - 1 };
+            let mut add = |v: u32, at: usize, x: f64, entries: &mut Vec<(u32, f64)>| {
+                add_ring_vertex_entry(entries, start, ring[at].nbr, &mut ring_entry[at], v, x)
+            };
+            // (a) the edge i → r: i is j1 of its flap (`f` is seen flipped when x = 1).
+            if let Some((f, x)) = cache.flap(self, replay, geometry, i, r, Some(k)) {
+                let ci = f.c[x];
+                den += ci * ci;
+                add(f.v[1 ^ x], k, ci * f.c[1 ^ x], entries);
+                add(f.v[2 ^ x], after, ci * f.c[2 ^ x], entries);
+                add(f.v[3 ^ x], before, ci * f.c[3 ^ x], entries);
+            }
+            // (b) the link edge r → next opposite i in the face left of i → r: i is its apex l1.
+            if !(k == 0 && boundary)
+                && let Some((f, x)) = cache.flap(self, replay, geometry, r, ring[after].nbr, None)
+                && f.v[2 ^ x] == i
+                && f.v[3 ^ x] != i
+            {
+                let ci = f.c[2 ^ x];
+                den += ci * ci;
+                add(f.v[x], k, ci * f.c[x], entries);
+                add(f.v[1 ^ x], after, ci * f.c[1 ^ x], entries);
+                add_ring_entry(entries, start, f.v[3 ^ x], ci * f.c[3 ^ x]);
+            }
+        }
+        if den.is_nan() || den <= 0.0 || !den.is_finite() {
+            entries.truncate(start);
+            return false;
+        }
+        let scale = -1.0 / den;
+        let mut gain = 0.0;
+        for (_, w) in &mut entries[start..] {
+            *w *= scale;
+            gain += w.abs();
+        }
+        if gain.is_nan() || gain > MAX_WEIGHT_SUM {
+            entries.truncate(start);
+            return false;
+        }
+        true
+    }
+}
+
+/// [`add_ring_entry`] for a flap vertex `v` expected to be the ring vertex `expected`, whose
+/// entry is remembered in `memo`.
+#[inline(always)]
+fn add_ring_vertex_entry(
+    entries: &mut Vec<(u32, f64)>,
+    start: usize,
+    expected: u32,
+    memo: &mut u32,
+    v: u32,
+    x: f64,
+) {
+    if v != expected {
+        add_ring_entry(entries, start, v, x);
+    } else if *memo == u32::MAX {
+        *memo = add_ring_entry(entries, start, v, x) as u32;
+    } else {
+        entries[start + *memo as usize].1 += x;
+    }
+}
+
+/// Adds `x` to the entry of `v` among `entries[start..]`, appending `(v, x)` when `v` has none
+/// yet; returns the entry's index relative to `start`.
+#[inline(always)]
+fn add_ring_entry(entries: &mut Vec<(u32, f64)>, start: usize, v: u32, x: f64) -> usize {
+    match entries[start..].iter().position(|&(u, _)| u == v) {
+        Some(e) => {
+            entries[start + e].1 += x;
+            e
+        }
+        None => {
+            entries.push((v, x));
+            entries.len() - 1 - start
+        }
+    }
+}
+
+/// A flap on rings along its canonical half-edge: `[j1, j2, l1, l2]` and their coefficients.
+/// Seen from the other half-edge, `j1, j2` and `l1, l2` swap: position `p` there is position
+/// `p ^ 1` here.
+#[derive(Clone, Copy, Debug, Default)]
+struct RingFlap {
+    v: [u32; 4],
+    c: [f64; 4],
+}
+
+/// [`FlapCache`] for flaps on rings, keyed by the edge's two vertices.
+struct RingFlapCache {
+    tags: [u64; FLAP_CACHE_SIZE],
+    flaps: [Option<RingFlap>; FLAP_CACHE_SIZE],
+}
+
+impl RingFlapCache {
+    fn new() -> Self {
+        Self {
+            tags: [u64::MAX; FLAP_CACHE_SIZE],
+            flaps: [None; FLAP_CACHE_SIZE],
+        }
+    }
+
+    /// The flap of edge `a`–`b` and 1 when it is seen flipped along `a → b` (`kb`: where `b`
+    /// is in `a`'s ring, when known).
+    #[inline]
+    fn flap(
+        &mut self,
+        op: &SecondDifference,
+        replay: &FlatReplay,
+        geometry: &[DVec3],
+        a: u32,
+        b: u32,
+        kb: Option<usize>,
+    ) -> Option<(&RingFlap, usize)> {
+        let key = (a.min(b) as u64) << 32 | a.max(b) as u64;
+        let at = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            >> (64 - FLAP_CACHE_SIZE.trailing_zeros())) as usize;
+        if self.tags[at] != key {
+            self.tags[at] = key;
+            self.flaps[at] = op.ring_flap(replay, geometry, a, b, kb);
+        }
+        let f = self.flaps[at].as_ref()?;
+        Some((f, (f.v[0] != a) as usize))
     }
 }
 
@@ -603,6 +842,60 @@ mod tests {
             assert!((sum - 1.0).abs() < 1e-12, "{sum}");
             assert!(s.iter().all(|&(_, w)| w.is_finite()));
         }
+    }
+
+    /// Stencils on the rings of a flat replay against stencils on the slotmap mesh the same
+    /// splits build, at many levels of a progressive mesh: same vertices, same order, same bits.
+    fn ring_stencils_match_mesh_stencils(mesh: &Mesh) {
+        use crate::pm::{PmOptions, ProgressiveMesh, SplitReplay};
+        let pm = ProgressiveMesh::build(mesh, &PmOptions::default(), &crate::progress::NoProgress)
+            .unwrap();
+        let nb = pm.n_base_vertices();
+        let pos = pm.original_positions();
+        let base = pm.base_triangles();
+        let mut slow = SplitReplay::new(&pos[..nb], &base).unwrap();
+        let mut fast = FlatReplay::new(&pos[..nb], &base, pm.splits().len()).unwrap();
+        let op = SecondDifference::default();
+        let mut compared = 0;
+        for (i, s) in pm.splits().iter().enumerate() {
+            slow.apply(s, pos[nb + i]).unwrap();
+            fast.apply(s).unwrap();
+            if i % 11 != 0 && i + 1 != pm.splits().len() {
+                continue;
+            }
+            let m = slow.mesh();
+            let all: Vec<VertexId> = m.vertices().collect();
+            let ids: Vec<u32> = all.iter().map(|v| v.slot() as u32).collect();
+            let (mut want, mut want_lens) = (Vec::new(), Vec::new());
+            op.stencils(m, pos, &all, &mut want, &mut want_lens);
+            let (mut got, mut got_lens) = (Vec::new(), Vec::new());
+            assert!(op.ring_stencils(&fast, pos, &ids, &mut got, &mut got_lens));
+            assert_eq!(got_lens, want_lens, "split {i}");
+            for (g, w) in got.iter().zip(&want) {
+                assert_eq!(g.0 as usize, w.0.slot(), "split {i}");
+                assert_eq!(g.1.to_bits(), w.1.to_bits(), "split {i}");
+            }
+            compared += want.len();
+        }
+        assert!(compared > 1000);
+    }
+
+    #[test]
+    fn ring_stencils_are_the_mesh_stencils_bit_for_bit() {
+        // Open (a bumpy grid with a hole: boundary vertices, boundary edges) and closed.
+        let (mut p, t) = jittered_plane(16, 5);
+        for q in &mut p {
+            q.z = 0.2 * (q.x * 1.3).sin() * (q.y * 0.4).cos();
+        }
+        let holed: Vec<[u32; 3]> = t
+            .into_iter()
+            .enumerate()
+            .filter(|(i, _)| !(100..112).contains(i))
+            .map(|(_, f)| f)
+            .collect();
+        ring_stencils_match_mesh_stencils(&Mesh::from_triangles(&p, &holed).unwrap().mesh);
+        let (p, t) = crate::mesh::shapes::icosphere(3);
+        ring_stencils_match_mesh_stencils(&Mesh::from_triangles(&p, &t).unwrap().mesh);
     }
 
     #[test]
