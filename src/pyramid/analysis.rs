@@ -22,7 +22,7 @@
 //! level. Steps 2–5 then run over the records, finest split first; like synthesis, they run
 //! the splits of a wave (see `waves`) at once, in reverse.
 
-use super::frames::frame_min_length;
+use super::frames::{LocalIndex, frame_min_length};
 use super::synthesis::{Scratch, decode, predict_local, prefetch_next_split, presmooth_local};
 use super::waves::{SharedSignal, Waves, run_waves};
 use super::{Codes, Pyramid, PyramidError, SplitOffsets};
@@ -94,7 +94,7 @@ impl Pyramid {
             },
             |k| morton.as_ref().map_or(0, |m| m[k]),
         );
-        let slotted = Records::in_slot_order(&records, &waves, record_of);
+        let slotted = Slotted::new(&records, &waves, record_of);
         drop(records);
 
         // Steps 2–5, finest split first: waves in reverse storage order, which, like split
@@ -102,18 +102,19 @@ impl Pyramid {
         let mut f = signal.to_vec();
         let mut details = vec![DVec3::ZERO; slotted.offsets.last().map_or(0, |o| o.details)];
         let min_length = frame_min_length(bbox_diagonal);
-        slotted.downsample(&waves, &mut f, &mut details, min_length, progress);
+        match &slotted.codes {
+            Codes::Byte(c) => {
+                slotted.downsample(c, &waves, &mut f, &mut details, min_length, progress)
+            }
+            Codes::Narrow(c) => {
+                slotted.downsample(c, &waves, &mut f, &mut details, min_length, progress)
+            }
+            Codes::Wide(c) => {
+                slotted.downsample(c, &waves, &mut f, &mut details, min_length, progress)
+            }
+        }
         progress.update(1.0);
 
-        let codes = slotted.codes;
-        let widest = codes.iter().copied().max().unwrap_or(0);
-        let codes = if widest <= u8::MAX as u32 {
-            Codes::Byte(codes.iter().map(|&c| c as u8).collect())
-        } else if widest <= u16::MAX as u32 {
-            Codes::Narrow(codes.iter().map(|&c| c as u16).collect())
-        } else {
-            Codes::Wide(codes)
-        };
         Ok(Pyramid {
             n_base,
             n_finest,
@@ -121,7 +122,7 @@ impl Pyramid {
             base: f[..n_base].to_vec(),
             offsets: slotted.offsets,
             locals: slotted.locals,
-            codes,
+            codes: slotted.codes,
             weights: slotted.weights,
             details,
             waves,
@@ -332,6 +333,7 @@ impl Recorder {
                 weights: Vec::with_capacity(72 * n),
                 range,
                 reversed,
+                widest: 0,
             },
             n_touched: 0,
             stencils: Vec::new(),
@@ -407,6 +409,8 @@ impl Recorder {
         for &u in &locals[l0..] {
             local_of[u as usize] = u32::MAX;
         }
+        let c0 = rec.offsets.last().map_or(0, |o| o.codes);
+        rec.widest = codes[c0..].iter().fold(rec.widest, |m, &c| m.max(c));
         self.n_touched += touched.len();
         Ok(())
     }
@@ -429,23 +433,34 @@ struct Records {
     locals: Vec<u32>,
     codes: Vec<u32>,
     weights: Vec<f64>,
-    /// The splits recorded, in the order given by `reversed` (finest first when set); after
-    /// [`Records::in_slot_order`], all splits in slot order.
+    /// The splits recorded, in the order given by `reversed` (finest first when set).
     range: std::ops::Range<usize>,
     reversed: bool,
+    /// The largest code.
+    widest: u32,
 }
 
-impl Records {
+/// The records of all splits in slot order (see `waves`), codes as narrow as the widest
+/// allows: the layout of the finished pyramid, which steps 2–5 already read.
+struct Slotted {
+    offsets: Vec<SplitOffsets>,
+    locals: Vec<u32>,
+    codes: Codes,
+    weights: Vec<f64>,
+}
+
+impl Slotted {
     /// The records of all ranges copied into the slots `waves` assigns them; `record_of(k)`
     /// names the range record holding split `k` and its position there. Streams are copied
     /// one at a time, so the peak memory is the records plus the largest stream; each is
     /// copied by all threads at once (the reads are scattered, so one thread would mostly
-    /// wait for memory).
-    fn in_slot_order<'a>(
+    /// wait for memory). Codes are narrowed on the way, so the 32-bit stream is never
+    /// written twice.
+    fn new<'a>(
         ranges: &[Records],
         waves: &Waves,
         record_of: impl Fn(usize) -> (&'a Records, usize) + Sync,
-    ) -> Records {
+    ) -> Slotted {
         let n_splits: usize = ranges.iter().map(|r| r.offsets.len() - 1).sum();
         let at = |slot: usize| record_of(waves.split_at(slot));
         let mut next = SplitOffsets::default();
@@ -462,24 +477,46 @@ impl Records {
         }
         let chunks = 4 * rayon::current_num_threads();
         let cuts: Vec<usize> = (0..=chunks).map(|c| n_splits * c / chunks).collect();
-        let locals = stream(&cuts, &offsets, &at, |r| &r.locals, |o| o.locals);
-        let codes = stream(&cuts, &offsets, &at, |r| &r.codes, |o| o.codes);
-        let weights = stream(&cuts, &offsets, &at, |r| &r.weights, |o| o.weights);
-        Records {
+        let locals = stream(&cuts, &offsets, &at, |r| &r.locals, |o| o.locals, |x| x);
+        let widest = ranges.iter().map(|r| r.widest).max().unwrap_or(0);
+        let codes = |o: &SplitOffsets| o.codes;
+        let codes = if widest <= u8::MAX as u32 {
+            Codes::Byte(stream(
+                &cuts,
+                &offsets,
+                &at,
+                |r| &r.codes,
+                codes,
+                |c| c as u8,
+            ))
+        } else if widest <= u16::MAX as u32 {
+            Codes::Narrow(stream(
+                &cuts,
+                &offsets,
+                &at,
+                |r| &r.codes,
+                codes,
+                |c| c as u16,
+            ))
+        } else {
+            Codes::Wide(stream(&cuts, &offsets, &at, |r| &r.codes, codes, |c| c))
+        };
+        let weights = stream(&cuts, &offsets, &at, |r| &r.weights, |o| o.weights, |w| w);
+        Slotted {
             offsets,
             locals,
             codes,
             weights,
-            range: 0..n_splits,
-            reversed: false,
         }
     }
 
     /// Steps 2–5 of the split stored at `slot`, reading `f = f^(n)`: writes the presmoothed
     /// values of its 1-ring (`f^(n−1)` there) into `f` and its details into their places in
     /// `details` (`min_length`: see [`vertex_frame`](super::frames::vertex_frame)).
-    fn split_details(
+    #[allow(clippy::too_many_arguments)]
+    fn split_details<I: LocalIndex>(
         &self,
+        codes: &[I],
         slot: usize,
         f: &SharedSignal,
         details: &SharedSignal,
@@ -489,7 +526,7 @@ impl Records {
         let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
         let table = &self.locals[o.locals..next.locals];
         let t = next.details - o.details;
-        let survivor = decode(&self.codes, o.codes, o.weights, &mut scratch.entries);
+        let survivor = decode(codes, o.codes, o.weights, &mut scratch.entries);
         prefetch_next_split(f, &self.offsets, &self.locals, slot);
         // 2. Presmooth the ring from f^(n); remember f^(n) on the touched vertices.
         let g = &mut scratch.g;
@@ -498,7 +535,7 @@ impl Records {
         scratch.saved.clear();
         scratch.saved.extend_from_slice(&g[..t]);
         presmooth_local(
-            &self.codes,
+            codes,
             &self.weights,
             &scratch.entries,
             g,
@@ -512,7 +549,7 @@ impl Records {
         }
         // 4. Predict, 5. details in the frames of the predicted geometry.
         predict_local(
-            &self.codes,
+            codes,
             &self.weights,
             &scratch.entries,
             survivor,
@@ -530,8 +567,9 @@ impl Records {
     /// Steps 2–5 for every split, turning `f = f^(finest)` into the base signal (on the base
     /// vertices) and filling `details`: waves from the last to the first, large waves on
     /// rayon's threads (see [`run_waves`]).
-    fn downsample(
+    fn downsample<I: LocalIndex>(
         &self,
+        codes: &[I],
         waves: &Waves,
         f: &mut [DVec3],
         details: &mut [DVec3],
@@ -543,7 +581,7 @@ impl Records {
             (0..waves.len()).rev().map(|w| waves.wave(w)),
             |done| progress.update(RECORDS_SHARE + (1.0 - RECORDS_SHARE) * done),
             |slot, scratch: &mut Scratch| {
-                self.split_details(slot, &f, &details, min_length, scratch)
+                self.split_details(codes, slot, &f, &details, min_length, scratch)
             },
         );
     }
@@ -552,12 +590,13 @@ impl Records {
 /// One stream of the records in slot order ([`Records::in_slot_order`]): `data` of the range
 /// record `at(slot)` names, each split's part found at `pos` of its offsets, copied with
 /// [`gather`] to `pos` of the slot's new `offsets`.
-fn stream<'a, T: Copy + Send + Sync + 'a>(
+fn stream<'a, S: Copy + Sync + 'a, T: Send>(
     cuts: &[usize],
     offsets: &[SplitOffsets],
     at: &(dyn Fn(usize) -> (&'a Records, usize) + Sync),
-    data: fn(&'a Records) -> &'a [T],
+    data: fn(&'a Records) -> &'a [S],
     pos: fn(&SplitOffsets) -> usize,
+    convert: fn(S) -> T,
 ) -> Vec<T> {
     gather(
         cuts,
@@ -566,16 +605,19 @@ fn stream<'a, T: Copy + Send + Sync + 'a>(
             let (r, i) = at(slot);
             &data(r)[pos(&r.offsets[i])..pos(&r.offsets[i + 1])]
         },
+        convert,
     )
 }
 
-/// The slices `record(slot)` of all slots `cuts[0]..cuts[last]`, concatenated; slot `s` lands
-/// at `start(s)` (`start(cuts[last])` is the total length). The chunks `cuts[c]..cuts[c + 1]`
-/// are copied on rayon's threads, each into its own part of the output.
-fn gather<'r, T: Copy + Send + Sync + 'r>(
+/// The slices `record(slot)` of all slots `cuts[0]..cuts[last]`, each element converted,
+/// concatenated; slot `s` lands at `start(s)` (`start(cuts[last])` is the total length). The
+/// chunks `cuts[c]..cuts[c + 1]` are copied on rayon's threads, each into its own part of the
+/// output.
+fn gather<'r, S: Copy + Sync + 'r, T: Send>(
     cuts: &[usize],
     start: impl Fn(usize) -> usize,
-    record: impl Fn(usize) -> &'r [T] + Sync,
+    record: impl Fn(usize) -> &'r [S] + Sync,
+    convert: fn(S) -> T,
 ) -> Vec<T> {
     use rayon::prelude::*;
     let (first, last) = (cuts[0], cuts[cuts.len() - 1]);
@@ -593,7 +635,7 @@ fn gather<'r, T: Copy + Send + Sync + 'r>(
         for slot in slots {
             let src = record(slot);
             for (d, &x) in part[at..at + src.len()].iter_mut().zip(src) {
-                d.write(x);
+                d.write(convert(x));
             }
             at += src.len();
         }
