@@ -392,31 +392,37 @@ fn memory_is_compact_and_synthesis_deterministic() {
 
 #[test]
 fn analysis_gives_the_same_pyramid_on_any_thread_count() {
-    // The records are cut into one range of splits per thread, each walked by its own cursor,
-    // and large waves are downsampled in blocks on the pool; the pyramid (storage order, base,
-    // every detail) must not depend on how many threads there are.
+    // The records are cut into one range of splits per thread, each walked on its own (a flat
+    // replay from the base for Guskov's operator, a half-edge cursor from the finest level
+    // for the others), and large waves are downsampled in blocks on the pool; the pyramid
+    // (storage order, base, every detail) must not depend on how many threads there are.
     let (p, t) = bumpy_sphere(4, 0.01);
     let (pm, _) = pyramid_of(&p, &t);
     // Two ranges of at least 1024 splits (the analysis' minimum) on 2 and 3 threads.
     assert!(pm.splits().len() >= 2 * 1024, "{}", pm.splits().len());
-    let analyse = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| Pyramid::analyze(&pm, &SecondDifference::default(), &NoProgress))
-            .unwrap()
-    };
-    let one = analyse(1);
-    for threads in [2, 3] {
-        let many = analyse(threads);
-        assert!(one.base() == many.base(), "{threads} threads: base");
-        for k in 0..one.n_splits() {
-            assert_eq!(one.split_slot(k), many.split_slot(k), "{threads} threads");
-            assert!(
-                one.split_details(k) == many.split_details(k),
-                "{threads} threads: split {k}"
-            );
+    let mcm = meshpyr::subdiv::MeanCurvatureStep::default();
+    let second_difference = SecondDifference::default();
+    let operators: [&dyn meshpyr::relax::Relaxation; 2] = [&second_difference, &mcm];
+    for op in operators {
+        let analyse = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| Pyramid::analyze(&pm, op, &NoProgress)).unwrap()
+        };
+        let one = analyse(1);
+        for threads in [2, 3] {
+            let many = analyse(threads);
+            let name = op.name();
+            assert!(one.base() == many.base(), "{name}, {threads} threads: base");
+            for k in 0..one.n_splits() {
+                assert_eq!(one.split_slot(k), many.split_slot(k), "{name}, {threads} threads");
+                assert!(
+                    one.split_details(k) == many.split_details(k),
+                    "{name}, {threads} threads: split {k}"
+                );
+            }
         }
     }
 }
