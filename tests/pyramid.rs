@@ -409,7 +409,8 @@ fn analysis_gives_the_same_pyramid_on_any_thread_count() {
                 .num_threads(threads)
                 .build()
                 .unwrap();
-            pool.install(|| Pyramid::analyze(&pm, op, &NoProgress)).unwrap()
+            pool.install(|| Pyramid::analyze(&pm, op, &NoProgress))
+                .unwrap()
         };
         let one = analyse(1);
         for threads in [2, 3] {
@@ -417,7 +418,11 @@ fn analysis_gives_the_same_pyramid_on_any_thread_count() {
             let name = op.name();
             assert!(one.base() == many.base(), "{name}, {threads} threads: base");
             for k in 0..one.n_splits() {
-                assert_eq!(one.split_slot(k), many.split_slot(k), "{name}, {threads} threads");
+                assert_eq!(
+                    one.split_slot(k),
+                    many.split_slot(k),
+                    "{name}, {threads} threads"
+                );
                 assert!(
                     one.split_details(k) == many.split_details(k),
                     "{name}, {threads} threads: split {k}"

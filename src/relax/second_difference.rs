@@ -208,24 +208,45 @@ impl SecondDifference {
     }
 }
 
-/// A small direct-mapped cache of edge flaps for one batch of stencils, keyed by the slot of
-/// the edge's canonical (smaller-slot) half-edge. A collision just recomputes.
-struct FlapCache {
-    tags: [u32; FLAP_CACHE_SIZE],
-    flaps: [Option<([VertexId; 4], [f64; 4])>; FLAP_CACHE_SIZE],
+/// A small direct-mapped memo of edge flaps for one batch of stencils (an edge enters the
+/// stencils of up to four vertices of a 1-ring). Keys are whole (a slot, a vertex pair), so
+/// a collision just recomputes.
+struct BatchMemo<K, V> {
+    tags: [K; BATCH_MEMO_SIZE],
+    values: [Option<V>; BATCH_MEMO_SIZE],
 }
 
-const FLAP_CACHE_SIZE: usize = 128;
+const BATCH_MEMO_SIZE: usize = 128;
 
-impl FlapCache {
-    fn new() -> Self {
+impl<K: Copy + PartialEq, V: Copy> BatchMemo<K, V> {
+    /// An empty memo; `unused` is a key no edge has.
+    fn new(unused: K) -> Self {
         Self {
-            tags: [u32::MAX; FLAP_CACHE_SIZE],
-            flaps: [None; FLAP_CACHE_SIZE],
+            tags: [unused; BATCH_MEMO_SIZE],
+            values: [None; BATCH_MEMO_SIZE],
         }
     }
 
-    /// The flap of `h`, from the cache when its edge was seen in this batch.
+    /// The value of `key` (whose hash is `hash`), computed by `compute` unless the memo holds
+    /// it.
+    #[inline]
+    fn get(&mut self, key: K, hash: u64, compute: impl FnOnce() -> Option<V>) -> Option<&V> {
+        // Fibonacci hashing: neighbouring keys spread over the table.
+        let at = (hash.wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            >> (64 - BATCH_MEMO_SIZE.trailing_zeros())) as usize;
+        if self.tags[at] != key {
+            self.tags[at] = key;
+            self.values[at] = compute();
+        }
+        self.values[at].as_ref()
+    }
+}
+
+/// Flaps on the half-edge mesh, keyed by the slot of the edge's canonical half-edge.
+type FlapCache = BatchMemo<u32, ([VertexId; 4], [f64; 4])>;
+
+impl FlapCache {
+    /// The flap of `h`, from the memo when its edge was seen in this batch.
     #[inline]
     fn flap(
         &mut self,
@@ -236,18 +257,10 @@ impl FlapCache {
     ) -> Option<([VertexId; 4], [f64; 4])> {
         let (canonical, flipped) = canonical_halfedge(mesh, h);
         let key = canonical.slot() as u32;
-        // Fibonacci hashing: neighbouring slots spread over the table.
-        let at =
-            (key.wrapping_mul(0x9E37_79B1) >> (32 - FLAP_CACHE_SIZE.trailing_zeros())) as usize;
-        let flap = if self.tags[at] == key {
-            self.flaps[at]
-        } else {
-            let f = op.canonical_flap(mesh, geometry, canonical);
-            self.tags[at] = key;
-            self.flaps[at] = f;
-            f
-        };
-        Some(orient_flap(flap?, flipped))
+        let flap = self.get(key, key.into(), || {
+            op.canonical_flap(mesh, geometry, canonical)
+        })?;
+        Some(orient_flap(*flap, flipped))
     }
 }
 
@@ -307,7 +320,7 @@ impl Relaxation for SecondDifference {
         out: &mut Vec<(u32, f64)>,
         lens: &mut Vec<usize>,
     ) -> bool {
-        let mut cache = RingFlapCache::new();
+        let mut cache = RingFlapCache::new(u64::MAX);
         for &v in vertices {
             let start = out.len();
             self.append_ring_stencil(replay, geometry, v, out, &mut cache);
@@ -358,7 +371,7 @@ impl Relaxation for SecondDifference {
                 std::hint::black_box((r.prev, geometry.get(v.slot())));
             }
         }
-        let mut cache = FlapCache::new();
+        let mut cache = FlapCache::new(u32::MAX);
         let mut s = Stencil::new();
         for &v in vertices {
             if self.stencil_with(mesh, v, &mut s, |h| cache.flap(self, mesh, geometry, h)) {
@@ -530,20 +543,10 @@ struct RingFlap {
     c: [f64; 4],
 }
 
-/// [`FlapCache`] for flaps on rings, keyed by the edge's two vertices.
-struct RingFlapCache {
-    tags: [u64; FLAP_CACHE_SIZE],
-    flaps: [Option<RingFlap>; FLAP_CACHE_SIZE],
-}
+/// Flaps on rings, keyed by the edge's two vertices.
+type RingFlapCache = BatchMemo<u64, RingFlap>;
 
 impl RingFlapCache {
-    fn new() -> Self {
-        Self {
-            tags: [u64::MAX; FLAP_CACHE_SIZE],
-            flaps: [None; FLAP_CACHE_SIZE],
-        }
-    }
-
     /// The flap of edge `a`–`b` and 1 when it is seen flipped along `a → b` (`kb`: where `b`
     /// is in `a`'s ring, when known).
     #[inline]
@@ -557,13 +560,7 @@ impl RingFlapCache {
         kb: Option<usize>,
     ) -> Option<(&RingFlap, usize)> {
         let key = (a.min(b) as u64) << 32 | a.max(b) as u64;
-        let at = (key.wrapping_mul(0x9E37_79B9_7F4A_7C15)
-            >> (64 - FLAP_CACHE_SIZE.trailing_zeros())) as usize;
-        if self.tags[at] != key {
-            self.tags[at] = key;
-            self.flaps[at] = op.ring_flap(replay, geometry, a, b, kb);
-        }
-        let f = self.flaps[at].as_ref()?;
+        let f = self.get(key, key, || op.ring_flap(replay, geometry, a, b, kb))?;
         Some((f, (f.v[0] != a) as usize))
     }
 }
