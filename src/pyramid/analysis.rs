@@ -137,8 +137,9 @@ impl Pyramid {
 /// two phases; about two thirds with Guskov's operator).
 const RECORDS_SHARE: f64 = 0.7;
 
-/// Splits per range below which one thread records them all: a range's cursor is built at the
-/// finest level and collapses to the top of its range first, which only pays off on long ranges.
+/// Splits per range below which one thread records them all: a range's walk first reaches the
+/// start of its range (a replay from the base, or a cursor collapsing from the finest level),
+/// which only pays off on long ranges.
 const SPLITS_PER_RANGE: usize = 1024;
 
 /// Cuts splits `0..n_splits` into at most `threads` contiguous ranges of near-equal length,
@@ -153,8 +154,8 @@ fn split_ranges(n_splits: usize, threads: usize) -> Vec<std::ops::Range<usize>> 
 /// Step 1 for every range of splits (coarsest range first), each range on its own thread.
 /// Operators with ring stencils walk a [`FlatReplay`] up from the base (each range replays
 /// the splits before it first, which is cheap); the others walk a half-edge cursor down from
-/// the finest level (`cursor` serves the finest range). Progress is reported by the range
-/// that ends the walk it shares with the bar.
+/// the finest level (`cursor` serves the finest range). The range a single walk would record
+/// first reports progress: the coarsest on the replay, the finest on the cursor.
 fn record_ranges(
     pm: &ProgressiveMesh,
     relaxation: &dyn Relaxation,

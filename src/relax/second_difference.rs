@@ -190,22 +190,28 @@ impl SecondDifference {
                 }
             }
         }
-        if den.is_nan() || den <= 0.0 || !den.is_finite() {
+        let ok = normalize_stencil(out, den);
+        if !ok {
             out.clear();
-            return false;
         }
-        let scale = -1.0 / den;
-        let mut gain = 0.0;
-        for (_, w) in out.iter_mut() {
-            *w *= scale;
-            gain += w.abs();
-        }
-        if gain.is_nan() || gain > MAX_WEIGHT_SUM {
-            out.clear();
-            return false;
-        }
-        true
+        ok
     }
+}
+
+/// Turns the summed products `Σ_e c_{e,i} c_{e,j}` of a stencil into its weights by dividing
+/// by `−den = −Σ_e c_{e,i}²`; `false` when the vertex must keep its value instead (no usable
+/// edge, or weights summing past [`MAX_WEIGHT_SUM`]; see the [module docs](self)).
+fn normalize_stencil<T>(entries: &mut [(T, f64)], den: f64) -> bool {
+    if den.is_nan() || den <= 0.0 || !den.is_finite() {
+        return false;
+    }
+    let scale = -1.0 / den;
+    let mut gain = 0.0;
+    for (_, w) in entries.iter_mut() {
+        *w *= scale;
+        gain += w.abs();
+    }
+    !(gain.is_nan() || gain > MAX_WEIGHT_SUM)
 }
 
 /// A small direct-mapped memo of edge flaps for one batch of stencils (an edge enters the
@@ -353,24 +359,6 @@ impl Relaxation for SecondDifference {
         out: &mut Vec<(VertexId, f64)>,
         lens: &mut Vec<usize>,
     ) {
-        // The batch's vertices lie scattered in memory (a progressive mesh's order is the
-        // collapse order), and each stencil starts with a chain of loads: the vertex record,
-        // then its first half-edge. Loading every vertex's first link up front lets those
-        // misses overlap instead of waiting for one another stencil by stencil.
-        let mut first = 0u64;
-        for &v in vertices {
-            if let Some(r) = mesh.vertices.get(v) {
-                first ^= r.halfedge.map_or(0, |h| h.slot() as u64);
-            }
-        }
-        std::hint::black_box(first);
-        for &v in vertices {
-            if let Some(h) = mesh.vertices.get(v).and_then(|r| r.halfedge)
-                && let Some(r) = mesh.halfedges.get(h)
-            {
-                std::hint::black_box((r.prev, geometry.get(v.slot())));
-            }
-        }
         let mut cache = FlapCache::new(u32::MAX);
         let mut s = Stencil::new();
         for &v in vertices {
@@ -480,21 +468,11 @@ impl SecondDifference {
                 add_ring_entry(entries, start, f.v[3 ^ x], ci * f.c[3 ^ x]);
             }
         }
-        if den.is_nan() || den <= 0.0 || !den.is_finite() {
+        let ok = normalize_stencil(&mut entries[start..], den);
+        if !ok {
             entries.truncate(start);
-            return false;
         }
-        let scale = -1.0 / den;
-        let mut gain = 0.0;
-        for (_, w) in &mut entries[start..] {
-            *w *= scale;
-            gain += w.abs();
-        }
-        if gain.is_nan() || gain > MAX_WEIGHT_SUM {
-            entries.truncate(start);
-            return false;
-        }
-        true
+        ok
     }
 }
 
@@ -547,7 +525,7 @@ struct RingFlap {
 type RingFlapCache = BatchMemo<u64, RingFlap>;
 
 impl RingFlapCache {
-    /// The flap of edge `a`–`b` and 1 when it is seen flipped along `a → b` (`kb`: where `b`
+    /// The flap of edge `a`–`b` and 1 when it is seen flipped along `a → b` (`ka`: where `b`
     /// is in `a`'s ring, when known).
     #[inline]
     fn flap(
@@ -557,10 +535,10 @@ impl RingFlapCache {
         geometry: &[DVec3],
         a: u32,
         b: u32,
-        kb: Option<usize>,
+        ka: Option<usize>,
     ) -> Option<(&RingFlap, usize)> {
         let key = (a.min(b) as u64) << 32 | a.max(b) as u64;
-        let f = self.get(key, key, || op.ring_flap(replay, geometry, a, b, kb))?;
+        let f = self.get(key, key, || op.ring_flap(replay, geometry, a, b, ka))?;
         Some((f, (f.v[0] != a) as usize))
     }
 }
