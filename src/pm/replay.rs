@@ -32,7 +32,7 @@ fn canonical(t: [u32; 3]) -> [u32; 3] {
 }
 
 /// One ring entry: the out-going half-edge `v → nbr` and its slot. Eight bytes, so a typical
-/// ring fits a cache line; which entry is a boundary half-edge is in [`Ring::boundary`], and
+/// ring fits a cache line; which entry is a boundary half-edge is in [`Rings::boundary`], and
 /// faces are found from their stored half-edge's slot ([`FlatReplay::triangles`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Entry {
@@ -42,14 +42,20 @@ pub(crate) struct Entry {
     pub(crate) slot: u32,
 }
 
-/// One cache line per vertex: up to [`INLINE`] ring entries, and in the last slot the header
-/// (`nbr`: length, bit 31 set when entry 0 is a boundary out-edge; `slot`: where a longer ring
-/// lives in the overflow arena, or `NIL`). Reading a ring of a typical vertex is one miss.
+/// Two cache lines per vertex: the header (`nbr`: length, bit 31 set when entry 0 is a
+/// boundary out-edge; `slot`: where a longer ring lives in the overflow arena, or `NIL`), then
+/// up to [`INLINE`] ring entries. A ring of up to seven entries is one cache line; fifteen
+/// hold the rings a replay meets almost always, including a survivor's just before its split
+/// (its valence is about the two merged vertices' valences minus four: 8 on a regular
+/// mesh, which one line's seven entries sent to the slower overflow path).
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(64))]
-struct Line([Entry; 8]);
+struct Line {
+    hdr: Entry,
+    e: [Entry; INLINE],
+}
 
-const INLINE: usize = 7;
+const INLINE: usize = 15;
 const BOUNDARY: u32 = 1 << 31;
 const BLANK: Entry = Entry {
     nbr: NIL,
@@ -70,32 +76,33 @@ impl Rings {
     }
 
     fn push_empty(&mut self) {
-        let mut l = Line([BLANK; 8]);
-        l.0[INLINE] = Entry { nbr: 0, slot: NIL };
-        self.lines.push(l);
+        self.lines.push(Line {
+            hdr: Entry { nbr: 0, slot: NIL },
+            e: [BLANK; INLINE],
+        });
     }
 
     fn boundary(&self, v: u32) -> bool {
-        self.lines[v as usize].0[INLINE].nbr & BOUNDARY != 0
+        self.lines[v as usize].hdr.nbr & BOUNDARY != 0
     }
 
     fn get(&self, v: u32) -> &[Entry] {
-        let l = &self.lines[v as usize].0;
-        let h = l[INLINE];
+        let l = &self.lines[v as usize];
+        let h = l.hdr;
         let len = (h.nbr & !BOUNDARY) as usize;
         if h.slot == NIL {
-            &l[..len]
+            &l.e[..len]
         } else {
             &self.over[h.slot as usize..h.slot as usize + len]
         }
     }
 
     fn get_mut(&mut self, v: u32) -> &mut [Entry] {
-        let l = &mut self.lines[v as usize].0;
-        let h = l[INLINE];
+        let l = &mut self.lines[v as usize];
+        let h = l.hdr;
         let len = (h.nbr & !BOUNDARY) as usize;
         if h.slot == NIL {
-            &mut l[..len]
+            &mut l.e[..len]
         } else {
             &mut self.over[h.slot as usize..h.slot as usize + len]
         }
@@ -104,9 +111,9 @@ impl Rings {
     /// Sets `v`'s ring to `src` rotated to start at `start`.
     fn set(&mut self, v: u32, src: &[Entry], start: usize, boundary: bool) {
         let n = src.len();
-        let h = self.lines[v as usize].0[INLINE];
+        let h = self.lines[v as usize].hdr;
         let dst: &mut [Entry] = if n <= INLINE {
-            &mut self.lines[v as usize].0[..n]
+            &mut self.lines[v as usize].e[..n]
         } else {
             let fits = h.slot != NIL && self.over[h.slot as usize - 1].nbr as usize >= n;
             let off = if fits {
@@ -121,7 +128,7 @@ impl Rings {
                 self.over.resize(off + cap, BLANK);
                 off
             };
-            self.lines[v as usize].0[INLINE].slot = off as u32;
+            self.lines[v as usize].hdr.slot = off as u32;
             &mut self.over[off..off + n]
         };
         // Rings are short: an element loop beats memmove calls here (and the chained
@@ -130,25 +137,38 @@ impl Rings {
         for (d, s) in dst.iter_mut().zip(tail.iter().chain(head)) {
             *d = *s;
         }
-        let hdr = &mut self.lines[v as usize].0[INLINE];
+        let hdr = &mut self.lines[v as usize].hdr;
         if n <= INLINE {
             hdr.slot = NIL;
         }
         hdr.nbr = n as u32 | if boundary { BOUNDARY } else { 0 };
     }
 
+    /// Points `v`'s entry to `from` at `to` instead; returns its position.
+    #[inline]
+    fn rename(&mut self, v: u32, from: u32, to: u32) -> Result<usize, SplitError> {
+        let ring = self.get_mut(v);
+        let k = ring
+            .iter()
+            .position(|x| x.nbr == from)
+            .ok_or(SplitError::Inconsistent)?;
+        ring[k].nbr = to;
+        Ok(k)
+    }
+
     /// Inserts `e` at position `at` of `v`'s ring where it already lives (the inline line, or
     /// an overflow block with room); `false`, changing nothing, when the ring must move.
     /// A split inserts into both wings' rings; shifting a few entries in place costs a
     /// fraction of rebuilding the ring through [`Rings::set`].
+    #[inline]
     fn insert_in_place(&mut self, v: u32, at: usize, e: Entry) -> bool {
-        let h = self.lines[v as usize].0[INLINE];
+        let h = self.lines[v as usize].hdr;
         let n = (h.nbr & !BOUNDARY) as usize;
         let ring: &mut [Entry] = if h.slot == NIL {
             if n + 1 > INLINE {
                 return false;
             }
-            &mut self.lines[v as usize].0[..n + 1]
+            &mut self.lines[v as usize].e[..n + 1]
         } else {
             let off = h.slot as usize;
             if (self.over[off - 1].nbr as usize) < n + 1 {
@@ -162,9 +182,48 @@ impl Rings {
             k -= 1;
         }
         ring[at] = e;
-        self.lines[v as usize].0[INLINE].nbr = h.nbr + 1;
+        self.lines[v as usize].hdr.nbr = h.nbr + 1;
         true
     }
+}
+
+/// The survivor's ring a split works on (see [`FlatReplay::list`]): a ring that lives in its
+/// line is copied whole (one fixed-size copy, no `memmove` call), a longer one into `spill`.
+#[derive(Clone, Debug)]
+struct Listed {
+    line: [Entry; INLINE],
+    len: usize,
+    inline: bool,
+    spill: Vec<Entry>,
+}
+
+impl Listed {
+    #[inline]
+    fn as_slice(&self) -> &[Entry] {
+        if self.inline {
+            &self.line[..self.len]
+        } else {
+            &self.spill
+        }
+    }
+}
+
+/// Writes `seq[start..]` then `seq[..start]` (the first `len` entries of `seq`, rotated) into
+/// the first `len` entries of `dst`, for `len <= INLINE`. `seq` is first extended
+/// periodically, so the rotation is one fixed-size copy of `INLINE` entries (moves, not a
+/// `memmove` call; entries past `len` are leftovers no reader looks at).
+#[inline(always)]
+fn write_rotated(
+    dst: &mut [Entry; INLINE],
+    seq: &mut [Entry; 2 * INLINE + 2],
+    len: usize,
+    start: usize,
+) {
+    debug_assert!(len <= INLINE && start < len.max(1));
+    for i in 0..INLINE {
+        seq[len + i] = seq[i];
+    }
+    dst[..INLINE].copy_from_slice(&seq[start..start + INLINE]);
 }
 
 fn invalid(reason: impl Into<String>) -> PmError {
@@ -187,7 +246,7 @@ pub struct FlatReplay {
     n_halfedges: u32,
     /// The ring last listed (the entries a split works on), and whose it is; `ring_v` holds
     /// its neighbours for [`Self::ring`].
-    ring: Vec<Entry>,
+    ring: Listed,
     ring_of: u32,
     ring_v: Vec<u32>,
     scratch: Vec<Entry>,
@@ -245,7 +304,12 @@ impl FlatReplay {
             n_base_faces: mesh.n_faces(),
             n_halfedges: n_he as u32,
             ring_v: Vec::new(),
-            ring: Vec::new(),
+            ring: Listed {
+                line: [BLANK; INLINE],
+                len: 0,
+                inline: true,
+                spill: Vec::new(),
+            },
             ring_of: NIL,
             scratch: Vec::new(),
         };
@@ -283,7 +347,8 @@ impl FlatReplay {
     pub fn ring(&mut self, v: u32) -> Result<&[u32], PmError> {
         self.list(v)?;
         self.ring_v.clear();
-        self.ring_v.extend(self.ring.iter().map(|x| x.nbr));
+        self.ring_v
+            .extend(self.ring.as_slice().iter().map(|x| x.nbr));
         Ok(&self.ring_v)
     }
 
@@ -310,11 +375,20 @@ impl FlatReplay {
         if v as usize >= self.rings.len() {
             return Err(invalid(format!("survivor {v} does not exist yet")));
         }
-        let e = self.rings.get(v);
-        self.ring.clear();
-        self.ring.extend_from_slice(e);
+        let line = &self.rings.lines[v as usize];
+        let h = line.hdr;
+        if h.slot == NIL {
+            self.ring.line = line.e;
+            self.ring.len = (h.nbr & !BOUNDARY) as usize;
+            self.ring.inline = true;
+        } else {
+            self.ring.spill.clear();
+            self.ring.spill.extend_from_slice(self.rings.get(v));
+            self.ring.len = self.ring.spill.len();
+            self.ring.inline = false;
+        }
         self.ring_of = v;
-        Ok(self.ring.len())
+        Ok(self.ring.len)
     }
 
     /// Cache hint for a split at `survivor` that comes `ahead` splits later: at a long
@@ -329,7 +403,10 @@ impl FlatReplay {
             return;
         }
         if ahead >= 16 {
-            prefetch(lines.as_ptr().wrapping_add(survivor as usize));
+            // Both halves: a survivor's ring is longer than the first line's seven entries.
+            let line = lines.as_ptr().wrapping_add(survivor as usize);
+            prefetch(line);
+            prefetch((line as *const u8).wrapping_add(64));
         } else {
             for e in self.rings.get(survivor) {
                 prefetch(lines.as_ptr().wrapping_add(e.nbr as usize));
@@ -340,7 +417,7 @@ impl FlatReplay {
     /// The valence of the vertex [`Self::ring`], [`Self::valence`] or [`Self::wing_indices`]
     /// listed last.
     pub fn listed_valence(&self) -> usize {
-        self.ring.len()
+        self.ring.len
     }
 
     /// Applies `s` (which must create vertex `level()`), finding its wings in the survivor's
@@ -366,7 +443,7 @@ impl FlatReplay {
             }
         }
         self.list(s.survivor)?;
-        let ring = &self.ring;
+        let ring = self.ring.as_slice();
         let find = |w: Option<u32>| match w {
             None => Ok(None),
             Some(x) => ring
@@ -401,7 +478,8 @@ impl FlatReplay {
         if self.ring_of != survivor {
             self.list(survivor)?;
         }
-        let n = self.ring.len();
+        let ring = self.ring.as_slice();
+        let n = ring.len();
         if il.is_some_and(|i| i >= n) || ir.is_some_and(|i| i >= n) {
             return Err(invalid(format!(
                 "split creating vertex {level}: {}",
@@ -411,8 +489,8 @@ impl FlatReplay {
         let split = VertexSplit {
             vertex,
             survivor,
-            left: il.map(|i| self.ring[i].nbr),
-            right: ir.map(|i| self.ring[i].nbr),
+            left: il.map(|i| ring[i].nbr),
+            right: ir.map(|i| ring[i].nbr),
         };
         let result = self.split(il, ir);
         self.ring_of = NIL;
@@ -420,19 +498,20 @@ impl FlatReplay {
         Ok(split)
     }
 
-    /// Inserts `e` in `v`'s ring just before (counter-clockwise of) its entry to `before`,
-    /// leaving entry 0 (the canonical half-edge) in place.
-    fn insert_before(&mut self, v: u32, before: u32, e: Entry) -> Result<(), SplitError> {
-        let ring = self.rings.get(v);
-        let k = ring
-            .iter()
-            .position(|x| x.nbr == before)
-            .ok_or(SplitError::Inconsistent)?;
-        let at = if k == 0 { ring.len() } else { k };
-        if self.rings.insert_in_place(v, at, e) {
-            return Ok(());
+    /// Inserts `e` in `v`'s ring just before (counter-clockwise of) its entry at `k`, leaving
+    /// entry 0 (the canonical half-edge) in place: before entry 0 is the end of the list.
+    #[inline]
+    fn insert_before(&mut self, v: u32, k: usize, e: Entry) {
+        let n = self.rings.get(v).len();
+        let at = if k == 0 { n } else { k };
+        if !self.rings.insert_in_place(v, at, e) {
+            self.insert_moving(v, at, e);
         }
-        // The ring outgrows its storage: rebuild it elsewhere.
+    }
+
+    /// [`Self::insert_before`] for a ring that outgrows its storage: rebuilt elsewhere.
+    #[cold]
+    fn insert_moving(&mut self, v: u32, at: usize, e: Entry) {
         let ring = self.rings.get(v);
         let mut tmp = std::mem::take(&mut self.scratch);
         tmp.clear();
@@ -442,7 +521,6 @@ impl FlatReplay {
         let boundary = self.rings.boundary(v);
         self.rings.set(v, &tmp, 0, boundary);
         self.scratch = tmp;
-        Ok(())
     }
 
     /// `vertex_split` on the listed ring of the survivor `v`: same checks, same resulting
@@ -451,12 +529,13 @@ impl FlatReplay {
     /// right wing (exclusive; or through the boundary out-edge).
     fn split(&mut self, il: Option<usize>, ir: Option<usize>) -> Result<(), SplitError> {
         let v = self.ring_of;
-        let n = self.ring.len();
+        let ring = self.ring.as_slice();
+        let n = ring.len();
         if n == 0 {
             return Err(SplitError::Inconsistent);
         }
-        let left = il.map(|i| self.ring[i].nbr);
-        let right = ir.map(|i| self.ring[i].nbr);
+        let left = il.map(|i| ring[i].nbr);
+        let right = ir.map(|i| ring[i].nbr);
         if (left.is_none() && right.is_none())
             || (left.is_some() && left == right)
             || left == Some(v)
@@ -501,7 +580,6 @@ impl FlatReplay {
         // The ring read from `start` on: the fan is its first `m` entries, v keeps the rest.
         // Slices rather than an index with a wrap per entry (which cost more than the rest of
         // a split's arithmetic).
-        let ring = &self.ring[..];
         let (fan, rest) = if start + m <= n {
             (
                 [&ring[start..start + m], &[][..]],
@@ -520,14 +598,19 @@ impl FlatReplay {
         let base = self.n_halfedges;
         let (o, h) = (base, base + 1);
         let mut next = base + 2;
-        let mut alloc2 = |yes: bool| {
-            yes.then(|| {
-                next += 2;
-                (next - 2, next - 1)
-            })
+        // (NIL for the pair of a missing wing.)
+        let (o2, o1) = if right.is_some() {
+            next += 2;
+            (next - 2, next - 1)
+        } else {
+            (NIL, NIL)
         };
-        let (o2, o1) = alloc2(right.is_some()).unzip();
-        let (h2, h1) = alloc2(left.is_some()).unzip();
+        let (h2, h1) = if left.is_some() {
+            next += 2;
+            (next - 2, next - 1)
+        } else {
+            (NIL, NIL)
+        };
         self.n_halfedges = next;
         if right.is_some() {
             self.face_he.push(o);
@@ -540,71 +623,120 @@ impl FlatReplay {
         // twin, which `vertex_split` re-pairs).
         for (k, e) in fan[0].iter().chain(fan[1]).enumerate() {
             if k != 0 || il.is_none() {
-                let x = self
-                    .rings
-                    .get_mut(e.nbr)
-                    .iter_mut()
-                    .find(|x| x.nbr == v)
-                    .ok_or(SplitError::Inconsistent)?;
-                x.nbr = u;
+                self.rings.rename(e.nbr, v, u)?;
             }
         }
 
         // u: (u→v) then the fan then (u→v_r); canonical: h without a left face, the old
         // boundary out-edge (the fan's last) without a right face, else the smallest slot.
-        self.scratch.clear();
-        self.scratch.push(Entry { nbr: v, slot: h });
-        self.scratch.extend_from_slice(fan[0]);
-        self.scratch.extend_from_slice(fan[1]);
-        if let (Some(r), Some(o1)) = (right, o1) {
-            self.scratch.push(Entry { nbr: r, slot: o1 });
-        }
-        let (u_start, u_boundary) = match (left, right) {
-            (None, _) => (0, true),
-            (_, None) => (m, true),
-            _ => (min_slot(&self.scratch), false),
-        };
-        self.rings.push_empty();
-        self.rings.set(u, &self.scratch, u_start, u_boundary);
-
         // v: what is left of its ring from the fan's end round to its start, then (v→v_l),
         // then (v→u). Canonical: o without a right face, the unchanged boundary out-edge of a
         // boundary v, else the smallest slot.
-        let old_first = self.ring[0].slot;
-        self.scratch.clear();
-        self.scratch.extend_from_slice(rest[0]);
-        self.scratch.extend_from_slice(rest[1]);
-        if let (Some(l), Some(h1)) = (left, h1) {
-            self.scratch.push(Entry { nbr: l, slot: h1 });
-        }
-        self.scratch.push(Entry { nbr: u, slot: o });
-        let v_start = if right.is_none() {
-            self.scratch.len() - 1
-        } else if v_boundary {
-            self.scratch
-                .iter()
-                .position(|x| x.slot == old_first)
-                .ok_or(SplitError::Inconsistent)?
+        let old_first = ring[0].slot;
+        let len_u = m + 1 + usize::from(right.is_some());
+        let len_v = n - m + 1 + usize::from(left.is_some());
+        if self.ring.inline && len_u <= INLINE && len_v <= INLINE {
+            // The common case (every ring at most 15 long): both rings built on the stack and
+            // written into their lines whole, with no scratch vector and no `memmove`.
+            let mut seq = [BLANK; 2 * INLINE + 2];
+            seq[0] = Entry { nbr: v, slot: h };
+            let mut k = 1;
+            for e in fan[0].iter().chain(fan[1]) {
+                seq[k] = *e;
+                k += 1;
+            }
+            if let Some(r) = right {
+                seq[k] = Entry { nbr: r, slot: o1 };
+            }
+            let (u_start, u_boundary) = match (left, right) {
+                (None, _) => (0, true),
+                (_, None) => (m, true),
+                _ => (min_slot(&seq[..len_u]), false),
+            };
+            let mut line = Line {
+                hdr: Entry {
+                    nbr: len_u as u32 | if u_boundary { BOUNDARY } else { 0 },
+                    slot: NIL,
+                },
+                e: [BLANK; INLINE],
+            };
+            write_rotated(&mut line.e, &mut seq, len_u, u_start);
+            self.rings.lines.push(line);
+
+            let mut k = 0;
+            for e in rest[0].iter().chain(rest[1]) {
+                seq[k] = *e;
+                k += 1;
+            }
+            if let Some(l) = left {
+                seq[k] = Entry { nbr: l, slot: h1 };
+                k += 1;
+            }
+            seq[k] = Entry { nbr: u, slot: o };
+            let v_start = if right.is_none() {
+                len_v - 1
+            } else if v_boundary {
+                seq[..len_v]
+                    .iter()
+                    .position(|x| x.slot == old_first)
+                    .ok_or(SplitError::Inconsistent)?
+            } else {
+                min_slot(&seq[..len_v])
+            };
+            let line = &mut self.rings.lines[v as usize];
+            write_rotated(&mut line.e, &mut seq, len_v, v_start);
+            line.hdr.nbr = len_v as u32 | if v_boundary { BOUNDARY } else { 0 };
         } else {
-            min_slot(&self.scratch)
-        };
-        self.rings.set(v, &self.scratch, v_start, v_boundary);
+            self.scratch.clear();
+            self.scratch.push(Entry { nbr: v, slot: h });
+            self.scratch.extend_from_slice(fan[0]);
+            self.scratch.extend_from_slice(fan[1]);
+            if let Some(r) = right {
+                self.scratch.push(Entry { nbr: r, slot: o1 });
+            }
+            let (u_start, u_boundary) = match (left, right) {
+                (None, _) => (0, true),
+                (_, None) => (m, true),
+                _ => (min_slot(&self.scratch), false),
+            };
+            self.rings.push_empty();
+            self.rings.set(u, &self.scratch, u_start, u_boundary);
+
+            self.scratch.clear();
+            self.scratch.extend_from_slice(rest[0]);
+            self.scratch.extend_from_slice(rest[1]);
+            if let Some(l) = left {
+                self.scratch.push(Entry { nbr: l, slot: h1 });
+            }
+            self.scratch.push(Entry { nbr: u, slot: o });
+            let v_start = if right.is_none() {
+                self.scratch.len() - 1
+            } else if v_boundary {
+                self.scratch
+                    .iter()
+                    .position(|x| x.slot == old_first)
+                    .ok_or(SplitError::Inconsistent)?
+            } else {
+                min_slot(&self.scratch)
+            };
+            self.rings.set(v, &self.scratch, v_start, v_boundary);
+        }
 
         // The wings gain an edge to u just before their edge to v; their canonical half-edge
         // (old, or boundary) stays entry 0.
-        if let (Some(l), Some(h2)) = (left, h2) {
-            self.insert_before(l, v, Entry { nbr: u, slot: h2 })?;
-        }
-        if let (Some(r), Some(o2)) = (right, o2) {
-            // v_r's old edge to v now runs to u; the new o2 = v_r→v goes before it.
-            let x = self
+        if let Some(l) = left {
+            let k = self
                 .rings
-                .get_mut(r)
-                .iter_mut()
-                .find(|x| x.nbr == v)
+                .get(l)
+                .iter()
+                .position(|x| x.nbr == v)
                 .ok_or(SplitError::Inconsistent)?;
-            x.nbr = u;
-            self.insert_before(r, u, Entry { nbr: v, slot: o2 })?;
+            self.insert_before(l, k, Entry { nbr: u, slot: h2 });
+        }
+        if let Some(r) = right {
+            // v_r's old edge to v now runs to u; the new o2 = v_r→v goes before it.
+            let k = self.rings.rename(r, v, u)?;
+            self.insert_before(r, k, Entry { nbr: v, slot: o2 });
         }
         Ok(())
     }
@@ -643,11 +775,33 @@ impl FlatReplay {
     /// or listing the faces: walking the rings in vertex order meets every face once at its
     /// smallest corner, already rotated, so vertex `v`'s faces are compared with bucket `v`
     /// (both a handful) while both arrays are read front to back.
+    ///
+    /// Large meshes are checked in two halves on two threads (the check is the longest step
+    /// of a load left after the replay).
     pub fn has_faces(&self, expected: &FaceBuckets) -> bool {
+        let n = self.rings.len() as u32;
+        let seen = if n >= 1 << 14 {
+            let mid = n / 2;
+            match rayon::join(
+                || self.faces_match(expected, 0..mid),
+                || self.faces_match(expected, mid..n),
+            ) {
+                (Some(a), Some(b)) => Some(a + b),
+                _ => None,
+            }
+        } else {
+            self.faces_match(expected, 0..n)
+        };
+        seen == Some(expected.faces.len())
+    }
+
+    /// [`Self::has_faces`] on the faces whose smallest corner is in `vertices`: how many
+    /// there are, or `None` when they differ from `expected`'s buckets.
+    fn faces_match(&self, expected: &FaceBuckets, vertices: std::ops::Range<u32>) -> Option<usize> {
         let mut seen = 0usize;
         // Which faces of the bucket are claimed: bits, or flags for a bucket of over 64.
         let mut claimed_big: Vec<bool> = Vec::new();
-        for v in 0..self.rings.len() as u32 {
+        for v in vertices {
             let e = self.rings.get(v);
             let theirs = match expected.starts.get(v as usize..v as usize + 2) {
                 Some(w) => &expected.faces[w[0] as usize..w[1] as usize],
@@ -680,15 +834,15 @@ impl FlatReplay {
                 match (0..theirs.len()).find(|&i| free(i) && theirs[i] == f) {
                     Some(i) if big => claimed_big[i] = true,
                     Some(i) => claimed |= 1 << i,
-                    None => return false,
+                    None => return None,
                 }
             }
             if mine != theirs.len() {
-                return false;
+                return None;
             }
             seen += mine;
         }
-        seen == expected.faces.len()
+        Some(seen)
     }
 }
 
@@ -867,6 +1021,33 @@ mod tests {
         let mut flipped = t.clone();
         flipped[65].swap(1, 2);
         assert!(!r.has_faces(&FaceBuckets::new(&flipped, n)));
+    }
+
+    #[test]
+    fn face_check_in_two_halves_sees_every_face() {
+        // Over 2^14 vertices: the check runs on two threads, each half of the vertex range
+        // owning the faces whose smallest corner it holds.
+        let (p, t) = crate::mesh::shapes::grid(140, |i, j| DVec3::new(i as f64, j as f64, 0.0));
+        let n = p.len();
+        assert!(n >= 1 << 14);
+        let r = FlatReplay::new(&p, &t, 0).unwrap();
+        assert!(r.has_faces(&FaceBuckets::new(&t, n)));
+        // A face moved from one half's vertices to the other's, a face missing from each half,
+        // and a duplicated face are all noticed.
+        let mid = (n / 2) as u32;
+        let lo = t.iter().position(|f| f.iter().all(|&x| x < mid)).unwrap();
+        let hi = t.iter().position(|f| f.iter().all(|&x| x >= mid)).unwrap();
+        let mut moved = t.clone();
+        moved[lo] = t[hi];
+        assert!(!r.has_faces(&FaceBuckets::new(&moved, n)));
+        for k in [lo, hi] {
+            let mut missing = t.clone();
+            missing.remove(k);
+            assert!(!r.has_faces(&FaceBuckets::new(&missing, n)));
+        }
+        let mut twice = t.clone();
+        twice.push(t[hi]);
+        assert!(!r.has_faces(&FaceBuckets::new(&twice, n)));
     }
 
     #[test]
