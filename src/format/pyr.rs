@@ -722,18 +722,246 @@ fn read_meta(c: &Container<'_>) -> Result<Meta, FormatError> {
     Ok(meta)
 }
 
-fn read_progressive(
-    bytes: &[u8],
+/// One `SPLT` block as the header scan found it.
+struct BlockRef<'a> {
+    /// Offset of its header (for errors).
+    at: u64,
+    count: usize,
+    /// How many of its splits the reader wants (all but in the last block read).
+    used: usize,
+    /// Index of its first split.
+    first: usize,
+    crc: u32,
+    payload: &'a [u8],
+}
+
+/// One block's contents, decoded but not yet replayed.
+struct DecodedBlock {
+    /// Survivor, left and right wing codes, and the record's offset, per split.
+    records: Vec<(u32, u64, u64, u64)>,
+    positions: Vec<DVec3>,
+    errors: Vec<f32>,
+    /// Trailing bytes after the records: an error a sequential reader meets only after
+    /// replaying the block.
+    trailing: Option<FormatError>,
+}
+
+/// The `SPLT` blocks of a file, located by a scan of their headers (12 bytes per 4096
+/// splits), each decoded by whichever thread claims it first. The replay is sequential and
+/// most of a load; decoding a block (checksum, positions, varint records, errors) does not
+/// depend on it, so another core decodes blocks ahead of the replay while the replaying thread
+/// only decodes a block nobody has claimed yet. Decoding is a pure function of the bytes, so
+/// who does it changes nothing, and the replay never waits on a block that is not being
+/// decoded: no deadlock on a one-thread pool.
+struct SplitBlocks<'a> {
+    blocks: Vec<BlockRef<'a>>,
+    /// What the scan met after the last block it found: nothing, or the error a sequential
+    /// reader reports once it has replayed the blocks before it.
+    end: Result<(), FormatError>,
+    n_base: usize,
+    f32: bool,
+    claimed: Vec<std::sync::atomic::AtomicBool>,
+    ready: Vec<std::sync::Mutex<Option<Result<DecodedBlock, FormatError>>>>,
+}
+
+impl<'a> SplitBlocks<'a> {
+    /// Scans the block headers of `c`'s `SPLT` section up to `max_level` (default: all).
+    /// A truncated file stops at its last complete block.
+    fn scan(c: &Container<'a>, meta: &Meta, max_level: Option<usize>) -> SplitBlocks<'a> {
+        let n_base = meta.n_base as usize;
+        let n_splits = meta.n_splits as usize;
+        let want = max_level.map_or(n_splits, |l| l.saturating_sub(n_base).min(n_splits));
+        let mut blocks = Vec::new();
+        let end = (|| {
+            let truncated = c.is_truncated();
+            let whole = if truncated {
+                c.section_prefix(SPLT)
+            } else {
+                // An intact file: check the section checksum too.
+                c.section(SPLT)?
+            };
+            let mut r = whole.ok_or_else(|| corrupt(0, "section SPLT is missing"))?;
+            let mut done = 0;
+            while done < want {
+                if r.remaining() < 12 && truncated {
+                    break;
+                }
+                let at = r.offset();
+                let count = r.u32("split block")? as usize;
+                let len = r.u32("split block")? as usize;
+                let crc = r.u32("split block")?;
+                let expected = (n_splits - done).min(meta.splits_per_block as usize);
+                if count != expected {
+                    return Err(corrupt(
+                        at,
+                        format!("split block holds {count} splits, expected {expected}"),
+                    ));
+                }
+                if len > r.remaining() {
+                    if truncated {
+                        break;
+                    }
+                    return Err(FormatError::Truncated {
+                        offset: r.offset(),
+                        what: "split block".into(),
+                    });
+                }
+                let payload = r.take(len, "split block")?;
+                let used = count.min(want - done);
+                blocks.push(BlockRef {
+                    at,
+                    count,
+                    used,
+                    first: done,
+                    crc,
+                    payload,
+                });
+                done += used;
+            }
+            Ok(())
+        })();
+        let n = blocks.len();
+        SplitBlocks {
+            blocks,
+            end,
+            n_base,
+            f32: meta.position_bits == 32,
+            claimed: (0..n).map(|_| Default::default()).collect(),
+            ready: (0..n).map(|_| Default::default()).collect(),
+        }
+    }
+
+    /// Decodes block `k`: checksum, positions, records, errors (only the splits wanted).
+    fn decode(&self, k: usize) -> Result<DecodedBlock, FormatError> {
+        let b = &self.blocks[k];
+        if crc32fast::hash(b.payload) != b.crc {
+            return Err(FormatError::Checksum {
+                what: "split block".into(),
+                offset: b.at,
+            });
+        }
+        // Payload: the records (variable length), then `count` positions and `count` errors
+        // (fixed length), so the records end where the fixed-size tail begins.
+        let width = 3 * if self.f32 { 4 } else { 8 };
+        let tail = b.count * (width + 4);
+        if tail > b.payload.len() {
+            return Err(corrupt(b.at, "split block is shorter than its positions"));
+        }
+        let (records, fixed) = b.payload.split_at(b.payload.len() - tail);
+        let mut p = ByteReader::new(records, b.at + 12);
+        let mut q = ByteReader::new(fixed, b.at + 12 + records.len() as u64);
+        let mut positions = Vec::new();
+        read_positions(&mut q, b.used, self.f32, &mut positions)?;
+        let mut decoded = Vec::with_capacity(b.used);
+        for k in 0..b.used {
+            let vertex = (self.n_base + b.first + k) as u32;
+            let at = p.offset();
+            if vertex == 0 {
+                return Err(corrupt(at, "split without a survivor"));
+            }
+            let back = p.count(u64::from(vertex - 1), "survivor")? as u32;
+            let lc = p.count(MAX_RING, "left wing")?;
+            let rc = p.count(MAX_RING, "right wing")?;
+            decoded.push((vertex - 1 - back, lc as u64, rc as u64, at));
+        }
+        q.take((b.count - b.used) * width, "positions")?;
+        let mut errors = Vec::with_capacity(b.used);
+        for _ in 0..b.used {
+            errors.push(f32::from_le_bytes(q.array("split error")?));
+        }
+        let trailing = (b.used == b.count && !p.is_empty())
+            .then(|| corrupt(p.offset(), "trailing bytes in split block"));
+        Ok(DecodedBlock {
+            records: decoded,
+            positions,
+            errors,
+            trailing,
+        })
+    }
+
+    /// Block `k`, for the replay: decoded here unless another thread claimed it first, in
+    /// which case that thread is decoding it right now and the wait is short.
+    fn take(&self, k: usize) -> Result<DecodedBlock, FormatError> {
+        use std::sync::atomic::Ordering;
+        if !self.claimed[k].swap(true, Ordering::AcqRel) {
+            return self.decode(k);
+        }
+        loop {
+            let slot = self.ready[k]
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .take();
+            if let Some(d) = slot {
+                return d;
+            }
+            std::thread::yield_now();
+        }
+    }
+
+    /// Decodes, in order, every block the replay has not claimed yet.
+    fn decode_ahead(&self) {
+        use std::sync::atomic::Ordering;
+        for k in 0..self.blocks.len() {
+            if self.claimed[k].swap(true, Ordering::AcqRel) {
+                continue;
+            }
+            // Should decoding panic (a bug), the replay must not wait forever for the block.
+            struct Publish<'b>(
+                &'b std::sync::Mutex<Option<Result<DecodedBlock, FormatError>>>,
+                Option<Result<DecodedBlock, FormatError>>,
+            );
+            impl Drop for Publish<'_> {
+                fn drop(&mut self) {
+                    let d = self
+                        .1
+                        .take()
+                        .unwrap_or_else(|| Err(internal("split block decoder panicked")));
+                    *self
+                        .0
+                        .lock()
+                        .unwrap_or_else(std::sync::PoisonError::into_inner) = Some(d);
+                }
+            }
+            let mut publish = Publish(&self.ready[k], None);
+            publish.1 = Some(self.decode(k));
+        }
+    }
+}
+
+/// The progressive part of `bytes` up to `max_level` (default: all), with `also` run on
+/// another core meanwhile (after it has helped decode the split blocks). Errors come in the
+/// order a sequential reader meets them: header, `BASE`, then block by block.
+fn read_progressive<'a, R: Send>(
+    bytes: &'a [u8],
     max_level: Option<usize>,
-) -> Result<(Container<'_>, Progressive), FormatError> {
+    also: impl FnOnce(&Container<'a>, &Meta) -> R + Send,
+) -> Result<(Container<'a>, Progressive, R), FormatError> {
     let c = Container::parse(bytes)?;
     check_version(&c)?;
     let meta = read_meta(&c)?;
+    let blocks = SplitBlocks::scan(&c, &meta, max_level);
+    let (p, r) = rayon::join(
+        || replay_progressive(&c, &meta, &blocks, bytes.len()),
+        || {
+            blocks.decode_ahead();
+            also(&c, &meta)
+        },
+    );
+    Ok((c, p?, r))
+}
+
+/// `BASE`, then the blocks of `blocks` replayed in order.
+fn replay_progressive(
+    c: &Container<'_>,
+    meta: &Meta,
+    blocks: &SplitBlocks<'_>,
+    file_len: usize,
+) -> Result<Progressive, FormatError> {
     let f32 = meta.position_bits == 32;
     let n_base = meta.n_base as usize;
     let n_splits = meta.n_splits as usize;
 
-    let mut r = required(&c, BASE)?;
+    let mut r = required(c, BASE)?;
     let mut positions = Vec::new();
     read_positions(&mut r, n_base, f32, &mut positions)?;
     let n_faces = r.count(r.remaining() as u64 / 3, "base face count")?;
@@ -756,80 +984,18 @@ fn read_progressive(
     }
     // Every split takes at least 3 record bytes and a position, so the file size caps the
     // room reserved for the replay.
-    let hint = n_splits.min(bytes.len() / 15);
+    let hint = n_splits.min(file_len / 15);
     let mut replay = FlatReplay::new(&positions, &base_faces, hint)
         .map_err(|e| corrupt(r.offset(), e.to_string()))?;
 
-    let truncated = c.is_truncated();
-    let whole = if truncated {
-        c.section_prefix(SPLT)
-    } else {
-        // An intact file: check the section checksum too.
-        c.section(SPLT)?
-    };
-    let mut r = whole.ok_or_else(|| corrupt(0, "section SPLT is missing"))?;
-    let want = max_level.map_or(n_splits, |l| l.saturating_sub(n_base).min(n_splits));
+    let want: usize = blocks.blocks.iter().map(|b| b.used).sum();
     let mut splits: Vec<VertexSplit> = Vec::with_capacity(want.min(hint));
     let mut errors: Vec<f32> = Vec::with_capacity(want.min(hint));
     positions.reserve(want.min(hint));
-    let mut decoded: Vec<(u32, u64, u64, u64)> = Vec::new();
-    while splits.len() < want {
-        if r.remaining() < 12 && truncated {
-            break;
-        }
-        let at = r.offset();
-        let count = r.u32("split block")? as usize;
-        let len = r.u32("split block")? as usize;
-        let crc = r.u32("split block")?;
-        let expected = (n_splits - splits.len()).min(meta.splits_per_block as usize);
-        if count != expected {
-            return Err(corrupt(
-                at,
-                format!("split block holds {count} splits, expected {expected}"),
-            ));
-        }
-        if len > r.remaining() {
-            if truncated {
-                break;
-            }
-            return Err(FormatError::Truncated {
-                offset: r.offset(),
-                what: "split block".into(),
-            });
-        }
-        let payload = r.take(len, "split block")?;
-        if crc32fast::hash(payload) != crc {
-            return Err(FormatError::Checksum {
-                what: "split block".into(),
-                offset: at,
-            });
-        }
-        // Payload: the records (variable length), then `count` positions and `count` errors
-        // (fixed length), so the records end where the fixed-size tail begins.
-        let tail = count * (3 * if f32 { 4 } else { 8 } + 4);
-        if tail > payload.len() {
-            return Err(corrupt(at, "split block is shorter than its positions"));
-        }
-        let (records, fixed) = payload.split_at(payload.len() - tail);
-        let mut p = ByteReader::new(records, at + 12);
-        let mut q = ByteReader::new(fixed, at + 12 + records.len() as u64);
-        // Only the splits up to the level asked for are decoded and replayed.
-        let used = count.min(want - splits.len());
-        read_positions(&mut q, used, f32, &mut positions)?;
-        // The records first (their survivors let the replay prefetch ahead), then the
-        // replay, which checks them against the rings.
-        decoded.clear();
-        for k in 0..used {
-            let vertex = (n_base + splits.len() + k) as u32;
-            let at = p.offset();
-            if vertex == 0 {
-                return Err(corrupt(at, "split without a survivor"));
-            }
-            let back = p.count(u64::from(vertex - 1), "survivor")? as u32;
-            let lc = p.count(MAX_RING, "left wing")? as u64;
-            let rc = p.count(MAX_RING, "right wing")? as u64;
-            decoded.push((vertex - 1 - back, lc, rc, at));
-        }
+    for k in 0..blocks.blocks.len() {
+        let block = blocks.take(k)?;
+        positions.extend_from_slice(&block.positions);
+        let decoded = &block.records;
         for (k, &(survivor, lc, rc, at)) in decoded.iter().enumerate() {
             for ahead in [16, 8] {
                 if let Some(r) = decoded.get(k + ahead) {
@@ -857,31 +1023,26 @@ fn read_progressive(
                 .map_err(|e| corrupt(at, e.to_string()))?;
             splits.push(s);
         }
-        q.take(3 * (count - used) * if f32 { 4 } else { 8 }, "positions")?;
-        for _ in 0..used {
-            errors.push(f32::from_le_bytes(q.array("split error")?));
-        }
-        if used == count && !p.is_empty() {
-            return Err(corrupt(p.offset(), "trailing bytes in split block"));
+        errors.extend_from_slice(&block.errors);
+        if let Some(e) = block.trailing {
+            return Err(e);
         }
     }
-    Ok((
-        c,
-        Progressive {
-            meta,
-            truncated,
-            replay,
-            splits,
-            positions,
-            errors,
-        },
-    ))
+    blocks.end.clone()?;
+    Ok(Progressive {
+        meta: meta.clone(),
+        truncated: c.is_truncated(),
+        replay,
+        splits,
+        positions,
+        errors,
+    })
 }
 
 /// Reads level `level` (default: the finest in the file) from the progressive part only. A
 /// truncated file yields its last complete level (`truncated` set); the caller warns.
 pub fn read_level(bytes: &[u8], level: Option<usize>) -> Result<LevelMesh, FormatError> {
-    let (_, p) = read_progressive(bytes, level)?;
+    let (_, p, ()) = read_progressive(bytes, level, |_, _| ())?;
     let n_base = p.meta.n_base as usize;
     let finest = n_base + p.meta.n_splits as usize;
     // The progressive reader stopped at the level asked for (or where the file ends).
@@ -1143,22 +1304,10 @@ fn decode_input_side(c: &Container<'_>, meta: &Meta) -> Result<InputSide, Format
 pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
     // The replay of the splits is sequential and about half of a load; the input's side
     // (vertex order, polygons, attributes, its faces in canonical order) does not depend on it,
-    // so it is decoded on another core meanwhile. Errors come in the order a sequential reader
-    // meets them: the progressive part, ISOL, then the input's side.
-    let header = Container::parse(bytes).and_then(|c| {
-        check_version(&c)?;
-        Ok((read_meta(&c)?, c))
-    });
-    let (progressive, input_side) = rayon::join(
-        || read_progressive(bytes, None),
-        || {
-            header
-                .as_ref()
-                .ok()
-                .map(|(meta, c)| decode_input_side(c, meta))
-        },
-    );
-    let (c, p) = progressive?;
+    // so it is decoded on another core meanwhile (after that core has decoded split blocks
+    // ahead of the replay). Errors come in the order a sequential reader meets them: the
+    // progressive part, ISOL, then the input's side.
+    let (c, p, input_side) = read_progressive(bytes, None, decode_input_side)?;
     if p.truncated {
         return Err(FormatError::Truncated {
             offset: bytes.len() as u64,
@@ -1185,13 +1334,12 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
     if !r.is_empty() {
         return Err(corrupt(r.offset(), "trailing bytes in ISOL"));
     }
-    // `read_progressive` parsed the same header, so the input's side ran.
     let InputSide {
         pm_to_mesh,
         mesh_to_pm,
         mut input,
         clean_faces,
-    } = input_side.ok_or_else(|| corrupt(0, "unreadable header"))??;
+    } = input_side?;
     // Vertex copies the builder made (order entries past the input's vertices) have no row.
     for (i, &s) in pm_to_mesh.iter().enumerate() {
         if let Some(p) = input.positions.get_mut(s as usize) {
