@@ -1240,7 +1240,10 @@ fn decode_polygons(
 /// input, its faces in PM indices with their canonical sorted order.
 struct InputSide {
     pm_to_mesh: Vec<u32>,
+    /// The inverse of `pm_to_mesh` (`u32::MAX` where nothing maps).
     mesh_to_pm: Vec<u32>,
+    /// Whether `pm_to_mesh` is a permutation, so that `mesh_to_pm` is its exact inverse.
+    permutation: bool,
     input: PolygonMesh,
     clean_faces: Option<CleanFaces>,
 }
@@ -1285,15 +1288,24 @@ fn decode_input_side(c: &Container<'_>, meta: &Meta) -> Result<InputSide, Format
     let mut r = required(c, ATTR)?;
     decode_attributes(&mut r, &mut input)?;
     let mut mesh_to_pm = vec![u32::MAX; n_total];
+    let mut permutation = true;
     for (i, &s) in pm_to_mesh.iter().enumerate() {
         if let Some(m) = mesh_to_pm.get_mut(s as usize) {
+            permutation &= *m == u32::MAX;
             *m = i as u32;
         }
     }
+    // The positions are placeholders (all finite, as the stored ones are: `read_position`
+    // refuses others), so this checks the polygons and attributes here, off the replay's
+    // critical path.
+    input
+        .check()
+        .map_err(|e| corrupt(0, format!("restored mesh: {e}")))?;
     let clean_faces = clean_triangle_faces(&input, &mesh_to_pm, n_total);
     Ok(InputSide {
         pm_to_mesh,
         mesh_to_pm,
+        permutation,
         input,
         clean_faces,
     })
@@ -1337,6 +1349,7 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
     let InputSide {
         pm_to_mesh,
         mesh_to_pm,
+        permutation,
         mut input,
         clean_faces,
     } = input_side?;
@@ -1346,9 +1359,6 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
             *p = positions[i];
         }
     }
-    input
-        .check()
-        .map_err(|e| corrupt(0, format!("restored mesh: {e}")))?;
     // The finest faces, checked to be exactly what the splits rebuild: read off a clean
     // triangle input, else from the builder's repaired mesh.
     let (faces, built) = match clean_faces.filter(|c| replay.has_faces(&c.buckets)) {
@@ -1371,6 +1381,7 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
             errors,
         },
         replay.n_base_faces(),
+        permutation.then_some(mesh_to_pm),
     )
     .map_err(|e| corrupt(0, e.to_string()))?;
     let info = BuildInfo {

@@ -158,7 +158,7 @@ impl ProgressiveMesh {
     /// applies exactly to the base mesh, and that all splits together give exactly `faces`.
     /// Cost: one replay of all splits ([`FlatReplay`]).
     pub fn from_parts(parts: PmParts) -> Result<ProgressiveMesh, PmError> {
-        let mut pm = Self::unreplayed(parts)?;
+        let mut pm = Self::unreplayed(parts, None)?;
         let n_base = pm.n_base;
         let base = pm.base_triangles();
         let mut replay = FlatReplay::new(&pm.positions[..n_base], &base, pm.splits.len())?;
@@ -175,18 +175,22 @@ impl ProgressiveMesh {
     /// [`Self::from_parts`] for a decoder that has already replayed `parts.splits` on a
     /// [`FlatReplay`] of the base mesh (which gave `n_base_faces` base faces) and checked that
     /// `parts.faces` are exactly the faces the replay rebuilt: everything else is checked as
-    /// in `from_parts`, without replaying or comparing the faces a second time.
+    /// in `from_parts`, without replaying or comparing the faces a second time. `mesh_to_pm`,
+    /// when given, is the inverse of `parts.pm_to_mesh`, which the caller has checked to be a
+    /// permutation (else it is computed and checked here).
     pub(crate) fn from_checked_parts(
         parts: PmParts,
         n_base_faces: usize,
+        mesh_to_pm: Option<Vec<u32>>,
     ) -> Result<ProgressiveMesh, PmError> {
-        let mut pm = Self::unreplayed(parts)?;
+        let mut pm = Self::unreplayed(parts, mesh_to_pm)?;
         pm.n_base_faces = n_base_faces;
         Ok(pm)
     }
 
-    /// The parts with every check that needs no replay.
-    fn unreplayed(parts: PmParts) -> Result<ProgressiveMesh, PmError> {
+    /// The parts with every check that needs no replay (`inverse`: see
+    /// [`Self::from_checked_parts`]).
+    fn unreplayed(parts: PmParts, inverse: Option<Vec<u32>>) -> Result<ProgressiveMesh, PmError> {
         let PmParts {
             n_base,
             positions,
@@ -206,13 +210,19 @@ impl ProgressiveMesh {
         if positions.iter().any(|p| !p.is_finite()) {
             return Err(invalid("non-finite position"));
         }
-        let mut mesh_to_pm = vec![super::NONE; total];
-        for (i, &s) in pm_to_mesh.iter().enumerate() {
-            match mesh_to_pm.get_mut(s as usize) {
-                Some(m) if *m == super::NONE => *m = i as u32,
-                _ => return Err(invalid("vertex order is not a permutation")),
+        let mesh_to_pm = match inverse.filter(|m| m.len() == total) {
+            Some(m) => m,
+            None => {
+                let mut mesh_to_pm = vec![super::NONE; total];
+                for (i, &s) in pm_to_mesh.iter().enumerate() {
+                    match mesh_to_pm.get_mut(s as usize) {
+                        Some(m) if *m == super::NONE => *m = i as u32,
+                        _ => return Err(invalid("vertex order is not a permutation")),
+                    }
+                }
+                mesh_to_pm
             }
-        }
+        };
         for (i, s) in splits.iter().enumerate() {
             let v = (n_base + i) as u32;
             let ok = s.vertex == v
