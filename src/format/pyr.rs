@@ -524,7 +524,11 @@ pub fn encode(
                 put_uvarint(&mut payload, il.map_or(0, |i| i as u64 + 1));
                 let rc = match (il, ir) {
                     (_, None) => 0,
-                    (Some(l), Some(r)) => ((r + valence - l) % valence) as u64 + 1,
+                    // (r - l) mod valence, with l, r < valence: a compare, not a division.
+                    (Some(l), Some(r)) => {
+                        let d = r + valence - l;
+                        (if d >= valence { d - valence } else { d }) as u64 + 1
+                    }
                     (None, Some(r)) => r as u64 + 1,
                 };
                 put_uvarint(&mut payload, rc);
@@ -1012,7 +1016,13 @@ fn replay_progressive(
             let il = lc.checked_sub(1);
             let ir = rc
                 .checked_sub(1)
-                .map(|r| il.map_or(r, |l| (l + r) % deg.max(1)));
+                // (l + r) mod deg with l, r < deg (checked above): a compare, not a division.
+                .map(|r| {
+                    il.map_or(r, |l| {
+                        let s = l + r;
+                        if s >= deg { s - deg } else { s }
+                    })
+                });
             let s = replay
                 .apply_indexed(
                     vertex,
