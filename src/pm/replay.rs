@@ -226,6 +226,18 @@ fn write_rotated(
     dst[..INLINE].copy_from_slice(&seq[start..start + INLINE]);
 }
 
+/// Copies the run `parts[0]` then `parts[1]` (a cyclic run of a ring, in at most two pieces)
+/// into `seq` from `at` on; returns the index after it.
+#[inline(always)]
+fn put_run(seq: &mut [Entry], at: usize, parts: [&[Entry]; 2]) -> usize {
+    let mut k = at;
+    for e in parts[0].iter().chain(parts[1]) {
+        seq[k] = *e;
+        k += 1;
+    }
+    k
+}
+
 fn invalid(reason: impl Into<String>) -> PmError {
     PmError::Internal(format!(
         "inconsistent progressive mesh data: {}",
@@ -640,11 +652,7 @@ impl FlatReplay {
             // written into their lines whole, with no scratch vector and no `memmove`.
             let mut seq = [BLANK; 2 * INLINE + 2];
             seq[0] = Entry { nbr: v, slot: h };
-            let mut k = 1;
-            for e in fan[0].iter().chain(fan[1]) {
-                seq[k] = *e;
-                k += 1;
-            }
+            let k = put_run(&mut seq, 1, fan);
             if let Some(r) = right {
                 seq[k] = Entry { nbr: r, slot: o1 };
             }
@@ -663,11 +671,7 @@ impl FlatReplay {
             write_rotated(&mut line.e, &mut seq, len_u, u_start);
             self.rings.lines.push(line);
 
-            let mut k = 0;
-            for e in rest[0].iter().chain(rest[1]) {
-                seq[k] = *e;
-                k += 1;
-            }
+            let mut k = put_run(&mut seq, 0, rest);
             if let Some(l) = left {
                 seq[k] = Entry { nbr: l, slot: h1 };
                 k += 1;
