@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{data, position_bits, rich_mesh};
+use common::{data, on_threads, position_bits, rich_mesh};
 use meshpyr::format::{self, BuildInfo, FormatError};
 use meshpyr::io;
 use meshpyr::mesh::{Mesh, PolygonMesh};
@@ -403,11 +403,7 @@ fn split_blocks_decode_the_same_on_any_thread_count() {
     fix_section_checksums(&mut only1);
 
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        on_threads(threads, || {
             let d = format::decode(&bytes).unwrap();
             let again = format::encode(&d.input, &d.pm, &d.info).unwrap().0;
             (

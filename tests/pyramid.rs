@@ -1,6 +1,9 @@
 //! The detail pyramid on synthetic meshes: perfect reconstruction (closed, open, several
 //! components), the Burt–Adelson property, filters touching only their bands, editing.
 
+mod common;
+
+use common::on_threads;
 use glam::DVec3;
 use meshpyr::mesh::{Mesh, SlotIndex};
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
@@ -405,12 +408,7 @@ fn analysis_gives_the_same_pyramid_on_any_thread_count() {
     let operators: [&dyn meshpyr::relax::Relaxation; 2] = [&second_difference, &mcm];
     for op in operators {
         let analyse = |threads: usize| {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            pool.install(|| Pyramid::analyze(&pm, op, &NoProgress))
-                .unwrap()
+            on_threads(threads, || Pyramid::analyze(&pm, op, &NoProgress)).unwrap()
         };
         let one = analyse(1);
         for threads in [2, 3] {
@@ -456,11 +454,7 @@ fn parallel_synthesis_gives_the_bits_of_split_order() {
     let mut partial_reference = pyr.signal_at_level(mid);
     one_by_one(mid, &mut partial_reference);
     for threads in [1, 3] {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        let (whole, partial) = pool.install(|| {
+        let (whole, partial) = on_threads(threads, || {
             let mut f = pyr.signal_at_level(mid);
             pyr.synthesize_range(&mut f, mid, n, &gains);
             (pyr.synthesize(&gains), f)
@@ -491,17 +485,9 @@ fn syntheses_running_side_by_side_on_the_pool_give_the_bits_of_one_thread() {
                 .resolve(pyr.surface_area())
         })
         .collect();
-    let single = rayon::ThreadPoolBuilder::new()
-        .num_threads(1)
-        .build()
-        .unwrap();
     let expected: Vec<Vec<DVec3>> =
-        single.install(|| gains.iter().map(|g| pyr.synthesize(g)).collect());
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(2)
-        .build()
-        .unwrap();
-    let got: Vec<Vec<DVec3>> = pool.install(|| {
+        on_threads(1, || gains.iter().map(|g| pyr.synthesize(g)).collect());
+    let got: Vec<Vec<DVec3>> = on_threads(2, || {
         use rayon::prelude::*;
         gains.par_iter().map(|g| pyr.synthesize(g)).collect()
     });

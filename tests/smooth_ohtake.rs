@@ -11,7 +11,7 @@ use std::process::Command;
 
 mod common;
 
-use common::data;
+use common::{data, on_threads};
 
 /// The half-edge mesh of `name` (with its extension) in `tests/data`.
 fn load(name: &str) -> Mesh {
@@ -111,11 +111,9 @@ fn output_is_bitwise_identical_for_any_thread_count() {
     let mesh = load("cube_om_noisy.ply");
     for options in [DenoiseOptions::adaptive(), DenoiseOptions::anisotropic()] {
         let with = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .expect("thread pool")
-                .install(|| denoise(&mesh, &options, &NoProgress).expect("denoising runs"))
+            on_threads(threads, || {
+                denoise(&mesh, &options, &NoProgress).expect("denoising runs")
+            })
         };
         let one = with(1);
         let many = with(4);

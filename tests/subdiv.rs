@@ -239,13 +239,7 @@ fn results_do_not_depend_on_the_thread_count() {
             local_width,
             ..Default::default()
         };
-        let on = |threads: usize| {
-            rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap()
-                .install(|| run(&coarse, opts.clone()))
-        };
+        let on = |threads: usize| on_threads(threads, || run(&coarse, opts.clone()));
         let bits = |m: &Mesh| {
             m.positions()
                 .iter()

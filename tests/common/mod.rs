@@ -11,6 +11,16 @@ use meshpyr::mesh::{
     ScalarType,
 };
 
+/// Runs `f` on a rayon pool of `threads` threads (for tests that results do not depend on the
+/// thread count).
+pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a rayon pool")
+        .install(f)
+}
+
 /// Path of a file in `tests/data`.
 pub fn data(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
