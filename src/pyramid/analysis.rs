@@ -17,10 +17,10 @@
 //! there, so the records and the pyramid do not depend on the thread count. Operators with
 //! ring stencils (Guskov's) walk a [`FlatReplay`] up from the base, replaying the splits
 //! before their range first: its rings are the half-edge mesh's circulations, slots included,
-//! in a line of memory per vertex instead of linked 48-byte records, and the record walk is
-//! bound by memory, not arithmetic. The others walk a half-edge cursor down from the finest
-//! level. Steps 2–5 then run over the records, finest split first; like synthesis, they run
-//! the splits of a wave (see `waves`) at once, in reverse.
+//! in one or two cache lines per vertex instead of linked 48-byte records, and the record
+//! walk is bound by memory, not arithmetic. The others walk a half-edge cursor down from the
+//! finest level. Steps 2–5 then run over the records, finest split first; like synthesis,
+//! they run the splits of a wave (see `waves`) at once, in reverse.
 
 use super::frames::{LocalIndex, frame_min_length};
 use super::synthesis::{Scratch, decode, predict_local, prefetch_next_split, presmooth_local};
@@ -588,7 +588,7 @@ impl Slotted {
     }
 }
 
-/// One stream of the records in slot order ([`Records::in_slot_order`]): `data` of the range
+/// One stream of the records in slot order ([`Slotted::new`]): `data` of the range
 /// record `at(slot)` names, each split's part found at `pos` of its offsets, copied with
 /// [`gather`] to `pos` of the slot's new `offsets`.
 fn stream<'a, S: Copy + Sync + 'a, T: Send>(
