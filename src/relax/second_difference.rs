@@ -377,6 +377,10 @@ impl SecondDifference {
     /// of smaller slot as [`Self::canonical_flap`] does (so the same bits as on the half-edge
     /// mesh with the replay's slots), or `None` for a boundary or degenerate edge and for
     /// vertices that are not neighbours. `ka`: where `b` is in `a`'s ring, when known.
+    ///
+    /// Out of line: it runs on the memo's misses only, and inlined it made every lookup pay
+    /// for its registers.
+    #[inline(never)]
     fn ring_flap(
         &self,
         replay: &FlatReplay,
@@ -440,20 +444,24 @@ impl SecondDifference {
         let mut ring_entry: SmallVec<[u32; 16]> = SmallVec::from_elem(u32::MAX, n);
         let ring_entry = ring_entry.as_mut_slice();
         let mut den = 0.0;
+        // A macro, not a closure: the five calls per spoke are the stencil's inner loop and a
+        // closure call here was not inlined (a quarter of the stencil's instructions).
+        macro_rules! add {
+            ($v:expr, $at:expr, $x:expr) => {
+                add_ring_vertex_entry(entries, start, ring[$at].nbr, &mut ring_entry[$at], $v, $x)
+            };
+        }
         for k in 0..n {
             let r = ring[k].nbr;
             let after = if k + 1 == n { 0 } else { k + 1 };
             let before = if k == 0 { n - 1 } else { k - 1 };
-            let mut add = |v: u32, at: usize, x: f64, entries: &mut Vec<(u32, f64)>| {
-                add_ring_vertex_entry(entries, start, ring[at].nbr, &mut ring_entry[at], v, x)
-            };
             // (a) the edge i → r: i is j1 of its flap (`f` is seen flipped when x = 1).
             if let Some((f, x)) = cache.flap(self, replay, geometry, i, r, Some(k)) {
                 let ci = f.c[x];
                 den += ci * ci;
-                add(f.v[1 ^ x], k, ci * f.c[1 ^ x], entries);
-                add(f.v[2 ^ x], after, ci * f.c[2 ^ x], entries);
-                add(f.v[3 ^ x], before, ci * f.c[3 ^ x], entries);
+                add!(f.v[1 ^ x], k, ci * f.c[1 ^ x]);
+                add!(f.v[2 ^ x], after, ci * f.c[2 ^ x]);
+                add!(f.v[3 ^ x], before, ci * f.c[3 ^ x]);
             }
             // (b) the link edge r → next opposite i in the face left of i → r: i is its apex l1.
             if !(k == 0 && boundary)
@@ -463,8 +471,8 @@ impl SecondDifference {
             {
                 let ci = f.c[2 ^ x];
                 den += ci * ci;
-                add(f.v[x], k, ci * f.c[x], entries);
-                add(f.v[1 ^ x], after, ci * f.c[1 ^ x], entries);
+                add!(f.v[x], k, ci * f.c[x]);
+                add!(f.v[1 ^ x], after, ci * f.c[1 ^ x]);
                 add_ring_entry(entries, start, f.v[3 ^ x], ci * f.c[3 ^ x]);
             }
         }
@@ -527,7 +535,7 @@ type RingFlapCache = BatchMemo<u64, RingFlap>;
 impl RingFlapCache {
     /// The flap of edge `a`–`b` and 1 when it is seen flipped along `a → b` (`ka`: where `b`
     /// is in `a`'s ring, when known).
-    #[inline]
+    #[inline(always)]
     fn flap(
         &mut self,
         op: &SecondDifference,
