@@ -63,6 +63,12 @@ impl Default for SecondDifference {
 /// The four coefficients `[c_j1, c_j2, c_l1, c_l2]` of `D_e` on the hinge `(j1, j2 | l1, l2)`,
 /// or `None` when either triangle is degenerate (`2·area < ratio · L²`) or the edge has zero
 /// length. Units: 1/length.
+///
+/// With `cot α = p / 2A` and `cot β = q / 2A` (`p = e·(l − j1)`, `q = L² − p`) each triangle
+/// needs one factor `t = 2 / (L · 2A)`: `c_l = (cot α + cot β)·2/L = L²·t` and
+/// `c_j1 = −(q1 t1 + q2 t2)`, `c_j2 = −(p1 t1 + p2 t2)`. That is three square roots and two
+/// divisions per hinge instead of three and five: the divider was a fifth of the analysis'
+/// time.
 #[inline]
 pub fn hinge_coefficients(
     pj1: DVec3,
@@ -76,26 +82,23 @@ pub fn hinge_coefficients(
     if l2.is_nan() || l2 <= 0.0 || !l2.is_finite() {
         return None;
     }
+    let length = l2.sqrt();
     let min_double_area = degenerate_area_ratio * l2;
-    let (a1, b1) = apex_cotangents(pj1, pj2, pl1, min_double_area)?;
-    let (a2, b2) = apex_cotangents(pj1, pj2, pl2, min_double_area)?;
-    let s = 2.0 / l2.sqrt();
-    Some([-s * (b1 + b2), -s * (a1 + a2), s * (a1 + b1), s * (a2 + b2)])
+    let (p1, t1) = apex_terms(e, length, pl1 - pj1, min_double_area)?;
+    let (p2, t2) = apex_terms(e, length, pl2 - pj1, min_double_area)?;
+    let (q1, q2) = (l2 - p1, l2 - p2);
+    Some([-(q1 * t1 + q2 * t2), -(p1 * t1 + p2 * t2), l2 * t1, l2 * t2])
 }
 
-/// Cotangents of the angles at `j1` and `j2` in the triangle `(j1, j2, l)`, or `None` when the
-/// triangle's doubled area is below `min_double_area`.
+/// For the triangle `(j1, j2, l)` with `e = j2 − j1` and `w = l − j1`: `p = e·w` and
+/// `t = 2 / (|e| · 2A)`, or `None` when the doubled area `2A` is below `min_double_area`.
 #[inline]
-fn apex_cotangents(pj1: DVec3, pj2: DVec3, pl: DVec3, min_double_area: f64) -> Option<(f64, f64)> {
-    let u = pj2 - pj1;
-    let w = pl - pj1;
-    let double_area = u.cross(w).length();
+fn apex_terms(e: DVec3, length: f64, w: DVec3, min_double_area: f64) -> Option<(f64, f64)> {
+    let double_area = e.cross(w).length();
     if double_area.is_nan() || double_area < min_double_area || double_area == 0.0 {
         return None;
     }
-    let cot_j1 = u.dot(w) / double_area;
-    let cot_j2 = (pj1 - pj2).dot(pl - pj2) / double_area;
-    Some((cot_j1, cot_j2))
+    Some((e.dot(w), 2.0 / (length * double_area)))
 }
 
 impl SecondDifference {
