@@ -426,6 +426,24 @@ impl FlatReplay {
         }
     }
 
+    /// Cache hint for reading the neighbourhood of `survivor` a few splits ahead: the first
+    /// ring line and the position in `positions` of every vertex within two edges of it (read
+    /// off the neighbours' lines, which [`Self::prefetch`] fetched earlier). Stencils on the
+    /// rings read exactly these, scattered over the arrays. Only a hint, like
+    /// [`Self::prefetch`].
+    pub fn prefetch_neighbourhood<T>(&self, survivor: u32, positions: &[T]) {
+        let lines = &self.rings.lines;
+        if survivor as usize >= lines.len() {
+            return;
+        }
+        for e in self.rings.get(survivor) {
+            for f in self.rings.get(e.nbr) {
+                prefetch(lines.as_ptr().wrapping_add(f.nbr as usize));
+                prefetch(positions.as_ptr().wrapping_add(f.nbr as usize));
+            }
+        }
+    }
+
     /// The valence of the vertex [`Self::ring`], [`Self::valence`] or [`Self::wing_indices`]
     /// listed last.
     pub fn listed_valence(&self) -> usize {

@@ -191,6 +191,9 @@ fn record_ranges(
         .collect()
 }
 
+/// How many splits ahead the recording walk hints the neighbourhood its stencils will read.
+const STENCIL_PREFETCH_AHEAD: usize = 4;
+
 /// Step 1 for splits `range` on a [`FlatReplay`], coarsest first: after split `k`, its new
 /// vertex, its ring and their stencils and fans are those of level `n0 + k + 1`.
 fn record_range_on_rings(
@@ -205,7 +208,22 @@ fn record_range_on_rings(
     let mut replay =
         FlatReplay::new(&geometry[..n_base], &pm.base_triangles(), range.end).map_err(internal)?;
     let splits = pm.splits();
-    for s in &splits[..range.start] {
+    // Hints for the splits 16 and 8 places ahead, as the `.pyr` reader gives them: the replay
+    // and the stencils read rings scattered over the arrays.
+    let hint = |replay: &FlatReplay, k: usize| {
+        for ahead in [16, 8] {
+            if let Some(t) = splits.get(k + ahead) {
+                replay.prefetch(t.survivor, ahead);
+            }
+        }
+    };
+    let hint_stencils = |replay: &FlatReplay, k: usize| {
+        if let Some(t) = splits.get(k + STENCIL_PREFETCH_AHEAD) {
+            replay.prefetch_neighbourhood(t.survivor, geometry);
+        }
+    };
+    for (k, s) in splits[..range.start].iter().enumerate() {
+        hint(&replay, k);
         replay.apply(s).map_err(internal)?;
     }
     let mut recorder = Recorder::new(range.clone(), geometry.len(), false);
@@ -216,6 +234,8 @@ fn record_range_on_rings(
             progress.update(RECORDS_SHARE * done as f64 / range.len().max(1) as f64);
         }
         let s = &splits[k];
+        hint(&replay, k);
+        hint_stencils(&replay, k);
         replay.apply(s).map_err(internal)?;
         let v = (n_base + k) as u32;
         touched.clear();
