@@ -219,20 +219,35 @@ fn normalize_stencil<T>(entries: &mut [(T, f64)], den: f64) -> bool {
 
 /// A small direct-mapped memo of edge flaps for one batch of stencils (an edge enters the
 /// stencils of up to four vertices of a 1-ring). Keys are whole (a slot, a vertex pair), so
-/// a collision just recomputes.
+/// a collision just recomputes. [`Self::clear`] starts a new batch by bumping a generation
+/// rather than rewriting the 7 KB of entries.
 struct BatchMemo<K, V> {
     tags: [K; BATCH_MEMO_SIZE],
+    /// The batch each entry was computed in; entries of older batches are empty.
+    generations: [u32; BATCH_MEMO_SIZE],
+    generation: u32,
     values: [Option<V>; BATCH_MEMO_SIZE],
 }
 
 const BATCH_MEMO_SIZE: usize = 128;
 
 impl<K: Copy + PartialEq, V: Copy> BatchMemo<K, V> {
-    /// An empty memo; `unused` is a key no edge has.
+    /// An empty memo.
     fn new(unused: K) -> Self {
         Self {
             tags: [unused; BATCH_MEMO_SIZE],
+            generations: [0; BATCH_MEMO_SIZE],
+            generation: 1,
             values: [None; BATCH_MEMO_SIZE],
+        }
+    }
+
+    /// Empties the memo for a new batch.
+    fn clear(&mut self) {
+        self.generation = self.generation.wrapping_add(1);
+        if self.generation == 0 {
+            self.generations = [0; BATCH_MEMO_SIZE];
+            self.generation = 1;
         }
     }
 
@@ -243,8 +258,9 @@ impl<K: Copy + PartialEq, V: Copy> BatchMemo<K, V> {
         // Fibonacci hashing: neighbouring keys spread over the table.
         let at = (hash.wrapping_mul(0x9E37_79B9_7F4A_7C15)
             >> (64 - BATCH_MEMO_SIZE.trailing_zeros())) as usize;
-        if self.tags[at] != key {
+        if self.tags[at] != key || self.generations[at] != self.generation {
             self.tags[at] = key;
+            self.generations[at] = self.generation;
             self.values[at] = compute();
         }
         self.values[at].as_ref()
@@ -329,12 +345,14 @@ impl Relaxation for SecondDifference {
         out: &mut Vec<(u32, f64)>,
         lens: &mut Vec<usize>,
     ) -> bool {
-        let mut cache = RingFlapCache::new(u64::MAX);
-        for &v in vertices {
-            let start = out.len();
-            self.append_ring_stencil(replay, geometry, v, out, &mut cache);
-            lens.push(out.len() - start);
-        }
+        RING_FLAPS.with_borrow_mut(|cache| {
+            cache.clear();
+            for &v in vertices {
+                let start = out.len();
+                self.append_ring_stencil(replay, geometry, v, out, cache);
+                lens.push(out.len() - start);
+            }
+        });
         true
     }
 
@@ -444,8 +462,15 @@ impl SecondDifference {
         let start = entries.len();
         let (ring, boundary) = replay.ring_entries(i);
         let n = ring.len();
-        let mut ring_entry: SmallVec<[u32; 16]> = SmallVec::from_elem(u32::MAX, n);
-        let ring_entry = ring_entry.as_mut_slice();
+        // Each ring vertex's entry, once it has one; on the stack for rings of up to 16.
+        let mut inline = [u32::MAX; 16];
+        let mut spilled = Vec::new();
+        let ring_entry = if n <= inline.len() {
+            &mut inline[..n]
+        } else {
+            spilled.resize(n, u32::MAX);
+            &mut spilled[..]
+        };
         let mut den = 0.0;
         // A macro, not a closure: the five calls per spoke are the stencil's inner loop and a
         // closure call here was not inlined (a quarter of the stencil's instructions).
@@ -534,6 +559,14 @@ struct RingFlap {
 
 /// Flaps on rings, keyed by the edge's two vertices.
 type RingFlapCache = BatchMemo<u64, RingFlap>;
+
+thread_local! {
+    /// Each thread's flap memo for [`Relaxation::ring_stencils`], kept between batches (one
+    /// per split in the analysis) so that starting a batch costs a generation bump, not a
+    /// fresh 7 KB memo.
+    static RING_FLAPS: std::cell::RefCell<RingFlapCache> =
+        std::cell::RefCell::new(RingFlapCache::new(u64::MAX));
+}
 
 impl RingFlapCache {
     /// The flap of edge `a`–`b` and 1 when it is seen flipped along `a → b` (`ka`: where `b`
