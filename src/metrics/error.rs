@@ -73,7 +73,7 @@ impl<'a> Surface<'a> {
         (0..self.triangles.len())
             .map(|t| {
                 let [a, b, c] = self.corners(t);
-                0.5 * (b - a).cross(c - a).length()
+                crate::mesh::geometry::triangle_area(a, b, c)
             })
             .sum()
     }

@@ -675,7 +675,7 @@ fn surface_stats(positions: &[DVec3], faces: &[[u32; 3]]) -> (f64, f64) {
         .iter()
         .map(|t| {
             let [a, b, c] = t.map(|i| positions[i as usize]);
-            0.5 * (b - a).cross(c - a).length()
+            crate::mesh::geometry::triangle_area(a, b, c)
         })
         .sum();
     let diagonal = crate::mesh::geometry::BoundingBox::of(positions.iter().copied())

@@ -79,7 +79,7 @@ pub fn lumped_mass(triangles: &[[u32; 3]], positions: &[DVec3]) -> Vec<f64> {
     let mut m = vec![0.0; positions.len()];
     for t in triangles {
         let [a, b, c] = t.map(|i| positions[i as usize]);
-        let area = 0.5 * (b - a).cross(c - a).length();
+        let area = crate::mesh::geometry::triangle_area(a, b, c);
         if is_degenerate(a, b, c, area) {
             continue;
         }

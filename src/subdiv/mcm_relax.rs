@@ -80,7 +80,7 @@ impl MeanCurvatureStep {
             }
             if !mesh.is_boundary_halfedge(h) {
                 let o = geometry[mesh.to_vertex(mesh.next(h)).slot()];
-                mass += 0.5 * (q - p).cross(o - p).length() / 3.0;
+                mass += crate::mesh::geometry::triangle_area(p, q, o) / 3.0;
             }
             neighbors.push((j, w));
         }
