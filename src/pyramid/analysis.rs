@@ -102,17 +102,9 @@ impl Pyramid {
         let mut f = signal.to_vec();
         let mut details = vec![DVec3::ZERO; slotted.offsets.last().map_or(0, |o| o.details)];
         let min_length = frame_min_length(bbox_diagonal);
-        match &slotted.codes {
-            Codes::Byte(c) => {
-                slotted.downsample(c, &waves, &mut f, &mut details, min_length, progress)
-            }
-            Codes::Narrow(c) => {
-                slotted.downsample(c, &waves, &mut f, &mut details, min_length, progress)
-            }
-            Codes::Wide(c) => {
-                slotted.downsample(c, &waves, &mut f, &mut details, min_length, progress)
-            }
-        }
+        with_codes!(&slotted.codes, c => {
+            slotted.downsample(c, &waves, &mut f, &mut details, min_length, progress)
+        });
         progress.update(1.0);
 
         Ok(Pyramid {

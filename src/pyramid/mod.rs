@@ -26,6 +26,18 @@
 //! need) in flat arrays. Synthesis — every re-filtering and every edit — then runs on those
 //! arrays alone, without touching the half-edge mesh.
 
+/// Evaluates `$body` with `$c` bound to the code stream `$codes` (a [`Codes`]) at its width:
+/// the one place the three widths are told apart, each arm a monomorphised copy.
+macro_rules! with_codes {
+    ($codes:expr, $c:ident => $body:expr) => {
+        match $codes {
+            Codes::Byte($c) => $body,
+            Codes::Narrow($c) => $body,
+            Codes::Wide($c) => $body,
+        }
+    };
+}
+
 pub mod analysis;
 pub mod edit;
 pub mod frames;
@@ -125,11 +137,7 @@ pub(crate) enum Codes {
 
 impl Codes {
     fn bytes(&self) -> usize {
-        match self {
-            Codes::Byte(c) => c.len(),
-            Codes::Narrow(c) => 2 * c.len(),
-            Codes::Wide(c) => 4 * c.len(),
-        }
+        with_codes!(self, c => std::mem::size_of_val(c.as_slice()))
     }
 }
 

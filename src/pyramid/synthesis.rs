@@ -297,11 +297,7 @@ impl Pyramid {
         let from = from.clamp(self.n_base, self.n_finest);
         let to = to.clamp(from, self.n_finest);
         let splits = from - self.n_base..to - self.n_base;
-        match &self.codes {
-            Codes::Byte(c) => self.synthesize_splits(c, f, splits, gains),
-            Codes::Narrow(c) => self.synthesize_splits(c, f, splits, gains),
-            Codes::Wide(c) => self.synthesize_splits(c, f, splits, gains),
-        }
+        with_codes!(&self.codes, c => self.synthesize_splits(c, f, splits, gains))
     }
 
     /// [`Pyramid::synthesize_range`] from `from` to the finest level, checking that `f` fits.
