@@ -524,11 +524,7 @@ pub fn encode(
                 put_uvarint(&mut payload, il.map_or(0, |i| i as u64 + 1));
                 let rc = match (il, ir) {
                     (_, None) => 0,
-                    // (r - l) mod valence, with l, r < valence: a compare, not a division.
-                    (Some(l), Some(r)) => {
-                        let d = r + valence - l;
-                        (if d >= valence { d - valence } else { d }) as u64 + 1
-                    }
+                    (Some(l), Some(r)) => wrap_once((r + valence - l) as u64, valence as u64) + 1,
                     (None, Some(r)) => r as u64 + 1,
                 };
                 put_uvarint(&mut payload, rc);
@@ -724,6 +720,14 @@ fn read_meta(c: &Container<'_>) -> Result<Meta, FormatError> {
         return Err(corrupt(at, "inconsistent counts in META"));
     }
     Ok(meta)
+}
+
+/// `x mod n` for `x < 2n`: the right wing's code is `(r − l) mod valence` and decodes as
+/// `(l + code) mod valence`, both with `l, r < valence`, so a compare and subtract does
+/// instead of a division per split.
+#[inline]
+fn wrap_once(x: u64, n: u64) -> u64 {
+    if x >= n { x - n } else { x }
 }
 
 /// One `SPLT` block as the header scan found it.
@@ -1014,15 +1018,10 @@ fn replay_progressive(
                 return Err(corrupt(at, "wing index past the survivor's ring"));
             }
             let il = lc.checked_sub(1);
+            // l, r < deg (checked above).
             let ir = rc
                 .checked_sub(1)
-                // (l + r) mod deg with l, r < deg (checked above): a compare, not a division.
-                .map(|r| {
-                    il.map_or(r, |l| {
-                        let s = l + r;
-                        if s >= deg { s - deg } else { s }
-                    })
-                });
+                .map(|r| il.map_or(r, |l| wrap_once(l + r, deg)));
             let s = replay
                 .apply_indexed(
                     vertex,
