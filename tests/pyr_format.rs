@@ -327,15 +327,21 @@ fn bunny_round_trip() {
     assert_eq!(d.input, input);
 }
 
-/// The `SPLT` section's (offset, length) and the payload range of each of its blocks.
-fn split_blocks(bytes: &[u8]) -> ((usize, usize), Vec<std::ops::Range<usize>>) {
-    let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap()) as usize;
-    let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap()) as usize;
-    let n = u32_at(16);
+/// The number of sections and the offset of the `SPLT` entry in the section table.
+fn split_entry(bytes: &[u8]) -> (usize, usize) {
+    let n = u32::from_le_bytes(bytes[16..20].try_into().unwrap()) as usize;
     let entry = (0..n)
         .map(|i| 24 + 32 * i)
         .find(|&e| &bytes[e..e + 4] == b"SPLT")
         .unwrap();
+    (n, entry)
+}
+
+/// The `SPLT` section's (offset, length) and the payload range of each of its blocks.
+fn split_blocks(bytes: &[u8]) -> ((usize, usize), Vec<std::ops::Range<usize>>) {
+    let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap()) as usize;
+    let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().unwrap()) as usize;
+    let (_, entry) = split_entry(bytes);
     let (off, len) = (u64_at(entry + 8), u64_at(entry + 16));
     let mut blocks = Vec::new();
     let mut at = off;
@@ -350,12 +356,8 @@ fn split_blocks(bytes: &[u8]) -> ((usize, usize), Vec<std::ops::Range<usize>>) {
 /// Recomputes the `SPLT` section checksum and the header checksum, leaving the block
 /// checksums as they are.
 fn fix_section_checksums(bytes: &mut [u8]) {
-    let n = u32::from_le_bytes(bytes[16..20].try_into().unwrap()) as usize;
+    let (n, entry) = split_entry(bytes);
     let ((off, len), _) = split_blocks(bytes);
-    let entry = (0..n)
-        .map(|i| 24 + 32 * i)
-        .find(|&e| &bytes[e..e + 4] == b"SPLT")
-        .unwrap();
     let crc = crc32fast::hash(&bytes[off..off + len]);
     bytes[entry + 24..entry + 28].copy_from_slice(&crc.to_le_bytes());
     let mut h = crc32fast::Hasher::new();
