@@ -1,6 +1,9 @@
 //! The half-edge builder: repairs on small hand-made cases, and property tests on random
 //! polygon soups (never panics, always valid).
 
+mod common;
+
+use common::on_threads;
 use glam::DVec3;
 use meshpyr::mesh::{Mesh, PolygonMesh};
 use proptest::prelude::*;
@@ -330,13 +333,7 @@ fn large_dirty_soup_builds_the_same_on_any_number_of_threads() {
             tris.push(t);
         }
     }
-    let build = |threads: usize| {
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap()
-            .install(|| Mesh::from_triangles(&pos, &tris).unwrap())
-    };
+    let build = |threads: usize| on_threads(threads, || Mesh::from_triangles(&pos, &tris).unwrap());
     let one = build(1);
     one.mesh.validate().unwrap();
     assert!(one.report.flipped_faces > 0, "{:?}", one.report);
