@@ -8,10 +8,13 @@ use glam::DVec3;
 use meshpyr::mesh::{Mesh, SlotIndex};
 use meshpyr::metrics::curvature::{gauss_curvature, ring_sign_changes};
 use meshpyr::progress::NoProgress;
-use meshpyr::subdiv::{Refinement, Scheme, Solver, SubdivError, SubdivOptions, subdivide};
+use meshpyr::subdiv::{
+    Refinement, Scheme, Solver, SubdivError, SubdivOptions, subdivide, subdivide_loop,
+    subdivide_mcm,
+};
 
 fn run(mesh: &Mesh, opts: SubdivOptions) -> Mesh {
-    subdivide(mesh, &opts, &NoProgress).unwrap().mesh
+    subdivide(mesh, &opts, &NoProgress).unwrap().mesh().unwrap()
 }
 
 fn max_distance(a: &Mesh, b: &Mesh) -> f64 {
@@ -284,12 +287,19 @@ fn bisection_names_a_folded_two_triangle_component() {
     let err = subdivide(&mesh, &opts, &NoProgress).unwrap_err();
     assert!(matches!(err, SubdivError::FoldedPair { .. }), "{err}");
     assert!(err.to_string().contains("--refine quad"));
-    // Quadrisection refines it.
+    // Quadrisection refines it. The refined pillow has four faces on some edges, so it has
+    // triangles but no half-edge mesh.
     let quad = SubdivOptions {
         refinement: Refinement::Quadrisection,
         ..opts
     };
-    assert_eq!(run(&mesh, quad).n_faces(), 4 * t.len());
+    let refined = subdivide(&mesh, &quad, &NoProgress).unwrap();
+    assert_eq!(refined.triangles.len(), 4 * t.len());
+    assert_eq!(refined.positions.len(), 7 + 6 + 3);
+    assert!(matches!(
+        refined.mesh(),
+        Err(SubdivError::NotManifold { level: 1 })
+    ));
 }
 
 #[test]
@@ -310,6 +320,21 @@ fn bad_options_and_inputs_are_typed_errors() {
             ..Default::default()
         }),
         SubdivError::TooLarge { .. }
+    ));
+    // Raising the limit does not lift the index range, nor do the direct entry points skip it.
+    let huge = SubdivOptions {
+        levels: 16,
+        max_output_faces: usize::MAX,
+        ..Default::default()
+    };
+    assert!(matches!(err(huge.clone()), SubdivError::TooLarge { limit, .. } if limit < 1 << 30));
+    assert!(matches!(
+        subdivide_mcm(&coarse, &huge, &NoProgress),
+        Err(SubdivError::TooLarge { .. })
+    ));
+    assert!(matches!(
+        subdivide_loop(&coarse, 16, &NoProgress),
+        Err(SubdivError::TooLarge { .. })
     ));
     assert!(matches!(
         err(SubdivOptions {

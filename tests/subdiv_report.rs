@@ -10,7 +10,7 @@ use meshpyr::progress::NoProgress;
 use meshpyr::subdiv::{Scheme, Solver, SubdivOptions, subdivide};
 
 fn run(mesh: &Mesh, opts: SubdivOptions) -> Mesh {
-    subdivide(mesh, &opts, &NoProgress).unwrap().mesh
+    subdivide(mesh, &opts, &NoProgress).unwrap().mesh().unwrap()
 }
 
 #[test]

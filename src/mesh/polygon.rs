@@ -213,6 +213,9 @@ impl PolygonMesh {
     pub fn from_triangles(positions: Vec<DVec3>, triangles: &[[u32; 3]]) -> Self {
         let mut m = PolygonMesh::new();
         m.positions = positions;
+        // Sized up front: growing by doubling copies (and page-faults) the arrays again.
+        m.face_indices.reserve_exact(3 * triangles.len());
+        m.face_starts.reserve_exact(triangles.len());
         for t in triangles {
             m.push_face(t);
         }

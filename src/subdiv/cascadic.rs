@@ -22,15 +22,17 @@
 //!
 //! Results are bit-for-bit reproducible on any number of threads: every sum runs in a fixed
 //! order, and what runs in parallel is independent work. With quadrisection, a level's
-//! half-edge mesh (needed only by the next refinement and the output) is built on one core
-//! while the level's system is assembled and solved from flat arrays on the other.
+//! half-edge connectivity (needed only by the next refinement) is built on one core while the
+//! level's system is assembled and solved from flat arrays on the other; the last level's is
+//! never built, since the output is its triangles.
 
 use super::fem::{
     SymmetricCsr, identity_rows, mass_of, mass_rhs, stiffness_from_weights, system_matrix,
     triangle_weights,
 };
+use super::halfedge_arrays::HalfedgeArrays;
 use super::refine::{
-    Marking, Prolongation, QuadTopology, bisect, build_quadrisection, initial_marking,
+    Marking, Prolongation, QuadTopology, bisect, initial_marking, quadrisect_connectivity,
     quadrisection_parts, quadrisection_stiffness,
 };
 use super::{Refinement, Solver, SubdivError, SubdivOptions, Subdivision, compact, default_beta};
@@ -301,17 +303,22 @@ pub fn subdivide_mcm(
     if mesh.n_faces() == 0 {
         return Err(SubdivError::NoFaces);
     }
-    let mut current = compact(mesh)?;
+    super::check_output_size(mesh, options.levels, options.face_factor(), usize::MAX)?;
+    let input = compact(mesh)?;
     let c = options.width;
-    let h0 = current.mean_edge_length();
+    let h0 = input.mean_edge_length();
     let alpha = 0.5 * (c * h0) * (c * h0);
-    let mut x0: Vec<DVec3> = current.positions();
-    let mut h_init = vertex_grid_size(&current);
+    let mut x0: Vec<DVec3> = input.positions();
+    let mut h_init = vertex_grid_size(&input);
     let mut h_cur = h_init.clone();
-    let mut marking: Option<Marking> = match options.refinement {
-        Refinement::Bisection => Some(initial_marking(&current)?),
-        Refinement::Quadrisection => None,
-    };
+    // The current level: its positions and triangles, and the connectivity the next refinement
+    // reads (flat half-edge arrays for quadrisection, the slotmap mesh for bisection).
+    let mut positions = x0.clone();
+    let mut triangles = input.to_triangles().1;
+    let mut connectivity = Some(match options.refinement {
+        Refinement::Quadrisection => Connectivity::Quad(HalfedgeArrays::from_mesh(&input)),
+        Refinement::Bisection => Connectivity::Bisect(initial_marking(&input)?, input),
+    });
     let beta = options
         .beta
         .unwrap_or_else(|| default_beta(options.solver, options.refinement));
@@ -342,7 +349,7 @@ pub fn subdivide_mcm(
             let mut solve_level = |triangles: &[[u32; 3]],
                                    positions: &[DVec3],
                                    prolongation: &Prolongation,
-                                   quad: Option<(&Mesh, &QuadTopology)>|
+                                   quad: Option<(&HalfedgeArrays, &QuadTopology)>|
              -> Result<(usize, f64, Vec<DVec3>), String> {
                 x0 = prolongation.apply(&x0);
                 // Mass and stiffness from one pass over the triangles; a quadrisection reads its
@@ -404,31 +411,41 @@ pub fn subdivide_mcm(
                     ))
                 }
             };
-            let (mut fine, solution) = match &marking {
-                None => {
-                    // The half-edge mesh of the new level is needed only for the next refinement
-                    // and the output, so it is built on another core while this level solves.
-                    let (topo, prolongation, positions) = quadrisection_parts(&current);
+            let last = level == options.levels;
+            // Only the last quadrisection level leaves no connectivity behind.
+            let Some(current) = connectivity.take() else {
+                break;
+            };
+            let (next, fine_triangles, solution) = match current {
+                Connectivity::Quad(coarse) => {
+                    let (topo, prolongation, fine_positions) =
+                        quadrisection_parts(&coarse, &positions);
+                    // The next refinement's connectivity is built on another core while this
+                    // level solves; the last level needs none.
                     let (fine, solution) = rayon::join(
-                        || build_quadrisection(&current, &topo, &positions),
+                        || (!last).then(|| quadrisect_connectivity(&coarse, &topo)),
                         || {
                             solve_level(
                                 &topo.triangles,
-                                &positions,
+                                &fine_positions,
                                 &prolongation,
-                                Some((&current, &topo)),
+                                Some((&coarse, &topo)),
                             )
                         },
                     );
-                    (fine.map_err(with_level)?, solution)
+                    (fine.map(Connectivity::Quad), topo.triangles, solution)
                 }
-                Some(m) => {
-                    let (refined, next) = bisect(&current, m).map_err(with_level)?;
-                    marking = Some(next);
-                    let positions = refined.mesh.positions();
-                    let solution =
-                        solve_level(&refined.triangles, &positions, &refined.prolongation, None);
-                    (refined.mesh, solution)
+                Connectivity::Bisect(marking, mesh) => {
+                    let (refined, next) = bisect(&mesh, &marking).map_err(with_level)?;
+                    let fine_positions = refined.mesh.positions();
+                    let solution = solve_level(
+                        &refined.triangles,
+                        &fine_positions,
+                        &refined.prolongation,
+                        None,
+                    );
+                    let next = Connectivity::Bisect(next, refined.mesh);
+                    (Some(next), refined.triangles, solution)
                 }
             };
             let fail = |why: String| SubdivError::SolverFailed { level, why };
@@ -436,27 +453,44 @@ pub fn subdivide_mcm(
             if solved.iter().any(|p| !p.is_finite()) {
                 return Err(fail("non-finite positions".to_string()));
             }
-            // `fine` is dense (fresh from refinement), so slot order is the solver's row order.
-            for (record, p) in fine.vertices.values_mut().zip(solved) {
-                record.position = p;
-            }
+            // A bisection's mesh is dense (fresh from refinement), so slot order is the
+            // solver's row order; the next bisection reads its positions.
+            connectivity = next.map(|c| match c {
+                Connectivity::Bisect(marking, mut mesh) => {
+                    for (record, &p) in mesh.vertices.values_mut().zip(&solved) {
+                        record.position = p;
+                    }
+                    Connectivity::Bisect(marking, mesh)
+                }
+                quad => quad,
+            });
+            positions = solved;
+            triangles = fine_triangles;
             reports.push(LevelReport {
                 level,
-                vertices: fine.n_vertices(),
-                faces: fine.n_faces(),
+                vertices: positions.len(),
+                faces: triangles.len(),
                 steps: taken,
                 relative_residual: residual,
             });
-            current = fine;
             done += growth.powi(level as i32);
             progress.update(done / total);
         }
         Ok(())
     })?;
     Ok(Subdivision {
-        mesh: current,
+        positions,
+        triangles,
         levels: reports,
     })
+}
+
+/// What the next refinement reads.
+enum Connectivity {
+    /// Quadrisection: the flat half-edge arrays.
+    Quad(HalfedgeArrays),
+    /// Bisection: the marking and the slotmap mesh with the level's positions.
+    Bisect(Marking, Mesh),
 }
 
 fn run_solver<const K: usize>(

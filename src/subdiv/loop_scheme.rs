@@ -8,8 +8,9 @@
 //!   `b0, b1`: `3/4 v + 1/8 (b0 + b1)` (the cubic B-spline rule along the boundary curve).
 //! - Isolated vertices stay where they are.
 
-use super::SubdivError;
-use super::refine::{build_quadrisection, quad_topology};
+use super::halfedge_arrays::HalfedgeArrays;
+use super::refine::{QuadTopology, quad_topology, quadrisect_connectivity};
+use super::{SubdivError, Subdivision};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use glam::DVec3;
@@ -25,63 +26,83 @@ pub fn loop_beta(n: usize) -> f64 {
 /// then one vertex per edge in [`Mesh::edges`] order — the same layout as
 /// [`quadrisect`](super::refine::quadrisect).
 pub fn loop_step(mesh: &Mesh) -> Result<Mesh, SubdivError> {
-    let topo = quad_topology(mesh);
-    let mut positions = Vec::with_capacity(topo.parents.len());
-    for &v in &topo.coarse {
-        let p = mesh.position(v);
-        let new = match mesh.vertex_halfedge(v) {
-            None => p,
-            Some(out) if mesh.is_boundary_halfedge(out) => {
-                // The stored out-edge of a boundary vertex runs along the boundary; the
-                // boundary edge arriving at v is its predecessor in the boundary loop.
-                let b1 = mesh.position(mesh.to_vertex(out));
-                let b0 = mesh.position(mesh.from_vertex(mesh.prev(out)));
-                0.75 * p + 0.125 * (b0 + b1)
-            }
-            Some(_) => {
-                let (sum, n) = mesh.outgoing(v).fold((DVec3::ZERO, 0usize), |(s, n), h| {
-                    (s + mesh.position(mesh.to_vertex(h)), n + 1)
-                });
-                let beta = loop_beta(n);
-                (1.0 - n as f64 * beta) * p + beta * sum
-            }
-        };
-        positions.push(new);
-    }
-    for &h in &topo.edges {
-        let a = mesh.position(mesh.from_vertex(h));
-        let b = mesh.position(mesh.to_vertex(h));
-        let t = mesh.twin(h);
-        let p = if mesh.is_boundary_halfedge(h) || mesh.is_boundary_halfedge(t) {
-            0.5 * (a + b)
-        } else {
-            let c = mesh.position(mesh.to_vertex(mesh.next(h)));
-            let d = mesh.position(mesh.to_vertex(mesh.next(t)));
-            0.375 * (a + b) + 0.125 * (c + d)
-        };
-        positions.push(p);
-    }
-    build_quadrisection(mesh, &topo, &positions)
+    let coarse = HalfedgeArrays::from_mesh(mesh);
+    let (topo, positions) = loop_level(&coarse, &mesh.positions());
+    Ok(quadrisect_connectivity(&coarse, &topo).to_mesh(&positions))
 }
 
-/// `levels` levels of Loop subdivision (the input is compacted first).
+/// The quadrisection of `mesh` (vertex positions `positions`) and Loop's positions for its
+/// vertices.
+fn loop_level(mesh: &HalfedgeArrays, positions: &[DVec3]) -> (QuadTopology, Vec<DVec3>) {
+    let (topo, _) = quad_topology(mesh);
+    let at = |v: u32| positions[v as usize];
+    let mut fine = Vec::with_capacity(topo.n_coarse + topo.edges.len());
+    for (v, &p) in (0..).zip(positions) {
+        let out = mesh.vertex_halfedge[v as usize];
+        let new = if out == super::halfedge_arrays::NONE {
+            p
+        } else if mesh.is_boundary(out) {
+            // The stored out-edge of a boundary vertex runs along the boundary; the boundary
+            // edge arriving at v is its predecessor in the boundary loop.
+            let b1 = at(mesh.get(out).to);
+            let b0 = at(mesh.from(mesh.get(out).prev));
+            0.75 * p + 0.125 * (b0 + b1)
+        } else {
+            let (sum, n) = mesh.outgoing(v).fold((DVec3::ZERO, 0usize), |(s, n), h| {
+                (s + at(mesh.get(h).to), n + 1)
+            });
+            let beta = loop_beta(n);
+            (1.0 - n as f64 * beta) * p + beta * sum
+        };
+        fine.push(new);
+    }
+    for &h in &topo.edges {
+        let e = mesh.get(h);
+        let (a, b) = (at(mesh.from(h)), at(e.to));
+        let p = if mesh.is_boundary(h) || mesh.is_boundary(e.twin) {
+            0.5 * (a + b)
+        } else {
+            let c = at(mesh.get(e.next).to);
+            let d = at(mesh.get(mesh.get(e.twin).next).to);
+            0.375 * (a + b) + 0.125 * (c + d)
+        };
+        fine.push(p);
+    }
+    (topo, fine)
+}
+
+/// `levels` levels of Loop subdivision (the input is compacted first). The result's level
+/// reports are empty: there is no solve.
 pub fn subdivide_loop(
     mesh: &Mesh,
     levels: usize,
     progress: &dyn Progress,
-) -> Result<Mesh, SubdivError> {
-    let mut current = super::compact(mesh)?;
+) -> Result<Subdivision, SubdivError> {
+    let factor = (0..levels).fold(1usize, |f, _| f.saturating_mul(4));
+    super::check_output_size(mesh, levels, factor, usize::MAX)?;
+    let input = super::compact(mesh)?;
+    let mut positions = input.positions();
+    let mut triangles = input.to_triangles().1;
+    let mut connectivity = HalfedgeArrays::from_mesh(&input);
+    drop(input);
     let total: f64 = (1..=levels).map(|l| 4f64.powi(l as i32)).sum();
     let mut done = 0.0;
     for level in 1..=levels {
-        current = loop_step(&current).map_err(|e| match e {
-            SubdivError::NotManifold { .. } => SubdivError::NotManifold { level },
-            e => e,
-        })?;
+        let (topo, fine) = loop_level(&connectivity, &positions);
+        // The last level's half-edges are never read: the output is its triangles.
+        if level < levels {
+            connectivity = quadrisect_connectivity(&connectivity, &topo);
+        }
+        positions = fine;
+        triangles = topo.triangles;
         done += 4f64.powi(level as i32);
         progress.update(done / total);
     }
-    Ok(current)
+    Ok(Subdivision {
+        positions,
+        triangles,
+        levels: Vec::new(),
+    })
 }
 
 #[cfg(test)]

@@ -16,6 +16,7 @@
 
 pub mod cascadic;
 pub mod fem;
+mod halfedge_arrays;
 pub mod loop_scheme;
 pub mod mcm_relax;
 pub mod refine;
@@ -27,6 +28,7 @@ pub use refine::{Marking, Prolongation, Refined};
 
 use crate::mesh::Mesh;
 use crate::progress::Progress;
+use glam::DVec3;
 
 /// Which subdivision rule computes the new positions.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -145,10 +147,28 @@ pub fn default_beta(solver: Solver, refinement: Refinement) -> f64 {
 /// The result of [`subdivide`].
 #[derive(Clone, Debug)]
 pub struct Subdivision {
-    /// The refined mesh: input vertices first (in slot order), new vertices after.
-    pub mesh: Mesh,
-    /// One entry per level (solver steps and residuals; empty statistics for Loop).
+    /// Vertex positions of the refined mesh: the input's vertices first (in slot order), then
+    /// the new vertices, level by level (one per edge of the level before, in
+    /// [`Mesh::edges`] order, for quadrisection).
+    pub positions: Vec<DVec3>,
+    /// Triangles of the refined mesh, indexing `positions`.
+    pub triangles: Vec<[u32; 3]>,
+    /// One entry per level (solver steps and residuals; empty for Loop).
     pub levels: Vec<LevelReport>,
+}
+
+impl Subdivision {
+    /// The refined surface as a half-edge [`Mesh`] (vertex and face slots in the order of
+    /// `positions` and `triangles`).
+    ///
+    /// Built on request because the result itself is flat: at a million vertices the
+    /// half-edge mesh takes about 400 MB, which callers that only write or measure the
+    /// surface do not need. Fails with [`SubdivError::NotManifold`] when the triangles are
+    /// not a manifold the builder takes without repair, which happens only for degenerate
+    /// inputs: a two-triangle "pillow" refines into triangles with four faces on an edge.
+    pub fn mesh(&self) -> Result<Mesh, SubdivError> {
+        refine::build(&self.positions, &self.triangles, self.levels.len())
+    }
 }
 
 /// Why a subdivision could not run.
@@ -273,22 +293,40 @@ pub fn subdivide(
     if mesh.n_faces() == 0 {
         return Err(SubdivError::NoFaces);
     }
-    let faces = mesh.n_faces().saturating_mul(options.face_factor());
-    if faces > options.max_output_faces {
-        return Err(SubdivError::TooLarge {
-            levels: options.levels,
-            faces,
-            limit: options.max_output_faces,
-        });
-    }
+    check_output_size(
+        mesh,
+        options.levels,
+        options.face_factor(),
+        options.max_output_faces,
+    )?;
     match options.scheme {
-        Scheme::Loop => {
-            let mesh = subdivide_loop(mesh, options.levels, progress)?;
-            let levels = Vec::new();
-            Ok(Subdivision { mesh, levels })
-        }
+        Scheme::Loop => subdivide_loop(mesh, options.levels, progress),
         Scheme::Mcm => subdivide_mcm(mesh, options, progress),
     }
+}
+
+/// Faces beyond which refinement's `u32` element indices could overflow (a quadrisection
+/// level makes up to 8 half-edges per coarse face). No memory this side of 100 GB reaches it.
+const INDEX_FACE_LIMIT: usize = (u32::MAX / 8) as usize;
+
+/// [`SubdivError::TooLarge`] if `levels` levels multiplying the faces by `face_factor` would
+/// give more than `limit` faces (or more than the index range allows).
+pub(crate) fn check_output_size(
+    mesh: &Mesh,
+    levels: usize,
+    face_factor: usize,
+    limit: usize,
+) -> Result<(), SubdivError> {
+    let limit = limit.min(INDEX_FACE_LIMIT);
+    let faces = mesh.n_faces().saturating_mul(face_factor);
+    if faces > limit {
+        return Err(SubdivError::TooLarge {
+            levels,
+            faces,
+            limit,
+        });
+    }
+    Ok(())
 }
 
 /// The mesh with its vertex and face slots made dense (`0..n` in slot order). Returns the

@@ -7,11 +7,10 @@
 //! [`subdivide`](super::subdivide) guarantees); their outputs are dense again.
 
 use super::SubdivError;
-use crate::mesh::{HalfedgeId, Mesh, SlotIndex, VertexId};
+use super::halfedge_arrays::{Halfedge, HalfedgeArrays, NONE};
+use crate::mesh::{Mesh, SlotIndex, VertexId};
 use glam::DVec3;
 use std::ops::{Add, Mul};
-
-const NONE: u32 = u32::MAX;
 
 /// Trivial interpolation from a coarse to a refined mesh: fine vertex `i` takes
 /// `(f[a] + f[b]) / 2` with `[a, b] = parents()[i]` (`a == b` for a copied coarse vertex).
@@ -76,45 +75,35 @@ impl Marking {
 }
 
 /// Connectivity of a quadrisection, shared by [`quadrisect`] and Loop's scheme: fine vertex
-/// `i < coarse.len()` is coarse vertex `coarse[i]`; fine vertex `coarse.len() + k` is the
-/// midpoint of edge `edges[k]`.
+/// `i < n_coarse` is coarse vertex `i`; fine vertex `n_coarse + k` is the midpoint of the edge
+/// of coarse half-edge `edges[k]`.
 pub(crate) struct QuadTopology {
-    pub coarse: Vec<VertexId>,
-    pub edges: Vec<HalfedgeId>,
+    pub n_coarse: usize,
+    pub edges: Vec<u32>,
     pub triangles: Vec<[u32; 3]>,
-    pub parents: Vec<[u32; 2]>,
-    /// Fine midpoint vertex of every coarse half-edge, by half-edge slot.
+    /// Fine midpoint vertex of every coarse half-edge.
     pub mid: Vec<u32>,
-    /// Dense index of every coarse vertex, by slot.
-    pub dense: Vec<u32>,
 }
 
-pub(crate) fn quad_topology(mesh: &Mesh) -> QuadTopology {
-    let coarse: Vec<VertexId> = mesh.vertices().collect();
-    let nv = coarse.len();
-    let mut dense = vec![NONE; slot_bound(coarse.iter().map(|v| v.slot()))];
-    for (i, v) in coarse.iter().enumerate() {
-        dense[v.slot()] = i as u32;
-    }
+pub(crate) fn quad_topology(mesh: &HalfedgeArrays) -> (QuadTopology, Prolongation) {
+    let nv = mesh.n_vertices();
     let mut parents: Vec<[u32; 2]> = (0..nv as u32).map(|i| [i, i]).collect();
-    let mut mid = vec![NONE; slot_bound(mesh.halfedges().map(|h| h.slot()))];
-    let mut edges = Vec::with_capacity(mesh.n_edges());
+    let mut mid = vec![NONE; mesh.halfedges.len()];
+    let mut edges = Vec::with_capacity(mesh.halfedges.len() / 2);
+    parents.reserve(mesh.halfedges.len() / 2);
     for h in mesh.edges() {
         let k = (nv + edges.len()) as u32;
-        mid[h.slot()] = k;
-        mid[mesh.twin(h).slot()] = k;
-        parents.push([
-            dense[mesh.from_vertex(h).slot()],
-            dense[mesh.to_vertex(h).slot()],
-        ]);
+        let e = mesh.get(h);
+        mid[h as usize] = k;
+        mid[e.twin as usize] = k;
+        parents.push([mesh.get(e.twin).to, e.to]);
         edges.push(h);
     }
     let mut triangles = Vec::with_capacity(4 * mesh.n_faces());
-    for f in mesh.faces() {
+    for t in 0..mesh.n_faces() {
         // face_halfedges = [v0→v1, v1→v2, v2→v0].
-        let [h0, h1, h2] = mesh.face_halfedges(f);
-        let [v0, v1, v2] = mesh.face_vertices(f).map(|v| dense[v.slot()]);
-        let (m01, m12, m20) = (mid[h0.slot()], mid[h1.slot()], mid[h2.slot()]);
+        let [v0, v1, v2] = mesh.face_vertices(t);
+        let [m01, m12, m20] = mesh.face_halfedges(t).map(|h| mid[h as usize]);
         triangles.extend_from_slice(&[
             [v0, m01, m20],
             [v1, m12, m01],
@@ -122,104 +111,67 @@ pub(crate) fn quad_topology(mesh: &Mesh) -> QuadTopology {
             [m01, m12, m20],
         ]);
     }
-    QuadTopology {
-        coarse,
+    let topo = QuadTopology {
+        n_coarse: nv,
         edges,
         triangles,
-        parents,
         mid,
-        dense,
-    }
+    };
+    (topo, Prolongation { parents })
 }
 
-/// Builds the quadrisected half-edge mesh directly by index arithmetic — no sorting, no
+/// The connectivity of the quadrisected mesh, by index arithmetic alone — no sorting, no
 /// hashing, no repair pass — which is what keeps refinement linear and cache friendly on
-/// large levels. Needs dense half-edge, face and vertex slots (fresh meshes have them).
+/// large levels.
 ///
-/// Layout: coarse half-edge slot `s` becomes fine half-edges `2s` (from its origin to the
+/// Layout: coarse half-edge `s` becomes fine half-edges `2s` (from its origin to the
 /// midpoint) and `2s+1` (midpoint to its head); coarse face `t` adds six interior half-edges
 /// at `2·nh + 6t ..` and fine faces `4t..4t+4` in the order of `topo.triangles`.
-pub(crate) fn build_quadrisection(
-    mesh: &Mesh,
+pub(crate) fn quadrisect_connectivity(
+    mesh: &HalfedgeArrays,
     topo: &QuadTopology,
-    positions: &[DVec3],
-) -> Result<Mesh, SubdivError> {
-    use crate::mesh::halfedge::{FaceRecord, HalfedgeRecord, VertexRecord};
-    let nh = mesh.n_halfedges();
+) -> HalfedgeArrays {
+    let nh = mesh.halfedges.len() as u32;
     let nf = mesh.n_faces();
-    let dense_slots = mesh.halfedges().enumerate().all(|(i, h)| h.slot() == i)
-        && mesh.faces().enumerate().all(|(i, f)| f.slot() == i);
-    if !dense_slots {
-        return build(positions, &topo.triangles, 1);
-    }
-    let mut fine = Mesh::new();
-    fine.vertices.reserve(positions.len());
-    let vids: Vec<VertexId> = positions
-        .iter()
-        .map(|&p| {
-            fine.vertices.insert(VertexRecord {
-                halfedge: None,
-                position: p,
-            })
-        })
-        .collect();
-    let n_fine_h = 2 * nh + 6 * nf;
-    fine.halfedges.reserve(n_fine_h);
-    let null = HalfedgeId::default();
-    let placeholder = HalfedgeRecord {
-        to: VertexId::default(),
-        next: null,
-        prev: null,
-        twin: null,
-        face: None,
+    let unset = Halfedge {
+        to: NONE,
+        twin: NONE,
+        next: NONE,
+        prev: NONE,
+        face: NONE,
     };
-    let hid: Vec<HalfedgeId> = (0..n_fine_h)
-        .map(|_| fine.halfedges.insert(placeholder.clone()))
-        .collect();
-    fine.faces.reserve(4 * nf);
-    let fid: Vec<_> = (0..4 * nf)
-        .map(|_| fine.faces.insert(FaceRecord { halfedge: null }))
-        .collect();
-    let first = |h: HalfedgeId| 2 * h.slot();
-    let second = |h: HalfedgeId| 2 * h.slot() + 1;
+    let mut he = vec![unset; 2 * nh as usize + 6 * nf];
+    let first = |h: u32| 2 * h;
+    let second = |h: u32| 2 * h + 1;
     // Split coarse half-edges: targets and twins; boundary ones also get their loop links.
-    for h in mesh.halfedges() {
-        let t = mesh.twin(h);
-        let m = vids[topo.mid[h.slot()] as usize];
-        let head = vids[topo.dense[mesh.to_vertex(h).slot()] as usize];
-        {
-            let r = &mut fine.halfedges[hid[first(h)]];
-            r.to = m;
-            r.twin = hid[second(t)];
-        }
-        {
-            let r = &mut fine.halfedges[hid[second(h)]];
-            r.to = head;
-            r.twin = hid[first(t)];
-        }
-        if mesh.is_boundary_halfedge(h) {
-            let (n, p) = (mesh.next(h), mesh.prev(h));
-            let r = &mut fine.halfedges[hid[first(h)]];
-            r.next = hid[second(h)];
-            r.prev = hid[second(p)];
-            let r = &mut fine.halfedges[hid[second(h)]];
-            r.next = hid[first(n)];
-            r.prev = hid[first(h)];
+    for (s, e) in (0..nh).zip(&mesh.halfedges) {
+        he[first(s) as usize].to = topo.mid[s as usize];
+        he[first(s) as usize].twin = second(e.twin);
+        he[second(s) as usize].to = e.to;
+        he[second(s) as usize].twin = first(e.twin);
+        if e.face == NONE {
+            let r = &mut he[first(s) as usize];
+            r.next = second(s);
+            r.prev = second(e.prev);
+            let r = &mut he[second(s) as usize];
+            r.next = first(e.next);
+            r.prev = first(s);
         }
     }
-    for (t, f) in mesh.faces().enumerate() {
-        let [h0, h1, h2] = mesh.face_halfedges(f);
-        let [m01, m12, m20] = [h0, h1, h2].map(|h| vids[topo.mid[h.slot()] as usize]);
-        let base = 2 * nh + 6 * t;
+    let mut face_halfedge = vec![NONE; 4 * nf];
+    for t in 0..nf {
+        let [h0, h1, h2] = mesh.face_halfedges(t);
+        let [m01, m12, m20] = [h0, h1, h2].map(|h| topo.mid[h as usize]);
+        let base = 2 * nh + 6 * t as u32;
         // Inner half-edges: I0 m01→m20, I1 m12→m01, I2 m20→m12 and their twins
         // C0 m20→m01, C1 m01→m12, C2 m12→m20 (the centre face).
         let (i0, i1, i2, c0, c1, c2) = (base, base + 1, base + 2, base + 3, base + 4, base + 5);
         let tos = [m20, m01, m12, m01, m12, m20];
         let twins = [c0, c1, c2, i0, i1, i2];
         for k in 0..6 {
-            let r = &mut fine.halfedges[hid[base + k]];
-            r.to = tos[k];
-            r.twin = hid[twins[k]];
+            let r = &mut he[(base + k) as usize];
+            r.to = tos[k as usize];
+            r.twin = twins[k as usize];
         }
         // Faces: corner v0 (first h0, I0, second h2), corner v1 (first h1, I1, second h0),
         // corner v2 (first h2, I2, second h1), centre (C1, C2, C0).
@@ -230,29 +182,33 @@ pub(crate) fn build_quadrisection(
             [c1, c2, c0],
         ];
         for (k, cycle) in cycles.iter().enumerate() {
-            let face = fid[4 * t + k];
-            fine.faces[face].halfedge = hid[cycle[0]];
+            let face = 4 * t + k;
+            face_halfedge[face] = cycle[0];
             for j in 0..3 {
-                let r = &mut fine.halfedges[hid[cycle[j]]];
-                r.next = hid[cycle[(j + 1) % 3]];
-                r.prev = hid[cycle[(j + 2) % 3]];
-                r.face = Some(face);
+                let r = &mut he[cycle[j] as usize];
+                r.next = cycle[(j + 1) % 3];
+                r.prev = cycle[(j + 2) % 3];
+                r.face = face as u32;
             }
         }
     }
     // Out-going half-edges: coarse vertices keep the first half of theirs (a boundary one
     // stays boundary); a midpoint takes the second half of a boundary side if there is one.
-    for (i, &v) in topo.coarse.iter().enumerate() {
-        if let Some(h) = mesh.vertex_halfedge(v) {
-            fine.vertices[vids[i]].halfedge = Some(hid[first(h)]);
-        }
+    let mut vertex_halfedge = Vec::with_capacity(topo.n_coarse + topo.edges.len());
+    vertex_halfedge.extend(
+        mesh.vertex_halfedge
+            .iter()
+            .map(|&h| if h == NONE { NONE } else { first(h) }),
+    );
+    vertex_halfedge.extend(topo.edges.iter().map(|&h| {
+        let t = mesh.get(h).twin;
+        second(if mesh.is_boundary(t) { t } else { h })
+    }));
+    HalfedgeArrays {
+        halfedges: he,
+        face_halfedge,
+        vertex_halfedge,
     }
-    for (e, &h) in topo.edges.iter().enumerate() {
-        let t = mesh.twin(h);
-        let side = if mesh.is_boundary_halfedge(t) { t } else { h };
-        fine.vertices[vids[topo.coarse.len() + e]].halfedge = Some(hid[second(side)]);
-    }
-    Ok(fine)
 }
 
 /// The cotangent stiffness of a quadrisection, read off the coarse mesh instead of sorted out
@@ -263,26 +219,25 @@ pub(crate) fn build_quadrisection(
 ///
 /// Gives exactly [`cotangent_stiffness`](super::fem::cotangent_stiffness)'s matrix, bit for
 /// bit (an entry's two terms commute, the diagonal sums in column order as there). Returns
-/// `None` when the coarse mesh is not one the layout covers (non-dense slots, or two faces
-/// sharing more than one edge), and the caller falls back to the general assembly.
+/// `None` when the coarse mesh is not one the layout covers (two faces sharing more than one
+/// edge), and the caller falls back to the general assembly.
 pub(crate) fn quadrisection_stiffness(
-    mesh: &Mesh,
+    mesh: &HalfedgeArrays,
     topo: &QuadTopology,
     tri_weights: &[[f64; 4]],
 ) -> Option<super::fem::SymmetricCsr> {
-    let dense_slots = mesh.faces().enumerate().all(|(i, f)| f.slot() == i);
-    if !dense_slots || tri_weights.len() != 4 * mesh.n_faces() {
+    if tri_weights.len() != 4 * mesh.n_faces() {
         return None;
     }
     // Face index t and position k (h = u_k → u_{k+1}) of every face half-edge, as 3t + k.
-    let mut corner = vec![NONE; slot_bound(mesh.halfedges().map(|h| h.slot()))];
-    for (t, f) in mesh.faces().enumerate() {
-        for (k, h) in mesh.face_halfedges(f).into_iter().enumerate() {
-            corner[h.slot()] = (3 * t + k) as u32;
+    let mut corner = vec![NONE; mesh.halfedges.len()];
+    for t in 0..mesh.n_faces() {
+        for (k, h) in mesh.face_halfedges(t).into_iter().enumerate() {
+            corner[h as usize] = (3 * t + k) as u32;
         }
     }
     let w = |tri: usize, j: usize| tri_weights[tri][j];
-    let nv = topo.coarse.len();
+    let nv = topo.n_coarse;
     let n = nv + topo.edges.len();
     // The fine edge from coarse vertex u_k (or u_{k+1}) to the midpoint of side s = h_k of
     // face t: corner triangle 4t+k, edge (0,1), and corner triangle 4t+k+1, edge (2,0).
@@ -306,19 +261,19 @@ pub(crate) fn quadrisection_stiffness(
         if i < nv {
             // A coarse vertex: one fine edge to the midpoint of each coarse edge around it;
             // it is the origin of each out-going h and the head of its twin.
-            for h in mesh.outgoing(topo.coarse[i]) {
-                let (own, twin) = (corner[h.slot()], corner[mesh.twin(h).slot()]);
-                ring.push((topo.mid[h.slot()], sum(at_origin(own), at_head(twin))));
+            for h in mesh.outgoing(i as u32) {
+                let (own, twin) = (corner[h as usize], corner[mesh.get(h).twin as usize]);
+                ring.push((topo.mid[h as usize], sum(at_origin(own), at_head(twin))));
             }
             return;
         }
         // A midpoint: the edge's two ends, and the two other midpoints of each adjacent face.
         let h = topo.edges[i - nv];
-        let g = mesh.twin(h);
-        let (own, twin) = (corner[h.slot()], corner[g.slot()]);
+        let e = mesh.get(h);
+        let g = e.twin;
+        let (own, twin) = (corner[h as usize], corner[g as usize]);
         // a is the origin of h and the head of g; b the reverse.
-        let a = topo.dense[mesh.from_vertex(h).slot()];
-        let b = topo.dense[mesh.to_vertex(h).slot()];
+        let (a, b) = (mesh.get(g).to, e.to);
         ring.push((a, sum(at_origin(own), at_head(twin))));
         ring.push((b, sum(at_head(own), at_origin(twin))));
         for (side, c) in [(h, own), (g, twin)] {
@@ -331,57 +286,79 @@ pub(crate) fn quadrisection_stiffness(
             // edge k+2.
             let next = w(4 * t + (k + 1) % 3, 1) + w(4 * t + 3, k);
             let prev = w(4 * t + k, 1) + w(4 * t + 3, (k + 2) % 3);
-            ring.push((topo.mid[mesh.next(side).slot()], next));
-            ring.push((topo.mid[mesh.prev(side).slot()], prev));
+            let s = mesh.get(side);
+            ring.push((topo.mid[s.next as usize], next));
+            ring.push((topo.mid[s.prev as usize], prev));
         }
     };
-    // Rows `rows` as (row lengths, columns, values); `None` on a repeated column.
-    let build = |rows: std::ops::Range<usize>| {
-        let mut len = Vec::with_capacity(rows.len());
-        let mut col = Vec::with_capacity(7 * rows.len());
-        let mut val = Vec::with_capacity(7 * rows.len());
+    // A row's length is known before its entries: a coarse vertex has one neighbour per
+    // out-going half-edge, a midpoint its two ends and two midpoints per adjacent face. So
+    // the rows go straight into the final arrays, with no per-chunk pieces to copy (at a
+    // million rows those copies were a sixth of the page faults of a whole subdivision).
+    let row_len = |i: usize| -> u32 {
+        if i < nv {
+            1 + mesh.outgoing(i as u32).count() as u32
+        } else {
+            let e = mesh.get(topo.edges[i - nv]);
+            let faces = u32::from(e.face != NONE) + u32::from(!mesh.is_boundary(e.twin));
+            3 + 2 * faces
+        }
+    };
+    const CHUNK: usize = 4096;
+    let parallel = n >= 2 * CHUNK;
+    use rayon::prelude::*;
+    let lens: Vec<u32> = if parallel {
+        (0..n).into_par_iter().map(row_len).collect()
+    } else {
+        (0..n).map(row_len).collect()
+    };
+    let mut row_start = Vec::with_capacity(n + 1);
+    row_start.push(0u32);
+    let mut at = 0u32;
+    for l in lens {
+        at = at.checked_add(l)?;
+        row_start.push(at);
+    }
+    let mut col = vec![0u32; at as usize];
+    let mut val = vec![0.0f64; at as usize];
+    // Rows `rows` into `col`/`val`, which start at the first row's entries; `None` on a
+    // repeated column.
+    let fill = |rows: std::ops::Range<usize>, col: &mut [u32], val: &mut [f64]| {
         let mut ring: Vec<(u32, f64)> = Vec::with_capacity(16);
+        let mut at = 0;
         for i in rows {
             ring_of(i, &mut ring);
             ring.sort_unstable_by_key(|e| e.0);
             if ring.windows(2).any(|p| p[0].0 == p[1].0) {
                 return None;
             }
-            col.push(i as u32);
-            val.push(ring.iter().map(|e| e.1).fold(0.0, |d, x| d + x));
-            for &(c, x) in &ring {
-                col.push(c);
-                val.push(-x);
+            col[at] = i as u32;
+            val[at] = ring.iter().map(|e| e.1).fold(0.0, |d, x| d + x);
+            for (k, &(c, x)) in ring.iter().enumerate() {
+                col[at + 1 + k] = c;
+                val[at + 1 + k] = -x;
             }
-            len.push(1 + ring.len() as u32);
+            at += 1 + ring.len();
         }
-        Some((len, col, val))
+        debug_assert_eq!(at, col.len());
+        Some(())
     };
-    const CHUNK: usize = 4096;
-    let pieces: Option<Vec<_>> = if n < 2 * CHUNK {
-        vec![build(0..n)].into_iter().collect()
-    } else {
-        use rayon::prelude::*;
-        (0..n.div_ceil(CHUNK))
+    if parallel {
+        let mut chunks = Vec::with_capacity(n.div_ceil(CHUNK));
+        let (mut col_rest, mut val_rest) = (&mut col[..], &mut val[..]);
+        for first in (0..n).step_by(CHUNK) {
+            let rows = first..(first + CHUNK).min(n);
+            let len = (row_start[rows.end] - row_start[rows.start]) as usize;
+            let (c, c_rest) = std::mem::take(&mut col_rest).split_at_mut(len);
+            let (v, v_rest) = std::mem::take(&mut val_rest).split_at_mut(len);
+            (col_rest, val_rest) = (c_rest, v_rest);
+            chunks.push((rows, c, v));
+        }
+        chunks
             .into_par_iter()
-            .map(|k| build(k * CHUNK..((k + 1) * CHUNK).min(n)))
-            .collect()
-    };
-    let pieces = pieces?;
-    let mut row_start = Vec::with_capacity(n + 1);
-    row_start.push(0u32);
-    let mut at = 0u32;
-    for (len, _, _) in &pieces {
-        for &l in len {
-            at += l;
-            row_start.push(at);
-        }
-    }
-    let mut col = Vec::with_capacity(at as usize);
-    let mut val = Vec::with_capacity(at as usize);
-    for (_, c, v) in pieces {
-        col.extend_from_slice(&c);
-        val.extend_from_slice(&v);
+            .try_for_each(|(rows, c, v)| fill(rows, c, v))?;
+    } else {
+        fill(0..n, &mut col, &mut val)?;
     }
     Some(super::fem::SymmetricCsr {
         row_start,
@@ -410,28 +387,29 @@ pub(crate) fn build(
 }
 
 /// 1-to-4 quadrisection: every triangle splits into three corner triangles and the midpoint
-/// triangle; new vertices sit at the edge midpoints.
+/// triangle; new vertices sit at the edge midpoints. Meshes with deleted elements work
+/// (elements are numbered by slot order).
 pub fn quadrisect(mesh: &Mesh) -> Result<Refined, SubdivError> {
-    let (topo, prolongation, positions) = quadrisection_parts(mesh);
-    let mesh = build_quadrisection(mesh, &topo, &positions)?;
+    let coarse = HalfedgeArrays::from_mesh(mesh);
+    let (topo, prolongation, positions) = quadrisection_parts(&coarse, &mesh.positions());
+    let fine = quadrisect_connectivity(&coarse, &topo);
     Ok(Refined {
-        mesh,
+        mesh: fine.to_mesh(&positions),
         triangles: topo.triangles,
         prolongation,
     })
 }
 
-/// A quadrisection before its half-edge mesh exists: connectivity, prolongation and the
+/// A quadrisection before its connectivity exists: topology, prolongation and the
 /// interpolated positions. Flat arrays are all a finite-element solve on the new level needs,
-/// so [`subdivide_mcm`](super::cascadic::subdivide_mcm) builds the mesh
-/// ([`build_quadrisection`]) while it solves.
-pub(crate) fn quadrisection_parts(mesh: &Mesh) -> (QuadTopology, Prolongation, Vec<DVec3>) {
-    let topo = quad_topology(mesh);
-    let coarse_pos: Vec<DVec3> = topo.coarse.iter().map(|&v| mesh.position(v)).collect();
-    let prolongation = Prolongation {
-        parents: topo.parents.clone(),
-    };
-    let positions = prolongation.apply(&coarse_pos);
+/// so [`subdivide_mcm`](super::cascadic::subdivide_mcm) builds the next level's connectivity
+/// ([`quadrisect_connectivity`]) while it solves, and not at all on the last level.
+pub(crate) fn quadrisection_parts(
+    mesh: &HalfedgeArrays,
+    coarse_positions: &[DVec3],
+) -> (QuadTopology, Prolongation, Vec<DVec3>) {
+    let (topo, prolongation) = quad_topology(mesh);
+    let positions = prolongation.apply(coarse_positions);
     (topo, prolongation, positions)
 }
 
@@ -767,9 +745,11 @@ mod tests {
         let grid = Mesh::from_triangles(&p, &holed).unwrap().mesh;
         // Six octahedron levels reach 16k fine rows, past the size where rows split over
         // threads.
-        for (mut mesh, levels) in [(octahedron(), 6), (grid, 2)] {
+        for (mesh, levels) in [(octahedron(), 6), (grid, 2)] {
+            let mut coarse_positions = mesh.positions();
+            let mut mesh = HalfedgeArrays::from_mesh(&mesh);
             for _ in 0..levels {
-                let (topo, _, positions) = quadrisection_parts(&mesh);
+                let (topo, _, positions) = quadrisection_parts(&mesh, &coarse_positions);
                 let coef: Vec<f64> = (0..topo.triangles.len())
                     .map(|i| 0.5 + (i % 7) as f64)
                     .collect();
@@ -788,7 +768,15 @@ mod tests {
                         assert_eq!(bits(&fast.val), bits(&general.val));
                     }
                 }
-                mesh = build_quadrisection(&mesh, &topo, &positions).unwrap();
+                let fine = quadrisect_connectivity(&mesh, &topo);
+                // The arrays are the mesh the general builder makes of the same triangles.
+                let built = build(&positions, &topo.triangles, 1).unwrap();
+                assert_eq!(
+                    built.to_triangles(),
+                    fine.to_mesh(&positions).to_triangles()
+                );
+                assert!(fine.to_mesh(&positions).validate().is_ok());
+                (mesh, coarse_positions) = (fine, positions);
             }
         }
     }
