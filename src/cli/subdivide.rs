@@ -140,7 +140,7 @@ pub fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
             l.level, l.vertices, l.faces, l.steps, l.relative_residual
         ));
     }
-    let output = PolygonMesh::from_triangles(result.positions, &result.triangles);
+    let output = PolygonMesh::from_triangle_vec(result.positions, result.triangles);
     io::write_mesh(&args.output, &output)?;
     global.say(format_args!(
         "wrote {} ({} vertices, {} faces)",

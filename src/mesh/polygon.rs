@@ -222,6 +222,19 @@ impl PolygonMesh {
         m
     }
 
+    /// A mesh taking ownership of positions and triangles (no attributes): the triangle
+    /// array becomes the index array without a copy, which matters for the million-face
+    /// outputs of subdivision.
+    pub fn from_triangle_vec(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Self {
+        let face_starts = (0..=triangles.len()).map(|t| 3 * t as u32).collect();
+        PolygonMesh {
+            positions,
+            face_starts,
+            face_indices: triangles.into_flattened(),
+            ..Default::default()
+        }
+    }
+
     /// Number of vertices (including unreferenced ones).
     pub fn n_vertices(&self) -> usize {
         self.positions.len()
@@ -300,5 +313,22 @@ impl PolygonMesh {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn owned_and_borrowed_triangle_constructors_agree() {
+        let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
+        let t = vec![[0, 1, 2], [0, 3, 1], [1, 3, 2]];
+        let owned = PolygonMesh::from_triangle_vec(p.clone(), t.clone());
+        assert_eq!(owned, PolygonMesh::from_triangles(p.clone(), &t));
+        assert_eq!(owned.face(2), &[1, 3, 2]);
+        let empty = PolygonMesh::from_triangle_vec(p.clone(), Vec::new());
+        assert_eq!(empty, PolygonMesh::from_triangles(p, &[]));
+        assert_eq!(empty.n_faces(), 0);
     }
 }

@@ -197,14 +197,16 @@ fn column_dot<const K: usize>(a: &[[f64; K]], b: &[[f64; K]]) -> [f64; K] {
 
 /// ‖A x − b‖ / ‖b‖, largest over the columns (0 for a zero column of b with zero residual).
 pub fn relative_residual<const K: usize>(a: &SymmetricCsr, b: &[[f64; K]], x: &[[f64; K]]) -> f64 {
-    let mut r = vec![[0.0; K]; x.len()];
-    a.mul(x, &mut r);
-    for (ri, bi) in r.iter_mut().zip(b) {
+    // Row by row, without storing A x − b: at a million rows that vector's first touch cost
+    // more than the product. The sums run over the rows in order, as a dot product would.
+    let mut rr = [0.0; K];
+    for (i, bi) in b.iter().enumerate().take(x.len()) {
+        let ax = a.row_times(i, x);
         for k in 0..K {
-            ri[k] -= bi[k];
+            let r = ax[k] - bi[k];
+            rr[k] += r * r;
         }
     }
-    let rr = column_dot(&r, &r);
     let bb = column_dot(b, b);
     (0..K)
         .map(|k| {
@@ -347,14 +349,14 @@ pub fn subdivide_mcm(
             let m_l = steps[level - 1];
             // The level's solve needs only flat arrays: triangles, prolongation and positions.
             let mut solve_level = |triangles: &[[u32; 3]],
-                                   positions: &[DVec3],
+                                   mut positions: Vec<DVec3>,
                                    prolongation: &Prolongation,
                                    quad: Option<(&HalfedgeArrays, &QuadTopology)>|
              -> Result<(usize, f64, Vec<DVec3>), String> {
                 x0 = prolongation.apply(&x0);
                 // Mass and stiffness from one pass over the triangles; a quadrisection reads its
                 // sparsity off the coarse mesh (the same bits as the general assembly).
-                let mass_and_stiffness = |coef: Option<&[f64]>| {
+                let mass_and_stiffness = |positions: &[DVec3], coef: Option<&[f64]>| {
                     let tri_weights = triangle_weights(triangles, positions, coef);
                     let mass = mass_of(triangles, &tri_weights, positions.len());
                     let stiffness = quad
@@ -374,7 +376,7 @@ pub fn subdivide_mcm(
                         .iter()
                         .map(|t| t.iter().map(|&v| alpha_v[v as usize]).sum::<f64>() / 3.0)
                         .collect();
-                    let (mass, stiffness) = mass_and_stiffness(Some(&coef));
+                    let (mass, stiffness) = mass_and_stiffness(&positions, Some(&coef));
                     let pinned = identity_rows(&mass);
                     let a = system_matrix(&mass, stiffness, 1.0);
                     let b: Vec<[f64; 4]> = (0..positions.len())
@@ -398,17 +400,15 @@ pub fn subdivide_mcm(
                         x.iter().map(|v| DVec3::new(v[0], v[1], v[2])).collect(),
                     ))
                 } else {
-                    let (mass, stiffness) = mass_and_stiffness(None);
+                    let (mass, stiffness) = mass_and_stiffness(&positions, None);
                     let a = system_matrix(&mass, stiffness, alpha);
                     let b = mass_rhs(&mass, &x0);
-                    let mut x: Vec<[f64; 3]> = positions.iter().map(|p| p.to_array()).collect();
-                    let taken = run_solver(options, &a, &b, &mut x, m_l)?;
-                    let residual = relative_residual(&a, &b, &x);
-                    Ok((
-                        taken,
-                        residual,
-                        x.iter().map(|&v| DVec3::from_array(v)).collect(),
-                    ))
+                    // Solved in place: the prolonged positions are the start, and the
+                    // solution is the level's positions (a DVec3 is three f64).
+                    let x: &mut [[f64; 3]] = bytemuck::cast_slice_mut(&mut positions);
+                    let taken = run_solver(options, &a, &b, x, m_l)?;
+                    let residual = relative_residual(&a, &b, x);
+                    Ok((taken, residual, positions))
                 }
             };
             let last = level == options.levels;
@@ -427,7 +427,7 @@ pub fn subdivide_mcm(
                         || {
                             solve_level(
                                 &topo.triangles,
-                                &fine_positions,
+                                fine_positions,
                                 &prolongation,
                                 Some((&coarse, &topo)),
                             )
@@ -440,7 +440,7 @@ pub fn subdivide_mcm(
                     let fine_positions = refined.mesh.positions();
                     let solution = solve_level(
                         &refined.triangles,
-                        &fine_positions,
+                        fine_positions,
                         &refined.prolongation,
                         None,
                     );

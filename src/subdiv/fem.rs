@@ -46,20 +46,26 @@ impl SymmetricCsr {
         self.val[self.row_start[i] as usize]
     }
 
+    /// Row `i` of `A x`, summed in column order.
+    #[inline]
+    pub fn row_times<const K: usize>(&self, i: usize, x: &[[f64; K]]) -> [f64; K] {
+        let (s, e) = (self.row_start[i] as usize, self.row_start[i + 1] as usize);
+        let mut acc = [0.0; K];
+        for (&c, &v) in self.col[s..e].iter().zip(&self.val[s..e]) {
+            for (a, xc) in acc.iter_mut().zip(&x[c as usize]) {
+                *a += v * xc;
+            }
+        }
+        acc
+    }
+
     /// `y = A x` for `K` right-hand sides stored row-major.
     pub fn mul<const K: usize>(&self, x: &[[f64; K]], y: &mut [[f64; K]]) {
         // Rows are independent and each is summed in column order, so splitting the rows
         // over threads gives the same bits as one thread.
         let rows = |first: usize, y: &mut [[f64; K]]| {
             for (i, yi) in (first..).zip(y.iter_mut()) {
-                let (s, e) = (self.row_start[i] as usize, self.row_start[i + 1] as usize);
-                let mut acc = [0.0; K];
-                for (&c, &v) in self.col[s..e].iter().zip(&self.val[s..e]) {
-                    for (a, xc) in acc.iter_mut().zip(&x[c as usize]) {
-                        *a += v * xc;
-                    }
-                }
-                *yi = acc;
+                *yi = self.row_times(i, x);
             }
         };
         if y.len() < PARALLEL_ROWS {
