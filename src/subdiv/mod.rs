@@ -4,6 +4,7 @@
 //! One algorithm per file:
 //! - [`refine`]: 1-to-4 quadrisection and conforming newest-vertex bisection, each giving a new
 //!   [`Mesh`] plus the [`Prolongation`] (which coarse vertices every new vertex interpolates);
+//!   the level loops run quadrisection on flat half-edge arrays (`halfedge_arrays`) instead;
 //! - [`loop_scheme`]: Loop's scheme with the usual boundary rules;
 //! - [`fem`]: lumped mass and cotangent stiffness on the prolonged surface (flat CSR arrays);
 //! - [`cascadic`]: the level loop `(M + αL) x_k = M · I x_0` with damped Jacobi, CG or exact

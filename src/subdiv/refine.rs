@@ -3,8 +3,11 @@
 //! (dense order) and a [`Prolongation`] saying which coarse vertices every new vertex
 //! interpolates (trivial interpolation: copies and edge midpoints).
 //!
-//! Both functions expect a mesh with dense slots (fresh from the builder, as
-//! [`subdivide`](super::subdivide) guarantees); their outputs are dense again.
+//! [`bisect`] expects a mesh with dense slots (fresh from the builder, as
+//! [`subdivide`](super::subdivide) guarantees); [`quadrisect`] numbers any mesh's elements by
+//! slot order. Both outputs are dense. Inside [`subdivide`](super::subdivide), quadrisection
+//! levels work on flat half-edge arrays (`quadrisect_connectivity`) and never build a
+//! [`Mesh`].
 
 use super::SubdivError;
 use super::halfedge_arrays::{Halfedge, HalfedgeArrays, NONE};
