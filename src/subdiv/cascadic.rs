@@ -32,8 +32,8 @@ use super::fem::{
 };
 use super::halfedge_arrays::HalfedgeArrays;
 use super::refine::{
-    Marking, Prolongation, QuadTopology, bisect, initial_marking, quadrisect_connectivity,
-    quadrisection_parts, quadrisection_stiffness,
+    BisectionLevel, Prolongation, QuadTopology, bisect_level, initial_marking,
+    quadrisect_connectivity, quadrisection_parts, quadrisection_stiffness,
 };
 use super::{Refinement, Solver, SubdivError, SubdivOptions, Subdivision, compact, default_beta};
 use crate::mesh::{Mesh, SlotIndex};
@@ -319,7 +319,10 @@ pub fn subdivide_mcm(
     let mut triangles = input.to_triangles().1;
     let mut connectivity = Some(match options.refinement {
         Refinement::Quadrisection => Connectivity::Quad(HalfedgeArrays::from_mesh(&input)),
-        Refinement::Bisection => Connectivity::Bisect(initial_marking(&input)?, input),
+        Refinement::Bisection => Connectivity::Bisect(BisectionLevel::from_mesh(
+            &input,
+            &initial_marking(&input)?,
+        )?),
     });
     let beta = options
         .beta
@@ -416,7 +419,7 @@ pub fn subdivide_mcm(
             let Some(current) = connectivity.take() else {
                 break;
             };
-            let (next, fine_triangles, solution) = match current {
+            let (next, fine_triangles, faces, solution) = match current {
                 Connectivity::Quad(coarse) => {
                     let (topo, prolongation, fine_positions) =
                         quadrisection_parts(&coarse, &positions);
@@ -433,19 +436,24 @@ pub fn subdivide_mcm(
                             )
                         },
                     );
-                    (fine.map(Connectivity::Quad), topo.triangles, solution)
+                    let faces = topo.triangles.len();
+                    (
+                        fine.map(Connectivity::Quad),
+                        Some(topo.triangles),
+                        faces,
+                        solution,
+                    )
                 }
-                Connectivity::Bisect(marking, mesh) => {
-                    let (refined, next) = bisect(&mesh, &marking).map_err(with_level)?;
-                    let fine_positions = refined.mesh.positions();
-                    let solution = solve_level(
-                        &refined.triangles,
-                        fine_positions,
-                        &refined.prolongation,
-                        None,
-                    );
-                    let next = Connectivity::Bisect(next, refined.mesh);
-                    (Some(next), refined.triangles, solution)
+                Connectivity::Bisect(coarse) => {
+                    let (fine, prolongation) =
+                        bisect_level(&coarse, positions.len()).map_err(with_level)?;
+                    drop(coarse);
+                    let fine_positions = prolongation.apply(&positions);
+                    let solution =
+                        solve_level(&fine.triangles, fine_positions, &prolongation, None);
+                    // The triangles stay with the level, which the next bisection reads.
+                    let faces = fine.triangles.len();
+                    (Some(Connectivity::Bisect(fine)), None, faces, solution)
                 }
             };
             let fail = |why: String| SubdivError::SolverFailed { level, why };
@@ -453,23 +461,15 @@ pub fn subdivide_mcm(
             if solved.iter().any(|p| !p.is_finite()) {
                 return Err(fail("non-finite positions".to_string()));
             }
-            // A bisection's mesh is dense (fresh from refinement), so slot order is the
-            // solver's row order; the next bisection reads its positions.
-            connectivity = next.map(|c| match c {
-                Connectivity::Bisect(marking, mut mesh) => {
-                    for (record, &p) in mesh.vertices.values_mut().zip(&solved) {
-                        record.position = p;
-                    }
-                    Connectivity::Bisect(marking, mesh)
-                }
-                quad => quad,
-            });
+            connectivity = next;
             positions = solved;
-            triangles = fine_triangles;
+            if let Some(fine) = fine_triangles {
+                triangles = fine;
+            }
             reports.push(LevelReport {
                 level,
                 vertices: positions.len(),
-                faces: triangles.len(),
+                faces,
                 steps: taken,
                 relative_residual: residual,
             });
@@ -478,6 +478,9 @@ pub fn subdivide_mcm(
         }
         Ok(())
     })?;
+    if let Some(Connectivity::Bisect(level)) = connectivity {
+        triangles = level.triangles;
+    }
     Ok(Subdivision {
         positions,
         triangles,
@@ -489,8 +492,8 @@ pub fn subdivide_mcm(
 enum Connectivity {
     /// Quadrisection: the flat half-edge arrays.
     Quad(HalfedgeArrays),
-    /// Bisection: the marking and the slotmap mesh with the level's positions.
-    Bisect(Marking, Mesh),
+    /// Bisection: the faces, their neighbours across each edge and their newest vertices.
+    Bisect(BisectionLevel),
 }
 
 fn run_solver<const K: usize>(

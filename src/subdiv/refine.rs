@@ -11,7 +11,7 @@
 
 use super::SubdivError;
 use super::halfedge_arrays::{Halfedge, HalfedgeArrays, NONE};
-use crate::mesh::{Mesh, SlotIndex, VertexId};
+use crate::mesh::{Mesh, SlotIndex};
 use glam::DVec3;
 use std::ops::{Add, Mul};
 
@@ -635,79 +635,19 @@ impl Blossom {
 /// Fails with [`SubdivError::NoCompatibleMarking`] if the marking is not compatible (a
 /// refinement edge that is not the refinement edge of the face across it).
 pub fn bisect(mesh: &Mesh, marking: &Marking) -> Result<(Refined, Marking), SubdivError> {
-    let coarse: Vec<VertexId> = mesh.vertices().collect();
-    let nv = coarse.len();
-    let mut dense = vec![NONE; slot_bound(coarse.iter().map(|v| v.slot()))];
-    for (i, v) in coarse.iter().enumerate() {
-        dense[v.slot()] = i as u32;
-    }
-    let faces: Vec<_> = mesh.faces().collect();
-    if marking.newest.len() != faces.len() {
-        return Err(SubdivError::InvalidOption {
-            name: "marking",
-            why: format!(
-                "has {} entries for {} faces",
-                marking.newest.len(),
-                faces.len()
-            ),
-        });
-    }
-    let mut parents: Vec<[u32; 2]> = (0..nv as u32).map(|i| [i, i]).collect();
-    let mut mid = vec![NONE; slot_bound(mesh.halfedges().map(|h| h.slot()))];
-    let mut refinement_edge = Vec::with_capacity(faces.len());
-    for (t, &f) in faces.iter().enumerate() {
-        let k = marking.newest[t] as usize % 3;
-        let h = mesh.face_halfedges(f)[(k + 1) % 3];
-        refinement_edge.push(h);
-        if mid[h.slot()] == NONE {
-            let twin = mesh.twin(h);
-            let m = parents.len() as u32;
-            mid[h.slot()] = m;
-            mid[twin.slot()] = m;
-            parents.push([
-                dense[mesh.from_vertex(h).slot()],
-                dense[mesh.to_vertex(h).slot()],
-            ]);
-        }
-    }
-    // Conformity: the face across every refinement edge must refine the same edge.
-    for (t, &h) in refinement_edge.iter().enumerate() {
-        let twin = mesh.twin(h);
-        if let Some(g) = mesh.face(twin) {
-            let partner_ok = faces
-                .binary_search_by_key(&g.slot(), |f| f.slot())
-                .ok()
-                .is_some_and(|u| refinement_edge[u] == twin);
-            if !partner_ok {
-                return Err(SubdivError::NoCompatibleMarking { face: t });
-            }
-            // Both sides' new edges would join the midpoint to the same apex.
-            if mesh.to_vertex(mesh.next(h)) == mesh.to_vertex(mesh.next(twin)) {
-                return Err(SubdivError::FoldedPair { face: t });
-            }
-        }
-    }
-    let mut triangles = Vec::with_capacity(2 * faces.len());
-    for (t, &f) in faces.iter().enumerate() {
-        let k = marking.newest[t] as usize % 3;
-        let v = mesh.face_vertices(f).map(|v| dense[v.slot()]);
-        let (z0, z1, z2) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
-        let m = mid[refinement_edge[t].slot()];
-        triangles.push([m, z0, z1]);
-        triangles.push([m, z2, z0]);
-    }
-    let prolongation = Prolongation { parents };
-    let coarse_pos: Vec<DVec3> = coarse.iter().map(|&v| mesh.position(v)).collect();
-    let positions = prolongation.apply(&coarse_pos);
-    let fine = build(&positions, &triangles, 1)?;
+    let level = BisectionLevel::from_mesh(mesh, marking)?;
+    let (fine, prolongation) = bisect_level(&level, mesh.n_vertices())?;
+    let positions = prolongation.apply(&mesh.positions());
+    let built = build(&positions, &fine.triangles, 1)?;
     // Children's newest vertex is `m`, at local index 0 as emitted; find it in the built
     // face's own vertex order rather than relying on the builder keeping corner order.
-    let newest = fine
+    let newest = built
         .faces()
-        .zip(&triangles)
+        .zip(&fine.triangles)
         .map(|(f, tri)| {
             let m = tri[0] as usize;
-            fine.face_vertices(f)
+            built
+                .face_vertices(f)
                 .iter()
                 .position(|v| v.slot() == m)
                 .unwrap_or(0) as u8
@@ -715,12 +655,140 @@ pub fn bisect(mesh: &Mesh, marking: &Marking) -> Result<(Refined, Marking), Subd
         .collect();
     Ok((
         Refined {
-            mesh: fine,
-            triangles,
+            mesh: built,
+            triangles: fine.triangles,
             prolongation,
         },
         Marking { newest },
     ))
+}
+
+/// A bisection level in flat arrays, what [`bisect_level`] reads and writes instead of a
+/// half-edge mesh (building one per level took most of a bisection's time and memory).
+pub(crate) struct BisectionLevel {
+    /// The faces, vertex order as [`Mesh::face_vertices`].
+    pub triangles: Vec<[u32; 3]>,
+    /// For face `t` and its edge `j` (from corner `j` to corner `j + 1`): the face edge across
+    /// it as `3t' + j'`, [`NONE`] on a boundary.
+    pub across: Vec<[u32; 3]>,
+    /// The local index of each face's newest vertex.
+    pub newest: Vec<u8>,
+}
+
+impl BisectionLevel {
+    /// The level of `mesh` (elements numbered by slot order) with `marking`.
+    pub fn from_mesh(mesh: &Mesh, marking: &Marking) -> Result<Self, SubdivError> {
+        let a = HalfedgeArrays::from_mesh(mesh);
+        let nf = a.n_faces();
+        if marking.newest.len() != nf {
+            return Err(SubdivError::InvalidOption {
+                name: "marking",
+                why: format!("has {} entries for {} faces", marking.newest.len(), nf),
+            });
+        }
+        let mut corner = vec![NONE; a.halfedges.len()];
+        for t in 0..nf {
+            for (j, h) in a.face_halfedges(t).into_iter().enumerate() {
+                corner[h as usize] = (3 * t + j) as u32;
+            }
+        }
+        Ok(BisectionLevel {
+            triangles: (0..nf).map(|t| a.face_vertices(t)).collect(),
+            across: (0..nf)
+                .map(|t| a.face_halfedges(t).map(|h| corner[a.get(h).twin as usize]))
+                .collect(),
+            newest: marking.newest.iter().map(|k| k % 3).collect(),
+        })
+    }
+}
+
+/// One level of newest-vertex bisection on flat arrays (see [`bisect`]): the refined level,
+/// whose faces are `2t` = `(m, z0, z1)` and `2t + 1` = `(m, z2, z0)` for face `t` with newest
+/// vertex `z0`, and the prolongation from `n_vertices` coarse vertices. New vertices are
+/// numbered in face order, at the first face that refines their edge.
+pub(crate) fn bisect_level(
+    level: &BisectionLevel,
+    n_vertices: usize,
+) -> Result<(BisectionLevel, Prolongation), SubdivError> {
+    let BisectionLevel {
+        triangles,
+        across,
+        newest,
+    } = level;
+    let nf = triangles.len();
+    // The face edge opposite the newest vertex, as 3t + j.
+    let refinement = |t: usize| (3 * t + (newest[t] as usize + 1) % 3) as u32;
+    let mut parents: Vec<[u32; 2]> = (0..n_vertices as u32).map(|i| [i, i]).collect();
+    let mut mid = vec![NONE; 3 * nf];
+    for t in 0..nf {
+        let c = refinement(t);
+        if mid[c as usize] == NONE {
+            let m = parents.len() as u32;
+            mid[c as usize] = m;
+            let twin = across[t][c as usize % 3];
+            if twin != NONE {
+                mid[twin as usize] = m;
+            }
+            let (v, j) = (triangles[t], c as usize % 3);
+            parents.push([v[j], v[(j + 1) % 3]]);
+        }
+    }
+    // Conformity: the face across every refinement edge must refine the same edge.
+    for (t, across_t) in across.iter().enumerate() {
+        let c = refinement(t);
+        let twin = across_t[c as usize % 3];
+        if twin != NONE {
+            let u = twin as usize / 3;
+            if refinement(u) != twin {
+                return Err(SubdivError::NoCompatibleMarking { face: t });
+            }
+            // Both sides' new edges would join the midpoint to the same apex.
+            let apex = |t: usize, c: u32| triangles[t][(c as usize % 3 + 2) % 3];
+            if apex(t, c) == apex(u, twin) {
+                return Err(SubdivError::FoldedPair { face: t });
+            }
+        }
+    }
+    // The child edge that is coarse face edge e (not a refinement edge): face u's edge k_u
+    // (z0 → z1) is edge 1 of child 2u, its edge k_u + 2 (z2 → z0) edge 1 of child 2u + 1.
+    let child_edge = |e: u32| {
+        if e == NONE {
+            return NONE;
+        }
+        let u = e / 3;
+        if e % 3 == u32::from(newest[u as usize]) {
+            6 * u + 1
+        } else {
+            6 * u + 4
+        }
+    };
+    let mut fine = BisectionLevel {
+        triangles: Vec::with_capacity(2 * nf),
+        across: Vec::with_capacity(2 * nf),
+        newest: vec![0; 2 * nf],
+    };
+    for t in 0..nf {
+        let k = newest[t] as usize;
+        let v = triangles[t];
+        let (z0, z1, z2) = (v[k], v[(k + 1) % 3], v[(k + 2) % 3]);
+        let c = refinement(t);
+        let m = mid[c as usize];
+        fine.triangles.push([m, z0, z1]);
+        fine.triangles.push([m, z2, z0]);
+        // Child a = 2t: m → z0 (twin of b's z0 → m), z0 → z1 (coarse edge k), z1 → m (twin of
+        // the partner's second child's m → z1). Child b = 2t + 1: m → z2 (twin of the
+        // partner's first child's z2 → m), z2 → z0 (coarse edge k + 2), z0 → m.
+        let (a, b) = (6 * t as u32, 6 * t as u32 + 3);
+        let partner = across[t][c as usize % 3];
+        let (pa, pb) = match partner {
+            NONE => (NONE, NONE),
+            p => (6 * (p / 3) + 2, 6 * (p / 3) + 3),
+        };
+        fine.across.push([b + 2, child_edge(across[t][k]), pb]);
+        fine.across
+            .push([pa, child_edge(across[t][(k + 2) % 3]), a]);
+    }
+    Ok((fine, Prolongation { parents }))
 }
 
 #[cfg(test)]
@@ -851,6 +919,39 @@ mod tests {
             faces = r.mesh.n_faces();
             m = r.mesh;
             marking = next;
+        }
+    }
+
+    #[test]
+    fn flat_bisection_levels_are_the_levels_of_the_built_meshes() {
+        // Closed (octahedron) and open (a jittered grid with a hole, marked with boundary
+        // edges): after each flat level, the neighbours across every face edge are those of
+        // the half-edge mesh the builder makes of the same triangles, and the newest vertex is
+        // the one the mesh-based step finds.
+        let (p, t) = crate::mesh::shapes::grid(4, |i, j| {
+            DVec3::new(i as f64 + 0.1 * ((i * j) % 3) as f64, j as f64, 0.0)
+        });
+        let t: Vec<[u32; 3]> = t
+            .into_iter()
+            .enumerate()
+            .filter(|&(i, _)| i != 12 && i != 13)
+            .map(|(_, f)| f)
+            .collect();
+        let grid = Mesh::from_triangles(&p, &t).unwrap().mesh;
+        for mut mesh in [octahedron(), grid] {
+            let mut marking = initial_marking(&mesh).unwrap();
+            let mut level = BisectionLevel::from_mesh(&mesh, &marking).unwrap();
+            for _ in 0..5 {
+                let (fine, prolongation) = bisect_level(&level, mesh.n_vertices()).unwrap();
+                let (refined, next) = bisect(&mesh, &marking).unwrap();
+                assert_eq!(prolongation, refined.prolongation);
+                assert_eq!(fine.triangles, refined.triangles);
+                let built = BisectionLevel::from_mesh(&refined.mesh, &next).unwrap();
+                assert_eq!(fine.triangles, built.triangles);
+                assert_eq!(fine.across, built.across);
+                assert_eq!(fine.newest, built.newest);
+                (mesh, marking, level) = (refined.mesh, next, fine);
+            }
         }
     }
 
