@@ -65,6 +65,20 @@ pub struct HalfedgeRecord {
     pub face: Option<FaceId>,
 }
 
+impl HalfedgeRecord {
+    /// A record with null links, to be filled once the handles it links to exist.
+    pub(crate) fn unlinked() -> Self {
+        let null = HalfedgeId::default();
+        HalfedgeRecord {
+            to: VertexId::default(),
+            next: null,
+            prev: null,
+            twin: null,
+            face: None,
+        }
+    }
+}
+
 /// Per-face record.
 #[derive(Clone, Debug)]
 pub struct FaceRecord {

@@ -194,14 +194,7 @@ pub fn half_edge_collapse(mesh: &mut Mesh, h: HalfedgeId) -> CollapseTopology {
 }
 
 fn placeholder(mesh: &mut Mesh) -> HalfedgeId {
-    let null = HalfedgeId::default();
-    mesh.halfedges.insert(HalfedgeRecord {
-        to: VertexId::default(),
-        next: null,
-        prev: null,
-        twin: null,
-        face: None,
-    })
+    mesh.halfedges.insert(HalfedgeRecord::unlinked())
 }
 
 /// Re-inserts a vertex at `position` next to `survivor`, undoing the collapse described by

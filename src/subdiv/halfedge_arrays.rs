@@ -100,17 +100,8 @@ impl HalfedgeArrays {
                 })
             })
             .collect();
-        let null = HalfedgeId::default();
         let hid: Vec<HalfedgeId> = (0..self.halfedges.len())
-            .map(|_| {
-                mesh.halfedges.insert(HalfedgeRecord {
-                    to: VertexId::default(),
-                    next: null,
-                    prev: null,
-                    twin: null,
-                    face: None,
-                })
-            })
+            .map(|_| mesh.halfedges.insert(HalfedgeRecord::unlinked()))
             .collect();
         let fid: Vec<FaceId> = self
             .face_halfedge
