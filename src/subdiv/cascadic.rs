@@ -314,7 +314,8 @@ pub fn subdivide_mcm(
     let mut h_init = vertex_grid_size(&input);
     let mut h_cur = h_init.clone();
     // The current level: its positions and triangles, and the connectivity the next refinement
-    // reads (flat half-edge arrays for quadrisection, the slotmap mesh for bisection).
+    // reads (flat half-edge arrays for quadrisection; faces, neighbours and newest vertices for
+    // bisection, which keep the triangles themselves).
     let mut positions = x0.clone();
     let mut triangles = input.to_triangles().1;
     let mut connectivity = Some(match options.refinement {
