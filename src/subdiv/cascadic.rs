@@ -197,16 +197,9 @@ fn column_dot<const K: usize>(a: &[[f64; K]], b: &[[f64; K]]) -> [f64; K] {
 
 /// ‖A x − b‖ / ‖b‖, largest over the columns (0 for a zero column of b with zero residual).
 pub fn relative_residual<const K: usize>(a: &SymmetricCsr, b: &[[f64; K]], x: &[[f64; K]]) -> f64 {
-    // Row by row, without storing A x − b: at a million rows that vector's first touch cost
-    // more than the product. The sums run over the rows in order, as a dot product would.
-    let mut rr = [0.0; K];
-    for (i, bi) in b.iter().enumerate().take(x.len()) {
-        let ax = a.row_times(i, x);
-        for k in 0..K {
-            let r = ax[k] - bi[k];
-            rr[k] += r * r;
-        }
-    }
+    // Without storing A x − b: at a million rows that vector's first touch cost more than
+    // the product.
+    let rr = a.residual_squares(x, b);
     let bb = column_dot(b, b);
     (0..K)
         .map(|k| {

@@ -59,6 +59,41 @@ impl SymmetricCsr {
         acc
     }
 
+    /// `Σ_i ((A x)_i − b_i)²` per column, without storing the residual. Summed per block of
+    /// rows, then over the blocks in order, so the bits do not depend on the thread count.
+    pub fn residual_squares<const K: usize>(&self, x: &[[f64; K]], b: &[[f64; K]]) -> [f64; K] {
+        let block = |first: usize, b: &[[f64; K]]| {
+            let mut rr = [0.0; K];
+            for (i, bi) in (first..).zip(b) {
+                let ax = self.row_times(i, x);
+                for k in 0..K {
+                    let r = ax[k] - bi[k];
+                    rr[k] += r * r;
+                }
+            }
+            rr
+        };
+        let b = &b[..x.len().min(b.len())];
+        let sums: Vec<[f64; K]> = if b.len() < PARALLEL_ROWS {
+            b.chunks(ROW_CHUNK)
+                .enumerate()
+                .map(|(c, chunk)| block(c * ROW_CHUNK, chunk))
+                .collect()
+        } else {
+            use rayon::prelude::*;
+            b.par_chunks(ROW_CHUNK)
+                .enumerate()
+                .map(|(c, chunk)| block(c * ROW_CHUNK, chunk))
+                .collect()
+        };
+        sums.iter().fold([0.0; K], |mut acc, s| {
+            for k in 0..K {
+                acc[k] += s[k];
+            }
+            acc
+        })
+    }
+
     /// `y = A x` for `K` right-hand sides stored row-major.
     pub fn mul<const K: usize>(&self, x: &[[f64; K]], y: &mut [[f64; K]]) {
         // Rows are independent and each is summed in column order, so splitting the rows
@@ -420,6 +455,46 @@ pub fn mass_rhs(mass: &[f64], x: &[DVec3]) -> Vec<[f64; 3]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn residual_squares_match_the_stored_residual_on_any_thread_count() {
+        // A tridiagonal matrix with 20k rows, past the parallel threshold.
+        let n: usize = 20_000;
+        let mut a = SymmetricCsr {
+            row_start: vec![0],
+            col: Vec::new(),
+            val: Vec::new(),
+        };
+        for i in 0..n {
+            a.col.push(i as u32);
+            a.val.push(2.5 + (i % 7) as f64 * 0.1);
+            for j in [i.wrapping_sub(1), i + 1] {
+                if j < n {
+                    a.col.push(j as u32);
+                    a.val.push(-1.0);
+                }
+            }
+            a.row_start.push(a.col.len() as u32);
+        }
+        let x: Vec<[f64; 2]> = (0..n).map(|i| [(i as f64).sin(), 0.5]).collect();
+        let b: Vec<[f64; 2]> = (0..n).map(|i| [(i as f64 * 0.3).cos(), 1.0]).collect();
+        let mut ax = vec![[0.0; 2]; n];
+        a.mul(&x, &mut ax);
+        for k in 0..2 {
+            let want: f64 = ax.iter().zip(&b).map(|(p, q)| (p[k] - q[k]).powi(2)).sum();
+            let got = a.residual_squares(&x, &b)[k];
+            assert!((got - want).abs() <= 1e-12 * want, "{got} vs {want}");
+        }
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| a.residual_squares(&x, &b))
+                .map(f64::to_bits)
+        };
+        assert_eq!(on(1), on(3));
+    }
     use crate::mesh::cotangent;
 
     /// The former sequential scatter-and-sort assembly, kept as an oracle: cotangent stiffness matrix L (positive semi-definite, rows sum to zero) of `triangles`
