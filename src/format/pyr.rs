@@ -511,11 +511,7 @@ pub fn encode(
             payload.clear();
             payload.reserve(chunk.len() * (4 + 4 + 3 * width));
             for (k, s) in chunk.iter().enumerate() {
-                for ahead in [16, 8] {
-                    if let Some(t) = chunk.get(k + ahead) {
-                        replay.prefetch(t.survivor, ahead);
-                    }
-                }
+                replay.prefetch_upcoming(k, |j| chunk.get(j).map(|t| t.survivor));
                 put_uvarint(&mut payload, u64::from(s.vertex - 1 - s.survivor));
                 let (il, ir) = replay
                     .wing_indices(s)
@@ -1005,11 +1001,7 @@ fn replay_progressive(
         positions.extend_from_slice(&block.positions);
         let decoded = &block.records;
         for (k, &(survivor, lc, rc, at)) in decoded.iter().enumerate() {
-            for ahead in [16, 8] {
-                if let Some(r) = decoded.get(k + ahead) {
-                    replay.prefetch(r.0, ahead);
-                }
-            }
+            replay.prefetch_upcoming(k, |j| decoded.get(j).map(|r| r.0));
             let vertex = (n_base + splits.len()) as u32;
             let deg = replay
                 .valence(survivor)

@@ -426,6 +426,18 @@ impl FlatReplay {
         }
     }
 
+    /// The hints a walk over the splits gives at split `k`: [`Self::prefetch`] for the splits
+    /// 16 and 8 places ahead, whose survivors `survivor(j)` gives (`None` past the end). The
+    /// encoder, the decoder and the pyramid's recording walk all replay this way.
+    #[inline]
+    pub fn prefetch_upcoming(&self, k: usize, survivor: impl Fn(usize) -> Option<u32>) {
+        for ahead in [16, 8] {
+            if let Some(s) = survivor(k + ahead) {
+                self.prefetch(s, ahead);
+            }
+        }
+    }
+
     /// Cache hint for reading the neighbourhood of `survivor` a few splits ahead: the first
     /// ring line and the position in `positions` of every vertex within two edges of it (read
     /// off the neighbours' lines, which [`Self::prefetch`] fetched earlier). Stencils on the

@@ -200,22 +200,16 @@ fn record_range_on_rings(
     let mut replay =
         FlatReplay::new(&geometry[..n_base], &pm.base_triangles(), range.end).map_err(internal)?;
     let splits = pm.splits();
-    // Hints for the splits 16 and 8 places ahead, as the `.pyr` reader gives them: the replay
-    // and the stencils read rings scattered over the arrays.
-    let hint = |replay: &FlatReplay, k: usize| {
-        for ahead in [16, 8] {
-            if let Some(t) = splits.get(k + ahead) {
-                replay.prefetch(t.survivor, ahead);
-            }
-        }
-    };
+    // Hints for the splits ahead, as the `.pyr` reader gives them, and for the stencils'
+    // neighbourhoods: the replay and the stencils read rings scattered over the arrays.
+    let survivor = |j: usize| splits.get(j).map(|t| t.survivor);
     let hint_stencils = |replay: &FlatReplay, k: usize| {
-        if let Some(t) = splits.get(k + STENCIL_PREFETCH_AHEAD) {
-            replay.prefetch_neighbourhood(t.survivor, geometry);
+        if let Some(s) = survivor(k + STENCIL_PREFETCH_AHEAD) {
+            replay.prefetch_neighbourhood(s, geometry);
         }
     };
     for (k, s) in splits[..range.start].iter().enumerate() {
-        hint(&replay, k);
+        replay.prefetch_upcoming(k, survivor);
         replay.apply(s).map_err(internal)?;
     }
     let mut recorder = Recorder::new(range.clone(), geometry.len(), false);
@@ -226,7 +220,7 @@ fn record_range_on_rings(
             progress.update(RECORDS_SHARE * done as f64 / range.len().max(1) as f64);
         }
         let s = &splits[k];
-        hint(&replay, k);
+        replay.prefetch_upcoming(k, survivor);
         hint_stencils(&replay, k);
         replay.apply(s).map_err(internal)?;
         let v = (n_base + k) as u32;
