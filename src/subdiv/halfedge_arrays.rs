@@ -171,6 +171,18 @@ impl HalfedgeArrays {
         [self.get(e.prev).to, e.to, self.get(e.next).to]
     }
 
+    /// Every half-edge's corner: `3t + k` for the `k`-th of face `t`'s
+    /// [`Self::face_halfedges`], [`NONE`] for a boundary half-edge.
+    pub fn corners(&self) -> Vec<u32> {
+        let mut corner = vec![NONE; self.halfedges.len()];
+        for t in 0..self.n_faces() {
+            for (k, h) in self.face_halfedges(t).into_iter().enumerate() {
+                corner[h as usize] = (3 * t + k) as u32;
+            }
+        }
+        corner
+    }
+
     /// One half-edge per edge, the one smaller than its twin, in index order (as
     /// [`Mesh::edges`]).
     pub fn edges(&self) -> impl Iterator<Item = u32> + '_ {
@@ -233,8 +245,15 @@ mod tests {
         }
         let isolated = a.n_vertices() as u32 - 1;
         assert_eq!(a.outgoing(isolated).count(), 0);
+        let corners = a.corners();
+        for t in 0..a.n_faces() {
+            for (k, h) in a.face_halfedges(t).into_iter().enumerate() {
+                assert_eq!(corners[h as usize] as usize, 3 * t + k);
+            }
+        }
         for h in mesh.halfedges() {
             let s = h.slot() as u32;
+            assert_eq!(corners[h.slot()] == NONE, mesh.is_boundary_halfedge(h));
             assert_eq!(a.from(s) as usize, mesh.from_vertex(h).slot());
             assert_eq!(a.is_boundary(s), mesh.is_boundary_halfedge(h));
         }

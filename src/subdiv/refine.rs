@@ -233,12 +233,7 @@ pub(crate) fn quadrisection_stiffness(
         return None;
     }
     // Face index t and position k (h = u_k → u_{k+1}) of every face half-edge, as 3t + k.
-    let mut corner = vec![NONE; mesh.halfedges.len()];
-    for t in 0..mesh.n_faces() {
-        for (k, h) in mesh.face_halfedges(t).into_iter().enumerate() {
-            corner[h as usize] = (3 * t + k) as u32;
-        }
-    }
+    let corner = mesh.corners();
     let w = |tri: usize, j: usize| tri_weights[tri][j];
     let nv = topo.n_coarse;
     let n = nv + topo.edges.len();
@@ -686,12 +681,7 @@ impl BisectionLevel {
                 why: format!("has {} entries for {} faces", marking.newest.len(), nf),
             });
         }
-        let mut corner = vec![NONE; a.halfedges.len()];
-        for t in 0..nf {
-            for (j, h) in a.face_halfedges(t).into_iter().enumerate() {
-                corner[h as usize] = (3 * t + j) as u32;
-            }
-        }
+        let corner = a.corners();
         Ok(BisectionLevel {
             triangles: (0..nf).map(|t| a.face_vertices(t)).collect(),
             across: (0..nf)
