@@ -78,8 +78,12 @@ pub fn subdivide_loop(
     levels: usize,
     progress: &dyn Progress,
 ) -> Result<Subdivision, SubdivError> {
-    let factor = (0..levels).fold(1usize, |f, _| f.saturating_mul(4));
-    super::check_output_size(mesh, levels, factor, usize::MAX)?;
+    let quadrisection = super::SubdivOptions {
+        levels,
+        refinement: super::Refinement::Quadrisection,
+        ..Default::default()
+    };
+    super::check_output_size(mesh, levels, quadrisection.face_factor(), usize::MAX)?;
     let input = super::compact(mesh)?;
     let mut positions = input.positions();
     let mut triangles = input.to_triangles().1;
