@@ -303,14 +303,13 @@ pub fn subdivide_mcm(
     let c = options.width;
     let h0 = input.mean_edge_length();
     let alpha = 0.5 * (c * h0) * (c * h0);
-    let mut x0: Vec<DVec3> = input.positions();
     let mut h_init = vertex_grid_size(&input);
     let mut h_cur = h_init.clone();
     // The current level: its positions and triangles, and the connectivity the next refinement
     // reads (flat half-edge arrays for quadrisection; faces, neighbours and newest vertices for
     // bisection, which keep the triangles themselves).
-    let mut positions = x0.clone();
-    let mut triangles = input.to_triangles().1;
+    let (mut positions, mut triangles) = input.to_triangles();
+    let mut x0: Vec<DVec3> = positions.clone();
     let mut connectivity = Some(match options.refinement {
         Refinement::Quadrisection => Connectivity::Quad(HalfedgeArrays::from_mesh(&input)),
         Refinement::Bisection => Connectivity::Bisect(BisectionLevel::from_mesh(

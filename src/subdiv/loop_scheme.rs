@@ -85,8 +85,7 @@ pub fn subdivide_loop(
     };
     super::check_output_size(mesh, levels, quadrisection.face_factor(), usize::MAX)?;
     let input = super::compact(mesh)?;
-    let mut positions = input.positions();
-    let mut triangles = input.to_triangles().1;
+    let (mut positions, mut triangles) = input.to_triangles();
     let mut connectivity = HalfedgeArrays::from_mesh(&input);
     drop(input);
     let total: f64 = (1..=levels).map(|l| 4f64.powi(l as i32)).sum();
