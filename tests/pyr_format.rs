@@ -248,10 +248,15 @@ fn wrong_version_and_unknown_required_sections_are_refused() {
             bytes: bytes[e.offset as usize..(e.offset + e.length) as usize].to_vec(),
         })
         .collect();
-    let v2 = meshpyr::format::container::write_container(2, 0, &sections);
+    let newer = meshpyr::format::container::write_container(format::MAJOR + 1, 0, &sections);
     assert!(matches!(
-        format::decode(&v2),
-        Err(FormatError::Version { major: 2, .. })
+        format::decode(&newer),
+        Err(FormatError::Version { major, .. }) if major == format::MAJOR + 1
+    ));
+    let older = meshpyr::format::container::write_container(format::OLDEST_MAJOR - 1, 0, &sections);
+    assert!(matches!(
+        format::decode(&older),
+        Err(FormatError::Version { major: 0, .. })
     ));
     // A newer minor with an extra optional section still reads.
     sections.push(meshpyr::format::container::Section {
@@ -259,10 +264,10 @@ fn wrong_version_and_unknown_required_sections_are_refused() {
         flags: 0,
         bytes: vec![1, 2, 3],
     });
-    let minor = meshpyr::format::container::write_container(1, 7, &sections);
+    let minor = meshpyr::format::container::write_container(format::MAJOR, 7, &sections);
     assert_eq!(format::decode(&minor).unwrap().input, tetra());
     sections.last_mut().unwrap().flags = meshpyr::format::container::REQUIRED;
-    let req = meshpyr::format::container::write_container(1, 7, &sections);
+    let req = meshpyr::format::container::write_container(format::MAJOR, 7, &sections);
     assert!(matches!(
         format::decode(&req),
         Err(FormatError::Version { .. })
@@ -302,6 +307,75 @@ fn golden_files_are_byte_identical() {
         let d = format::decode(&stored).unwrap();
         assert_eq!(d.input, io::read_mesh(&data(mesh)).unwrap());
     }
+}
+
+/// Files of format 1.0 (split errors as raw f32) still load: the golden files of 1.0 decode to
+/// the same mesh and hierarchy as a fresh build, and saving them again writes today's golden
+/// bytes.
+#[test]
+fn format_1_files_still_load() {
+    for (file, mesh) in [("tetra.pyr", "tetrahedron.ply"), ("joint.pyr", "joint.ply")] {
+        let old = std::fs::read(golden(&format!("v1/{file}"))).unwrap();
+        assert_eq!(&old[8..10], &1u16.to_le_bytes(), "{file}: not a 1.x file");
+        let input = io::read_mesh(&data(mesh)).unwrap();
+        let (pm, bytes) = build(&input);
+        let d = format::decode(&old).unwrap();
+        assert_same_mesh(&input, &d.input, file);
+        assert_eq!(d.pm.splits(), pm.splits(), "{file}");
+        assert_eq!(
+            d.pm.split_errors()
+                .iter()
+                .map(|e| e.to_bits())
+                .collect::<Vec<_>>(),
+            pm.split_errors()
+                .iter()
+                .map(|e| e.to_bits())
+                .collect::<Vec<_>>(),
+            "{file}"
+        );
+        let level = format::read_level(&old, None).unwrap();
+        assert_eq!(level.level, pm.n_vertices(), "{file}");
+        let (again, _) = format::encode(&d.input, &d.pm, &d.info).unwrap();
+        assert!(
+            again == bytes,
+            "{file}: re-saved 1.0 file differs from a fresh save"
+        );
+    }
+}
+
+/// The error deltas are exact for any bit pattern: negative, zero, subnormal, infinite and NaN
+/// errors, and jumps across the whole `u32` range, come back with the same bits.
+#[test]
+fn split_errors_round_trip_for_any_bits() {
+    let input = io::read_mesh(&data("joint.ply")).unwrap();
+    let (pm, _) = build(&input);
+    let odd = [
+        0u32,
+        u32::MAX,
+        f32::NAN.to_bits(),
+        f32::INFINITY.to_bits(),
+        (-0.0f32).to_bits(),
+        1,
+        0x8000_0001,
+        (-3.5f32).to_bits(),
+        0x7fff_ffff,
+    ];
+    let errors: Vec<f32> = (0..pm.splits().len())
+        .map(|i| f32::from_bits(odd[i % odd.len()].wrapping_add(i as u32 / odd.len() as u32)))
+        .collect();
+    let parts = meshpyr::pm::PmParts {
+        n_base: pm.n_base_vertices(),
+        positions: pm.original_positions().to_vec(),
+        pm_to_mesh: pm.pm_to_mesh().to_vec(),
+        splits: pm.splits().to_vec(),
+        faces: pm.finest_faces().to_vec(),
+        errors: errors.clone(),
+    };
+    let odd_pm = ProgressiveMesh::from_parts(parts).unwrap();
+    let (bytes, _) = format::encode(&input, &odd_pm, &BuildInfo::default()).unwrap();
+    let d = format::decode(&bytes).unwrap();
+    let bits = |e: &[f32]| e.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(d.pm.split_errors()), bits(&errors));
 }
 
 #[test]

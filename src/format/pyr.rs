@@ -22,8 +22,11 @@ use crate::relax::SecondDifference;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
-/// Major version written; readers refuse other majors.
-pub const MAJOR: u16 = 1;
+/// Major version written. 2.0 codes the split errors as varint deltas of their bit patterns
+/// (1.x stored them as raw f32); readers take majors 1 and 2 and refuse others.
+pub const MAJOR: u16 = 2;
+/// The oldest major this reader still decodes.
+pub const OLDEST_MAJOR: u16 = 1;
 /// Minor version written; readers accept any minor of their major (unknown optional sections
 /// are skipped).
 pub const MINOR: u16 = 0;
@@ -529,15 +532,21 @@ pub fn encode(
                     .map_err(|e| internal(&e.to_string()))?;
             }
             sizes.pm_connectivity += payload.len() + 12;
+            // Errors as deltas of their bit patterns: successive splits have similar errors,
+            // and positive floats order like their bits, so the deltas are short (about 2
+            // bytes on scans, against 4 raw) and the coding is exact for any value.
+            let before = payload.len();
+            let mut prev = 0u32;
+            for e in &pm.split_errors()[first - n_base..first - n_base + chunk.len()] {
+                let bits = e.to_bits();
+                put_ivarint(&mut payload, i64::from(bits) - i64::from(prev));
+                prev = bits;
+            }
+            sizes.split_errors += payload.len() - before;
             for &p in &positions[first..first + chunk.len()] {
                 put_position(&mut payload, p, f32);
             }
             sizes.positions += chunk.len() * 3 * width;
-            let errs = &pm.split_errors()[first - n_base..first - n_base + chunk.len()];
-            for e in errs {
-                payload.extend_from_slice(&e.to_le_bytes());
-            }
-            sizes.split_errors += errs.len() * 4;
             splt.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
             splt.extend_from_slice(&(payload.len() as u32).to_le_bytes());
             splt.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
@@ -656,11 +665,11 @@ struct Progressive {
 }
 
 fn check_version(c: &Container<'_>) -> Result<(), FormatError> {
-    if c.major != MAJOR {
+    if !(OLDEST_MAJOR..=MAJOR).contains(&c.major) {
         return Err(FormatError::Version {
             major: c.major,
             minor: c.minor,
-            supported: format!("{MAJOR}.x"),
+            supported: format!("{OLDEST_MAJOR}.x to {MAJOR}.x"),
         });
     }
     let unknown = c.unknown_required(&KNOWN);
@@ -764,6 +773,9 @@ struct SplitBlocks<'a> {
     end: Result<(), FormatError>,
     n_base: usize,
     f32: bool,
+    /// Format 2.x: errors as varint deltas between the records and the positions (1.x: raw
+    /// f32 after the positions).
+    coded_errors: bool,
     claimed: Vec<std::sync::atomic::AtomicBool>,
     ready: Vec<std::sync::Mutex<Option<Result<DecodedBlock, FormatError>>>>,
 }
@@ -830,6 +842,7 @@ impl<'a> SplitBlocks<'a> {
             end,
             n_base,
             f32: meta.position_bits == 32,
+            coded_errors: c.major >= 2,
             claimed: (0..n).map(|_| Default::default()).collect(),
             ready: (0..n).map(|_| Default::default()).collect(),
         }
@@ -844,10 +857,11 @@ impl<'a> SplitBlocks<'a> {
                 offset: b.at,
             });
         }
-        // Payload: the records (variable length), then `count` positions and `count` errors
-        // (fixed length), so the records end where the fixed-size tail begins.
+        // Payload, 2.x: the records and the error deltas (variable length), then `count`
+        // positions (fixed length), so the positions start at a known offset from the end.
+        // 1.x: the records, then `count` positions and `count` raw f32 errors.
         let width = 3 * if self.f32 { 4 } else { 8 };
-        let tail = b.count * (width + 4);
+        let tail = b.count * (width + if self.coded_errors { 0 } else { 4 });
         if tail > b.payload.len() {
             return Err(corrupt(b.at, "split block is shorter than its positions"));
         }
@@ -868,10 +882,27 @@ impl<'a> SplitBlocks<'a> {
             let rc = p.count(MAX_RING, "right wing")?;
             decoded.push((vertex - 1 - back, lc as u64, rc as u64, at));
         }
-        q.take((b.count - b.used) * width, "positions")?;
         let mut errors = Vec::with_capacity(b.used);
-        for _ in 0..b.used {
-            errors.push(f32::from_le_bytes(q.array("split error")?));
+        if self.coded_errors {
+            // The errors follow every record of the block, wanted or not.
+            for _ in 0..3 * (b.count - b.used) {
+                p.uvarint("split record")?;
+            }
+            let mut prev = 0u32;
+            for _ in 0..b.used {
+                let at = p.offset();
+                let bits = i64::from(prev)
+                    .checked_add(p.ivarint("split error")?)
+                    .and_then(|x| u32::try_from(x).ok())
+                    .ok_or_else(|| corrupt(at, "split error out of range"))?;
+                errors.push(f32::from_bits(bits));
+                prev = bits;
+            }
+        } else {
+            q.take((b.count - b.used) * width, "positions")?;
+            for _ in 0..b.used {
+                errors.push(f32::from_le_bytes(q.array("split error")?));
+            }
         }
         let trailing = (b.used == b.count && !p.is_empty())
             .then(|| corrupt(p.offset(), "trailing bytes in split block"));
