@@ -300,6 +300,24 @@ fn bisection_names_a_folded_two_triangle_component() {
         refined.mesh(),
         Err(SubdivError::NotManifold { level: 1 })
     ));
+    // Loop too, and its error names the level as well.
+    let looped = subdivide(
+        &mesh,
+        &SubdivOptions {
+            scheme: Scheme::Loop,
+            levels: 2,
+            ..quad
+        },
+        &NoProgress,
+    )
+    .unwrap();
+    assert_eq!(looped.triangles.len(), 16 * t.len());
+    let counts: Vec<_> = looped.levels.iter().map(|l| (l.level, l.faces)).collect();
+    assert_eq!(counts, [(1, 4 * t.len()), (2, 16 * t.len())]);
+    assert!(matches!(
+        looped.mesh(),
+        Err(SubdivError::NotManifold { level: 2 })
+    ));
 }
 
 #[test]

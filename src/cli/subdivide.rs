@@ -135,9 +135,16 @@ pub fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
         .with_context(|| format!("subdividing {}", args.input.display()))?;
     bar.finish_and_clear();
     for l in &result.levels {
+        let solve = match options.scheme {
+            Scheme::Mcm => format!(
+                ", {} steps, relative residual {:.1e}",
+                l.steps, l.relative_residual
+            ),
+            Scheme::Loop => String::new(),
+        };
         global.say(format_args!(
-            "level {}: {} vertices, {} faces, {} steps, relative residual {:.1e}",
-            l.level, l.vertices, l.faces, l.steps, l.relative_residual
+            "level {}: {} vertices, {} faces{solve}",
+            l.level, l.vertices, l.faces
         ));
     }
     let output = PolygonMesh::from_triangle_vec(result.positions, result.triangles);

@@ -10,7 +10,7 @@
 
 use super::halfedge_arrays::HalfedgeArrays;
 use super::refine::{QuadTopology, quad_topology, quadrisect_connectivity};
-use super::{SubdivError, Subdivision};
+use super::{LevelReport, SubdivError, Subdivision};
 use crate::mesh::Mesh;
 use crate::progress::Progress;
 use glam::DVec3;
@@ -71,8 +71,8 @@ fn loop_level(mesh: &HalfedgeArrays, positions: &[DVec3]) -> (QuadTopology, Vec<
     (topo, fine)
 }
 
-/// `levels` levels of Loop subdivision (the input is compacted first). The result's level
-/// reports are empty: there is no solve.
+/// `levels` levels of Loop subdivision (the input is compacted first). Each level's report
+/// has its counts, 0 steps and a zero residual: the stencils are explicit, nothing is solved.
 pub fn subdivide_loop(
     mesh: &Mesh,
     levels: usize,
@@ -90,6 +90,7 @@ pub fn subdivide_loop(
     drop(input);
     let total: f64 = (1..=levels).map(|l| 4f64.powi(l as i32)).sum();
     let mut done = 0.0;
+    let mut reports = Vec::with_capacity(levels);
     for level in 1..=levels {
         let (topo, fine) = loop_level(&connectivity, &positions);
         // The last level's half-edges are never read: the output is its triangles.
@@ -98,13 +99,20 @@ pub fn subdivide_loop(
         }
         positions = fine;
         triangles = topo.triangles;
+        reports.push(LevelReport {
+            level,
+            vertices: positions.len(),
+            faces: triangles.len(),
+            steps: 0,
+            relative_residual: 0.0,
+        });
         done += 4f64.powi(level as i32);
         progress.update(done / total);
     }
     Ok(Subdivision {
         positions,
         triangles,
-        levels: Vec::new(),
+        levels: reports,
     })
 }
 

@@ -154,7 +154,7 @@ pub struct Subdivision {
     pub positions: Vec<DVec3>,
     /// Triangles of the refined mesh, indexing `positions`.
     pub triangles: Vec<[u32; 3]>,
-    /// One entry per level (solver steps and residuals; empty for Loop).
+    /// One entry per level: counts, solver steps and residuals (0 and 0 for Loop).
     pub levels: Vec<LevelReport>,
 }
 
