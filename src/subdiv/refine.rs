@@ -708,25 +708,26 @@ pub(crate) fn bisect_level(
     let nf = triangles.len();
     // The face edge opposite the newest vertex, as 3t + j.
     let refinement = |t: usize| (3 * t + (newest[t] as usize + 1) % 3) as u32;
+    // The face edge across face t's refinement edge (NONE on the boundary).
+    let partner = |t: usize| across[t][refinement(t) as usize % 3];
     let mut parents: Vec<[u32; 2]> = (0..n_vertices as u32).map(|i| [i, i]).collect();
     let mut mid = vec![NONE; 3 * nf];
-    for t in 0..nf {
+    for (t, v) in triangles.iter().enumerate() {
         let c = refinement(t);
         if mid[c as usize] == NONE {
             let m = parents.len() as u32;
             mid[c as usize] = m;
-            let twin = across[t][c as usize % 3];
+            let twin = partner(t);
             if twin != NONE {
                 mid[twin as usize] = m;
             }
-            let (v, j) = (triangles[t], c as usize % 3);
+            let j = c as usize % 3;
             parents.push([v[j], v[(j + 1) % 3]]);
         }
     }
     // Conformity: the face across every refinement edge must refine the same edge.
-    for (t, across_t) in across.iter().enumerate() {
-        let c = refinement(t);
-        let twin = across_t[c as usize % 3];
+    for t in 0..nf {
+        let (c, twin) = (refinement(t), partner(t));
         if twin != NONE {
             let u = twin as usize / 3;
             if refinement(u) != twin {
@@ -769,8 +770,7 @@ pub(crate) fn bisect_level(
         // the partner's second child's m → z1). Child b = 2t + 1: m → z2 (twin of the
         // partner's first child's z2 → m), z2 → z0 (coarse edge k + 2), z0 → m.
         let (a, b) = (6 * t as u32, 6 * t as u32 + 3);
-        let partner = across[t][c as usize % 3];
-        let (pa, pb) = match partner {
+        let (pa, pb) = match partner(t) {
             NONE => (NONE, NONE),
             p => (6 * (p / 3) + 2, 6 * (p / 3) + 3),
         };
