@@ -115,7 +115,7 @@ pub fn save_edited(
     relaxation: RelaxationSpec,
     path: &Path,
 ) -> anyhow::Result<()> {
-    let (input, pm) = format::with_positions(&scan.input, &scan.built, &scan.pm, input_positions)
+    let (input, pm) = format::with_positions(&scan.input, &scan.source, &scan.pm, input_positions)
         .context("cannot save the edit")?;
     let (bytes, _) = encode_pyr(&input, &pm, relaxation).context("cannot save the edit")?;
     io::write_atomic(path, &bytes)?;

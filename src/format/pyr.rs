@@ -11,7 +11,7 @@ use super::container::{Container, REQUIRED, Section, write_container};
 use super::varint::{ByteReader, put_ivarint, put_uvarint};
 use crate::mesh::{
     Attribute, AttributeData, Built, ElementProperty, ExtraElement, ListProperty, Mesh,
-    PolygonMesh, ScalarType, SlotIndex,
+    PolygonMesh, ScalarType, SlotIndex, SourceMap,
 };
 use crate::pm::{
     FaceBuckets, FlatReplay, PmOptions, PmParts, ProgressiveMesh, VertexSplit, canonical_sorted,
@@ -194,13 +194,20 @@ impl PyrData {
     pub fn into_scan(self, progress: &dyn Progress) -> Result<ScanPyramid, PyramidError> {
         let op = self.info.relaxation.operator();
         let pyramid = Pyramid::analyze(&self.pm, op.as_ref(), progress)?;
-        let built = match self.built {
-            Some(b) => b,
-            None => Mesh::from_polygons(&self.input)?,
+        // A file whose input needed no repair was loaded without building the half-edge mesh
+        // (see `clean_triangle_faces`): its mesh is the input itself, vertex for vertex and
+        // face for face.
+        let source = match self.built {
+            Some(b) => b.source,
+            None => SourceMap {
+                vertex_source: (0..self.input.positions.len() as u32).collect(),
+                face_source: (0..self.input.n_faces() as u32).collect(),
+                input_vertices: self.input.positions.len(),
+            },
         };
         Ok(ScanPyramid {
             input: self.input,
-            built,
+            source,
             pm: self.pm,
             pyramid,
         })
@@ -1576,7 +1583,7 @@ fn fuzz_one(data: &[u8]) {
 /// input stores f32 positions they are rounded to f32 first, as writing a mesh file would.
 pub fn with_positions(
     input: &PolygonMesh,
-    built: &Built,
+    source: &SourceMap,
     pm: &ProgressiveMesh,
     positions: Vec<DVec3>,
 ) -> Result<(PolygonMesh, ProgressiveMesh), FormatError> {
@@ -1589,7 +1596,7 @@ pub fn with_positions(
         .into_iter()
         .map(|p| if round { p.as_vec3().as_dvec3() } else { p })
         .collect();
-    let source = &built.source.vertex_source;
+    let source = &source.vertex_source;
     let mut pm_positions = Vec::with_capacity(pm.pm_to_mesh().len());
     for &s in pm.pm_to_mesh() {
         let src = source.get(s as usize).copied().unwrap_or(s) as usize;

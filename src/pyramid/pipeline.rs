@@ -4,7 +4,7 @@
 //! lines up after filtering.
 
 use super::{Pyramid, PyramidError};
-use crate::mesh::{Built, Mesh, PolygonMesh};
+use crate::mesh::{Mesh, PolygonMesh, SourceMap};
 use crate::pm::{PmOptions, ProgressiveMesh};
 use crate::progress::Progress;
 use crate::relax::Relaxation;
@@ -21,8 +21,10 @@ pub struct PyramidOptions {
 pub struct ScanPyramid {
     /// The mesh as read.
     pub input: PolygonMesh,
-    /// The repaired half-edge mesh and the map back to the input.
-    pub built: Built,
+    /// Where each vertex of the repaired mesh came from in the input. The repaired half-edge
+    /// mesh itself is dropped once the hierarchy is built: filters never read it, and it is
+    /// about 430 B per vertex, which would sit through the analysis' memory peak.
+    pub source: SourceMap,
     /// The hierarchy.
     pub pm: ProgressiveMesh,
     /// The pyramid of the input's positions.
@@ -44,10 +46,12 @@ impl ScanPyramid {
         let built = Mesh::from_polygons(&input)?;
         let pm =
             ProgressiveMesh::build(&built.mesh, &options.pm, &|x: f64| progress.update(0.5 * x))?;
+        let source = built.source;
+        drop(built.mesh);
         let pyramid = Pyramid::analyze(&pm, relaxation, &|x: f64| progress.update(0.5 + 0.5 * x))?;
         Ok(ScanPyramid {
             input,
-            built,
+            source,
             pm,
             pyramid,
         })
@@ -56,14 +60,16 @@ impl ScanPyramid {
     /// Maps a signal in PM order onto the input's vertices (split copies averaged, vertices
     /// outside the hierarchy keep their input positions).
     pub fn to_input_positions(&self, pm_signal: &[DVec3]) -> Vec<DVec3> {
-        let mut mesh_values = self.built.mesh.positions();
-        for (&slot, &x) in self.pm.pm_to_mesh().iter().zip(pm_signal) {
+        // The PM covers every vertex of the repaired mesh (`pm_to_mesh` is a permutation of its
+        // slots), and its original positions are the mesh's; entries `pm_signal` lacks keep them.
+        let original = self.pm.original_positions();
+        let mut mesh_values = vec![DVec3::ZERO; self.source.vertex_source.len()];
+        for (i, &slot) in self.pm.pm_to_mesh().iter().enumerate() {
             if let Some(m) = mesh_values.get_mut(slot as usize) {
-                *m = x;
+                *m = pm_signal.get(i).copied().unwrap_or(original[i]);
             }
         }
-        self.built
-            .source
+        self.source
             .to_input_positions(&mesh_values, &self.input.positions)
     }
 
