@@ -71,31 +71,25 @@ impl Pyramid {
         // Step 1 for every split, then the storage order: wave by wave (see `waves`).
         let ranges = split_ranges(n_splits, rayon::current_num_threads());
         let cursor = (!relaxation.has_ring_stencils()).then(|| pm.cursor());
-        let records = record_ranges(pm, relaxation, cursor, &ranges, progress)?;
-        let record_of = |k: usize| {
-            let r = ranges.partition_point(|r| r.end <= k);
-            let rec = &records[r];
-            let i = if rec.reversed {
-                rec.range.end - 1 - k
-            } else {
-                k - rec.range.start
-            };
-            (rec, i)
-        };
+        let mut records = record_ranges(pm, relaxation, cursor, &ranges, progress)?;
+        // One code width for the pyramid: the widest range's.
+        let widest = records.iter().map(|r| r.widest).max().unwrap_or(0);
+        for r in &mut records {
+            r.codes.widen_to(widest);
+        }
         // Waves store their splits by the place of the new vertex (see `run_waves`).
         let morton = morton_codes(&geometry[n_base..n_finest]);
         let waves = Waves::schedule(
             n_splits,
             signal.len(),
             |k| {
-                let (rec, i) = record_of(k);
+                let (rec, i) = record_of(&records, k);
                 let (o, next) = (rec.offsets[i], rec.offsets[i + 1]);
                 (&rec.locals[o.locals..next.locals], next.details - o.details)
             },
             |k| morton.as_ref().map_or(0, |m| m[k]),
         );
-        let slotted = Slotted::new(&records, &waves, record_of);
-        drop(records);
+        let slotted = Slotted::new(records, &waves);
 
         // Steps 2–5, finest split first: waves in reverse storage order, which, like split
         // order, runs every split after the splits it depends on.
@@ -325,6 +319,9 @@ struct Recorder {
     stencils: Vec<(u32, f64)>,
     stencil_lens: Vec<usize>,
     fan: Vec<u32>,
+    /// The current split's codes, appended to the range's stream (in its current width) once
+    /// complete.
+    split_codes: Vec<u32>,
     /// PM vertex → its index in the current split's local table (u32::MAX: not in it).
     local_of: Vec<u32>,
 }
@@ -335,9 +332,12 @@ impl Recorder {
         Recorder {
             rec: Records {
                 offsets: Vec::with_capacity(n + 1),
-                locals: Vec::with_capacity(32 * n),
-                codes: Vec::with_capacity(128 * n),
-                weights: Vec::with_capacity(72 * n),
+                // Reserves above the usual sizes (on scans about 32 locals, 127–135 codes
+                // and 74–80 weights per split): untouched capacity costs no memory, a
+                // doubling copies the stream.
+                locals: Vec::with_capacity(40 * n),
+                codes: Codes::Byte(Vec::with_capacity(160 * n)),
+                weights: Vec::with_capacity(96 * n),
                 range,
                 reversed,
                 widest: 0,
@@ -346,6 +346,7 @@ impl Recorder {
             stencils: Vec::new(),
             stencil_lens: Vec::new(),
             fan: Vec::new(),
+            split_codes: Vec::new(),
             local_of: vec![u32::MAX; n_vertices],
         }
     }
@@ -362,13 +363,15 @@ impl Recorder {
         mut fan: impl FnMut(u32, &mut Vec<u32>) -> bool,
     ) -> Result<(), PyramidError> {
         let rec = &mut self.rec;
-        let (locals, codes, weights) = (&mut rec.locals, &mut rec.codes, &mut rec.weights);
+        let (locals, weights) = (&mut rec.locals, &mut rec.weights);
         rec.offsets.push(SplitOffsets {
             locals: locals.len(),
-            codes: codes.len(),
+            codes: rec.codes.len(),
             weights: weights.len(),
             details: self.n_touched,
         });
+        let codes = &mut self.split_codes;
+        codes.clear();
         let l0 = locals.len();
         let local_of = &mut self.local_of;
         let mut local = |u: u32, locals: &mut Vec<u32>| {
@@ -416,8 +419,8 @@ impl Recorder {
         for &u in &locals[l0..] {
             local_of[u as usize] = u32::MAX;
         }
-        let c0 = rec.offsets.last().map_or(0, |o| o.codes);
-        rec.widest = codes[c0..].iter().fold(rec.widest, |m, &c| m.max(c));
+        rec.widest = codes.iter().fold(rec.widest, |m, &c| m.max(c));
+        rec.codes.extend_widening(codes, rec.widest);
         self.n_touched += touched.len();
         Ok(())
     }
@@ -433,18 +436,33 @@ impl Recorder {
     }
 }
 
-/// The signal-independent per-split streams of a pyramid being built (codes still 32-bit);
-/// the `details` offsets count the touched vertices, whose details come later.
+/// The signal-independent per-split streams of a pyramid being built; the `details` offsets
+/// count the touched vertices, whose details come later. Codes are recorded as narrow as the
+/// range's largest code so far allows (a byte on most meshes), not as 32-bit values narrowed
+/// later: the 32-bit stream would be 4 bytes × ~130 codes per split at the analysis' peak.
 struct Records {
     offsets: Vec<SplitOffsets>,
     locals: Vec<u32>,
-    codes: Vec<u32>,
+    codes: Codes,
     weights: Vec<f64>,
     /// The splits recorded, in the order given by `reversed` (finest first when set).
     range: std::ops::Range<usize>,
     reversed: bool,
     /// The largest code.
     widest: u32,
+}
+
+/// The range record holding split `k` (ranges are contiguous and in split order), and the
+/// split's position in it.
+fn record_of(records: &[Records], k: usize) -> (&Records, usize) {
+    let r = records.partition_point(|r| r.range.end <= k);
+    let rec = &records[r];
+    let i = if rec.reversed {
+        rec.range.end - 1 - k
+    } else {
+        k - rec.range.start
+    };
+    (rec, i)
 }
 
 /// The records of all splits in slot order (see `waves`), codes as narrow as the widest
@@ -457,19 +475,14 @@ struct Slotted {
 }
 
 impl Slotted {
-    /// The records of all ranges copied into the slots `waves` assigns them; `record_of(k)`
-    /// names the range record holding split `k` and its position there. Streams are copied
-    /// one at a time, so the peak memory is the records plus the largest stream; each is
-    /// copied by all threads at once (the reads are scattered, so one thread would mostly
-    /// wait for memory). Codes are narrowed on the way, so the 32-bit stream is never
-    /// written twice.
-    fn new<'a>(
-        ranges: &[Records],
-        waves: &Waves,
-        record_of: impl Fn(usize) -> (&'a Records, usize) + Sync,
-    ) -> Slotted {
+    /// The records of all ranges copied into the slots `waves` assigns them (every range's
+    /// codes already in one width). Streams are copied one at a time and each range stream is
+    /// freed once copied, so the peak is the slotted streams plus the range's weights (the
+    /// largest stream), not both layouts whole. Each stream is copied by all threads at once
+    /// (the reads are scattered, so one thread would mostly wait for memory).
+    fn new(mut ranges: Vec<Records>, waves: &Waves) -> Slotted {
         let n_splits: usize = ranges.iter().map(|r| r.offsets.len() - 1).sum();
-        let at = |slot: usize| record_of(waves.split_at(slot));
+        let at = |slot: usize| record_of(&ranges, waves.split_at(slot));
         let mut next = SplitOffsets::default();
         let mut offsets = Vec::with_capacity(n_splits + 1);
         offsets.push(next);
@@ -485,29 +498,52 @@ impl Slotted {
         let chunks = 4 * rayon::current_num_threads();
         let cuts: Vec<usize> = (0..=chunks).map(|c| n_splits * c / chunks).collect();
         let locals = stream(&cuts, &offsets, &at, |r| &r.locals, |o| o.locals, |x| x);
-        let widest = ranges.iter().map(|r| r.widest).max().unwrap_or(0);
+        for r in &mut ranges {
+            r.locals = Vec::new();
+        }
+        let at = |slot: usize| record_of(&ranges, waves.split_at(slot));
+        // Every range was widened to the widest code of all (see `Self::new`'s caller), so
+        // all have the same width and each accessor below sees its own variant.
         let codes = |o: &SplitOffsets| o.codes;
-        let codes = if widest <= u8::MAX as u32 {
-            Codes::Byte(stream(
+        let codes = match &ranges.first().map(|r| &r.codes) {
+            None | Some(Codes::Byte(_)) => Codes::Byte(stream(
                 &cuts,
                 &offsets,
                 &at,
-                |r| &r.codes,
+                |r| match &r.codes {
+                    Codes::Byte(c) => c,
+                    _ => &[],
+                },
                 codes,
-                |c| c as u8,
-            ))
-        } else if widest <= u16::MAX as u32 {
-            Codes::Narrow(stream(
+                |c| c,
+            )),
+            Some(Codes::Narrow(_)) => Codes::Narrow(stream(
                 &cuts,
                 &offsets,
                 &at,
-                |r| &r.codes,
+                |r| match &r.codes {
+                    Codes::Narrow(c) => c,
+                    _ => &[],
+                },
                 codes,
-                |c| c as u16,
-            ))
-        } else {
-            Codes::Wide(stream(&cuts, &offsets, &at, |r| &r.codes, codes, |c| c))
+                |c| c,
+            )),
+            Some(Codes::Wide(_)) => Codes::Wide(stream(
+                &cuts,
+                &offsets,
+                &at,
+                |r| match &r.codes {
+                    Codes::Wide(c) => c,
+                    _ => &[],
+                },
+                codes,
+                |c| c,
+            )),
         };
+        for r in &mut ranges {
+            r.codes = Codes::Byte(Vec::new());
+        }
+        let at = |slot: usize| record_of(&ranges, waves.split_at(slot));
         let weights = stream(&cuts, &offsets, &at, |r| &r.weights, |o| o.weights, |w| w);
         Slotted {
             offsets,

@@ -139,6 +139,46 @@ impl Codes {
     fn bytes(&self) -> usize {
         with_codes!(self, c => std::mem::size_of_val(c.as_slice()))
     }
+
+    /// Number of codes.
+    pub(crate) fn len(&self) -> usize {
+        with_codes!(self, c => c.len())
+    }
+
+    /// Largest code the current width holds.
+    fn capacity_max(&self) -> u32 {
+        match self {
+            Codes::Byte(_) => u8::MAX.into(),
+            Codes::Narrow(_) => u16::MAX.into(),
+            Codes::Wide(_) => u32::MAX,
+        }
+    }
+
+    /// Rewrites the stream in the narrowest width that holds `max` (never narrower than now).
+    pub(crate) fn widen_to(&mut self, max: u32) {
+        if max <= self.capacity_max() {
+            return;
+        }
+        use frames::LocalIndex;
+        // Codes fit in u32 (they were recorded from u32 values).
+        let wide: Vec<u32> = with_codes!(&*self, c => c.iter().map(|&x| x.at() as u32).collect());
+        *self = if max <= u16::MAX.into() {
+            Codes::Narrow(wide.into_iter().map(|x| x as u16).collect())
+        } else {
+            Codes::Wide(wide)
+        };
+    }
+
+    /// Appends `src`, whose largest code is `max`, widening the stream first if needed.
+    pub(crate) fn extend_widening(&mut self, src: &[u32], max: u32) {
+        self.widen_to(max);
+        match self {
+            // `max` fits the width (widened above), so the casts keep every value.
+            Codes::Byte(c) => c.extend(src.iter().map(|&x| x as u8)),
+            Codes::Narrow(c) => c.extend(src.iter().map(|&x| x as u16)),
+            Codes::Wide(c) => c.extend_from_slice(src),
+        }
+    }
 }
 
 impl Pyramid {
@@ -283,5 +323,79 @@ mod tests {
             .map(|(x, y)| (*x - *y).length())
             .fold(0.0, f64::max);
         assert!(err < 1e-12 * narrow.bbox_diagonal(), "{err:e}");
+    }
+
+    /// Two components: a double cone whose two apexes join all of 300 rim vertices, and a
+    /// bumpy torus. The rim vertices collapse first (at the finest levels the apexes' fans
+    /// need 16-bit codes), the torus later (8-bit codes), so on two threads the two ranges
+    /// are recorded in different widths and joined; the pyramid must be the one-thread
+    /// pyramid, bit for bit.
+    #[test]
+    fn ranges_recorded_in_different_code_widths_join_exactly() {
+        let rim = 300u32;
+        let mut p = vec![DVec3::new(0.0, 0.0, 1.0), DVec3::new(0.0, 0.0, -1.0)];
+        let mut t = Vec::new();
+        for k in 0..rim {
+            let a = k as f64 / rim as f64 * std::f64::consts::TAU;
+            p.push(DVec3::new(a.cos(), a.sin(), 0.0));
+            let (b, c) = (2 + k, 2 + (k + 1) % rim);
+            t.push([0, b, c]);
+            t.push([1, c, b]);
+        }
+        let (n, m) = (60u32, 40u32);
+        let first = p.len() as u32;
+        for i in 0..n {
+            for j in 0..m {
+                let (u, v) = (
+                    i as f64 / n as f64 * std::f64::consts::TAU,
+                    j as f64 / m as f64 * std::f64::consts::TAU,
+                );
+                let r = 2.0 + (1.0 + 0.2 * (5.0 * u).sin() * (3.0 * v).cos()) * v.cos();
+                p.push(DVec3::new(10.0 + r * u.cos(), r * u.sin(), v.sin()));
+            }
+        }
+        let id = |i: u32, j: u32| first + (i % n) * m + (j % m);
+        for i in 0..n {
+            for j in 0..m {
+                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+            }
+        }
+        let mesh = Mesh::from_triangles(&p, &t).unwrap().mesh;
+        let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &NoProgress).unwrap();
+        let on = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| Pyramid::analyze(&pm, &SecondDifference::default(), &NoProgress))
+                .unwrap()
+        };
+        let (one, two) = (on(1), on(2));
+        assert!(
+            matches!(one.codes, Codes::Narrow(_)),
+            "the apex needs 16-bit codes"
+        );
+        let codes = |p: &Pyramid| with_codes!(&p.codes, c => c.iter().map(|&x| frames::LocalIndex::at(x)).collect::<Vec<usize>>());
+        let bits = |v: &[DVec3]| {
+            v.iter()
+                .map(|x| x.to_array().map(f64::to_bits))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(codes(&one), codes(&two));
+        assert_eq!(one.locals, two.locals);
+        assert_eq!(one.offsets, two.offsets);
+        assert_eq!(bits(&one.details), bits(&two.details));
+        assert_eq!(
+            one.weights.iter().map(|w| w.to_bits()).collect::<Vec<_>>(),
+            two.weights.iter().map(|w| w.to_bits()).collect::<Vec<_>>()
+        );
+        let unit = two.synthesize(&LevelGains::unit());
+        let err = unit
+            .iter()
+            .zip(pm.original_positions())
+            .map(|(x, y)| (*x - *y).length())
+            .fold(0.0, f64::max);
+        assert!(err < 1e-12 * two.bbox_diagonal(), "{err:e}");
     }
 }
