@@ -7,25 +7,10 @@ use std::hint::black_box;
 
 /// A closed UV-sphere-like torus grid with `n*m*2` triangles (all vertices regular).
 fn torus(n: u32, m: u32) -> PolygonMesh {
-    let mut pos = Vec::with_capacity((n * m) as usize);
-    for i in 0..n {
-        for j in 0..m {
-            let (u, v) = (
-                i as f64 / n as f64 * std::f64::consts::TAU,
-                j as f64 / m as f64 * std::f64::consts::TAU,
-            );
-            let r = 2.0 + v.cos();
-            pos.push(DVec3::new(r * u.cos(), r * u.sin(), v.sin()));
-        }
-    }
-    let id = |i: u32, j: u32| (i % n) * m + (j % m);
-    let mut tris = Vec::with_capacity((2 * n * m) as usize);
-    for i in 0..n {
-        for j in 0..m {
-            tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
+    let (pos, tris) = meshpyr::mesh::shapes::torus(n, m, |u, v| {
+        let r = 2.0 + v.cos();
+        DVec3::new(r * u.cos(), r * u.sin(), v.sin())
+    });
     PolygonMesh::from_triangles(pos, &tris)
 }
 

@@ -13,30 +13,15 @@ use std::time::Duration;
 
 /// A bumpy, slightly noisy torus with `n·m` vertices.
 fn torus(n: u32, m: u32) -> Mesh {
-    let mut pos = Vec::with_capacity((n * m) as usize);
     let mut state = 0x9e37_79b9_7f4a_7c15u64;
-    for i in 0..n {
-        for j in 0..m {
-            let (u, v) = (
-                i as f64 / n as f64 * std::f64::consts::TAU,
-                j as f64 / m as f64 * std::f64::consts::TAU,
-            );
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            let noise = ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.002;
-            let r = 2.0 + (1.0 + 0.05 * (7.0 * u).sin() * (5.0 * v).cos() + noise) * v.cos();
-            pos.push(DVec3::new(r * u.cos(), r * u.sin(), v.sin()));
-        }
-    }
-    let id = |i: u32, j: u32| (i % n) * m + (j % m);
-    let mut tris = Vec::with_capacity((2 * n * m) as usize);
-    for i in 0..n {
-        for j in 0..m {
-            tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
+    let (pos, tris) = meshpyr::mesh::shapes::torus(n, m, |u, v| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        let noise = ((state >> 11) as f64 / (1u64 << 53) as f64 - 0.5) * 0.002;
+        let r = 2.0 + (1.0 + 0.05 * (7.0 * u).sin() * (5.0 * v).cos() + noise) * v.cos();
+        DVec3::new(r * u.cos(), r * u.sin(), v.sin())
+    });
     Mesh::from_polygons(&PolygonMesh::from_triangles(pos, &tris))
         .unwrap()
         .mesh

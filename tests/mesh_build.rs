@@ -40,26 +40,10 @@ fn grid(k: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
 
 /// An n×m torus.
 fn torus(n: u32, m: u32) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-    let mut pos = Vec::new();
-    for i in 0..n {
-        for j in 0..m {
-            let (u, v) = (
-                i as f64 / n as f64 * std::f64::consts::TAU,
-                j as f64 / m as f64 * std::f64::consts::TAU,
-            );
-            let r = 2.0 + v.cos();
-            pos.push(p(r * u.cos(), r * u.sin(), v.sin()));
-        }
-    }
-    let id = |i: u32, j: u32| (i % n) * m + (j % m);
-    let mut t = Vec::new();
-    for i in 0..n {
-        for j in 0..m {
-            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-        }
-    }
-    (pos, t)
+    meshpyr::mesh::shapes::torus(n, m, |u, v| {
+        let r = 2.0 + v.cos();
+        p(r * u.cos(), r * u.sin(), v.sin())
+    })
 }
 
 #[test]

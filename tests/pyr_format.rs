@@ -20,6 +20,11 @@ fn build(input: &PolygonMesh) -> (ProgressiveMesh, Vec<u8>) {
     (pm, bytes)
 }
 
+/// Split errors as bit patterns, so that NaN and −0.0 compare exactly.
+fn error_bits(errors: &[f32]) -> Vec<u32> {
+    errors.iter().map(|e| e.to_bits()).collect()
+}
+
 fn tetra() -> PolygonMesh {
     io::read_mesh(&data("tetrahedron.ply")).unwrap()
 }
@@ -76,14 +81,8 @@ fn decode_restores_input_and_hierarchy_exactly() {
         };
         assert_eq!(bits(&d.pm), bits(&pm), "{name}");
         assert_eq!(
-            d.pm.split_errors()
-                .iter()
-                .map(|e| e.to_bits())
-                .collect::<Vec<_>>(),
-            pm.split_errors()
-                .iter()
-                .map(|e| e.to_bits())
-                .collect::<Vec<_>>()
+            error_bits(d.pm.split_errors()),
+            error_bits(pm.split_errors())
         );
         // write → read → write is byte-identical
         let (again, _) = format::encode(&d.input, &d.pm, &d.info).unwrap();
@@ -323,14 +322,8 @@ fn format_1_files_still_load() {
         assert_same_mesh(&input, &d.input, file);
         assert_eq!(d.pm.splits(), pm.splits(), "{file}");
         assert_eq!(
-            d.pm.split_errors()
-                .iter()
-                .map(|e| e.to_bits())
-                .collect::<Vec<_>>(),
-            pm.split_errors()
-                .iter()
-                .map(|e| e.to_bits())
-                .collect::<Vec<_>>(),
+            error_bits(d.pm.split_errors()),
+            error_bits(pm.split_errors()),
             "{file}"
         );
         let level = format::read_level(&old, None).unwrap();
@@ -374,8 +367,7 @@ fn split_errors_round_trip_for_any_bits() {
     let odd_pm = ProgressiveMesh::from_parts(parts).unwrap();
     let (bytes, _) = format::encode(&input, &odd_pm, &BuildInfo::default()).unwrap();
     let d = format::decode(&bytes).unwrap();
-    let bits = |e: &[f32]| e.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-    assert_eq!(bits(d.pm.split_errors()), bits(&errors));
+    assert_eq!(error_bits(d.pm.split_errors()), error_bits(&errors));
 }
 
 #[test]

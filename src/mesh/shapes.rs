@@ -104,6 +104,44 @@ pub fn grid(n: usize, mut point: impl FnMut(usize, usize) -> DVec3) -> (Vec<DVec
     (p, t)
 }
 
+/// A closed `n × m` torus grid: vertex `i·m + j` sits at `point(u, v)` with angles
+/// `u = 2πi/n` (around the axis) and `v = 2πj/m` (around the tube), visited with `i` outer and
+/// `j` inner; each grid quad makes the triangles `[(i, j), (i+1, j), (i+1, j+1)]` and
+/// `[(i, j), (i+1, j+1), (i, j+1)]` (indices wrapping), `2·n·m` in all, consistently oriented.
+///
+/// ```
+/// use glam::DVec3;
+/// let (p, t) = meshpyr::mesh::shapes::torus(8, 6, |u, v| {
+///     let r = 2.0 + v.cos();
+///     DVec3::new(r * u.cos(), r * u.sin(), v.sin())
+/// });
+/// assert_eq!((p.len(), t.len()), (48, 96));
+/// assert_eq!(t[0], [0, 6, 7]);
+/// ```
+pub fn torus(
+    n: u32,
+    m: u32,
+    mut point: impl FnMut(f64, f64) -> DVec3,
+) -> (Vec<DVec3>, Vec<[u32; 3]>) {
+    let mut p = Vec::with_capacity((n * m) as usize);
+    for i in 0..n {
+        for j in 0..m {
+            let u = i as f64 / n as f64 * std::f64::consts::TAU;
+            let v = j as f64 / m as f64 * std::f64::consts::TAU;
+            p.push(point(u, v));
+        }
+    }
+    let id = |i: u32, j: u32| (i % n) * m + (j % m);
+    let mut t = Vec::with_capacity((2 * n * m) as usize);
+    for i in 0..n {
+        for j in 0..m {
+            t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    (p, t)
+}
+
 /// A closed UV sphere: the poles (vertices 0 = +z and 1 = −z) and `nv − 1` rings of `nu`
 /// vertices, `2·nu·(nv − 1)` outward-facing triangles. Vertex `k` of ring `j` (1-based) at
 /// longitude step `i` sits at distance `radius(k, i, j)` from the origin.

@@ -25,7 +25,7 @@
 use super::frames::{LocalIndex, frame_min_length};
 use super::synthesis::{Scratch, decode, predict_local, prefetch_next_split, presmooth_local};
 use super::waves::{SharedSignal, Waves, run_waves};
-use super::{Codes, Pyramid, PyramidError, SplitOffsets};
+use super::{CodeWidth, Codes, Pyramid, PyramidError, SplitOffsets};
 use crate::mesh::geometry::morton_codes;
 use crate::mesh::{SlotIndex, VertexId};
 use crate::pm::{FlatReplay, PmCursor, ProgressiveMesh};
@@ -503,42 +503,11 @@ impl Slotted {
         }
         let at = |slot: usize| record_of(&ranges, waves.split_at(slot));
         // Every range was widened to the widest code of all (see `Self::new`'s caller), so
-        // all have the same width and each accessor below sees its own variant.
-        let codes = |o: &SplitOffsets| o.codes;
-        let codes = match &ranges.first().map(|r| &r.codes) {
-            None | Some(Codes::Byte(_)) => Codes::Byte(stream(
-                &cuts,
-                &offsets,
-                &at,
-                |r| match &r.codes {
-                    Codes::Byte(c) => c,
-                    _ => &[],
-                },
-                codes,
-                |c| c,
-            )),
-            Some(Codes::Narrow(_)) => Codes::Narrow(stream(
-                &cuts,
-                &offsets,
-                &at,
-                |r| match &r.codes {
-                    Codes::Narrow(c) => c,
-                    _ => &[],
-                },
-                codes,
-                |c| c,
-            )),
-            Some(Codes::Wide(_)) => Codes::Wide(stream(
-                &cuts,
-                &offsets,
-                &at,
-                |r| match &r.codes {
-                    Codes::Wide(c) => c,
-                    _ => &[],
-                },
-                codes,
-                |c| c,
-            )),
+        // all have the same width.
+        let codes = match ranges.first().map(|r| &r.codes) {
+            None | Some(Codes::Byte(_)) => slotted_codes::<u8>(&cuts, &offsets, &at),
+            Some(Codes::Narrow(_)) => slotted_codes::<u16>(&cuts, &offsets, &at),
+            Some(Codes::Wide(_)) => slotted_codes::<u32>(&cuts, &offsets, &at),
         };
         for r in &mut ranges {
             r.codes = Codes::Byte(Vec::new());
@@ -628,6 +597,23 @@ impl Slotted {
             },
         );
     }
+}
+
+/// The code stream in slot order, every range's codes being `T`s (a range in another width
+/// contributes nothing, which `gather`'s length check turns into a panic).
+fn slotted_codes<'a, T: CodeWidth + Send + Sync + 'a>(
+    cuts: &[usize],
+    offsets: &[SplitOffsets],
+    at: &(dyn Fn(usize) -> (&'a Records, usize) + Sync),
+) -> Codes {
+    T::wrap(stream(
+        cuts,
+        offsets,
+        at,
+        |r| T::of(&r.codes),
+        |o| o.codes,
+        |c| c,
+    ))
 }
 
 /// One stream of the records in slot order ([`Slotted::new`]): `data` of the range

@@ -135,6 +135,33 @@ pub(crate) enum Codes {
     Wide(Vec<u32>),
 }
 
+/// The element types of [`Codes`]: their slice in a stream of their width, and the stream.
+pub(crate) trait CodeWidth: Copy + Sized {
+    /// The codes if `codes` has this width, else an empty slice.
+    fn of(codes: &Codes) -> &[Self];
+    /// The stream of these codes.
+    fn wrap(codes: Vec<Self>) -> Codes;
+}
+
+macro_rules! code_width {
+    ($t:ty, $variant:ident) => {
+        impl CodeWidth for $t {
+            fn of(codes: &Codes) -> &[$t] {
+                match codes {
+                    Codes::$variant(c) => c,
+                    _ => &[],
+                }
+            }
+            fn wrap(codes: Vec<$t>) -> Codes {
+                Codes::$variant(codes)
+            }
+        }
+    };
+}
+code_width!(u8, Byte);
+code_width!(u16, Narrow);
+code_width!(u32, Wide);
+
 impl Codes {
     fn bytes(&self) -> usize {
         with_codes!(self, c => std::mem::size_of_val(c.as_slice()))
@@ -276,26 +303,10 @@ mod tests {
     fn codes_of_every_width_synthesize_the_same_bits() {
         // Large neighbourhoods need 16- or 32-bit local indices; every width must run the same
         // arithmetic. Widen a small pyramid's 8-bit codes and compare bits.
-        let (n, m) = (12u32, 10u32);
-        let mut p = Vec::new();
-        for i in 0..n {
-            for j in 0..m {
-                let (u, v) = (
-                    i as f64 / n as f64 * std::f64::consts::TAU,
-                    j as f64 / m as f64 * std::f64::consts::TAU,
-                );
-                let r = 2.0 + (1.0 + 0.1 * (3.0 * u).sin()) * v.cos();
-                p.push(DVec3::new(r * u.cos(), r * u.sin(), v.sin()));
-            }
-        }
-        let id = |i: u32, j: u32| (i % n) * m + (j % m);
-        let mut t = Vec::new();
-        for i in 0..n {
-            for j in 0..m {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
+        let (p, t) = crate::mesh::shapes::torus(12, 10, |u, v| {
+            let r = 2.0 + (1.0 + 0.1 * (3.0 * u).sin()) * v.cos();
+            DVec3::new(r * u.cos(), r * u.sin(), v.sin())
+        });
         let mesh = Mesh::from_triangles(&p, &t).unwrap().mesh;
         let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &NoProgress).unwrap();
         let narrow = Pyramid::analyze(&pm, &SecondDifference::default(), &NoProgress).unwrap();
@@ -342,25 +353,13 @@ mod tests {
             t.push([0, b, c]);
             t.push([1, c, b]);
         }
-        let (n, m) = (60u32, 40u32);
+        let (torus_p, torus_t) = crate::mesh::shapes::torus(60, 40, |u, v| {
+            let r = 2.0 + (1.0 + 0.2 * (5.0 * u).sin() * (3.0 * v).cos()) * v.cos();
+            DVec3::new(10.0 + r * u.cos(), r * u.sin(), v.sin())
+        });
         let first = p.len() as u32;
-        for i in 0..n {
-            for j in 0..m {
-                let (u, v) = (
-                    i as f64 / n as f64 * std::f64::consts::TAU,
-                    j as f64 / m as f64 * std::f64::consts::TAU,
-                );
-                let r = 2.0 + (1.0 + 0.2 * (5.0 * u).sin() * (3.0 * v).cos()) * v.cos();
-                p.push(DVec3::new(10.0 + r * u.cos(), r * u.sin(), v.sin()));
-            }
-        }
-        let id = |i: u32, j: u32| first + (i % n) * m + (j % m);
-        for i in 0..n {
-            for j in 0..m {
-                t.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                t.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
+        p.extend(torus_p);
+        t.extend(torus_t.iter().map(|f| f.map(|x| first + x)));
         let mesh = Mesh::from_triangles(&p, &t).unwrap().mesh;
         let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &NoProgress).unwrap();
         let on = |threads: usize| {
