@@ -370,6 +370,77 @@ fn split_errors_round_trip_for_any_bits() {
     assert_eq!(error_bits(d.pm.split_errors()), error_bits(&errors));
 }
 
+/// A split error whose running value leaves the `u32` range, and bytes after a block's errors,
+/// are typed errors naming the problem (the checksums are fixed, so the decoder sees them).
+#[test]
+fn damaged_split_errors_are_typed_errors() {
+    use meshpyr::format::container::{Container, Section, write_container};
+    use meshpyr::format::varint::{ByteReader, put_ivarint};
+    let (_, bytes) = build(&io::read_mesh(&data("joint.ply")).unwrap());
+    let c = Container::parse(&bytes).unwrap();
+    // (payload, offset of its errors, split count) → new payload.
+    type Edit<'a> = &'a dyn Fn(&[u8], usize, usize) -> Vec<u8>;
+    let with_payload = |edit: Edit<'_>| {
+        let sections: Vec<Section> = c
+            .sections
+            .iter()
+            .map(|e| {
+                let mut b = bytes[e.offset as usize..(e.offset + e.length) as usize].to_vec();
+                if &e.tag == b"SPLT" {
+                    // One block: count, length, CRC, then records, errors, positions.
+                    let count = u32::from_le_bytes(b[0..4].try_into().unwrap()) as usize;
+                    let payload = &b[12..];
+                    let mut r = ByteReader::new(payload, 0);
+                    for _ in 0..3 * count {
+                        r.uvarint("record").unwrap();
+                    }
+                    let payload = edit(payload, r.offset() as usize, count);
+                    b.truncate(4);
+                    b.extend_from_slice(&(payload.len() as u32).to_le_bytes());
+                    b.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
+                    b.extend_from_slice(&payload);
+                }
+                Section {
+                    tag: e.tag,
+                    flags: e.flags,
+                    bytes: b,
+                }
+            })
+            .collect();
+        write_container(format::MAJOR, format::MINOR, &sections)
+    };
+    // Unchanged payload: still decodes (the harness itself is sound).
+    assert!(format::decode(&with_payload(&|p, _, _| p.to_vec())).is_ok());
+    // The first error's delta replaced by −1: the running value goes below 0.
+    let negative = with_payload(&|p, errors_at, _| {
+        let mut r = ByteReader::new(&p[errors_at..], 0);
+        r.ivarint("error").unwrap();
+        let mut out = p[..errors_at].to_vec();
+        put_ivarint(&mut out, -1);
+        out.extend_from_slice(&p[errors_at + r.offset() as usize..]);
+        out
+    });
+    let err = format::decode(&negative).unwrap_err();
+    assert!(matches!(err, FormatError::Corrupt { .. }), "{err}");
+    assert!(
+        err.to_string().contains("split error out of range"),
+        "{err}"
+    );
+    // A byte between the errors and the positions (joint's positions are f32: 12 bytes each).
+    let trailing = with_payload(&|p, _, count| {
+        let cut = p.len() - 12 * count;
+        let mut out = p[..cut].to_vec();
+        out.push(0);
+        out.extend_from_slice(&p[cut..]);
+        out
+    });
+    let err = format::decode(&trailing).unwrap_err();
+    assert!(
+        err.to_string().contains("trailing bytes in split block"),
+        "{err}"
+    );
+}
+
 #[test]
 fn fuzz_corpus_replays() {
     let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus/read_pyr");
