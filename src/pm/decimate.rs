@@ -198,6 +198,24 @@ impl FlatMesh {
             }
         }
         let n_vertices = vertices.iter().filter(|x| x.corner != NONE).count();
+        // Work relative to the centre of the mesh's bounding box. Plane quadrics in absolute
+        // coordinates carry `d² = (n·p)²` terms that cancel in every error evaluation: a scan
+        // in georeferenced units (offsets of 1e5–1e7 from the origin are common) would lose
+        // most of the error's digits and collapse in a nearly random order. Errors, normals
+        // and shapes are translation-invariant, and collapses create no positions, so the
+        // hierarchy only gains digits.
+        let (lo, hi) = vertices
+            .iter()
+            .filter(|x| x.corner != NONE)
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), x| {
+                (lo.min(x.position), hi.max(x.position))
+            });
+        if n_vertices > 0 {
+            let origin = 0.5 * (lo + hi);
+            for x in &mut vertices {
+                x.position -= origin;
+            }
+        }
         let corners = corner_vertex
             .iter()
             .zip(&twin)

@@ -9,6 +9,7 @@ use super::decimate::{Collapse, DecimateParams, pass_ended};
 use super::quadric::Quadric;
 use crate::mesh::{HalfedgeId, Mesh, SlotIndex};
 use crate::progress::Progress;
+use glam::DVec3;
 
 const NONE: u32 = u32::MAX;
 
@@ -82,6 +83,22 @@ pub(crate) fn decimate(
     progress: &dyn Progress,
 ) -> (Vec<Collapse>, Mesh) {
     let mut mesh = input.clone();
+    // Relative to the bounding-box centre of the vertices with faces, as `decimate.rs` does.
+    let (lo, hi) = mesh.vertices().filter(|&v| !mesh.is_isolated(v)).fold(
+        (DVec3::INFINITY, DVec3::NEG_INFINITY),
+        |(lo, hi), v| {
+            let p = mesh.position(v);
+            (lo.min(p), hi.max(p))
+        },
+    );
+    if lo.x <= hi.x {
+        let origin = 0.5 * (lo + hi);
+        let vertices: Vec<_> = mesh.vertices().collect();
+        for v in vertices {
+            let p = mesh.position(v);
+            mesh.set_position(v, p - origin);
+        }
+    }
     let n_he = mesh.halfedges().map(|h| h.slot() + 1).max().unwrap_or(0);
     let n_v = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
     let mut hid = vec![HalfedgeId::default(); n_he];
