@@ -165,6 +165,25 @@ pub fn denoise(
         }
         positions[v.slot()] = p;
     }
+    // Everything below runs relative to the bounding-box centre: the fitting's energy is a sum
+    // of tiny differences and the scale selection a discrete choice, so in the absolute
+    // coordinates of a scan far from the origin (georeferenced units) rounding would decide
+    // them (1e6 units away, results differed by a quarter of the displacement). An exactly
+    // translated input now gives exactly translated output.
+    let origin = {
+        let (lo, hi) = positions
+            .iter()
+            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            });
+        if lo.is_finite() && hi.is_finite() {
+            0.5 * (lo + hi)
+        } else {
+            DVec3::ZERO
+        }
+    };
+    let input = positions;
+    let positions: Vec<DVec3> = input.iter().map(|&p| p - origin).collect();
     let l = surface.mean_edge_length(&positions);
     let mut result = Denoised {
         positions,
@@ -175,6 +194,7 @@ pub fn denoise(
     };
     if !(l > 0.0 && l.is_finite()) {
         progress.update(1.0);
+        result.positions = input;
         return Ok(result);
     }
     surface.reorder_spatially(&result.positions);
@@ -203,8 +223,14 @@ pub fn denoise(
         step_cap: options.step_cap * l,
         ..FitOptions::default()
     };
+    let start = result.positions.clone();
     result.fit = fitting.minimise(&mut result.positions, &fit_options, &|x: f64| {
         progress.update(0.7 + 0.3 * x)
     });
+    // Back to the input's coordinates; vertices the fitting did not move (those in no face,
+    // and empty slots) keep their exact input bits.
+    for ((p, &x0), &q) in result.positions.iter_mut().zip(&start).zip(&input) {
+        *p = if *p == x0 { q } else { *p + origin };
+    }
     Ok(result)
 }
