@@ -326,3 +326,36 @@ fn filter_with_normal_relaxation_reproduces_and_filters_the_fandisk() {
         .fold(0.0, f64::max);
     assert!(err < 1e-6, "{err}");
 }
+
+/// A scan far from the origin is denoised like the same scan at the origin. The noisy fandisk,
+/// snapped to multiples of 2^-20, is translated by 2^20 exactly; the denoiser works relative to
+/// the bounding-box centre, so both copies run the same arithmetic and the outputs differ only
+/// by the rounding of the final translation back (a 2^20 coordinate's last bit, 2.3e-10). In
+/// absolute coordinates the far copy's result moved by a quarter of the displacement.
+#[test]
+fn a_scan_far_from_the_origin_is_denoised_the_same() {
+    let noisy = load("fandisk_noise_n020.ply");
+    let snap = |x: f64| (x * f64::from(1u32 << 20)).round() / f64::from(1u32 << 20);
+    let offset = f64::from(1u32 << 20);
+    let moved = |by: f64| {
+        let mut m = noisy.clone();
+        let vertices: Vec<_> = m.vertices().collect();
+        for v in vertices {
+            let p = m.position(v);
+            m.set_position(v, DVec3::new(snap(p.x), snap(p.y), snap(p.z)) + by);
+        }
+        m
+    };
+    for options in [DenoiseOptions::adaptive(), DenoiseOptions::anisotropic()] {
+        let near = denoise(&moved(0.0), &options, &NoProgress).unwrap();
+        let far = denoise(&moved(offset), &options, &NoProgress).unwrap();
+        let start = moved(0.0).positions();
+        let (mut worst, mut moved_most) = (0.0f64, 0.0f64);
+        for ((a, b), s) in near.positions.iter().zip(&far.positions).zip(&start) {
+            worst = worst.max((*b - offset - *a).abs().max_element());
+            moved_most = moved_most.max((*a - *s).length());
+        }
+        assert!(moved_most > 1e-3, "the denoiser moved nothing");
+        assert!(worst <= 4.7e-10, "far copy differs by {worst:e}");
+    }
+}
