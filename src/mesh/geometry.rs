@@ -25,6 +25,13 @@ impl BoundingBox {
     pub fn diagonal(&self) -> f64 {
         (self.max - self.min).length()
     }
+
+    /// The centre. Algorithms whose arithmetic cancels large coordinates (plane quadrics,
+    /// energies of tiny differences) run relative to it, so that a scan far from the origin
+    /// keeps its digits.
+    pub fn centre(&self) -> DVec3 {
+        0.5 * (self.min + self.max)
+    }
 }
 
 /// Morton (Z-order) codes of `points` in their bounding cube, 21 bits per axis: points near in

@@ -32,7 +32,7 @@ use super::collapse::Legality;
 use super::prefetch::prefetch;
 use super::quadric::Quadric;
 use crate::mesh::build::{next_c, prev_c};
-use crate::mesh::{CornerTable, Mesh, SlotIndex};
+use crate::mesh::{BoundingBox, CornerTable, Mesh, SlotIndex};
 use crate::progress::Progress;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -204,14 +204,9 @@ impl FlatMesh {
         // most of the error's digits and collapse in a nearly random order. Errors, normals
         // and shapes are translation-invariant, and collapses create no positions, so the
         // hierarchy only gains digits.
-        let (lo, hi) = vertices
-            .iter()
-            .filter(|x| x.corner != NONE)
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), x| {
-                (lo.min(x.position), hi.max(x.position))
-            });
-        if n_vertices > 0 {
-            let origin = 0.5 * (lo + hi);
+        let used = vertices.iter().filter(|x| x.corner != NONE);
+        if let Some(bounds) = BoundingBox::of(used.map(|x| x.position)) {
+            let origin = bounds.centre();
             for x in &mut vertices {
                 x.position -= origin;
             }

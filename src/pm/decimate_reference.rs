@@ -7,9 +7,8 @@ use super::collapse::{
 };
 use super::decimate::{Collapse, DecimateParams, pass_ended};
 use super::quadric::Quadric;
-use crate::mesh::{HalfedgeId, Mesh, SlotIndex};
+use crate::mesh::{BoundingBox, HalfedgeId, Mesh, SlotIndex};
 use crate::progress::Progress;
-use glam::DVec3;
 
 const NONE: u32 = u32::MAX;
 
@@ -84,15 +83,9 @@ pub(crate) fn decimate(
 ) -> (Vec<Collapse>, Mesh) {
     let mut mesh = input.clone();
     // Relative to the bounding-box centre of the vertices with faces, as `decimate.rs` does.
-    let (lo, hi) = mesh.vertices().filter(|&v| !mesh.is_isolated(v)).fold(
-        (DVec3::INFINITY, DVec3::NEG_INFINITY),
-        |(lo, hi), v| {
-            let p = mesh.position(v);
-            (lo.min(p), hi.max(p))
-        },
-    );
-    if lo.x <= hi.x {
-        let origin = 0.5 * (lo + hi);
+    let used = mesh.vertices().filter(|&v| !mesh.is_isolated(v));
+    if let Some(bounds) = BoundingBox::of(used.map(|v| mesh.position(v))) {
+        let origin = bounds.centre();
         let vertices: Vec<_> = mesh.vertices().collect();
         for v in vertices {
             let p = mesh.position(v);

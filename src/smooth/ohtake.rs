@@ -15,7 +15,7 @@ use super::dual::DualGraph;
 use super::fitting::{FitOptions, FitReport, Fitting};
 use super::normal_filter::{FilteredNormals, MAX_SCALES, ScaleGrid, Variance, filter_normals};
 use super::surface::FlatSurface;
-use crate::mesh::{Mesh, SlotIndex};
+use crate::mesh::{BoundingBox, Mesh, SlotIndex};
 use crate::progress::Progress;
 use glam::DVec3;
 
@@ -170,18 +170,7 @@ pub fn denoise(
     // coordinates of a scan far from the origin (georeferenced units) rounding would decide
     // them (1e6 units away, results differed by a quarter of the displacement). An exactly
     // translated input now gives exactly translated output.
-    let origin = {
-        let (lo, hi) = positions
-            .iter()
-            .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), &p| {
-                (lo.min(p), hi.max(p))
-            });
-        if lo.is_finite() && hi.is_finite() {
-            0.5 * (lo + hi)
-        } else {
-            DVec3::ZERO
-        }
-    };
+    let origin = BoundingBox::of(positions.iter().copied()).map_or(DVec3::ZERO, |b| b.centre());
     let input = positions;
     let positions: Vec<DVec3> = input.iter().map(|&p| p - origin).collect();
     let l = surface.mean_edge_length(&positions);
