@@ -17,7 +17,7 @@ use std::time::Instant;
 /// Arguments of `meshpyr build`.
 #[derive(clap::Args, Debug)]
 pub struct BuildArgs {
-    /// Input mesh (.obj, .ply, .off, .stl).
+    /// Input mesh (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
     pub input: PathBuf,
     /// Output `.pyr` file.
     #[arg(short, long)]
@@ -31,7 +31,7 @@ pub struct BuildArgs {
 /// Runs `meshpyr build`.
 pub fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
     let relaxation = args.relax.spec()?;
-    let input = io::read_mesh(&args.input)?;
+    let input = super::read_input_mesh(&args.input)?;
     let start = Instant::now();
     let built = crate::mesh::Mesh::from_polygons(&input)
         .with_context(|| format!("cannot build the mesh of {}", args.input.display()))?;

@@ -2,7 +2,6 @@
 //! a processed mesh against a reference (see [`crate::metrics::error`]).
 
 use super::Global;
-use crate::io;
 use crate::mesh::Mesh;
 use crate::metrics::{Comparison, compare};
 use anyhow::Context;
@@ -21,9 +20,9 @@ use std::path::{Path, PathBuf};
                   repaired and consistently oriented by the builder first (see `meshpyr info`)."
 )]
 pub struct CompareArgs {
-    /// The processed mesh M' (.obj, .ply, .off, .stl).
+    /// The processed mesh M' (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
     pub result: PathBuf,
-    /// The reference mesh M.
+    /// The reference mesh M (same formats).
     pub reference: PathBuf,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -31,7 +30,7 @@ pub struct CompareArgs {
 }
 
 fn load(path: &Path) -> anyhow::Result<Mesh> {
-    let poly = io::read_mesh(path)?;
+    let poly = super::read_input_mesh(path)?;
     Ok(Mesh::from_polygons(&poly)
         .with_context(|| format!("building a mesh from {}", path.display()))?
         .mesh)

@@ -18,7 +18,7 @@ pub enum PlyEncodingArg {
 /// Arguments of `meshpyr convert`.
 #[derive(clap::Args, Debug)]
 pub struct ConvertArgs {
-    /// Input mesh (.obj, .ply, .off, .stl).
+    /// Input mesh (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
     pub input: PathBuf,
     /// Output mesh; the format follows the extension.
     pub output: PathBuf,
@@ -33,7 +33,7 @@ pub struct ConvertArgs {
 /// Runs `meshpyr convert`.
 pub fn run(args: ConvertArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
-    let mesh = io::read_mesh(&args.input)?;
+    let mesh = super::read_input_mesh(&args.input)?;
     let opts = WriteOptions {
         ply_encoding: match args.ply_encoding {
             PlyEncodingArg::Ascii => PlyEncoding::Ascii,

@@ -1,7 +1,6 @@
 //! `meshpyr info MESH [--json]`: counts, topology, size and what the builder repaired.
 
 use super::Global;
-use crate::io;
 use crate::mesh::{BuildReport, Mesh, PolygonMesh};
 use anyhow::Context;
 use serde::Serialize;
@@ -10,7 +9,7 @@ use std::path::PathBuf;
 /// Arguments of `meshpyr info`.
 #[derive(clap::Args, Debug)]
 pub struct InfoArgs {
-    /// Mesh file (.obj, .ply, .off, .stl).
+    /// Mesh file (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
     pub mesh: PathBuf,
     /// Print one JSON object instead of text.
     #[arg(long)]
@@ -103,7 +102,7 @@ fn count_file_edges(poly: &PolygonMesh) -> usize {
 
 /// Runs `meshpyr info`.
 pub fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
-    let poly = io::read_mesh(&args.mesh)?;
+    let poly = super::read_input_mesh(&args.mesh)?;
     let info = mesh_info(&poly).with_context(|| args.mesh.display().to_string())?;
     if args.json {
         outln!("{}", serde_json::to_string(&info)?);

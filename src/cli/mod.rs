@@ -76,6 +76,22 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
     })
 }
 
+/// Reads the mesh a command works on: a mesh file, or a `.pyr` file (recognised by its
+/// signature, whatever its name), whose stored input mesh is restored exactly — the file the
+/// user built it from, so `info`, `convert`, `simplify`, `subdivide`, `smooth`, `compare` and
+/// `build` take the file they keep as well.
+pub fn read_input_mesh(path: &std::path::Path) -> anyhow::Result<crate::mesh::PolygonMesh> {
+    use anyhow::Context;
+    if build::is_pyr_file(path) {
+        let bytes =
+            std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+        let data = crate::format::decode(&bytes)
+            .with_context(|| format!("cannot load {}", path.display()))?;
+        return Ok(data.input);
+    }
+    Ok(crate::io::read_mesh(path)?)
+}
+
 /// Fails before any work when `path` has no mesh format we can write (the extension decides),
 /// so a typo in `-o` does not cost a whole run.
 pub fn check_mesh_output(path: &std::path::Path) -> anyhow::Result<()> {

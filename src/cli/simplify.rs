@@ -11,7 +11,7 @@ use std::path::PathBuf;
 #[derive(clap::Args, Debug)]
 #[command(group(clap::ArgGroup::new("target").required(true).args(["faces", "ratio", "error"])))]
 pub struct SimplifyArgs {
-    /// Input mesh (.obj, .ply, .off, .stl).
+    /// Input mesh (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
     pub input: PathBuf,
     /// Output mesh; the format follows the extension.
     #[arg(short, long)]
@@ -43,7 +43,7 @@ pub fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
         (_, _, Some(e)) => SimplifyTarget::Error(e),
         _ => anyhow::bail!("one of --faces, --ratio, --error is required"),
     };
-    let input = io::read_mesh(&args.input)?;
+    let input = super::read_input_mesh(&args.input)?;
     let opts = PmOptions {
         max_normal_angle_degrees: args.max_angle,
         boundary_weight: args.boundary_weight,

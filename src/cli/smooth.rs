@@ -70,7 +70,7 @@ pub enum VarianceArg {
                   compare`."
 )]
 pub struct SmoothArgs {
-    /// Input mesh (.obj, .ply, .off, .stl).
+    /// Input mesh (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
     pub input: PathBuf,
     /// Output mesh; the format follows the extension.
     #[arg(short, long)]
@@ -208,7 +208,7 @@ pub fn run(args: SmoothArgs, global: &Global) -> anyhow::Result<()> {
     if matches!(args.method, MethodArg::Adaptive | MethodArg::Anisotropic) {
         args.denoise_options().validate()?;
     }
-    let input = io::read_mesh(&args.input)?;
+    let input = super::read_input_mesh(&args.input)?;
     let built = Mesh::from_polygons(&input)
         .with_context(|| format!("building a mesh from {}", args.input.display()))?;
     if built.report.repaired_anything() {

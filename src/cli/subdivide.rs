@@ -50,7 +50,7 @@ const AUTO_EXACT_MAX_VERTICES: f64 = 250_000.0;
                   Dirty input is repaired by the builder first (see `meshpyr info`)."
 )]
 pub struct SubdivideArgs {
-    /// Input mesh (.obj, .ply, .off, .stl).
+    /// Input mesh (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
     pub input: PathBuf,
     /// Output mesh; the format follows the extension.
     #[arg(short, long)]
@@ -86,7 +86,7 @@ pub struct SubdivideArgs {
 /// Runs `meshpyr subdivide`.
 pub fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
-    let input = io::read_mesh(&args.input)?;
+    let input = super::read_input_mesh(&args.input)?;
     let built = Mesh::from_polygons(&input)
         .with_context(|| format!("building a mesh from {}", args.input.display()))?;
     if built.report.repaired_anything() {
