@@ -497,7 +497,7 @@ impl Slotted {
         }
         let chunks = 4 * rayon::current_num_threads();
         let cuts: Vec<usize> = (0..=chunks).map(|c| n_splits * c / chunks).collect();
-        let locals = stream(&cuts, &offsets, &at, |r| &r.locals, |o| o.locals, |x| x);
+        let locals = stream(&cuts, &offsets, &at, |r| &r.locals, |o| o.locals);
         for r in &mut ranges {
             r.locals = Vec::new();
         }
@@ -513,7 +513,7 @@ impl Slotted {
             r.codes = Codes::Byte(Vec::new());
         }
         let at = |slot: usize| record_of(&ranges, waves.split_at(slot));
-        let weights = stream(&cuts, &offsets, &at, |r| &r.weights, |o| o.weights, |w| w);
+        let weights = stream(&cuts, &offsets, &at, |r| &r.weights, |o| o.weights);
         Slotted {
             offsets,
             locals,
@@ -606,26 +606,18 @@ fn slotted_codes<'a, T: CodeWidth + Send + Sync + 'a>(
     offsets: &[SplitOffsets],
     at: &(dyn Fn(usize) -> (&'a Records, usize) + Sync),
 ) -> Codes {
-    T::wrap(stream(
-        cuts,
-        offsets,
-        at,
-        |r| T::of(&r.codes),
-        |o| o.codes,
-        |c| c,
-    ))
+    T::wrap(stream(cuts, offsets, at, |r| T::of(&r.codes), |o| o.codes))
 }
 
 /// One stream of the records in slot order ([`Slotted::new`]): `data` of the range
 /// record `at(slot)` names, each split's part found at `pos` of its offsets, copied with
 /// [`gather`] to `pos` of the slot's new `offsets`.
-fn stream<'a, S: Copy + Sync + 'a, T: Send>(
+fn stream<'a, T: Copy + Send + Sync + 'a>(
     cuts: &[usize],
     offsets: &[SplitOffsets],
     at: &(dyn Fn(usize) -> (&'a Records, usize) + Sync),
-    data: fn(&'a Records) -> &'a [S],
+    data: fn(&'a Records) -> &'a [T],
     pos: fn(&SplitOffsets) -> usize,
-    convert: fn(S) -> T,
 ) -> Vec<T> {
     gather(
         cuts,
@@ -634,19 +626,16 @@ fn stream<'a, S: Copy + Sync + 'a, T: Send>(
             let (r, i) = at(slot);
             &data(r)[pos(&r.offsets[i])..pos(&r.offsets[i + 1])]
         },
-        convert,
     )
 }
 
-/// The slices `record(slot)` of all slots `cuts[0]..cuts[last]`, each element converted,
-/// concatenated; slot `s` lands at `start(s)` (`start(cuts[last])` is the total length). The
-/// chunks `cuts[c]..cuts[c + 1]` are copied on rayon's threads, each into its own part of the
-/// output.
-fn gather<'r, S: Copy + Sync + 'r, T: Send>(
+/// The slices `record(slot)` of all slots `cuts[0]..cuts[last]`, concatenated; slot `s` lands
+/// at `start(s)` (`start(cuts[last])` is the total length). The chunks `cuts[c]..cuts[c + 1]`
+/// are copied on rayon's threads, each into its own part of the output.
+fn gather<'r, T: Copy + Send + Sync + 'r>(
     cuts: &[usize],
     start: impl Fn(usize) -> usize,
-    record: impl Fn(usize) -> &'r [S] + Sync,
-    convert: fn(S) -> T,
+    record: impl Fn(usize) -> &'r [T] + Sync,
 ) -> Vec<T> {
     use rayon::prelude::*;
     let (first, last) = (cuts[0], cuts[cuts.len() - 1]);
@@ -664,7 +653,7 @@ fn gather<'r, S: Copy + Sync + 'r, T: Send>(
         for slot in slots {
             let src = record(slot);
             for (d, &x) in part[at..at + src.len()].iter_mut().zip(src) {
-                d.write(convert(x));
+                d.write(x);
             }
             at += src.len();
         }
