@@ -80,14 +80,19 @@ pub fn is_pyr_file(path: &Path) -> bool {
         .is_ok_and(|_| format::is_pyr(&head))
 }
 
+/// Reads and decodes a whole `.pyr` file (validated), errors naming the file.
+pub fn load_pyr(path: &Path) -> anyhow::Result<format::PyrData> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    format::decode(&bytes).with_context(|| format!("cannot load {}", path.display()))
+}
+
 /// Loads a `.pyr` file and recomputes its pyramid (the relaxation recorded in the file).
 pub fn load_pyr_scan(
     path: &Path,
     global: &Global,
 ) -> anyhow::Result<(ScanPyramid, RelaxationSpec)> {
     let start = Instant::now();
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let data = format::decode(&bytes).with_context(|| format!("cannot load {}", path.display()))?;
+    let data = load_pyr(path)?;
     let spec = data.info.relaxation;
     let loaded = start.elapsed().as_secs_f64();
     let bar = global.progress("analysis");

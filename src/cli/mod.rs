@@ -81,13 +81,8 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
 /// user built it from, so `info`, `convert`, `simplify`, `subdivide`, `smooth`, `compare` and
 /// `build` take the file they keep as well.
 pub fn read_input_mesh(path: &std::path::Path) -> anyhow::Result<crate::mesh::PolygonMesh> {
-    use anyhow::Context;
     if build::is_pyr_file(path) {
-        let bytes =
-            std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-        let data = crate::format::decode(&bytes)
-            .with_context(|| format!("cannot load {}", path.display()))?;
-        return Ok(data.input);
+        return Ok(build::load_pyr(path)?.input);
     }
     Ok(crate::io::read_mesh(path)?)
 }
