@@ -222,6 +222,33 @@ fn lowpass_removes_noise_and_gains_act_only_on_their_levels() {
     assert_eq!(a[..cut], b[..cut]);
 }
 
+/// Levels a filter removes take a shortcut in synthesis (no frames, the prediction alone):
+/// it must give what a vanishing gain gives through the frames.
+#[test]
+fn removed_levels_give_what_a_vanishing_gain_gives() {
+    let (p, t) = noisy_height_field(30, 0.004);
+    let (_, pyr) = pyramid_of(&p, &t);
+    let n = pyr.n_vertices();
+    let diag = pyr.bbox_diagonal();
+    let (a, b) = (LevelSpec::Vertices(n / 8), LevelSpec::Vertices(n / 2));
+    for (removed, vanishing) in [
+        (
+            Filter::default().lowpass(a),
+            Filter::default().gain(a, LevelSpec::Vertices(n), 1e-200),
+        ),
+        (
+            Filter::default().stopband(a, b),
+            Filter::default().gain(a, b, 1e-200),
+        ),
+    ] {
+        let x = pyr.synthesize(&removed.resolve(1.0));
+        let y = pyr.synthesize(&vanishing.resolve(1.0));
+        assert!(max_dist(&x, &y) <= 1e-14 * diag, "{}", max_dist(&x, &y));
+        // And the levels really were removed.
+        assert!(max_dist(&x, &pyr.synthesize(&LevelGains::unit())) > 1e-4 * diag);
+    }
+}
+
 #[test]
 fn planar_linear_signal_has_no_details() {
     // Linear precision carried through the whole pyramid: on a flat mesh the prediction of

@@ -162,6 +162,20 @@ pub(crate) fn predict_local<I: LocalIndex>(
     frames: &mut Vec<Frame>,
     min_length: f64,
 ) {
+    predict_values(codes, weights, entries, survivor, g, q);
+    local_frames(codes, entries, survivor, g, frames, min_length);
+}
+
+/// The predictions of [`predict_local`] without the frames: `q`, and `G` in `g`.
+#[inline]
+fn predict_values<I: LocalIndex>(
+    codes: &[I],
+    weights: &[f64],
+    entries: &[Entry],
+    survivor: usize,
+    g: &mut [DVec3],
+    q: &mut Vec<DVec3>,
+) {
     let t = entries.len();
     g[0] = g[survivor];
     let qv = relax_entry(codes, weights, &entries[0], g, g[survivor]);
@@ -172,6 +186,18 @@ pub(crate) fn predict_local<I: LocalIndex>(
         q.push(relax_entry(codes, weights, e, g, g[i]));
     }
     g[1..t].copy_from_slice(&q[1..]);
+}
+
+/// The frames of [`predict_local`], from the predicted geometry `G` in `g`.
+#[inline]
+fn local_frames<I: LocalIndex>(
+    codes: &[I],
+    entries: &[Entry],
+    survivor: usize,
+    g: &[DVec3],
+    frames: &mut Vec<Frame>,
+    min_length: f64,
+) {
     frames.clear();
     for (i, e) in entries.iter().enumerate() {
         let reference = if i == 0 { survivor } else { 0 };
@@ -199,18 +225,33 @@ impl Pyramid {
         g.clear();
         g.extend(locals.iter().map(|&x| f.get(x as usize)));
         let survivor = decode(codes, o.codes, o.weights, &mut scratch.entries);
-        predict_local(
+        predict_values(
             codes,
             &self.weights,
             &scratch.entries,
             survivor,
             g,
             &mut scratch.q,
-            &mut scratch.frames,
-            frame_min_length(self.bbox_diagonal),
         );
         let level = self.level_of_split(self.waves.split_at(slot));
         let (tangential, normal) = gains.split_gain(level);
+        if tangential == 0.0 && normal == 0.0 {
+            // A level the filter removes (low-pass, stop-band): its details vanish, so the
+            // prediction is the result and the frames, about half of a split's work, are
+            // not needed.
+            for (&x, &q) in locals.iter().zip(&scratch.q) {
+                f.set(x as usize, q);
+            }
+            return;
+        }
+        local_frames(
+            codes,
+            &scratch.entries,
+            survivor,
+            g,
+            &mut scratch.frames,
+            frame_min_length(self.bbox_diagonal),
+        );
         let details = &self.details[o.details..next.details];
         // The touched vertices open the local table; there is one detail for each.
         for (((&x, &q), frame), &d) in locals
