@@ -1,5 +1,6 @@
 //! Detail pyramid: analysis and synthesis against the PM build, at growing sizes (linearity),
-//! plus the bundled bunny scan. Run with `cargo bench --bench pyramid`.
+//! plus the bundled bunny scan. Synthesis runs the paper's enhancement (`synthesis`), low-pass
+//! and stop-band filters. Run with `cargo bench --bench pyramid`.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
@@ -55,12 +56,19 @@ fn bench(c: &mut Criterion) {
             b.iter(|| Pyramid::analyze(black_box(pm), &relax, &NoProgress).unwrap())
         });
         let pyr = Pyramid::analyze(&pm, &relax, &NoProgress).unwrap();
-        let gains = Filter::default()
-            .gain(LevelSpec::Vertices(1000), LevelSpec::Vertices(15000), 2.0)
-            .resolve(pyr.surface_area());
-        g.bench_with_input(BenchmarkId::new("synthesis", name), &pyr, |b, p| {
-            b.iter(|| black_box(p).synthesize(&gains))
-        });
+        // The paper's three Venus filters: enhancement (every level still needs its frames),
+        // low-pass and stop-band (removed levels skip them).
+        let (a, z) = (LevelSpec::Vertices(1000), LevelSpec::Vertices(15000));
+        for (id, filter) in [
+            ("synthesis", Filter::default().gain(a, z, 2.0)),
+            ("synthesis_lowpass", Filter::default().lowpass(a)),
+            ("synthesis_stopband", Filter::default().stopband(a, z)),
+        ] {
+            let gains = filter.resolve(pyr.surface_area());
+            g.bench_with_input(BenchmarkId::new(id, name), &pyr, |b, p| {
+                b.iter(|| black_box(p).synthesize(&gains))
+            });
+        }
     }
     g.finish();
 }
