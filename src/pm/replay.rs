@@ -209,9 +209,10 @@ impl Listed {
 }
 
 /// Writes `seq[start..]` then `seq[..start]` (the first `len` entries of `seq`, rotated) into
-/// the first `len` entries of `dst`, for `len <= INLINE`. `seq` is first extended
-/// periodically, so the rotation is one fixed-size copy of `INLINE` entries (moves, not a
-/// `memmove` call; entries past `len` are leftovers no reader looks at).
+/// the first `len` entries of `dst`, for `len <= INLINE`. The `start` entries that wrap are
+/// first appended after `len` (usually none or a few), so the rotation is one fixed-size copy
+/// of `INLINE` entries (moves, not a `memmove` call; entries past `len` are leftovers no
+/// reader looks at).
 #[inline(always)]
 fn write_rotated(
     dst: &mut [Entry; INLINE],
@@ -220,7 +221,7 @@ fn write_rotated(
     start: usize,
 ) {
     debug_assert!(len <= INLINE && start < len.max(1));
-    for i in 0..INLINE {
+    for i in 0..start.min(INLINE) {
         seq[len + i] = seq[i];
     }
     dst[..INLINE].copy_from_slice(&seq[start..start + INLINE]);
