@@ -12,7 +12,7 @@ use meshpyr::format::{self, BuildInfo};
 use meshpyr::mesh::Mesh;
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Filter, LevelSpec, Pyramid};
+use meshpyr::pyramid::{Filter, Pyramid};
 use meshpyr::relax::SecondDifference;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -71,18 +71,13 @@ fn main() -> anyhow::Result<()> {
     );
 
     let per_million = 1e6 / pyramid.n_vertices() as f64;
-    let (lo, hi) = (LevelSpec::Vertices(1000), LevelSpec::Vertices(15000));
-    for (name, filter) in [
-        ("synthesis, enhance", Filter::default().gain(lo, hi, 2.0)),
-        ("synthesis, low-pass", Filter::default().lowpass(lo)),
-        ("synthesis, stop-band", Filter::default().stopband(lo, hi)),
-    ] {
+    for (name, _, filter) in Filter::paper_experiments() {
         let gains = filter.resolve(pyramid.surface_area());
         let t = min_median(5 * runs, || {
             std::hint::black_box(pyramid.synthesize(&gains));
         });
         println!(
-            "{name:22}{}   {:.3} / {:.3} s per million vertices",
+            "synthesis, {name:11}{}   {:.3} / {:.3} s per million vertices",
             ms(t),
             t.0 * per_million,
             t.1 * per_million

@@ -222,24 +222,7 @@ pub fn demo_filters(
         sizes.total as f64 / scan.input.n_vertices().max(1) as f64
     ));
     let pyr = &scan.pyramid;
-    let v = LevelSpec::Vertices;
-    let experiments = [
-        (
-            "lowpass",
-            "low-pass above level 1000",
-            Filter::default().lowpass(v(1000)),
-        ),
-        (
-            "stopband",
-            "stop-band 1000-15000",
-            Filter::default().stopband(v(1000), v(15000)),
-        ),
-        (
-            "enhanced",
-            "enhancement x2 on 1000-15000",
-            Filter::default().gain(v(1000), v(15000), 2.0),
-        ),
-    ];
+    let experiments = Filter::paper_experiments();
     let mut signals = vec![("input", pyr.synthesize(&Filter::default().resolve(1.0)))];
     for (name, what, filter) in &experiments {
         let start = Instant::now();

@@ -23,7 +23,9 @@
 //! they run the splits of a wave (see `waves`) at once, in reverse.
 
 use super::frames::{LocalIndex, frame_min_length};
-use super::synthesis::{Scratch, decode, predict_local, prefetch_next_split, presmooth_local};
+use super::synthesis::{
+    Scratch, decode, local_frames, predict_values, prefetch_next_split, presmooth_local,
+};
 use super::waves::{SharedSignal, Waves, run_waves};
 use super::{CodeWidth, Codes, Pyramid, PyramidError, SplitOffsets};
 use crate::mesh::geometry::morton_codes;
@@ -560,13 +562,19 @@ impl Slotted {
             f.set(x as usize, s);
         }
         // 4. Predict, 5. details in the frames of the predicted geometry.
-        predict_local(
+        predict_values(
             codes,
             &self.weights,
             &scratch.entries,
             survivor,
             g,
             &mut scratch.q,
+        );
+        local_frames(
+            codes,
+            &scratch.entries,
+            survivor,
+            g,
             &mut scratch.frames,
             min_length,
         );

@@ -181,6 +181,36 @@ impl Filter {
         self
     }
 
+    /// The paper's three Venus experiments (Guskov, Sweldens, Schröder 1999, Fig. 9), as
+    /// `(name, description, filter)`: low-pass above level 1000, stop-band 1000–15000 and
+    /// enhancement ×2 on 1000–15000. The demo writes them; the benches time them.
+    ///
+    /// ```
+    /// use meshpyr::pyramid::Filter;
+    /// let names: Vec<&str> = Filter::paper_experiments().iter().map(|e| e.0).collect();
+    /// assert_eq!(names, ["lowpass", "stopband", "enhanced"]);
+    /// ```
+    pub fn paper_experiments() -> [(&'static str, &'static str, Filter); 3] {
+        let (a, b) = (LevelSpec::Vertices(1000), LevelSpec::Vertices(15000));
+        [
+            (
+                "lowpass",
+                "low-pass above level 1000",
+                Filter::default().lowpass(a),
+            ),
+            (
+                "stopband",
+                "stop-band 1000-15000",
+                Filter::default().stopband(a, b),
+            ),
+            (
+                "enhanced",
+                "enhancement x2 on 1000-15000",
+                Filter::default().gain(a, b, 2.0),
+            ),
+        ]
+    }
+
     /// True when no band is set (synthesis reproduces the input).
     pub fn is_identity(&self) -> bool {
         self.bands.iter().all(|b| b.gain == 1.0)

@@ -2,9 +2,9 @@
 //! and its 1-ring with the level's relaxation weights, rebuild their frames from the prediction,
 //! and add the scaled details.
 //!
-//! The prediction step here is the one the analysis uses too (`predict_local`), so both passes
-//! evaluate identical arithmetic in identical order; with unit gains synthesis returns the
-//! analysed signal up to rounding.
+//! The prediction and the frames here are the ones the analysis uses too (`predict_values`,
+//! `local_frames`), so both passes evaluate identical arithmetic in identical order; with unit
+//! gains synthesis returns the analysed signal up to rounding.
 //!
 //! Each split works on its *local table* (see [`Pyramid`]): the values of the few dozen vertices
 //! it reads are gathered once into a small contiguous buffer, predicted and framed there, and
@@ -147,28 +147,10 @@ pub(crate) fn presmooth_local<I: LocalIndex>(
 /// The subdivision step `S_n` on a split's local signal `g` (entry `i` is `g[i]`; `g` holds
 /// `f^(n−1)` on everything but the new vertex): the new vertex starts at its survivor's value
 /// (operators with a self weight read it) and is predicted, then its 1-ring simultaneously
-/// (reading the new vertex's prediction). Leaves the predicted geometry `G` in `g`, the
-/// predictions in `q` and the frames of all touched entries, built from `G`, in `frames`
-/// (`min_length`: see [`vertex_frame`]).
+/// (reading the new vertex's prediction). Leaves the predictions in `q` and the predicted
+/// geometry `G` in `g`, from which [`local_frames`] builds the frames.
 #[inline]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn predict_local<I: LocalIndex>(
-    codes: &[I],
-    weights: &[f64],
-    entries: &[Entry],
-    survivor: usize,
-    g: &mut [DVec3],
-    q: &mut Vec<DVec3>,
-    frames: &mut Vec<Frame>,
-    min_length: f64,
-) {
-    predict_values(codes, weights, entries, survivor, g, q);
-    local_frames(codes, entries, survivor, g, frames, min_length);
-}
-
-/// The predictions of [`predict_local`] without the frames: `q`, and `G` in `g`.
-#[inline]
-fn predict_values<I: LocalIndex>(
+pub(crate) fn predict_values<I: LocalIndex>(
     codes: &[I],
     weights: &[f64],
     entries: &[Entry],
@@ -188,9 +170,10 @@ fn predict_values<I: LocalIndex>(
     g[1..t].copy_from_slice(&q[1..]);
 }
 
-/// The frames of [`predict_local`], from the predicted geometry `G` in `g`.
+/// The frames of all touched entries of a split, built from the predicted geometry `G` in `g`
+/// (`min_length`: see [`vertex_frame`]).
 #[inline]
-fn local_frames<I: LocalIndex>(
+pub(crate) fn local_frames<I: LocalIndex>(
     codes: &[I],
     entries: &[Entry],
     survivor: usize,
