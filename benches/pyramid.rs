@@ -1,6 +1,7 @@
 //! Detail pyramid: analysis and synthesis against the PM build, at growing sizes (linearity),
 //! plus the bundled bunny scan. Synthesis runs the paper's low-pass, stop-band and enhancement
-//! filters (`synthesis_lowpass`, `synthesis_stopband`, `synthesis_enhanced`). Run with `cargo bench --bench pyramid`.
+//! filters (`synthesis_lowpass`, `synthesis_stopband`, `synthesis_enhanced`). Run with
+//! `cargo bench --bench pyramid`.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use glam::DVec3;
