@@ -129,6 +129,32 @@ fn filter_rejects_missing_or_bad_filters() {
     assert!(!out.exists());
 }
 
+/// A band that selects none of the pyramid's levels still filters (it changes nothing) but says
+/// so, under `-q` too; bands that reach the levels say nothing.
+#[test]
+fn bands_outside_the_pyramid_are_reported() {
+    let input = data("teapot.ply");
+    let out = scratch("teapot-band.ply");
+    let o = out.to_str().unwrap();
+    let run = |band: &[&str]| {
+        let mut args = vec!["-q", "filter", &input, "-o", o];
+        args.extend_from_slice(band);
+        let r = meshpyr(&args);
+        ok(&r);
+        String::from_utf8_lossy(&r.stderr).into_owned()
+    };
+    let warned = |err: &str| err.contains("warning:") && err.contains("changes nothing");
+    let err = run(&["--stopband", "50000:90000"]);
+    assert!(warned(&err) && err.contains("band 50000:90000"), "{err}");
+    assert!(warned(&run(&["--lowpass", "50000"])));
+    // Finer than the scan's sampling: a feature size resolving far above the finest level.
+    assert!(warned(&run(&["--enhance", "0.000001u:0.0000001u=2"])));
+    // A unit gain changes nothing by design: no warning.
+    assert_eq!(run(&["--gain", "50000:60000=1"]), "");
+    assert_eq!(run(&["--stopband", "200:400", "--lowpass", "600"]), "");
+    assert!(out.exists());
+}
+
 #[test]
 fn spectrum_writes_a_png_and_a_csv() {
     let png = scratch("spider.png");

@@ -7,7 +7,9 @@
 use super::{BarProgress, Global};
 use crate::format::RelaxationSpec;
 use crate::io;
-use crate::pyramid::{Filter, GainBand, LevelSpec, PyramidOptions, ScanPyramid};
+use crate::pyramid::{
+    Filter, GainBand, LevelGains, LevelSpec, Pyramid, PyramidOptions, ScanPyramid,
+};
 use crate::relax::{Relaxation, SecondDifference};
 use anyhow::Context;
 use std::path::{Path, PathBuf};
@@ -155,6 +157,35 @@ impl FilterOptions {
             .extend(self.enhance.iter().chain(&self.gain).copied());
         f
     }
+
+    /// [`Self::filter`] resolved on `pyramid`, with a warning on standard error for every band
+    /// that selects none of the pyramid's levels (a stop-band above the finest level, a
+    /// feature size finer than the scan's sampling), which would otherwise change nothing
+    /// without a word. `name` is the input, for the message.
+    pub fn gains_for(&self, pyramid: &Pyramid, name: &str) -> LevelGains {
+        let filter = self.filter();
+        let gains = filter.resolve(pyramid.surface_area());
+        // Splits create the levels (base, finest]; a band (a, b] reaches them when it overlaps.
+        let (base, finest) = (pyramid.n_base_vertices(), pyramid.n_vertices());
+        for (band, &(a, b, gain)) in filter.bands.iter().zip(&gains.bands) {
+            if gain == 1.0 || (a < finest && b > base) {
+                continue;
+            }
+            let (what, levels) = match band.to {
+                Some(to) => (
+                    format!("band {}:{}", band.from, to),
+                    format!("{}..={b}", a + 1),
+                ),
+                None => (format!("low-pass {}", band.from), format!("above {a}")),
+            };
+            eprintln!(
+                "warning: {name}: {what} selects levels {levels}, but the pyramid's levels are \
+                 {}..={finest}; it changes nothing",
+                base + 1
+            );
+        }
+        gains
+    }
 }
 
 /// Arguments of `meshpyr filter`.
@@ -184,7 +215,9 @@ pub fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
     }
     let (scan, _) = load_pyramid(&args.input, args.relax, global)?;
     let start = Instant::now();
-    let gains = filter.resolve(scan.pyramid.surface_area());
+    let gains = args
+        .filters
+        .gains_for(&scan.pyramid, &args.input.display().to_string());
     let out = scan.pyramid.synthesize(&gains);
     let mesh = scan.output_mesh(&out);
     global.say(format_args!(
