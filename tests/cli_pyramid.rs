@@ -147,6 +147,7 @@ fn bands_outside_the_pyramid_are_reported() {
     let err = run(&["--stopband", "50000:90000"]);
     assert!(warned(&err) && err.contains("band 50000:90000"), "{err}");
     assert!(warned(&run(&["--lowpass", "50000"])));
+    assert!(warned(&run(&["--stopband", "300:300"])));
     // Finer than the scan's sampling: a feature size resolving far above the finest level.
     assert!(warned(&run(&["--enhance", "0.000001u:0.0000001u=2"])));
     // A unit gain changes nothing by design: no warning.

@@ -165,21 +165,27 @@ impl FilterOptions {
     pub fn gains_for(&self, pyramid: &Pyramid, name: &str) -> LevelGains {
         let filter = self.filter();
         let gains = filter.resolve(pyramid.surface_area());
-        // Splits create the levels (base, finest]; a band (a, b] reaches them when it overlaps.
+        // Splits create the levels (base, finest]; a band (a, b] reaches them when it is not
+        // empty and overlaps them.
         let (base, finest) = (pyramid.n_base_vertices(), pyramid.n_vertices());
         for (band, &(a, b, gain)) in filter.bands.iter().zip(&gains.bands) {
-            if gain == 1.0 || (a < finest && b > base) {
+            if gain == 1.0 || (a < b && a < finest && b > base) {
                 continue;
             }
-            let (what, levels) = match band.to {
-                Some(to) => (
-                    format!("band {}:{}", band.from, to),
-                    format!("{}..={b}", a + 1),
-                ),
-                None => (format!("low-pass {}", band.from), format!("above {a}")),
+            let what = match band.to {
+                Some(to) => format!("band {}:{}", band.from, to),
+                None => format!("low-pass {}", band.from),
+            };
+            let selects = match band.to {
+                _ if a >= b => {
+                    eprintln!("warning: {name}: {what} is empty; it changes nothing");
+                    continue;
+                }
+                Some(_) => format!("levels {}..={b}", a + 1),
+                None => format!("levels above {a}"),
             };
             eprintln!(
-                "warning: {name}: {what} selects levels {levels}, but the pyramid's levels are \
+                "warning: {name}: {what} selects {selects}, but the pyramid's levels are \
                  {}..={finest}; it changes nothing",
                 base + 1
             );
