@@ -7,6 +7,8 @@ use meshpyr::pm::{MeshRecords, PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
 use std::path::Path;
 
+mod common;
+
 fn load(name: &str) -> Mesh {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("tests/data")
@@ -158,21 +160,11 @@ fn simplify_to_targets() {
 /// gives the very same splits.
 #[test]
 fn a_scan_far_from_the_origin_gets_the_same_hierarchy() {
-    let snap = |x: f64| (x * f64::from(1u32 << 20)).round() / f64::from(1u32 << 20);
-    let moved = |mesh: &Mesh, offset: f64| {
-        let mut m = mesh.clone();
-        let vertices: Vec<_> = m.vertices().collect();
-        for v in vertices {
-            let p = m.position(v);
-            m.set_position(
-                v,
-                glam::DVec3::new(snap(p.x), snap(p.y), snap(p.z)) + offset,
-            );
-        }
-        m
-    };
     let fandisk = load("fandisk.ply");
-    let (near, far) = (moved(&fandisk, 0.0), moved(&fandisk, f64::from(1u32 << 20)));
+    let (near, far) = (
+        common::snapped_and_moved(&fandisk, 0.0),
+        common::snapped_and_moved(&fandisk, f64::from(1u32 << 20)),
+    );
     let a = ProgressiveMesh::build(&near, &PmOptions::default(), &NoProgress).unwrap();
     let b = ProgressiveMesh::build(&far, &PmOptions::default(), &NoProgress).unwrap();
     assert_eq!(a.n_base_vertices(), b.n_base_vertices());

@@ -335,21 +335,15 @@ fn filter_with_normal_relaxation_reproduces_and_filters_the_fandisk() {
 #[test]
 fn a_scan_far_from_the_origin_is_denoised_the_same() {
     let noisy = load("fandisk_noise_n020.ply");
-    let snap = |x: f64| (x * f64::from(1u32 << 20)).round() / f64::from(1u32 << 20);
     let offset = f64::from(1u32 << 20);
-    let moved = |by: f64| {
-        let mut m = noisy.clone();
-        let vertices: Vec<_> = m.vertices().collect();
-        for v in vertices {
-            let p = m.position(v);
-            m.set_position(v, DVec3::new(snap(p.x), snap(p.y), snap(p.z)) + by);
-        }
-        m
-    };
+    let (near_mesh, far_mesh) = (
+        common::snapped_and_moved(&noisy, 0.0),
+        common::snapped_and_moved(&noisy, offset),
+    );
+    let start = near_mesh.positions();
     for options in [DenoiseOptions::adaptive(), DenoiseOptions::anisotropic()] {
-        let near = denoise(&moved(0.0), &options, &NoProgress).unwrap();
-        let far = denoise(&moved(offset), &options, &NoProgress).unwrap();
-        let start = moved(0.0).positions();
+        let near = denoise(&near_mesh, &options, &NoProgress).unwrap();
+        let far = denoise(&far_mesh, &options, &NoProgress).unwrap();
         let (mut worst, mut moved_most) = (0.0f64, 0.0f64);
         for ((a, b), s) in near.positions.iter().zip(&far.positions).zip(&start) {
             worst = worst.max((*b - offset - *a).abs().max_element());

@@ -168,6 +168,20 @@ pub fn load(name: &str) -> meshpyr::mesh::Mesh {
         .mesh
 }
 
+/// `mesh` with its coordinates snapped to multiples of 2^-20 and then moved by `offset` along
+/// every axis, both exactly for offsets up to 2^20 or so: the same scan near and far from the
+/// origin, which only the arithmetic can tell apart.
+pub fn snapped_and_moved(mesh: &Mesh, offset: f64) -> Mesh {
+    let snap = |x: f64| (x * f64::from(1u32 << 20)).round() / f64::from(1u32 << 20);
+    let mut m = mesh.clone();
+    let vertices: Vec<_> = m.vertices().collect();
+    for v in vertices {
+        let p = m.position(v);
+        m.set_position(v, DVec3::new(snap(p.x), snap(p.y), snap(p.z)) + offset);
+    }
+    m
+}
+
 /// The six coarse control meshes with extraordinary vertices.
 pub const CONTROL_MESHES: [&str; 6] = [
     "cone20",
