@@ -212,14 +212,14 @@ pub fn denoise(
         step_cap: options.step_cap * l,
         ..FitOptions::default()
     };
-    let start = result.positions.clone();
     result.fit = fitting.minimise(&mut result.positions, &fit_options, &|x: f64| {
         progress.update(0.7 + 0.3 * x)
     });
     // Back to the input's coordinates; vertices the fitting did not move (those in no face,
-    // and empty slots) keep their exact input bits.
-    for ((p, &x0), &q) in result.positions.iter_mut().zip(&start).zip(&input) {
-        *p = if *p == x0 { q } else { *p + origin };
+    // and empty slots) keep their exact input bits. Nothing changed the positions before the
+    // fitting, so a vertex it left alone still holds exactly `q - origin`.
+    for (p, &q) in result.positions.iter_mut().zip(&input) {
+        *p = if *p == q - origin { q } else { *p + origin };
     }
     Ok(result)
 }
