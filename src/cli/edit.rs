@@ -97,7 +97,11 @@ pub fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
             radius: args.radius,
         })
         .collect();
-    let gains = args.filters.gains_for(p, &args.input.display().to_string());
+    let gains = super::filter::resolve_reporting(
+        &args.filters.filter(),
+        p,
+        &args.input.display().to_string(),
+    );
     let out = p.edit(args.level, &handles, &gains)?;
     if writes_pyr {
         let positions = scan.to_input_positions(&out);

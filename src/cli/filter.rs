@@ -157,41 +157,42 @@ impl FilterOptions {
             .extend(self.enhance.iter().chain(&self.gain).copied());
         f
     }
+}
 
-    /// [`Self::filter`] resolved on `pyramid`, with a warning on standard error for every band
-    /// that selects none of the pyramid's levels (a stop-band above the finest level, a
-    /// feature size finer than the scan's sampling), which would otherwise change nothing
-    /// without a word. `name` is the input, for the message.
-    pub fn gains_for(&self, pyramid: &Pyramid, name: &str) -> LevelGains {
-        let filter = self.filter();
-        let gains = filter.resolve(pyramid.surface_area());
-        // Splits create the levels (base, finest]; a band (a, b] reaches them when it is not
-        // empty and overlaps them.
-        let (base, finest) = (pyramid.n_base_vertices(), pyramid.n_vertices());
-        for (band, &(a, b, gain)) in filter.bands.iter().zip(&gains.bands) {
-            if gain == 1.0 || (a < b && a < finest && b > base) {
-                continue;
-            }
-            let what = match band.to {
-                Some(to) => format!("band {}:{}", band.from, to),
-                None => format!("low-pass {}", band.from),
-            };
-            let selects = match band.to {
-                _ if a >= b => {
-                    eprintln!("warning: {name}: {what} is empty; it changes nothing");
-                    continue;
-                }
-                Some(_) => format!("levels {}..={b}", a + 1),
-                None => format!("levels above {a}"),
-            };
+/// `filter` resolved on `pyramid`, with a warning on standard error for every band that
+/// selects none of the pyramid's levels (an empty band, a stop-band above the finest level, a
+/// feature size finer than the scan's sampling), which would otherwise change nothing without
+/// a word. `name` is the input, for the message.
+pub fn resolve_reporting(filter: &Filter, pyramid: &Pyramid, name: &str) -> LevelGains {
+    let gains = filter.resolve(pyramid.surface_area());
+    // Splits create the levels (base, finest]; a band (a, b] reaches them when it is not
+    // empty and overlaps them.
+    let (base, finest) = (pyramid.n_base_vertices(), pyramid.n_vertices());
+    for (band, &(a, b, gain)) in filter.bands.iter().zip(&gains.bands) {
+        if gain == 1.0 || (a < b && a < finest && b > base) {
+            continue;
+        }
+        let (what, selects) = match band.to {
+            Some(to) => (
+                format!("band {}:{to}", band.from),
+                format!("levels {}..={b}", a + 1),
+            ),
+            None => (
+                format!("low-pass {}", band.from),
+                format!("levels above {a}"),
+            ),
+        };
+        if a >= b {
+            eprintln!("warning: {name}: {what} is empty; it changes nothing");
+        } else {
             eprintln!(
                 "warning: {name}: {what} selects {selects}, but the pyramid's levels are \
                  {}..={finest}; it changes nothing",
                 base + 1
             );
         }
-        gains
     }
+    gains
 }
 
 /// Arguments of `meshpyr filter`.
@@ -221,9 +222,7 @@ pub fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
     }
     let (scan, _) = load_pyramid(&args.input, args.relax, global)?;
     let start = Instant::now();
-    let gains = args
-        .filters
-        .gains_for(&scan.pyramid, &args.input.display().to_string());
+    let gains = resolve_reporting(&filter, &scan.pyramid, &args.input.display().to_string());
     let out = scan.pyramid.synthesize(&gains);
     let mesh = scan.output_mesh(&out);
     global.say(format_args!(
