@@ -69,6 +69,7 @@ pub fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
         sizes.positions as f64 / n,
         sizes.trailing as f64 / n
     ));
+    global.say(format_args!("  {}", pm.describe_base()));
     Ok(())
 }
 

@@ -37,6 +37,11 @@ pub struct MeshInfo {
     pub euler_characteristic: i64,
     /// Σ over components of (2 − b − χ)/2; null when the file is not manifold.
     pub genus: Option<u64>,
+    /// The fewest vertices a surface of this topology can be simplified to
+    /// ([`crate::mesh::topology::vertex_floor`], on the repaired mesh).
+    pub floor_vertices: usize,
+    /// For a `.pyr` file: the hierarchy's base level against that floor (null otherwise).
+    pub pm_base: Option<String>,
     /// True when no edge has more than two triangles and no vertex is pinched.
     pub manifold: bool,
     /// Bounding-box diagonal.
@@ -65,6 +70,8 @@ pub fn mesh_info(poly: &PolygonMesh) -> anyhow::Result<MeshInfo> {
         components: topo.components,
         euler_characteristic: topo.euler_characteristic,
         genus: if manifold { topo.genus } else { None },
+        floor_vertices: topo.floor_vertices,
+        pm_base: None,
         manifold,
         bbox_diagonal: built.mesh.bbox_diagonal(),
         mean_edge_length: built.mesh.mean_edge_length(),
@@ -103,7 +110,10 @@ fn count_file_edges(poly: &PolygonMesh) -> usize {
 /// Runs `meshpyr info`.
 pub fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
     let poly = super::read_input_mesh(&args.mesh)?;
-    let info = mesh_info(&poly).with_context(|| args.mesh.display().to_string())?;
+    let mut info = mesh_info(&poly).with_context(|| args.mesh.display().to_string())?;
+    if super::build::is_pyr_file(&args.mesh) {
+        info.pm_base = Some(super::build::load_pyr(&args.mesh)?.pm.describe_base());
+    }
     if args.json {
         outln!("{}", serde_json::to_string(&info)?);
         return Ok(());
@@ -125,6 +135,13 @@ pub fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
         info.genus
             .map_or("n/a (not manifold)".to_string(), |g| g.to_string())
     );
+    outln!(
+        "  simplifies to at least {} vertices (the floor of its topology)",
+        info.floor_vertices
+    );
+    if let Some(base) = &info.pm_base {
+        outln!("  hierarchy: {base}");
+    }
     outln!(
         "  manifold {}  bbox diagonal {:.6}  mean edge length {:.6}",
         if info.manifold { "yes" } else { "no" },

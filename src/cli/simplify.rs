@@ -54,6 +54,9 @@ pub fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
         .with_context(|| format!("cannot simplify {}", args.input.display()))?;
     bar.finish_and_clear();
     io::write_mesh(&args.output, &result.mesh)?;
+    if let Some(shortfall) = result.shortfall() {
+        eprintln!("warning: {}: {shortfall}", args.input.display());
+    }
     global.say(format_args!(
         "wrote {}: {} -> {} triangles, {} vertices",
         args.output.display(),

@@ -21,6 +21,46 @@ pub struct Topology {
     /// Σ over components of (2 − b − χ)/2; `None` if a component's value is not a whole
     /// non-negative number (which a valid orientable surface never gives).
     pub genus: Option<u64>,
+    /// The fewest vertices a triangulation of the same surface can have, summed over
+    /// components ([`vertex_floor`]): how far a simplification can go at most.
+    pub floor_vertices: usize,
+}
+
+/// The fewest vertices a triangulated component with `genus` handles and `boundary_loops`
+/// holes can have: 4 for a sphere (a tetrahedron), Heawood's bound `⌈(7 + √(1 + 48g)) / 2⌉`
+/// for a closed surface of genus `g ≥ 1` (7 for a torus), and with holes, at least 3 per
+/// hole (a hole is a cycle of at least 3 edges) and at least the closed surface's bound minus
+/// one per hole (capping every hole with one vertex gives a closed surface).
+pub fn vertex_floor(genus: u64, boundary_loops: u64) -> u64 {
+    let closed = if genus == 0 {
+        4
+    } else {
+        ((7.0 + (1.0 + 48.0 * genus as f64).sqrt()) / 2.0).ceil() as u64
+    };
+    if boundary_loops == 0 {
+        closed
+    } else {
+        (3 * boundary_loops)
+            .max(closed.saturating_sub(boundary_loops))
+            .max(3)
+    }
+}
+
+impl Topology {
+    /// One phrase for reports: "floor 318 vertices (1 component, 106 holes, genus 3)".
+    pub fn describe_floor(&self) -> String {
+        let count =
+            |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+        let genus = self
+            .genus
+            .map_or("genus n/a".to_string(), |g| format!("genus {g}"));
+        format!(
+            "floor {} ({}, {}, {genus})",
+            count(self.floor_vertices, "vertex", "vertices"),
+            count(self.components, "component", "components"),
+            count(self.boundary_loops, "hole", "holes"),
+        )
+    }
 }
 
 impl Mesh {
@@ -89,14 +129,20 @@ impl Mesh {
         }
         let mut genus = Some(0u64);
         let mut chi_total = 0;
+        let mut floor_vertices = 0;
         for &[v, e, f, b] in &counts {
             let chi = v - e + f;
             chi_total += chi;
             let twice = 2 - b - chi;
+            let whole = twice >= 0 && twice % 2 == 0;
             genus = match genus {
-                Some(g) if twice >= 0 && twice % 2 == 0 => Some(g + (twice / 2) as u64),
+                Some(g) if whole => Some(g + (twice / 2) as u64),
                 _ => None,
             };
+            // A component whose genus is not whole cannot be a valid surface; count it as
+            // the sphere it would be with its holes.
+            let g = if whole { (twice / 2) as u64 } else { 0 };
+            floor_vertices += vertex_floor(g, b as u64).min(v as u64) as usize;
         }
         Topology {
             referenced_vertices: referenced,
@@ -106,6 +152,28 @@ impl Mesh {
             components: counts.len(),
             euler_characteristic: chi_total,
             genus,
+            floor_vertices,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_floor_of_closed_surfaces_is_the_smallest_triangulation() {
+        assert_eq!(vertex_floor(0, 0), 4); // tetrahedron
+        assert_eq!(vertex_floor(1, 0), 7); // Möbius–Császár torus
+        assert_eq!(vertex_floor(2, 0), 9); // Heawood's bound (10 is realised)
+        assert_eq!(vertex_floor(6, 0), 12);
+    }
+
+    #[test]
+    fn holes_need_three_vertices_each() {
+        assert_eq!(vertex_floor(0, 1), 3); // a single triangle
+        assert_eq!(vertex_floor(0, 2), 6); // an annulus between two triangles
+        assert_eq!(vertex_floor(3, 106), 318);
+        assert_eq!(vertex_floor(6, 1), 11);
     }
 }

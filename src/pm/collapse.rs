@@ -14,6 +14,7 @@
 //! collapse (or any sequence undone in stack order) restores every record in its original slot
 //! — the data structure is identical up to slotmap's internal generation counters.
 
+use super::legality::{Legality, RingFace, shape_check};
 use crate::mesh::halfedge::{FaceRecord, HalfedgeRecord, VertexRecord};
 use crate::mesh::{FaceId, HalfedgeId, Mesh, SlotIndex, VertexId};
 use glam::DVec3;
@@ -420,28 +421,6 @@ impl Marks {
     }
 }
 
-/// Bounds for the legality test.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Legality {
-    /// Largest valence the survivor may get.
-    pub max_valence: usize,
-    /// Cosine of the largest allowed rotation of a face normal (`cos 60°` by default here; `PmOptions` defaults to 45°).
-    pub min_normal_cos: f64,
-    /// Smallest allowed triangle quality `4√3·A / (l1² + l2² + l3²)` (1 for equilateral) of a
-    /// face the collapse changes, unless the face was already worse before.
-    pub min_quality: f64,
-}
-
-impl Default for Legality {
-    fn default() -> Self {
-        Legality {
-            max_valence: 32,
-            min_normal_cos: 0.5,
-            min_quality: 0.05,
-        }
-    }
-}
-
 /// The topological rules of `algorithms.md` §4.2 (link condition, boundary rules, no
 /// collapse of a lone triangle or a tetrahedron, no interior vertex left with valence < 3,
 /// valence cap). Returns the valence the survivor would have, or `None` if illegal.
@@ -519,47 +498,23 @@ pub fn is_collapse_topologically_legal(
     Some(new_valence)
 }
 
-/// Triangle quality `4√3·A / Σ l²` from its doubled-area normal.
-#[inline]
-pub(crate) fn quality(n: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
-    let s = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
-    if s > 0.0 {
-        2.0 * 3f64.sqrt() * n.length() / s
-    } else {
-        0.0
-    }
-}
-
-/// The geometric rules: no face around `u` (other than the two that vanish) may rotate its
-/// normal by more than the bound or become a sliver it was not before.
+/// The geometric rules ([`shape_check`]) on the faces around `h`'s tail.
 pub fn is_collapse_geometrically_legal(mesh: &Mesh, h: HalfedgeId, legality: &Legality) -> bool {
     let o = mesh.twin(h);
     let u = mesh.to_vertex(o);
     let pu = mesh.position(u);
     let pv = mesh.position(mesh.to_vertex(h));
     let (fl, fr) = (mesh.face(h), mesh.face(o));
+    let mut ring: SmallVec<[RingFace; 16]> = SmallVec::new();
     for g in mesh.outgoing(u) {
         let Some(f) = mesh.face(g) else { continue };
-        if Some(f) == fl || Some(f) == fr {
-            continue;
-        }
-        let a = mesh.position(mesh.to_vertex(g));
-        let b = mesh.position(mesh.to_vertex(mesh.next(g)));
-        let n_old = (a - pu).cross(b - pu);
-        let n_new = (a - pv).cross(b - pv);
-        let q_old = quality(n_old, pu, a, b);
-        let q_new = quality(n_new, pv, a, b);
-        if q_new < legality.min_quality && q_new <= q_old {
-            return false;
-        }
-        // A (near-)degenerate face has no trustworthy normal; only the quality rule applies.
-        if q_old > 1e-6
-            && n_old.dot(n_new) <= legality.min_normal_cos * n_old.length() * n_new.length()
-        {
-            return false;
-        }
+        ring.push(RingFace {
+            a: mesh.position(mesh.to_vertex(g)),
+            b: mesh.position(mesh.to_vertex(mesh.next(g))),
+            dies: Some(f) == fl || Some(f) == fr,
+        });
     }
-    true
+    shape_check(pu, pv, &ring, legality).is_ok()
 }
 
 /// Topological and geometric legality together.

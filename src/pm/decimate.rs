@@ -28,7 +28,7 @@
 //! the corner table, so the collapse sequence is identical to collapsing the [`Mesh`] itself
 //! (a test replays it against the half-edge implementation).
 
-use super::collapse::Legality;
+use super::legality::{Legality, Refusal, Relaxation, RingFace, shape_check};
 use super::prefetch::prefetch;
 use super::quadric::Quadric;
 use crate::mesh::build::{next_c, prev_c};
@@ -437,14 +437,14 @@ impl FlatMesh {
     }
 
     /// The topological rules of [`super::is_collapse_topologically_legal`] on the corner
-    /// table. Returns the valence the survivor would have, or `None` if illegal.
-    fn topologically_legal(&self, h: u32, max_valence: usize) -> Option<u32> {
+    /// table. Returns the valence the survivor would have, or the rule that refuses.
+    fn topologically_legal(&self, h: u32, max_valence: usize) -> Result<u32, Refusal> {
         let o = self.twin(h);
         let (u, v) = (self.tail_vertex(h), self.head_vertex(h));
         let has_l = !self.is_boundary_halfedge(h);
         let has_r = !self.is_boundary_halfedge(o);
         if self.is_boundary_vertex(u) && has_l && has_r {
-            return None;
+            return Err(Refusal::Boundary);
         }
         let mut wings = [NONE; 2];
         let mut n_wings = 0;
@@ -457,23 +457,23 @@ impl FlatMesh {
             if self.is_boundary_halfedge(self.corners[e1 as usize].twin)
                 && self.is_boundary_halfedge(self.corners[e2 as usize].twin)
             {
-                return None;
+                return Err(Refusal::DanglingFace);
             }
             let w = self.cv(e2);
             // An interior wing vertex loses an edge; valence 3 would leave a degenerate pillow.
             if !self.is_boundary_vertex(w) && self.valence(w) <= 3 {
-                return None;
+                return Err(Refusal::Pillow);
             }
             wings[n_wings] = w;
             n_wings += 1;
         }
         if n_wings == 2 && wings[0] == wings[1] {
-            return None;
+            return Err(Refusal::Link);
         }
         // The valence cap first: it is cheap, and it bounds both rings for the link test.
         let new_valence = (self.valence(u) + self.valence(v)) as usize - 2 - n_wings;
         if new_valence > max_valence {
-            return None;
+            return Err(Refusal::Valence);
         }
         // Link condition: the common neighbours of u and v are exactly the wings. The rings
         // are small (the cap above), so a linear search in u's ring beats per-vertex marks,
@@ -488,42 +488,38 @@ impl FlatMesh {
                 legal &= wings[..n_wings].contains(&w);
             }
         });
-        (legal && common == n_wings).then_some(new_valence as u32)
+        if legal && common == n_wings {
+            Ok(new_valence as u32)
+        } else {
+            Err(Refusal::Link)
+        }
     }
 
-    /// The geometric rules of [`super::is_collapse_geometrically_legal`]: no face around `u`
-    /// other than the two that vanish may rotate its normal by more than the bound or become a
-    /// sliver it was not before.
-    fn geometrically_legal(&self, h: u32, legality: &Legality) -> bool {
+    /// The shape rules of [`super::Legality`] ([`shape_check`]) on the faces around `h`'s
+    /// tail.
+    fn geometrically_legal(&self, h: u32, legality: &Legality) -> Result<(), Refusal> {
         let o = self.twin(h);
         let (u, v) = (self.tail_vertex(h), self.head_vertex(h));
-        let (pu, pv) = (self.position(u), self.position(v));
         let dead = |c: u32| {
             (!self.is_boundary_halfedge(h) && c / 3 == h / 3)
                 || (!self.is_boundary_halfedge(o) && c / 3 == o / 3)
         };
-        let mut legal = true;
+        let mut ring: smallvec::SmallVec<[RingFace; 16]> = smallvec::SmallVec::new();
         self.for_each_corner(u, |c| {
-            if !legal || dead(c) {
-                return;
-            }
-            let a = self.position(self.cv(next_c(c)));
-            let b = self.position(self.cv(prev_c(c)));
-            let n_old = (a - pu).cross(b - pu);
-            let n_new = (a - pv).cross(b - pv);
-            let q_old = super::collapse::quality(n_old, pu, a, b);
-            let q_new = super::collapse::quality(n_new, pv, a, b);
-            if q_new < legality.min_quality && q_new <= q_old {
-                legal = false;
-            }
-            // A (near-)degenerate face has no trustworthy normal; only the quality rule applies.
-            if q_old > 1e-6
-                && n_old.dot(n_new) <= legality.min_normal_cos * n_old.length() * n_new.length()
-            {
-                legal = false;
-            }
+            ring.push(RingFace {
+                a: self.position(self.cv(next_c(c))),
+                b: self.position(self.cv(prev_c(c))),
+                dies: dead(c),
+            })
         });
-        legal
+        shape_check(self.position(u), self.position(v), &ring, legality)
+    }
+
+    /// Whether collapsing `h` is legal: the survivor's valence, or the rule that refuses.
+    fn legal(&self, h: u32, legality: &Legality) -> Result<u32, Refusal> {
+        let valence = self.topologically_legal(h, legality.max_valence)?;
+        self.geometrically_legal(h, legality)?;
+        Ok(valence)
     }
 
     /// Asks the cache for what testing and collapsing the edge of half-edge `h` reads first:
@@ -657,62 +653,128 @@ fn initial_quadrics(mesh: &FlatMesh, boundary_weight: f64) -> Vec<Quadric> {
     q
 }
 
-/// Decimates `mesh`; returns the collapses in order and the final mesh.
+/// Why a decimation ended.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// The face or vertex target was met.
+    Target,
+    /// Every collapse left would exceed the error bound.
+    ErrorBound,
+    /// No legal collapse is left, even with every shape rule relaxed: for each rule, how many
+    /// of the remaining edges it refused (in their cheaper direction), most first.
+    NoLegalCollapse(Vec<(Refusal, usize)>),
+}
+
+impl std::fmt::Display for Stop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Stop::Target => write!(f, "target reached"),
+            Stop::ErrorBound => write!(f, "error bound reached"),
+            Stop::NoLegalCollapse(refusals) => {
+                write!(f, "no legal collapse left")?;
+                for (i, (rule, n)) in refusals.iter().enumerate() {
+                    let sep = if i == 0 { " (" } else { ", " };
+                    write!(f, "{sep}{}: {n} edges", rule.describe())?;
+                }
+                if !refusals.is_empty() {
+                    write!(f, ")")?;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// What a decimation did besides its collapses.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct Outcome {
+    /// Why it ended.
+    pub stop: Stop,
+    /// Collapses made under each relaxation step (`Valence`, `Slivers`, `Normals`).
+    pub relaxed: [usize; 3],
+}
+
+/// The pass schedule shared by the decimator and its reference. A pass normally visits the
+/// candidates under a cost cut; one that collapses nothing is repeated without the cut, and a
+/// full pass that collapses nothing relaxes the shape rules one step for a pass of limited
+/// length. Any collapse returns to the full rules, so relaxed collapses happen only where
+/// nothing else can move.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Schedule {
+    pub use_goal: bool,
+    pub relaxation: Relaxation,
+}
+
+impl Schedule {
+    pub fn new() -> Schedule {
+        Schedule {
+            use_goal: true,
+            relaxation: Relaxation::None,
+        }
+    }
+
+    /// The rules of this pass.
+    pub fn legality(&self, params: &DecimateParams) -> Legality {
+        params.legality.relaxed(self.relaxation)
+    }
+
+    /// How many collapses this pass may make: relaxed passes do a small share of the faces
+    /// left, the cheapest first, then hand back to the full rules.
+    pub fn budget(&self, n_faces: usize) -> usize {
+        match self.relaxation {
+            Relaxation::None => usize::MAX,
+            _ => (n_faces / 64).max(1),
+        }
+    }
+
+    /// After a pass: whether decimation is over, i.e. a full pass with every rule relaxed
+    /// found no legal collapse.
+    pub fn pass_ended(&mut self, collapsed: bool, error_cut: f64, params: &DecimateParams) -> bool {
+        if collapsed {
+            *self = Schedule::new();
+            return false;
+        }
+        if self.use_goal && error_cut.is_finite() && error_cut < params.max_error_sq {
+            self.use_goal = false;
+            return false;
+        }
+        match self.relaxation.next() {
+            Some(r) => {
+                self.relaxation = r;
+                self.use_goal = false;
+                false
+            }
+            None => true,
+        }
+    }
+}
+
+/// Decimates `mesh`; returns the collapses in order, the final mesh and why it stopped.
 pub(crate) fn decimate(
     mut mesh: FlatMesh,
     params: &DecimateParams,
     progress: &dyn Progress,
-) -> (Vec<Collapse>, FlatMesh) {
+) -> (Vec<Collapse>, FlatMesh, Outcome) {
     let mut quadric = initial_quadrics(&mesh, params.boundary_weight);
     let mut locked_list: Vec<u32> = Vec::new();
     let mut cands: Vec<Candidate> = Vec::new();
     let mut collapses: Vec<Collapse> = Vec::new();
+    let mut relaxed = [0usize; 3];
 
     let start_faces = mesh.n_faces;
     let work = start_faces.saturating_sub(params.target_faces).max(1);
     let done =
         |m: &FlatMesh| m.n_faces <= params.target_faces || m.n_vertices <= params.target_vertices;
-    let mut use_goal = true;
+    let mut schedule = Schedule::new();
+    let mut stop = Stop::Target;
     while !done(&mesh) {
-        // Every live edge once, by the corner that represents it. Costs are independent, so
-        // they are computed in parallel; the order of `cands` does not matter (sorted below by
-        // a key that is unique per candidate).
-        cands.clear();
-        let nt = mesh.corners.len() / 3;
-        let scan = |t: usize, out: &mut Vec<Candidate>| {
-            // Triangles are read in order, their vertices' records at random.
-            if let Some(ahead) = mesh.corners.get(3 * t + 24..3 * t + 27) {
-                for x in ahead.iter().filter(|x| x.vertex != NONE) {
-                    prefetch(quadric.as_ptr().wrapping_add(x.vertex as usize));
-                    prefetch(mesh.vertices.as_ptr().wrapping_add(x.vertex as usize));
-                }
-            }
-            if mesh.corners[3 * t].vertex == NONE {
-                return;
-            }
-            for c in 3 * t as u32..3 * t as u32 + 3 {
-                if let Some(x) = mesh.candidate(&quadric, c, params.max_error_sq) {
-                    out.push(x);
-                }
-            }
-        };
-        if nt >= PAR_MIN {
-            cands.par_extend(
-                (0..nt)
-                    .into_par_iter()
-                    .with_min_len(PAR_MIN / 4)
-                    .fold(Vec::new, |mut out, t| {
-                        scan(t, &mut out);
-                        out
-                    })
-                    .flatten_iter(),
-            );
-        } else {
-            for t in 0..nt {
-                scan(t, &mut cands);
-            }
-        }
+        collect_candidates(&mesh, &quadric, params.max_error_sq, &mut cands);
         if cands.is_empty() {
+            stop = if params.max_error_sq.is_finite() {
+                Stop::ErrorBound
+            } else {
+                Stop::NoLegalCollapse(mesh.refusals(&quadric, params))
+            };
             break;
         }
         // Each collapse removes about two faces; aim for this pass's share of the target and
@@ -720,7 +782,7 @@ pub(crate) fn decimate(
         // candidates under the cut are ever visited, so only they are sorted.
         let faces_left = mesh.n_faces - params.target_faces.min(mesh.n_faces);
         let goal = (faces_left / 2).max(1);
-        let error_cut = if use_goal && goal < cands.len() {
+        let error_cut = if schedule.use_goal && goal < cands.len() {
             let (_, nth, _) = cands.select_nth_unstable_by(goal, by_cost);
             1.5 * nth.cost
         } else {
@@ -735,9 +797,11 @@ pub(crate) fn decimate(
         } else {
             cands.sort_unstable_by(by_cost);
         }
+        let legality = schedule.legality(params);
+        let mut budget = schedule.budget(mesh.n_faces);
         let before = collapses.len();
         for (i, c) in cands.iter().enumerate() {
-            if done(&mesh) {
+            if done(&mesh) || budget == 0 {
                 break;
             }
             // Candidates come in cost order, i.e. at random places in memory, and each one's
@@ -758,14 +822,10 @@ pub(crate) fn decimate(
             if mesh.is_locked(a) || mesh.is_locked(b) {
                 continue;
             }
-            let legal = |h: u32| {
-                mesh.topologically_legal(h, params.legality.max_valence)
-                    .filter(|_| mesh.geometrically_legal(h, &params.legality))
-            };
-            let (h, cost, valence) = if let Some(val) = legal(h0) {
+            let (h, cost, valence) = if let Ok(val) = mesh.legal(h0, &legality) {
                 (h0, c.cost, val)
             } else if c.alt_cost <= error_cut
-                && let Some(val) = legal(o0)
+                && let Ok(val) = mesh.legal(o0, &legality)
             {
                 (o0, c.alt_cost, val)
             } else {
@@ -783,43 +843,103 @@ pub(crate) fn decimate(
                 right,
                 error_sq: cost,
             });
+            budget -= 1;
         }
         for &v in &locked_list {
             mesh.set_locked(v, false);
         }
         locked_list.clear();
+        if schedule.relaxation != Relaxation::None {
+            relaxed[schedule.relaxation as usize - 1] += collapses.len() - before;
+        }
         progress.update((start_faces - mesh.n_faces) as f64 / work as f64);
-        if pass_ended(collapses.len() > before, &mut use_goal, error_cut, params) {
+        if schedule.pass_ended(collapses.len() > before, error_cut, params) {
+            stop = Stop::NoLegalCollapse(mesh.refusals(&quadric, params));
             break;
         }
     }
     progress.update(1.0);
-    (collapses, mesh)
+    (collapses, mesh, Outcome { stop, relaxed })
 }
 
-/// After a pass: whether decimation is over, i.e. a full pass (no cost cut below the error
-/// bound) found no legal collapse. A pass with a cut that found nothing is retried without it.
-pub(crate) fn pass_ended(
-    collapsed: bool,
-    use_goal: &mut bool,
-    error_cut: f64,
-    params: &DecimateParams,
-) -> bool {
-    if collapsed {
-        *use_goal = true;
-        return false;
+/// Every live edge once, by the corner that represents it, into `cands` (in no particular
+/// order). Costs are independent, so they are computed in parallel.
+fn collect_candidates(
+    mesh: &FlatMesh,
+    quadric: &[Quadric],
+    max_error_sq: f64,
+    cands: &mut Vec<Candidate>,
+) {
+    cands.clear();
+    let nt = mesh.corners.len() / 3;
+    let scan = |t: usize, out: &mut Vec<Candidate>| {
+        // Triangles are read in order, their vertices' records at random.
+        if let Some(ahead) = mesh.corners.get(3 * t + 24..3 * t + 27) {
+            for x in ahead.iter().filter(|x| x.vertex != NONE) {
+                prefetch(quadric.as_ptr().wrapping_add(x.vertex as usize));
+                prefetch(mesh.vertices.as_ptr().wrapping_add(x.vertex as usize));
+            }
+        }
+        if mesh.corners[3 * t].vertex == NONE {
+            return;
+        }
+        for c in 3 * t as u32..3 * t as u32 + 3 {
+            if let Some(x) = mesh.candidate(quadric, c, max_error_sq) {
+                out.push(x);
+            }
+        }
+    };
+    if nt >= PAR_MIN {
+        cands.par_extend(
+            (0..nt)
+                .into_par_iter()
+                .with_min_len(PAR_MIN / 4)
+                .fold(Vec::new, |mut out, t| {
+                    scan(t, &mut out);
+                    out
+                })
+                .flatten_iter(),
+        );
+    } else {
+        for t in 0..nt {
+            scan(t, cands);
+        }
     }
-    if !*use_goal || error_cut.is_infinite() || error_cut >= params.max_error_sq {
-        return true;
+}
+
+impl FlatMesh {
+    /// For each rule, how many live edges within the error bound it refuses under the most
+    /// relaxed rules (each edge counted once, in its cheaper allowed direction; an interior
+    /// edge between two boundary vertices has none and counts as `Boundary`), most first.
+    fn refusals(&self, quadric: &[Quadric], params: &DecimateParams) -> Vec<(Refusal, usize)> {
+        let legality = params.legality.relaxed(Relaxation::Normals);
+        let mut counts = std::collections::BTreeMap::<Refusal, usize>::new();
+        for c in 0..self.n_corners() {
+            let t = self.corners[c as usize].twin;
+            let represents = self.slot_of(c) < self.slot_of(t) || self.is_boundary_halfedge(t);
+            if self.cv(c) == NONE || !represents {
+                continue;
+            }
+            let refusal = match self.candidate(quadric, c, f64::INFINITY) {
+                None => Some(Refusal::Boundary),
+                Some(x) if x.cost <= params.max_error_sq => self.legal(x.h, &legality).err(),
+                Some(_) => None,
+            };
+            if let Some(r) = refusal {
+                *counts.entry(r).or_default() += 1;
+            }
+        }
+        let mut counts: Vec<_> = counts.into_iter().collect();
+        counts.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+        counts
     }
-    *use_goal = false;
-    false
 }
 
 #[cfg(test)]
 mod tests {
-    use super::super::collapse::{Legality, Marks, half_edge_collapse, is_collapse_legal};
+    use super::super::collapse::{Marks, half_edge_collapse, is_collapse_legal};
     use super::super::decimate_reference;
+    use super::super::legality::Legality;
     use super::*;
     use crate::mesh::{PolygonMesh, shapes};
     use crate::progress::NoProgress;
@@ -842,7 +962,7 @@ mod tests {
     /// edges in the same order with the same errors, and end in the same mesh.
     fn assert_same_as_reference(mesh: &Mesh, p: &DecimateParams) -> usize {
         let (want, coarse) = decimate_reference::decimate(mesh, p, &NoProgress);
-        let (got, flat) = decimate(FlatMesh::from_mesh(mesh), p, &NoProgress);
+        let (got, flat, _) = decimate(FlatMesh::from_mesh(mesh), p, &NoProgress);
         assert_eq!(got.len(), want.len(), "number of collapses");
         for (i, (g, w)) in got.iter().zip(&want).enumerate() {
             assert_eq!(g, w, "collapse {i}");
@@ -975,7 +1095,7 @@ mod tests {
                 .unwrap();
             pool.install(|| {
                 let p = params(500, f64::INFINITY, 100.0);
-                let (collapses, flat) = decimate(FlatMesh::from_mesh(&mesh), &p, &NoProgress);
+                let (collapses, flat, _) = decimate(FlatMesh::from_mesh(&mesh), &p, &NoProgress);
                 (collapses, flat.triangles())
             })
         };

@@ -5,7 +5,7 @@
 use super::collapse::{
     Marks, half_edge_collapse, is_collapse_geometrically_legal, is_collapse_topologically_legal,
 };
-use super::decimate::{Collapse, DecimateParams, pass_ended};
+use super::decimate::{Collapse, DecimateParams, Schedule};
 use super::quadric::Quadric;
 use crate::mesh::{BoundingBox, HalfedgeId, Mesh, SlotIndex};
 use crate::progress::Progress;
@@ -115,7 +115,7 @@ pub(crate) fn decimate(
     let done = |m: &Mesh| {
         m.n_faces() <= params.target_faces || m.n_vertices() - isolated <= params.target_vertices
     };
-    let mut use_goal = true;
+    let mut schedule = Schedule::new();
     while !done(&mesh) {
         // Live, deduplicated edges, each by the smaller slot of its two half-edges.
         next_edges.clear();
@@ -168,15 +168,17 @@ pub(crate) fn decimate(
         // allow 1.5× the cost of the candidate that would meet it (many get locked).
         let faces_left = mesh.n_faces() - params.target_faces.min(mesh.n_faces());
         let goal = (faces_left / 2).max(1);
-        let error_cut = if use_goal && goal < cands.len() {
+        let error_cut = if schedule.use_goal && goal < cands.len() {
             1.5 * cands[goal].cost
         } else {
             f64::INFINITY
         }
         .min(params.max_error_sq);
+        let legality = schedule.legality(params);
+        let mut budget = schedule.budget(mesh.n_faces());
         let before = collapses.len();
         for c in &cands {
-            if done(&mesh) || c.cost > error_cut {
+            if done(&mesh) || c.cost > error_cut || budget == 0 {
                 break;
             }
             let h0 = hid[c.h as usize];
@@ -189,9 +191,8 @@ pub(crate) fn decimate(
                 continue;
             }
             let legal = |mesh: &Mesh, marks: &mut Marks, h: HalfedgeId| {
-                is_collapse_topologically_legal(mesh, h, params.legality.max_valence, marks)
-                    .is_some()
-                    && is_collapse_geometrically_legal(mesh, h, &params.legality)
+                is_collapse_topologically_legal(mesh, h, legality.max_valence, marks).is_some()
+                    && is_collapse_geometrically_legal(mesh, h, &legality)
             };
             let (h, cost) = if legal(&mesh, &mut marks, h0) {
                 (h0, c.cost)
@@ -218,13 +219,14 @@ pub(crate) fn decimate(
                 right: topo.right.map_or(NONE, |x| x.slot() as u32),
                 error_sq: cost,
             });
+            budget -= 1;
         }
         for &v in &locked_list {
             locked[v as usize] = false;
         }
         locked_list.clear();
         progress.update((start_faces - mesh.n_faces()) as f64 / work as f64);
-        if pass_ended(collapses.len() > before, &mut use_goal, error_cut, params) {
+        if schedule.pass_ended(collapses.len() > before, error_cut, params) {
             break;
         }
     }

@@ -1,9 +1,8 @@
 //! The body of the `pm_ops` fuzz target, kept in the library so that the committed corpus is
 //! replayed by `cargo test` without cargo-fuzz.
 
-use super::collapse::{
-    Legality, Marks, MeshRecords, half_edge_collapse, is_collapse_legal, vertex_split,
-};
+use super::collapse::{Marks, MeshRecords, half_edge_collapse, is_collapse_legal, vertex_split};
+use super::legality::Legality;
 use super::progressive::{PmOptions, ProgressiveMesh};
 use crate::mesh::{HalfedgeId, Mesh, SlotIndex};
 use crate::progress::NoProgress;

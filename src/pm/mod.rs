@@ -4,6 +4,8 @@
 //! conventions").
 //!
 //! - [`collapse`]: the half-edge collapse / vertex split primitives and the legality tests.
+//! - [`Legality`]: the shape rules a collapse must keep, and how a stalled decimation relaxes
+//!   them ([`Relaxation`]).
 //! - [`quadric`]: area-weighted plane quadrics.
 //! - `decimate`: the greedy batched decimation loop, on a flat corner table.
 //! - [`ProgressiveMesh`] / [`PmCursor`]: the hierarchy and its cursor.
@@ -16,6 +18,7 @@ mod decimate;
 #[cfg(test)]
 mod decimate_reference;
 pub(crate) mod fuzz;
+mod legality;
 pub(crate) mod prefetch;
 mod progressive;
 pub mod quadric;
@@ -23,11 +26,13 @@ mod replay;
 pub mod simplify;
 
 pub use collapse::{
-    CollapseTopology, Legality, Marks, MeshRecords, SplitError, canonicalize, collapse_topology,
+    CollapseTopology, Marks, MeshRecords, SplitError, canonicalize, collapse_topology,
     half_edge_collapse, is_collapse_geometrically_legal, is_collapse_legal,
     is_collapse_topologically_legal, vertex_split,
 };
+pub use decimate::Stop;
 pub use fuzz::fuzz_operations;
+pub use legality::{Legality, Refusal, Relaxation};
 pub use progressive::{
     PmCursor, PmError, PmOptions, PmParts, ProgressiveMesh, SplitReplay, VertexSplit,
 };

@@ -247,6 +247,7 @@ impl ProgressiveMesh {
             faces,
             n_base_faces: 0,
             errors,
+            stop: None,
         })
     }
 }

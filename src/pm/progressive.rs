@@ -2,7 +2,7 @@
 //! that walks the levels one split at a time.
 
 use super::collapse::{half_edge_collapse, vertex_split};
-use super::decimate::{DecimateParams, FlatMesh, decimate};
+use super::decimate::{DecimateParams, FlatMesh, Stop, decimate};
 use crate::mesh::{Mesh, SlotIndex, VertexId};
 use crate::progress::Progress;
 use glam::DVec3;
@@ -111,6 +111,8 @@ pub struct ProgressiveMesh {
     n_base_faces: usize,
     /// Quadric error (RMS distance) of each split's collapse.
     errors: Vec<f32>,
+    /// Why the build stopped at the base level; `None` for a hierarchy loaded from parts.
+    stop: Option<Stop>,
 }
 
 const NONE: u32 = u32::MAX;
@@ -124,7 +126,7 @@ impl ProgressiveMesh {
         progress: &dyn Progress,
     ) -> Result<ProgressiveMesh, PmError> {
         let params = decimate_params(opts, mesh.bbox_diagonal())?;
-        let (collapses, coarse) = decimate(FlatMesh::from_mesh(mesh), &params, progress);
+        let (collapses, coarse, outcome) = decimate(FlatMesh::from_mesh(mesh), &params, progress);
 
         // PM order: surviving referenced vertices (slot order), removed vertices in reverse
         // collapse order, then isolated vertices (slot order).
@@ -188,6 +190,7 @@ impl ProgressiveMesh {
             faces,
             n_base_faces: coarse.n_faces(),
             errors,
+            stop: Some(outcome.stop),
         })
     }
 
@@ -199,6 +202,28 @@ impl ProgressiveMesh {
     /// Number of vertices at the finest level (all vertices referenced by a face).
     pub fn n_vertices(&self) -> usize {
         self.n_base + self.splits.len()
+    }
+
+    /// Why the build stopped at the base level (the target, or no legal collapse left and
+    /// which rules refused); `None` for a hierarchy loaded from a file.
+    pub fn stop(&self) -> Option<&Stop> {
+        self.stop.as_ref()
+    }
+
+    /// One phrase describing the base level against the floor of its topology, and why the
+    /// build stopped there when known: "base level 4 vertices, 4 triangles; floor 4 vertices
+    /// (1 component, 0 holes, genus 0); no legal collapse left (valence-3 wing: 6 edges)".
+    pub fn describe_base(&self) -> String {
+        let floor = self.base_mesh().topology().describe_floor();
+        let mut s = format!(
+            "base level {} vertices, {} triangles; {floor}",
+            self.n_base,
+            self.base_triangles().len()
+        );
+        if let Some(stop) = &self.stop {
+            s += &format!("; {stop}");
+        }
+        s
     }
 
     /// Number of faces at the coarsest level.
@@ -452,7 +477,7 @@ pub(crate) fn decimate_params(
         target_vertices: opts.target_vertices,
         target_faces: opts.target_faces,
         max_error_sq,
-        legality: super::collapse::Legality {
+        legality: super::Legality {
             max_valence: opts.max_valence,
             min_normal_cos: angle.to_radians().cos(),
             min_quality: opts.min_quality,

@@ -1,9 +1,9 @@
 //! Simplification of a file-level mesh: the progressive mesh cut at a level, written with the
 //! input's per-vertex attributes carried along (the behaviour of `meshpyr simplify`).
 
-use super::decimate::{FlatMesh, decimate};
+use super::decimate::{FlatMesh, Stop, decimate};
 use super::progressive::{PmError, PmOptions, decimate_params};
-use crate::mesh::{BoundingBox, BuildError, CornerTable, PolygonMesh};
+use crate::mesh::{BoundingBox, BuildError, CornerTable, Mesh, PolygonMesh, Topology};
 use crate::progress::Progress;
 use glam::DVec3;
 
@@ -44,6 +44,28 @@ pub struct Simplified {
     pub input_triangles: usize,
     /// For each output vertex, the input vertex it came from.
     pub source_rows: Vec<u32>,
+    /// Why simplification stopped: the target, or, short of it, no legal collapse left.
+    pub stop: Stop,
+    /// Collapses that needed relaxed shape rules ([`Relaxation`](super::Relaxation)).
+    pub relaxed_collapses: usize,
+    /// The result's topology (components, holes, genus and the floor they set) when it
+    /// stopped short of the target; `None` when the target was reached.
+    pub short_of_target: Option<Topology>,
+}
+
+impl Simplified {
+    /// One line saying where simplification stopped and why, when it stopped short of the
+    /// target (`None` otherwise).
+    pub fn shortfall(&self) -> Option<String> {
+        let topology = self.short_of_target.as_ref()?;
+        Some(format!(
+            "stopped at {} triangles, {} vertices: {}; {} of its topology",
+            self.mesh.n_faces(),
+            self.mesh.n_vertices(),
+            self.stop,
+            topology.describe_floor(),
+        ))
+    }
 }
 
 /// Simplifies `input` by quadric-error half-edge collapses (the base level
@@ -93,7 +115,7 @@ pub fn simplify(
     }
     let params = decimate_params(&o, bbox_diagonal)?;
     let flat = FlatMesh::from_corners(positions, &repaired.corners);
-    let (_, coarse) = decimate(flat, &params, progress);
+    let (_, coarse, outcome) = decimate(flat, &params, progress);
     // The cut is the progressive mesh's base level: survivors in slot order, live triangles in
     // input order (exactly what `ProgressiveMesh::level_triangles` gives there).
     let survivors = coarse.survivors();
@@ -127,9 +149,16 @@ pub fn simplify(
             data: a.data.gather(&source_rows),
         })
         .collect();
+    let short_of_target = match outcome.stop {
+        Stop::NoLegalCollapse(_) => Some(Mesh::from_polygons(&mesh)?.mesh.topology()),
+        _ => None,
+    };
     Ok(Simplified {
         mesh,
         input_triangles: n_faces,
         source_rows,
+        stop: outcome.stop,
+        relaxed_collapses: outcome.relaxed.iter().sum(),
+        short_of_target,
     })
 }
