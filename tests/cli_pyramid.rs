@@ -153,6 +153,14 @@ fn bands_outside_the_pyramid_are_reported() {
     // A unit gain changes nothing by design: no warning.
     assert_eq!(run(&["--gain", "50000:60000=1"]), "");
     assert_eq!(run(&["--stopband", "200:400", "--lowpass", "600"]), "");
+    // Below the coarsest level (32 open patches: at least 96 vertices): the low-pass keeps
+    // the base level, not 10 vertices, and says so.
+    let err = run(&["--lowpass", "10"]);
+    assert!(
+        err.contains("warning:")
+            && err.contains("low-pass 10 reaches below the pyramid's coarsest level"),
+        "{err}"
+    );
     assert!(out.exists());
 }
 

@@ -199,3 +199,63 @@ fn errors_exit_non_zero_with_one_line() {
         "{err}"
     );
 }
+
+/// A target below the floor of the mesh's topology: the command does what it can, writes the
+/// result and says in one warning line where it stopped and why; a reachable target is quiet.
+#[test]
+fn a_target_below_the_topology_floor_warns_once() {
+    let out = scratch("elephant-10.ply");
+    let run = meshpyr(&[
+        "simplify",
+        &data("elephant_holes.ply"),
+        "-o",
+        out.to_str().unwrap(),
+        "--faces",
+        "10",
+    ]);
+    ok(&run);
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    let warnings: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("warning:"))
+        .collect();
+    assert_eq!(warnings.len(), 1, "{stderr}");
+    let w = warnings[0];
+    assert!(w.contains("elephant_holes.ply: stopped at"), "{w}");
+    assert!(w.contains("no legal collapse left"), "{w}");
+    assert!(
+        w.contains("the floor of its topology is 318 vertices (1 component, 106 holes, genus 3)"),
+        "{w}"
+    );
+    let m = read_mesh(&out).unwrap();
+    assert!(m.n_vertices() <= 2 * 318, "{}", m.n_vertices());
+
+    let run = meshpyr(&[
+        "simplify",
+        &data("elephant_holes.ply"),
+        "-o",
+        out.to_str().unwrap(),
+        "--ratio",
+        "0.2",
+    ]);
+    ok(&run);
+    assert!(!String::from_utf8_lossy(&run.stderr).contains("warning"));
+}
+
+/// Closed genus-0 scans go down to a tetrahedron.
+#[test]
+fn a_marching_cubes_scan_simplifies_to_a_tetrahedron() {
+    let out = scratch("mc-4.ply");
+    let run = meshpyr(&[
+        "simplify",
+        &data("mc/mc_bunny_quant36.ply"),
+        "-o",
+        out.to_str().unwrap(),
+        "--faces",
+        "4",
+    ]);
+    ok(&run);
+    assert!(!String::from_utf8_lossy(&run.stderr).contains("warning"));
+    let m = read_mesh(&out).unwrap();
+    assert_eq!((m.n_vertices(), m.n_faces()), (4, 4));
+}

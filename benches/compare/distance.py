@@ -86,9 +86,8 @@ def distances(points, pos, tris, chunk=20000):
     return out
 
 
-def compare(ref_path, res_path, n=400000, seed=1):
-    rp, rt = read_ply(ref_path)
-    sp, st = read_ply(res_path)
+def compare_arrays(rp, rt, sp, st, n=400000, seed=1):
+    """compare() on meshes already read: reference (rp, rt), result (sp, st)."""
     diag = np.linalg.norm(rp.max(0) - rp.min(0))
     rng = np.random.default_rng(seed)
     d_rs = distances(sample(rp, rt, n, rng), sp, st)
@@ -96,6 +95,12 @@ def compare(ref_path, res_path, n=400000, seed=1):
     h = max(d_rs.max(), d_sr.max()) / diag
     rms = np.sqrt(0.5 * ((d_rs ** 2).mean() + (d_sr ** 2).mean())) / diag
     return h, rms, len(st)
+
+
+def compare(ref_path, res_path, n=400000, seed=1):
+    rp, rt = read_ply(ref_path)
+    sp, st = read_ply(res_path)
+    return compare_arrays(rp, rt, sp, st, n, seed)
 
 
 if __name__ == "__main__":

@@ -162,14 +162,16 @@ impl FilterOptions {
 /// `filter` resolved on `pyramid`, with a warning on standard error for every band that
 /// selects none of the pyramid's levels (an empty band, a stop-band above the finest level, a
 /// feature size finer than the scan's sampling), which would otherwise change nothing without
-/// a word. `name` is the input, for the message.
+/// a word, and for every band that reaches below the coarsest level (a low-pass to fewer
+/// vertices than the base has), which would otherwise silently do less. `name` is the input,
+/// for the message.
 pub fn resolve_reporting(filter: &Filter, pyramid: &Pyramid, name: &str) -> LevelGains {
     let gains = filter.resolve(pyramid.surface_area());
     // Splits create the levels (base, finest]; a band (a, b] reaches them when it is not
     // empty and overlaps them.
     let (base, finest) = (pyramid.n_base_vertices(), pyramid.n_vertices());
     for (band, &(a, b, gain)) in filter.bands.iter().zip(&gains.bands) {
-        if gain == 1.0 || (a < b && a < finest && b > base) {
+        if gain == 1.0 {
             continue;
         }
         let (what, selects) = match band.to {
@@ -184,11 +186,20 @@ pub fn resolve_reporting(filter: &Filter, pyramid: &Pyramid, name: &str) -> Leve
         };
         if a >= b {
             eprintln!("warning: {name}: {what} is empty; it changes nothing");
-        } else {
+        } else if a >= finest || b <= base {
             eprintln!(
                 "warning: {name}: {what} selects {selects}, but the pyramid's levels are \
                  {}..={finest}; it changes nothing",
                 base + 1
+            );
+        } else if a < base {
+            eprintln!(
+                "warning: {name}: {what} reaches below the pyramid's coarsest level, {base} \
+                 vertices (no legal collapse goes further); levels {}..={base} do not exist, so \
+                 it acts on levels {}..={} only",
+                a + 1,
+                base + 1,
+                b.min(finest)
             );
         }
     }

@@ -29,6 +29,10 @@ pub struct SimplifyArgs {
     /// Largest rotation of a face normal one collapse may cause, in degrees.
     #[arg(long, default_value_t = PmOptions::default().max_normal_angle_degrees)]
     pub max_angle: f64,
+    /// Smallest triangle quality (4√3·area / Σ edge², 1 = equilateral) a collapse may leave
+    /// around the vertex it removes, unless it was already worse there (0 turns the rule off).
+    #[arg(long, default_value_t = PmOptions::default().min_quality)]
+    pub min_quality: f64,
     /// Weight of the boundary-preserving planes (0 lets boundaries drift).
     #[arg(long, default_value_t = PmOptions::default().boundary_weight)]
     pub boundary_weight: f64,
@@ -46,6 +50,7 @@ pub fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
     let input = super::read_input_mesh(&args.input)?;
     let opts = PmOptions {
         max_normal_angle_degrees: args.max_angle,
+        min_quality: args.min_quality,
         boundary_weight: args.boundary_weight,
         ..PmOptions::default()
     };
@@ -57,8 +62,12 @@ pub fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
     if let Some(shortfall) = result.shortfall() {
         eprintln!("warning: {}: {shortfall}", args.input.display());
     }
+    let relaxed = match result.relaxed_collapses {
+        0 => String::new(),
+        n => format!(" ({n} collapses needed relaxed shape rules)"),
+    };
     global.say(format_args!(
-        "wrote {}: {} -> {} triangles, {} vertices",
+        "wrote {}: {} -> {} triangles, {} vertices{relaxed}",
         args.output.display(),
         result.input_triangles,
         result.mesh.n_faces(),

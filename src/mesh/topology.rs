@@ -47,7 +47,8 @@ pub fn vertex_floor(genus: u64, boundary_loops: u64) -> u64 {
 }
 
 impl Topology {
-    /// One phrase for reports: "floor 318 vertices (1 component, 106 holes, genus 3)".
+    /// The floor and what sets it, for reports: "318 vertices (1 component, 106 holes,
+    /// genus 3)".
     pub fn describe_floor(&self) -> String {
         let count =
             |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
@@ -55,7 +56,7 @@ impl Topology {
             .genus
             .map_or("genus n/a".to_string(), |g| format!("genus {g}"));
         format!(
-            "floor {} ({}, {}, {genus})",
+            "{} ({}, {}, {genus})",
             count(self.floor_vertices, "vertex", "vertices"),
             count(self.components, "component", "components"),
             count(self.boundary_loops, "hole", "holes"),

@@ -1036,6 +1036,35 @@ mod tests {
     }
 
     #[test]
+    fn degenerate_scans_match_the_half_edge_decimator_down_to_the_floor() {
+        // Marching-cubes output with zero-area faces and coincident vertices, and a
+        // many-component implicit: decimated to nothing, they exercise every relaxation step
+        // and the census of what stopped.
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mc");
+        let mut relaxed = 0;
+        for name in [
+            "mc_bunny_quant36.ply",
+            "mc_implicit_n40.ply",
+            "mc_armadillo_open52.ply",
+        ] {
+            let input = crate::io::read_mesh(&dir.join(name)).unwrap();
+            let mesh = Mesh::from_polygons(&input).unwrap().mesh;
+            assert_same_as_reference(&mesh, &params(0, f64::INFINITY, 100.0));
+            let (_, _, outcome) = decimate(
+                FlatMesh::from_mesh(&mesh),
+                &params(0, f64::INFINITY, 100.0),
+                &NoProgress,
+            );
+            relaxed += outcome.relaxed.iter().sum::<usize>();
+            assert!(
+                matches!(&outcome.stop, Stop::NoLegalCollapse(r) if !r.is_empty()),
+                "{name}: {outcome:?}"
+            );
+        }
+        assert!(relaxed > 0);
+    }
+
+    #[test]
     fn meshes_with_free_slots_match_the_half_edge_decimator() {
         // After some collapses the slots have holes, so half-edge ids are no longer slots and
         // ties go through the slot table.

@@ -211,12 +211,13 @@ impl ProgressiveMesh {
     }
 
     /// One phrase describing the base level against the floor of its topology, and why the
-    /// build stopped there when known: "base level 4 vertices, 4 triangles; floor 4 vertices
-    /// (1 component, 0 holes, genus 0); no legal collapse left (valence-3 wing: 6 edges)".
+    /// build stopped there when known: "base level 4 vertices, 4 triangles; topology floor 4
+    /// vertices (1 component, 0 holes, genus 0); no legal collapse left (valence-3 wing: 6
+    /// edges)".
     pub fn describe_base(&self) -> String {
         let floor = self.base_mesh().topology().describe_floor();
         let mut s = format!(
-            "base level {} vertices, {} triangles; {floor}",
+            "base level {} vertices, {} triangles; topology floor {floor}",
             self.n_base,
             self.base_triangles().len()
         );

@@ -59,7 +59,7 @@ impl Simplified {
     pub fn shortfall(&self) -> Option<String> {
         let topology = self.short_of_target.as_ref()?;
         Some(format!(
-            "stopped at {} triangles, {} vertices: {}; {} of its topology",
+            "stopped at {} triangles, {} vertices: {}; the floor of its topology is {}",
             self.mesh.n_faces(),
             self.mesh.n_vertices(),
             self.stop,
