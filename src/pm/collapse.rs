@@ -498,7 +498,7 @@ pub fn is_collapse_topologically_legal(
     Some(new_valence)
 }
 
-/// The geometric rules ([`shape_check`]) on the faces around `h`'s tail.
+/// The shape rules of [`Legality`] (normals, slivers) on the faces around `h`'s tail.
 pub fn is_collapse_geometrically_legal(mesh: &Mesh, h: HalfedgeId, legality: &Legality) -> bool {
     let o = mesh.twin(h);
     let u = mesh.to_vertex(o);
