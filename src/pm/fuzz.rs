@@ -94,6 +94,17 @@ pub(crate) fn mesh_from_bytes(r: &mut Bytes) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     (new_pos, tris)
 }
 
+/// Degenerate clusters as scanners leave them: up to 15 triangle corners snapped onto the next
+/// corner of their triangle (zero-length edges, zero-area faces, coincident vertices).
+fn snap_corners(r: &mut Bytes, pos: &mut [DVec3], tris: &[[u32; 3]]) {
+    let snaps = if tris.is_empty() { 0 } else { r.u8() % 16 };
+    for _ in 0..snaps {
+        let t = tris[r.u8() as usize % tris.len()];
+        let k = (r.u8() % 3) as usize;
+        pos[t[k] as usize] = pos[t[(k + 1) % 3] as usize];
+    }
+}
+
 fn sorted_triangles(tris: impl Iterator<Item = [u32; 3]>) -> Vec<[u32; 3]> {
     let mut v: Vec<[u32; 3]> = tris
         .map(|t| {
@@ -106,7 +117,7 @@ fn sorted_triangles(tris: impl Iterator<Item = [u32; 3]>) -> Vec<[u32; 3]> {
     v
 }
 
-/// Interprets `data` as a small mesh, build options and a sequence of collapse / split /
+/// Interprets `data` as a small mesh (with degenerate clusters), build options and a sequence of collapse / split /
 /// level-jump operations, and checks every invariant after every step: `validate()`, vertex
 /// slot == PM index, vertex and face counts per level, bit-exact positions, the cursor mesh
 /// equal to [`ProgressiveMesh::level_triangles`], exact records after returning to the finest
@@ -117,7 +128,8 @@ fn sorted_triangles(tris: impl Iterator<Item = [u32; 3]>) -> Vec<[u32; 3]> {
 /// otherwise.
 pub fn fuzz_operations(data: &[u8]) {
     let mut r = Bytes { data, pos: 0 };
-    let (pos, tris) = mesh_from_bytes(&mut r);
+    let (mut pos, tris) = mesh_from_bytes(&mut r);
+    snap_corners(&mut r, &mut pos, &tris);
     let built = match Mesh::from_triangles(&pos, &tris) {
         Ok(b) => b,
         Err(e) => panic!("builder failed on a generated mesh: {e}"),
