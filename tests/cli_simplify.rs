@@ -259,3 +259,35 @@ fn a_marching_cubes_scan_simplifies_to_a_tetrahedron() {
     let m = read_mesh(&out).unwrap();
     assert_eq!((m.n_vertices(), m.n_faces()), (4, 4));
 }
+
+/// `--prune` drops floating debris before simplifying, says how much, and the ratio still
+/// counts the file's triangles; without it every component is kept.
+#[test]
+fn prune_drops_small_pieces_on_request_only() {
+    let input = data("mc/mc_implicit_n56.ply");
+    let faces = read_mesh(Path::new(&input)).unwrap().n_triangles();
+    let out = scratch("implicit-pruned.ply");
+    let run = |extra: &[&str]| {
+        let mut args = vec![
+            "simplify",
+            &input,
+            "-o",
+            out.to_str().unwrap(),
+            "--ratio",
+            "0.05",
+        ];
+        args.extend_from_slice(extra);
+        let r = meshpyr(&args);
+        ok(&r);
+        let m = Mesh::from_polygons(&read_mesh(&out).unwrap()).unwrap().mesh;
+        (String::from_utf8_lossy(&r.stderr).into_owned(), m)
+    };
+    let (said, pruned) = run(&["--prune", "0.1"]);
+    assert!(said.contains("pruned 27 of 29 components"), "{said}");
+    assert_eq!(pruned.topology().components, 2);
+    let target = (0.05 * faces as f64).round() as usize;
+    assert!(pruned.n_faces() <= target && pruned.n_faces() + 10 >= target);
+    let (said, kept) = run(&[]);
+    assert!(!said.lines().any(|l| l.starts_with("pruned")), "{said}");
+    assert_eq!(kept.topology().components, 29);
+}

@@ -33,6 +33,12 @@ pub struct SimplifyArgs {
     /// around the vertex it removes, unless it was already worse there (0 turns the rule off).
     #[arg(long, default_value_t = PmOptions::default().min_quality)]
     pub min_quality: f64,
+    /// Before simplifying, drop the connected pieces whose bounding-box diagonal is below this
+    /// fraction of the whole mesh's (floating debris of reconstructions; the largest piece
+    /// always stays). Reported; off unless given. `--ratio` still refers to the file's
+    /// triangles.
+    #[arg(long, value_name = "FRACTION")]
+    pub prune: Option<f64>,
     /// Weight of the boundary-preserving planes (0 lets boundaries drift).
     #[arg(long, default_value_t = PmOptions::default().boundary_weight)]
     pub boundary_weight: f64,
@@ -47,7 +53,27 @@ pub fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
         (_, _, Some(e)) => SimplifyTarget::Error(e),
         _ => anyhow::bail!("one of --faces, --ratio, --error is required"),
     };
-    let input = super::read_input_mesh(&args.input)?;
+    let mut input = super::read_input_mesh(&args.input)?;
+    let mut target = target;
+    if let Some(fraction) = args.prune {
+        // A ratio refers to the file as given, not to what is left after pruning.
+        if let SimplifyTarget::Ratio(r) = target
+            && r > 0.0
+            && r <= 1.0
+        {
+            target = SimplifyTarget::Faces((r * input.n_triangles() as f64).round() as usize);
+        }
+        anyhow::ensure!(
+            (0.0..=1.0).contains(&fraction),
+            "--prune must be a fraction in [0, 1], got {fraction}"
+        );
+        let (kept, pruned) = crate::mesh::prune_small_components(&input, fraction);
+        global.say(format_args!(
+            "pruned {} of {} components ({} polygons) smaller than {fraction} of the diagonal",
+            pruned.components, pruned.of_components, pruned.faces
+        ));
+        input = kept;
+    }
     let opts = PmOptions {
         max_normal_angle_degrees: args.max_angle,
         min_quality: args.min_quality,

@@ -21,6 +21,14 @@ impl BoundingBox {
         Some(BoundingBox { min, max })
     }
 
+    /// The smallest box holding this one and `p`.
+    pub fn including(self, p: DVec3) -> BoundingBox {
+        BoundingBox {
+            min: self.min.min(p),
+            max: self.max.max(p),
+        }
+    }
+
     /// Length of the diagonal; the scale all relative tolerances refer to.
     pub fn diagonal(&self) -> f64 {
         (self.max - self.min).length()

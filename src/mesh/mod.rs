@@ -5,6 +5,7 @@ pub mod build;
 pub mod geometry;
 pub mod halfedge;
 pub mod polygon;
+pub mod prune;
 pub mod shapes;
 pub mod topology;
 pub mod validate;
@@ -15,5 +16,6 @@ pub use halfedge::{FaceId, HalfedgeId, Mesh, Outgoing, SlotIndex, VertexId};
 pub use polygon::{
     Attribute, AttributeData, ElementProperty, ExtraElement, ListProperty, PolygonMesh, ScalarType,
 };
+pub use prune::{Pruned, prune_small_components};
 pub use topology::Topology;
 pub use validate::ValidationError;
