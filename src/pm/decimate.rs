@@ -8,9 +8,11 @@
 //! endpoints was the survivor of a collapse in this pass — the only vertex whose quadric
 //! changed — so every cost used is exact. A pass stops at the target or once costs exceed
 //! 1.5× the cost of the candidate that would meet the pass's share of the target, which keeps
-//! the order close to a global heap's. Legality is tested when an edge's turn comes; an illegal
-//! cheaper direction falls back to the other one. The build ends when a pass without the cost
-//! cut finds no legal collapse, so "no legal collapse left" really means none.
+//! the order close to a global heap's. Legality ([`super::Legality`]) is tested when an edge's
+//! turn comes; an illegal cheaper direction falls back to the other one. A pass that finds no
+//! legal collapse is repeated without the cost cut, then with the shape rules relaxed step by
+//! step ([`Schedule`]; `docs/pm-legality.md`); the build ends when even that finds none, so "no
+//! legal collapse left" really means none, and [`Stop`] says which rules refused what is left.
 //!
 //! **Why a corner table.** The collapses visit the mesh in cost order, i.e. at random, so the
 //! time goes into cache misses on the records a legality test walks. The decimator therefore
