@@ -3,8 +3,11 @@
 usage: python3 distance.py REFERENCE.ply RESULT.ply [SAMPLES=400000] [SEED=1]
 
 Both surfaces are sampled area-uniformly (SAMPLES points each, fixed seed, plus all vertices).
-For each sample the distance to the other surface is the exact point-to-triangle distance,
-minimised over the K=32 triangles with the nearest centroids (scipy cKDTree). Reports, relative
+For each sample the distance to the other surface is the exact point-to-triangle distance to
+the nearest triangle: the K=32 triangles with the nearest centroids (scipy cKDTree) give an
+upper bound, then every triangle whose bounding sphere (centroid, circumradius) comes within it
+is checked. (The bound alone overstates distances where big triangles sit next to small ones,
+as in a simplified CAD model: 40x on fandisk at 20 %.) Reports, relative
 to the reference's bounding-box diagonal:
   hausdorff = max over both directions of the max distance
   rms       = sqrt((mean d^2 reference->result + mean d^2 result->reference) / 2)
@@ -70,9 +73,8 @@ def point_triangle_dist2(p, a, b, c):
     return ((p - out) ** 2).sum(1)
 
 
-def distances(points, pos, tris, chunk=20000):
-    cent = pos[tris].mean(axis=1)
-    tree = cKDTree(cent)
+def nearest_centroid_bound(points, pos, tris, tree, chunk=20000):
+    """Distance to the nearest of the K triangles with the nearest centroids: an upper bound."""
     out = np.empty(len(points))
     for s in range(0, len(points), chunk):
         p = points[s:s + chunk]
@@ -82,6 +84,29 @@ def distances(points, pos, tris, chunk=20000):
         for j in range(nn.shape[1]):
             t = tris[nn[:, j]]
             best = np.minimum(best, point_triangle_dist2(p, pos[t[:, 0]], pos[t[:, 1]], pos[t[:, 2]]))
+        out[s:s + chunk] = np.sqrt(best)
+    return out
+
+
+def distances(points, pos, tris, chunk=5000, pairs=2_000_000):
+    """Exact distance from each point to the triangle mesh (pos, tris)."""
+    cent = pos[tris].mean(axis=1)
+    radius = np.linalg.norm(pos[tris] - cent[:, None, :], axis=2).max(1)
+    tree = cKDTree(cent)
+    bound = nearest_centroid_bound(points, pos, tris, tree)
+    out = bound.copy()
+    for s in range(0, len(points), chunk):
+        p, ub = points[s:s + chunk], bound[s:s + chunk]
+        best = ub ** 2
+        near = tree.query_ball_point(p, ub + radius.max())
+        ii = np.repeat(np.arange(len(p)), [len(c) for c in near])
+        jj = np.concatenate([np.asarray(c, dtype=np.int64) for c in near])
+        keep = np.linalg.norm(p[ii] - cent[jj], axis=1) <= ub[ii] + radius[jj]
+        ii, jj = ii[keep], jj[keep]
+        for b in range(0, len(ii), pairs):
+            i2, t = ii[b:b + pairs], tris[jj[b:b + pairs]]
+            d = point_triangle_dist2(p[i2], pos[t[:, 0]], pos[t[:, 1]], pos[t[:, 2]])
+            np.minimum.at(best, i2, d)
         out[s:s + chunk] = np.sqrt(best)
     return out
 

@@ -32,7 +32,7 @@
 
 use super::legality::{Legality, Refusal, Relaxation, RingFace, shape_check};
 use super::prefetch::prefetch;
-use super::quadric::Quadric;
+use super::quadric::{POINT_REGULARISATION, Quadric};
 use crate::mesh::build::{next_c, prev_c};
 use crate::mesh::{BoundingBox, CornerTable, Mesh, SlotIndex};
 use crate::progress::Progress;
@@ -630,6 +630,11 @@ fn initial_quadrics(mesh: &FlatMesh, boundary_weight: f64) -> Vec<Quadric> {
         for x in [a, b, c] {
             q[x as usize].add(&fq);
         }
+    }
+    // Before the boundary planes, which add no weight: the regulariser scales with the faces'.
+    for (v, qv) in q.iter_mut().enumerate() {
+        let scale = POINT_REGULARISATION * qv.weight;
+        qv.add(&Quadric::from_point(mesh.position(v as u32), scale));
     }
     if boundary_weight > 0.0 {
         let nh = mesh.n_corners();

@@ -6,7 +6,7 @@ use super::collapse::{
     Marks, half_edge_collapse, is_collapse_geometrically_legal, is_collapse_topologically_legal,
 };
 use super::decimate::{Collapse, DecimateParams, Schedule};
-use super::quadric::Quadric;
+use super::quadric::{POINT_REGULARISATION, Quadric};
 use crate::mesh::{BoundingBox, HalfedgeId, Mesh, SlotIndex};
 use crate::progress::Progress;
 
@@ -50,6 +50,10 @@ fn initial_quadrics(mesh: &Mesh, boundary_weight: f64) -> Vec<Quadric> {
         for x in [a, b, c] {
             q[x.slot()].add(&fq);
         }
+    }
+    for v in mesh.vertices() {
+        let scale = POINT_REGULARISATION * q[v.slot()].weight;
+        q[v.slot()].add(&Quadric::from_point(mesh.position(v), scale));
     }
     if boundary_weight > 0.0 {
         for h in mesh.halfedges() {
