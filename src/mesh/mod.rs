@@ -8,6 +8,7 @@ pub mod polygon;
 pub mod prune;
 pub mod shapes;
 pub mod topology;
+mod union_find;
 pub mod validate;
 
 pub use build::{BuildError, BuildReport, Built, CornerTable, Repaired, SourceMap};

@@ -6,6 +6,7 @@
 //! a tetrahedron at every level, and at 1 % of the faces they can hold most of the budget.
 //! Dropping them changes the topology, which is why it is never done unless asked for.
 
+use super::union_find::UnionFind;
 use super::{BoundingBox, PolygonMesh};
 
 /// What [`prune_small_components`] removed.
@@ -25,30 +26,20 @@ pub struct Pruned {
 /// (dropped pieces leave unreferenced vertices); per-face attributes follow their polygons.
 pub fn prune_small_components(mesh: &PolygonMesh, min_fraction: f64) -> (PolygonMesh, Pruned) {
     let n = mesh.positions.len();
-    let mut parent: Vec<u32> = (0..n as u32).collect();
-    fn root(p: &mut [u32], mut x: u32) -> u32 {
-        while p[x as usize] != x {
-            p[x as usize] = p[p[x as usize] as usize];
-            x = p[x as usize];
-        }
-        x
-    }
+    let mut sets = UnionFind::new(n);
     for f in mesh.faces() {
         for w in f.windows(2) {
-            let (a, b) = (root(&mut parent, w[0]), root(&mut parent, w[1]));
-            if a != b {
-                parent[a.max(b) as usize] = a.min(b);
-            }
+            sets.union(w[0], w[1]);
         }
     }
     let face_root: Vec<Option<u32>> = mesh
         .faces()
-        .map(|f| f.first().map(|&v| root(&mut parent, v)))
+        .map(|f| f.first().map(|&v| sets.find(v)))
         .collect();
     let mut boxes: Vec<Option<BoundingBox>> = vec![None; n];
     for f in mesh.faces() {
         let Some(&first) = f.first() else { continue };
-        let r = root(&mut parent, first) as usize;
+        let r = sets.find(first) as usize;
         for &v in f {
             let p = mesh.positions[v as usize];
             boxes[r] = Some(match boxes[r] {

@@ -1,6 +1,7 @@
 //! Global topology of a [`Mesh`]: components, boundary loops, Euler characteristic, genus.
 
 use super::halfedge::{Mesh, SlotIndex};
+use super::union_find::UnionFind;
 use serde::Serialize;
 
 /// Counts describing a mesh's topology.
@@ -69,26 +70,18 @@ impl Mesh {
     pub fn topology(&self) -> Topology {
         // Components by union-find over vertex slots, joined along edges.
         let n = self.vertices.capacity() + 1;
-        let mut parent: Vec<u32> = (0..n as u32).collect();
-        fn find(p: &mut [u32], mut x: u32) -> u32 {
-            while p[x as usize] != x {
-                p[x as usize] = p[p[x as usize] as usize];
-                x = p[x as usize];
-            }
-            x
-        }
+        let mut parent = UnionFind::new(n);
         for h in self.edges() {
-            let a = find(&mut parent, self.from_vertex(h).slot() as u32);
-            let b = find(&mut parent, self.to_vertex(h).slot() as u32);
-            if a != b {
-                parent[a.max(b) as usize] = a.min(b);
-            }
+            parent.union(
+                self.from_vertex(h).slot() as u32,
+                self.to_vertex(h).slot() as u32,
+            );
         }
         // Per-component counts (V, E, F, B), keyed by root slot.
         let mut comp_index = vec![u32::MAX; n];
         let mut counts: Vec<[i64; 4]> = Vec::new();
-        let mut comp_of = |parent: &mut [u32], slot: usize, counts: &mut Vec<[i64; 4]>| {
-            let r = find(parent, slot as u32) as usize;
+        let mut comp_of = |parent: &mut UnionFind, slot: usize, counts: &mut Vec<[i64; 4]>| {
+            let r = parent.find(slot as u32) as usize;
             if comp_index[r] == u32::MAX {
                 comp_index[r] = counts.len() as u32;
                 counts.push([0; 4]);
