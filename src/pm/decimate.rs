@@ -774,8 +774,14 @@ pub(crate) fn decimate(
         |m: &FlatMesh| m.n_faces <= params.target_faces || m.n_vertices <= params.target_vertices;
     let mut schedule = Schedule::new();
     let mut stop = Stop::Target;
+    // The live triangles, in order: dead ones are dropped after every pass, so a pass reads
+    // only what is left.
+    let mut live: Vec<u32> = (0..mesh.corners.len() as u32 / 3)
+        .filter(|&t| mesh.corners[3 * t as usize].vertex != NONE)
+        .collect();
     while !done(&mesh) {
-        collect_candidates(&mesh, &quadric, params.max_error_sq, &mut cands);
+        live.retain(|&t| mesh.corners[3 * t as usize].vertex != NONE);
+        collect_candidates(&mesh, &live, &quadric, params.max_error_sq, &mut cands);
         if cands.is_empty() {
             stop = if params.max_error_sq.is_finite() {
                 Stop::ErrorBound
@@ -873,43 +879,41 @@ pub(crate) fn decimate(
 /// order). Costs are independent, so they are computed in parallel.
 fn collect_candidates(
     mesh: &FlatMesh,
+    live: &[u32],
     quadric: &[Quadric],
     max_error_sq: f64,
     cands: &mut Vec<Candidate>,
 ) {
     cands.clear();
-    let nt = mesh.corners.len() / 3;
-    let scan = |t: usize, out: &mut Vec<Candidate>| {
+    let scan = |i: usize, out: &mut Vec<Candidate>| {
         // Triangles are read in order, their vertices' records at random.
-        if let Some(ahead) = mesh.corners.get(3 * t + 24..3 * t + 27) {
-            for x in ahead.iter().filter(|x| x.vertex != NONE) {
+        if let Some(&ahead) = live.get(i + 8) {
+            for x in &mesh.corners[3 * ahead as usize..3 * ahead as usize + 3] {
                 prefetch(quadric.as_ptr().wrapping_add(x.vertex as usize));
                 prefetch(mesh.vertices.as_ptr().wrapping_add(x.vertex as usize));
             }
         }
-        if mesh.corners[3 * t].vertex == NONE {
-            return;
-        }
-        for c in 3 * t as u32..3 * t as u32 + 3 {
+        let t = live[i];
+        for c in 3 * t..3 * t + 3 {
             if let Some(x) = mesh.candidate(quadric, c, max_error_sq) {
                 out.push(x);
             }
         }
     };
-    if nt >= PAR_MIN {
+    if live.len() >= PAR_MIN {
         cands.par_extend(
-            (0..nt)
+            (0..live.len())
                 .into_par_iter()
                 .with_min_len(PAR_MIN / 4)
-                .fold(Vec::new, |mut out, t| {
-                    scan(t, &mut out);
+                .fold(Vec::new, |mut out, i| {
+                    scan(i, &mut out);
                     out
                 })
                 .flatten_iter(),
         );
     } else {
-        for t in 0..nt {
-            scan(t, cands);
+        for i in 0..live.len() {
+            scan(i, cands);
         }
     }
 }
