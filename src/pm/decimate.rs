@@ -681,7 +681,8 @@ impl std::fmt::Display for Stop {
                 write!(f, "no legal collapse left")?;
                 for (i, (rule, n)) in refusals.iter().enumerate() {
                     let sep = if i == 0 { " (" } else { ", " };
-                    write!(f, "{sep}{}: {n} edges", rule.describe())?;
+                    let edges = if *n == 1 { "edge" } else { "edges" };
+                    write!(f, "{sep}{}: {n} {edges}", rule.describe())?;
                 }
                 if !refusals.is_empty() {
                     write!(f, ")")?;
