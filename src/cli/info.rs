@@ -109,11 +109,16 @@ fn count_file_edges(poly: &PolygonMesh) -> usize {
 
 /// Runs `meshpyr info`.
 pub fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
-    let poly = super::read_input_mesh(&args.mesh)?;
+    // A .pyr file is decoded once, for its stored input and its hierarchy.
+    let (poly, pm_base) = if super::build::is_pyr_file(&args.mesh) {
+        let data = super::build::load_pyr(&args.mesh)?;
+        let base = data.pm.describe_base();
+        (data.input, Some(base))
+    } else {
+        (crate::io::read_mesh(&args.mesh)?, None)
+    };
     let mut info = mesh_info(&poly).with_context(|| args.mesh.display().to_string())?;
-    if super::build::is_pyr_file(&args.mesh) {
-        info.pm_base = Some(super::build::load_pyr(&args.mesh)?.pm.describe_base());
-    }
+    info.pm_base = pm_base;
     if args.json {
         outln!("{}", serde_json::to_string(&info)?);
         return Ok(());

@@ -56,6 +56,10 @@ pub fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
     let mut input = super::read_input_mesh(&args.input)?;
     let mut target = target;
     if let Some(fraction) = args.prune {
+        anyhow::ensure!(
+            (0.0..=1.0).contains(&fraction),
+            "--prune must be a fraction in [0, 1], got {fraction}"
+        );
         // A ratio refers to the file as given, not to what is left after pruning.
         if let SimplifyTarget::Ratio(r) = target
             && r > 0.0
@@ -63,10 +67,6 @@ pub fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
         {
             target = SimplifyTarget::Faces((r * input.n_triangles() as f64).round() as usize);
         }
-        anyhow::ensure!(
-            (0.0..=1.0).contains(&fraction),
-            "--prune must be a fraction in [0, 1], got {fraction}"
-        );
         let (kept, pruned) = crate::mesh::prune_small_components(&input, fraction);
         global.say(format_args!(
             "pruned {} of {} components ({} polygons) smaller than {fraction} of the diagonal",

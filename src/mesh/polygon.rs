@@ -138,6 +138,16 @@ pub struct Attribute {
     pub data: AttributeData,
 }
 
+impl Attribute {
+    /// The same column with `rows[i]`'s value in row `i` (rows dropped or reordered).
+    pub fn gathered(&self, rows: &[u32]) -> Attribute {
+        Attribute {
+            name: self.name.clone(),
+            data: self.data.gather(rows),
+        }
+    }
+}
+
 /// A list-valued property of an extra element or an extra list property (kept opaque).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ListProperty {

@@ -79,10 +79,7 @@ pub fn prune_small_components(mesh: &PolygonMesh, min_fraction: f64) -> (Polygon
     out.face_attributes = mesh
         .face_attributes
         .iter()
-        .map(|a| super::Attribute {
-            name: a.name.clone(),
-            data: a.data.gather(&kept),
-        })
+        .map(|a| a.gathered(&kept))
         .collect();
     let components = (0..n)
         .filter(|&r| boxes[r].is_some() && !keep_root(r))

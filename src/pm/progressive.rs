@@ -215,11 +215,12 @@ impl ProgressiveMesh {
     /// vertices (1 component, 0 holes, genus 0); no legal collapse left (valence-3 wing: 6
     /// edges)".
     pub fn describe_base(&self) -> String {
-        let floor = self.base_mesh().topology().describe_floor();
+        let base = self.base_mesh();
         let mut s = format!(
-            "base level {} vertices, {} triangles; topology floor {floor}",
+            "base level {} vertices, {} triangles; topology floor {}",
             self.n_base,
-            self.base_triangles().len()
+            base.n_faces(),
+            base.topology().describe_floor()
         );
         if let Some(stop) = &self.stop {
             s += &format!("; {stop}");

@@ -144,10 +144,7 @@ pub fn simplify(
     mesh.vertex_attributes = input
         .vertex_attributes
         .iter()
-        .map(|a| crate::mesh::Attribute {
-            name: a.name.clone(),
-            data: a.data.gather(&source_rows),
-        })
+        .map(|a| a.gathered(&source_rows))
         .collect();
     let short_of_target = match outcome.stop {
         Stop::NoLegalCollapse(_) => Some(Mesh::from_polygons(&mesh)?.mesh.topology()),
