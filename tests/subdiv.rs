@@ -1,4 +1,4 @@
-//! Subdivision: topology, face counts, the cross-check against `reference/cascadic_mcm.py`,
+//! Subdivision: topology, face counts, the cross-check against `docs/reference/cascadic_mcm.py`,
 //! cascadic vs exact, shrinkage vs width, and the curvature comparison with Loop.
 
 mod common;
@@ -62,7 +62,7 @@ fn topology_and_face_counts_are_kept_on_all_control_meshes() {
 
 #[test]
 fn exact_solves_match_the_numpy_reference() {
-    // `python3 reference/cascadic_mcm.py`: stretched octahedron, 5 quadrisection levels,
+    // `python3 docs/reference/cascadic_mcm.py`: stretched octahedron, 5 quadrisection levels,
     // exact per-level solves, finest extent (c=0.2) [1.353 1.353 1.99], (c=0.3)
     // [0.864 0.864 1.176]; cascadic damped Jacobi m_l = 1·4^(5−l), c=0.3: extent
     // [1.087 1.087 2.002] and max|x − x_exact| = 0.413.

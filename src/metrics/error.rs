@@ -1,4 +1,4 @@
-//! Error metrics between a processed mesh M′ and a reference surface M (algorithms.md §5,
+//! Error metrics between a processed mesh M′ and a reference surface M (`docs/algorithms.md` §5,
 //! after Ohtake–Belyaev–Seidel 2002 §4):
 //!
 //! ```text

@@ -1,5 +1,5 @@
 //! Half-edge collapse and its exact inverse, the vertex split, with the legality tests of
-//! `algorithms.md` §4.2.
+//! `docs/algorithms.md` §4.2.
 //!
 //! Collapse `u → v` (half-edge `h = u→v`, `o = twin(h)`): the face `f_l = (u, v, v_l)` left of
 //! `h` and `f_r = (v, u, v_r)` right of it are deleted together with their six half-edges;
@@ -421,7 +421,7 @@ impl Marks {
     }
 }
 
-/// The topological rules of `algorithms.md` §4.2 (link condition, boundary rules, no
+/// The topological rules of `docs/algorithms.md` §4.2 (link condition, boundary rules, no
 /// collapse of a lone triangle or a tetrahedron, no interior vertex left with valence < 3,
 /// valence cap). Returns the valence the survivor would have, or `None` if illegal.
 pub fn is_collapse_topologically_legal(

@@ -1,6 +1,6 @@
 //! The progressive mesh (PM): quadric-error half-edge collapses recorded as exact vertex
 //! splits, vertices renumbered so that level `n` is the mesh on the first `n` vertices, and a
-//! cursor that walks the levels up and down (`algorithms.md` §4, `design.md` "Progressive mesh
+//! cursor that walks the levels up and down (`docs/algorithms.md` §4, "Progressive mesh
 //! conventions").
 //!
 //! - [`collapse`]: the half-edge collapse / vertex split primitives and the legality tests.

@@ -1,4 +1,4 @@
-//! Analysis (`algorithms.md` §1c): finest → coarsest, one half-edge collapse at a time.
+//! Analysis (`docs/algorithms.md` §1c): finest → coarsest, one half-edge collapse at a time.
 //!
 //! At level `n` (vertex `n − 1` is about to be removed, `t` is the vertex it collapses into):
 //! 1. record the level's relaxation weights of the removed vertex and of its 1-ring, computed

@@ -1,4 +1,4 @@
-//! Multiresolution editing (`algorithms.md` §1c, "Filtering and editing"): change the signal of
+//! Multiresolution editing (`docs/algorithms.md` §1c, "Filtering and editing"): change the signal of
 //! a coarse level, then resynthesise. The details of all finer levels are added in frames built
 //! from the edited prediction, so the fine structure follows the coarse deformation instead of
 //! being smeared or left behind.

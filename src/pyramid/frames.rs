@@ -1,4 +1,4 @@
-//! Local frames for details (`algorithms.md` §1c, "Local frames").
+//! Local frames for details (`docs/algorithms.md` §1c, "Local frames").
 //!
 //! A detail is stored as `d = F (f − q)`, with `F` the orthonormal frame `(t1, t2, n)` of the
 //! vertex in the *predicted* geometry `G` of its level (predictions on the split's vertices, the

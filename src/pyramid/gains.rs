@@ -1,4 +1,4 @@
-//! Filters as a gain per level (`algorithms.md` §1c, "Filtering and editing").
+//! Filters as a gain per level (`docs/algorithms.md` §1c, "Filtering and editing").
 //!
 //! Synthesis adds the details of level `n` scaled by `g(n)`. A filter is a list of bands, each a
 //! half-open level range `(from, to]` with a gain; where bands overlap their gains multiply.

@@ -1,5 +1,5 @@
 //! The Burt–Adelson detail pyramid on a progressive mesh (Guskov–Sweldens–Schröder 1999;
-//! `algorithms.md` §1c): a space-frequency decomposition of a surface into a coarse base signal
+//! `docs/algorithms.md` §1c): a space-frequency decomposition of a surface into a coarse base signal
 //! plus, for every vertex split, the details that the relaxation-based prediction misses.
 //!
 //! * [`analysis`]: finest → coarsest, vertex by vertex — presmooth the 1-ring, collapse, predict

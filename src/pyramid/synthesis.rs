@@ -1,4 +1,4 @@
-//! Synthesis (`algorithms.md` §1c): from the base signal, split by split, predict the new vertex
+//! Synthesis (`docs/algorithms.md` §1c): from the base signal, split by split, predict the new vertex
 //! and its 1-ring with the level's relaxation weights, rebuild their frames from the prediction,
 //! and add the scaled details.
 //!

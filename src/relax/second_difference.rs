@@ -1,4 +1,4 @@
-//! Guskov's non-uniform relaxation operator (Guskov–Sweldens–Schröder 1999; `algorithms.md`
+//! Guskov's non-uniform relaxation operator (Guskov–Sweldens–Schröder 1999; `docs/algorithms.md`
 //! §1a–1b): the value at a vertex that minimises the sum of squared hinge-map second
 //! differences over the edges whose flap contains the vertex.
 //!
@@ -674,7 +674,7 @@ mod tests {
             if r[0] > 0.0 || r[1] > 0.0 {
                 non_convex += 1;
             }
-            // The cot form as written in algorithms.md, from angles computed independently.
+            // The cot form as written in `docs/algorithms.md`, from angles computed independently.
             let l = e.length();
             let (a1, b1) = (cot(pj1, pj2, pl1), cot(pj2, pj1, pl1));
             assert!((c[2] - 2.0 * (a1 + b1) / l).abs() <= 1e-9 * c[2].abs().max(1.0));

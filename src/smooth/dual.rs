@@ -1,4 +1,4 @@
-//! Geodesic neighbourhoods on the dual mesh (`algorithms.md` §2.2, §2.5).
+//! Geodesic neighbourhoods on the dual mesh (`docs/algorithms.md` §2.2, §2.5).
 //!
 //! The dual vertices are the triangle centroids; two are joined when their triangles share an
 //! interior edge, at length `d(P, Q) = |P − M| + |M − Q|` through the edge midpoint `M`

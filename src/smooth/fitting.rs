@@ -1,4 +1,4 @@
-//! Vertex fitting to a smoothed normal field (`algorithms.md` §2.6):
+//! Vertex fitting to a smoothed normal field (`docs/algorithms.md` §2.6):
 //!
 //! ```text
 //! E(P) = Σ_T A(T) ‖n(T) − m(T)‖² = Σ_T (2A(T) − N_T · m(T)),   N_T = (P1 − P0) × (P2 − P0)

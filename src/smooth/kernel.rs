@@ -1,4 +1,4 @@
-//! The finite-support Gaussian-like kernel of Ohtake–Belyaev–Seidel (`algorithms.md` §2.1).
+//! The finite-support Gaussian-like kernel of Ohtake–Belyaev–Seidel (`docs/algorithms.md` §2.1).
 //!
 //! ```text
 //! K_σ(x) = 1/(√(2π) σ) · { exp(−x²/(2σ²))            |x| ≤ 2σ

@@ -7,7 +7,7 @@
 //!   One concept per file: [`kernel`], [`dual`] (geodesic neighbourhoods), [`normal_filter`]
 //!   (scale selection and smoothed normals), [`fitting`] (vertex update), [`surface`] (flat
 //!   arrays), [`ohtake`] (the pipeline).
-//! - Baselines from the paper's comparisons (algorithms.md §2, §5): [`taubin`] (λ|μ smoothing
+//! - Baselines from the paper's comparisons (`docs/algorithms.md` §2, §5): [`taubin`] (λ|μ smoothing
 //!   with uniform, inverse-edge-length or cotangent weights) and [`mcf`] (implicit
 //!   mean-curvature flow, Desbrun et al. 1999).
 //!

@@ -1,5 +1,5 @@
 //! The adaptive Gaussian filter of face normals with automatic scale selection
-//! (`algorithms.md` §2.3–2.4).
+//! (`docs/algorithms.md` §2.3–2.4).
 //!
 //! For each triangle T and each σ of a grid, the smoothed normal is
 //! `m_σ(T) = Σ_j w_j n_j / ‖Σ_j w_j n_j‖` with `w_j = A(T_j) K_σ(d(T, T_j))` over the dual

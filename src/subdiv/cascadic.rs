@@ -1,4 +1,4 @@
-//! Cascadic MCM subdivision (Diewald–Morigi–Rumpf 2001, algorithms.md §3).
+//! Cascadic MCM subdivision (Diewald–Morigi–Rumpf 2001, `docs/algorithms.md` §3).
 //!
 //! One fully implicit step of mean-curvature motion of width σ = c·h_0 (diffusion
 //! coefficient α = σ²/2 over unit time) is approximated by a fixed-point iteration that
@@ -16,9 +16,10 @@
 //! or preconditioned CG (cascadic multigrid, `m_l = ⌈m_{l_max} β^{l_max−l}⌉`: many steps on
 //! the cheap coarse levels, few on the fine ones), or solved exactly.
 //!
-//! Local filter width (S3 §7): with a smoothed grid-size function h (initially the mean
-//! length of the edges at each vertex), `α_k = (c · I h_{k−1})²/2` per vertex, averaged per
-//! triangle, and h is diffused with the same matrix: `(M + L^α)[x_k, h_k] = M [I x_0, I h_0]`.
+//! Local filter width (Diewald–Morigi–Rumpf §7; `docs/algorithms.md` §3.6): with a smoothed
+//! grid-size function h (initially the mean length of the edges at each vertex),
+//! `α_k = (c · I h_{k−1})²/2` per vertex, averaged per triangle, and h is diffused with the
+//! same matrix: `(M + L^α)[x_k, h_k] = M [I x_0, I h_0]`.
 //!
 //! Results are bit-for-bit reproducible on any number of threads: every sum runs in a fixed
 //! order, and what runs in parallel is independent work. With quadrisection, a level's

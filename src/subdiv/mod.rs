@@ -81,8 +81,8 @@ pub struct SubdivOptions {
     /// keeps a sphere of radius r only if α ≤ r²/8, so `c·h_0` must stay well below the
     /// feature size; larger values shrink the surface more (see the README table).
     pub width: f64,
-    /// Local filter-width expansion (S3 §7): `α` follows a smoothed local grid size that is
-    /// diffused with the surface (default false).
+    /// Local filter-width expansion (Diewald–Morigi–Rumpf §7; `docs/algorithms.md` §3.6): `α`
+    /// follows a smoothed local grid size that is diffused with the surface (default false).
     pub local_width: bool,
     /// Smoothing steps on the finest level, `m_{l_max}` (default 2).
     pub finest_steps: usize,
@@ -126,7 +126,7 @@ impl Default for SubdivOptions {
     }
 }
 
-/// The default growth factor `β` of the cascadic schedule (algorithms.md §3.5, from the
+/// The default growth factor `β` of the cascadic schedule (`docs/algorithms.md` §3.5, from the
 /// Bornemann–Deuflhard bounds with mesh-size ratio κ): CG is optimal for κ⁻¹ < β < κ⁻² and
 /// takes the geometric mean; Jacobi takes β = κ⁻² ("nearly optimal", O(N log N)).
 ///

@@ -192,7 +192,7 @@ pub const CONTROL_MESHES: [&str; 6] = [
     "mushroom_quad",
 ];
 
-/// The octahedron stretched along z used by `reference/cascadic_mcm.py`.
+/// The octahedron stretched along z used by `docs/reference/cascadic_mcm.py`.
 pub fn stretched_octahedron() -> Mesh {
     let p = [
         [1.0, 0.0, 0.0],
