@@ -12,6 +12,8 @@
 #[cfg(feature = "cli")]
 pub mod cli;
 pub mod format;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod io;
 pub mod mesh;
 pub mod metrics;
