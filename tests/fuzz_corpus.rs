@@ -1,9 +1,10 @@
 //! Replays every committed fuzz corpus file and crash reproducer through the same harness the
-//! fuzz targets use (`meshpyr::io::fuzz_read`), so CI exercises them without cargo-fuzz.
+//! fuzz targets use (`meshpyr::fuzzing::fuzz_read`), so CI exercises them without cargo-fuzz.
 
 use std::path::Path;
 
-use meshpyr::io::{MeshFormat, fuzz_read};
+use meshpyr::fuzzing::fuzz_read;
+use meshpyr::io::MeshFormat;
 
 fn replay(dir: &str, format: MeshFormat) -> usize {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz");

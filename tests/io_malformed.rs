@@ -7,9 +7,10 @@ use std::cell::Cell;
 
 use common::*;
 use glam::DVec3;
+use meshpyr::fuzzing::fuzz_read;
 use meshpyr::io::{
-    IoError, Location, MeshFormat, PlyEncoding, WriteOptions, fuzz_read, read_mesh,
-    read_mesh_bytes, write_mesh_bytes,
+    IoError, Location, MeshFormat, PlyEncoding, WriteOptions, read_mesh, read_mesh_bytes,
+    write_mesh_bytes,
 };
 use meshpyr::mesh::PolygonMesh;
 

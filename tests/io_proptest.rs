@@ -5,7 +5,8 @@ mod common;
 
 use common::*;
 use glam::DVec3;
-use meshpyr::io::{MeshFormat, WriteOptions, fuzz_read, read_mesh_bytes, write_mesh_bytes};
+use meshpyr::fuzzing::fuzz_read;
+use meshpyr::io::{MeshFormat, WriteOptions, read_mesh_bytes, write_mesh_bytes};
 use meshpyr::mesh::{
     Attribute, AttributeData, ElementProperty, ExtraElement, ListProperty, PolygonMesh, ScalarType,
 };

@@ -5,13 +5,13 @@ mod common;
 
 #[test]
 fn replay_pm_ops_corpus() {
-    let n = common::replay_fuzz_corpus("pm_ops", meshpyr::pm::fuzz_operations);
+    let n = common::replay_fuzz_corpus("pm_ops", meshpyr::fuzzing::fuzz_operations);
     assert!(n > 0, "no pm_ops corpus found");
 }
 
 #[test]
 fn fixed_byte_patterns() {
     for data in common::byte_patterns(64, 200) {
-        meshpyr::pm::fuzz_operations(&data);
+        meshpyr::fuzzing::fuzz_operations(&data);
     }
 }

@@ -4,6 +4,7 @@ mod common;
 
 use common::{data, on_threads, position_bits, rich_mesh};
 use meshpyr::format::{self, BuildInfo, FormatError};
+use meshpyr::fuzzing;
 use meshpyr::io;
 use meshpyr::mesh::{Mesh, PolygonMesh};
 use meshpyr::pm::ProgressiveMesh;
@@ -219,14 +220,14 @@ fn bit_flips_are_errors_or_harmless() {
 #[test]
 fn damage_with_fixed_checksums_never_panics() {
     let (_, bytes) = build(&io::read_mesh(&data("joint.ply")).unwrap());
-    assert!(format::fix_checksums(&bytes) == bytes);
+    assert!(fuzzing::fix_checksums(&bytes) == bytes);
     let mut accepted = 0;
     // Every 7th byte keeps the test at a few seconds; the fuzzer covers the rest.
     for i in (24..bytes.len()).step_by(7) {
         let mut b = bytes.clone();
         b[i] ^= 1 << (i % 8);
-        let b = format::fix_checksums(&b);
-        let r = std::panic::catch_unwind(|| format::fuzz_read_pyr(&b));
+        let b = fuzzing::fix_checksums(&b);
+        let r = std::panic::catch_unwind(|| fuzzing::fuzz_read_pyr(&b));
         assert!(r.is_ok(), "flip at byte {i} panics");
         accepted += format::decode(&b).is_ok() as usize;
     }
@@ -451,7 +452,7 @@ fn fuzz_corpus_replays() {
     for e in std::fs::read_dir(&dir).unwrap() {
         let p = e.unwrap().path();
         let bytes = std::fs::read(&p).unwrap();
-        let r = std::panic::catch_unwind(|| format::fuzz_read_pyr(&bytes));
+        let r = std::panic::catch_unwind(|| fuzzing::fuzz_read_pyr(&bytes));
         assert!(r.is_ok(), "{} panics", p.display());
         n += 1;
     }
@@ -528,7 +529,7 @@ fn split_blocks_decode_the_same_on_any_thread_count() {
     for i in blocks[0].clone() {
         let mut b = bytes.clone();
         b[i] ^= 0x02;
-        let b = format::fix_checksums(&b);
+        let b = fuzzing::fix_checksums(&b);
         if let Err(e) = format::decode(&b)
             && e.to_string().contains("wing index past")
         {

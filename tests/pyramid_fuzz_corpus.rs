@@ -5,13 +5,13 @@ mod common;
 
 #[test]
 fn replay_pyramid_ops_corpus() {
-    let n = common::replay_fuzz_corpus("pyramid_ops", meshpyr::pyramid::fuzz_pyramid);
+    let n = common::replay_fuzz_corpus("pyramid_ops", meshpyr::fuzzing::fuzz_pyramid);
     assert!(n > 0, "no pyramid_ops corpus found");
 }
 
 #[test]
 fn fixed_byte_patterns() {
     for data in common::byte_patterns(64, 300) {
-        meshpyr::pyramid::fuzz_pyramid(&data);
+        meshpyr::fuzzing::fuzz_pyramid(&data);
     }
 }

@@ -7,8 +7,9 @@ pub mod varint;
 
 pub use pyr::{
     BuildInfo, LevelMesh, MAJOR, MINOR, OLDEST_MAJOR, PyrData, RelaxationSpec, SizeReport, decode,
-    encode, fix_checksums, fuzz_read_pyr, is_pyr, read_level, with_positions,
+    encode, is_pyr, read_level, with_positions,
 };
+pub(crate) use pyr::{fix_checksums, fuzz_read_pyr};
 
 /// What can go wrong reading a `.pyr` file. Every variant says where.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

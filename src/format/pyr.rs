@@ -1513,7 +1513,7 @@ pub fn is_pyr(bytes: &[u8]) -> bool {
 /// `bytes` with every checksum (header, sections, `SPLT` blocks) recomputed, where the
 /// structure can be followed. Lets the fuzzer reach the decoders behind the checksums, which
 /// random mutations almost never get past.
-pub fn fix_checksums(bytes: &[u8]) -> Vec<u8> {
+pub(crate) fn fix_checksums(bytes: &[u8]) -> Vec<u8> {
     let mut out = bytes.to_vec();
     let Ok(c) = Container::parse_unchecked(bytes) else {
         return out;
@@ -1552,7 +1552,7 @@ pub fn fix_checksums(bytes: &[u8]) -> Vec<u8> {
 /// Body of the `read_pyr` fuzz target: every reader on arbitrary bytes must return, never
 /// panic; whatever decodes must re-encode to a file that decodes to the same data. The input
 /// is tried as is and with its checksums fixed ([`fix_checksums`]).
-pub fn fuzz_read_pyr(data: &[u8]) {
+pub(crate) fn fuzz_read_pyr(data: &[u8]) {
     fuzz_one(data);
     let fixed = fix_checksums(data);
     if fixed != data {

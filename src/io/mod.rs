@@ -402,7 +402,7 @@ pub fn write_mesh_bytes(
 /// re-read mesh gives identical bytes, and that PLY encodings agree with each other.
 ///
 /// Panics only on a reader/writer inconsistency (a bug), never because the input is bad.
-pub fn fuzz_read(format: MeshFormat, bytes: &[u8]) {
+pub(crate) fn fuzz_read(format: MeshFormat, bytes: &[u8]) {
     let Ok(mesh) = read_mesh_bytes(bytes, format) else {
         return;
     };

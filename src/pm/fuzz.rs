@@ -126,7 +126,7 @@ fn sorted_triangles(tris: impl Iterator<Item = [u32; 3]>) -> Vec<[u32; 3]> {
 /// # Panics
 /// On any violated invariant — that is how the fuzzer reports a bug. Never on valid input
 /// otherwise.
-pub fn fuzz_operations(data: &[u8]) {
+pub(crate) fn fuzz_operations(data: &[u8]) {
     let mut r = Bytes { data, pos: 0 };
     let (mut pos, tris) = mesh_from_bytes(&mut r);
     snap_corners(&mut r, &mut pos, &tris);

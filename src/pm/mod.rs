@@ -11,7 +11,7 @@
 //! - [`ProgressiveMesh`] / [`PmCursor`]: the hierarchy and its cursor.
 //! - [`FlatReplay`]: vertex splits replayed on flat arrays (reading and writing `.pyr` files).
 //! - [`simplify()`]: a file-level mesh cut at a level, attributes carried along.
-//! - [`fuzz_operations`]: the body of the `pm_ops` fuzz target.
+//! - `fuzz`: the body of the `pm_ops` fuzz target (`meshpyr::fuzzing::fuzz_operations`).
 
 pub mod collapse;
 mod decimate;
@@ -31,7 +31,7 @@ pub use collapse::{
     is_collapse_topologically_legal, vertex_split,
 };
 pub use decimate::Stop;
-pub use fuzz::fuzz_operations;
+pub(crate) use fuzz::fuzz_operations;
 pub use legality::{Legality, Refusal, Relaxation};
 pub use progressive::{
     PmCursor, PmError, PmOptions, PmParts, ProgressiveMesh, SplitReplay, VertexSplit,

@@ -51,7 +51,7 @@ fn band(r: &mut Bytes, n0: usize, n: usize) -> (LevelSpec, LevelSpec, f64) {
 ///
 /// # Panics
 /// On any violated invariant — that is how the fuzzer reports a bug.
-pub fn fuzz_pyramid(data: &[u8]) {
+pub(crate) fn fuzz_pyramid(data: &[u8]) {
     let mut r = Bytes::new(data);
     let (mut pos, tris) = mesh_from_bytes(&mut r);
     for _ in 0..r.u8() % 4 {

@@ -15,7 +15,7 @@
 //! * [`spectrum`]: detail energy per level band, as a table and a chart.
 //! * [`pipeline`]: file-level glue — polygon mesh in, polygon mesh out in the input's exact
 //!   vertex and face order.
-//! * [`fuzz_pyramid`]: the body of the `pyramid_ops` fuzz target.
+//! * `fuzz`: the body of the `pyramid_ops` fuzz target (`meshpyr::fuzzing::fuzz_pyramid`).
 //!
 //! Levels are vertex counts, as in the paper: level `n` is the mesh of the first `n` PM
 //! vertices, and the details of level `n` are those stored by the split that creates vertex
@@ -49,7 +49,7 @@ pub mod synthesis;
 pub(crate) mod waves;
 
 pub use edit::{MoveHandle, falloff};
-pub use fuzz::fuzz_pyramid;
+pub(crate) use fuzz::fuzz_pyramid;
 pub use gains::{Filter, GainBand, GainParseError, LevelGains, LevelSpec};
 pub use pipeline::{PyramidOptions, ScanPyramid};
 pub use spectrum::{BandEnergy, Spectrum};
