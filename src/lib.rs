@@ -13,6 +13,7 @@ pub mod format;
 pub mod io;
 pub mod mesh;
 pub mod metrics;
+pub mod numerics;
 pub mod plot;
 pub mod pm;
 pub mod progress;

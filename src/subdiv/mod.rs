@@ -6,9 +6,9 @@
 //!   [`Mesh`] plus the [`Prolongation`] (which coarse vertices every new vertex interpolates);
 //!   the level loops run quadrisection on flat half-edge arrays (`halfedge_arrays`) instead;
 //! - [`loop_scheme`]: Loop's scheme with the usual boundary rules;
-//! - [`fem`]: lumped mass and cotangent stiffness on the prolonged surface (flat CSR arrays);
 //! - [`cascadic`]: the level loop `(M + αL) x_k = M · I x_0` with damped Jacobi, CG or exact
-//!   solves, the cascadic schedule and the local filter-width expansion;
+//!   solves, the cascadic schedule and the local filter-width expansion; the lumped mass,
+//!   cotangent stiffness (on the prolonged surface) and solvers are [`crate::numerics`];
 //! - [`mcm_relax`]: [`MeanCurvatureStep`], one Jacobi update of the implicit MCM system as a
 //!   [`Relaxation`](crate::relax::Relaxation) for the detail pyramid.
 //!
@@ -16,7 +16,6 @@
 //! vertex slots), new vertices follow. No attributes are carried over.
 
 pub mod cascadic;
-pub mod fem;
 mod halfedge_arrays;
 pub mod loop_scheme;
 pub mod mcm_relax;
