@@ -34,7 +34,7 @@ impl RelaxKind {
         match self {
             RelaxKind::SecondDifference => Ok(RelaxationSpec::of(&SecondDifference::default())),
             RelaxKind::Mcm => Ok(RelaxationSpec::of_mean_curvature(
-                &crate::subdiv::MeanCurvatureStep::default(),
+                &crate::relax::MeanCurvatureStep::default(),
             )),
             RelaxKind::Normal => Ok(RelaxationSpec::of_normal_adaptive(
                 &crate::relax::NormalAdaptive::default(),

@@ -55,11 +55,11 @@ pub enum RelaxationSpec {
         degenerate_area_ratio: f64,
     },
     /// One Jacobi step of implicit mean-curvature motion
-    /// ([`MeanCurvatureStep`](crate::subdiv::MeanCurvatureStep)).
+    /// ([`MeanCurvatureStep`](crate::relax::MeanCurvatureStep)).
     MeanCurvature {
-        /// [`MeanCurvatureStep::width`](crate::subdiv::MeanCurvatureStep::width).
+        /// [`MeanCurvatureStep::width`](crate::relax::MeanCurvatureStep::width).
         width: f64,
-        /// [`MeanCurvatureStep::damping`](crate::subdiv::MeanCurvatureStep::damping).
+        /// [`MeanCurvatureStep::damping`](crate::relax::MeanCurvatureStep::damping).
         damping: f64,
     },
     /// The normal-adaptive 1-ring average ([`NormalAdaptive`](crate::relax::NormalAdaptive)).
@@ -79,7 +79,7 @@ impl RelaxationSpec {
                 degenerate_area_ratio,
             }),
             RelaxationSpec::MeanCurvature { width, damping } => {
-                Box::new(crate::subdiv::MeanCurvatureStep { width, damping })
+                Box::new(crate::relax::MeanCurvatureStep { width, damping })
             }
             RelaxationSpec::NormalAdaptive { normal_scale } => {
                 Box::new(crate::relax::NormalAdaptive { normal_scale })
@@ -95,7 +95,7 @@ impl RelaxationSpec {
     }
 
     /// The spec of a mean-curvature step.
-    pub fn of_mean_curvature(op: &crate::subdiv::MeanCurvatureStep) -> Self {
+    pub fn of_mean_curvature(op: &crate::relax::MeanCurvatureStep) -> Self {
         RelaxationSpec::MeanCurvature {
             width: op.width,
             damping: op.damping,

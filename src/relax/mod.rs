@@ -9,9 +9,11 @@ use crate::mesh::{Mesh, VertexId};
 use crate::pm::FlatReplay;
 use glam::DVec3;
 
+pub mod mean_curvature;
 pub mod normal_adaptive;
 pub mod second_difference;
 
+pub use mean_curvature::MeanCurvatureStep;
 pub use normal_adaptive::NormalAdaptive;
 pub use second_difference::SecondDifference;
 

@@ -8,9 +8,10 @@
 //! - [`loop_scheme`]: Loop's scheme with the usual boundary rules;
 //! - [`cascadic`]: the level loop `(M + αL) x_k = M · I x_0` with damped Jacobi, CG or exact
 //!   solves, the cascadic schedule and the local filter-width expansion; the lumped mass,
-//!   cotangent stiffness (on the prolonged surface) and solvers are [`crate::numerics`];
-//! - [`mcm_relax`]: [`MeanCurvatureStep`], one Jacobi update of the implicit MCM system as a
-//!   [`Relaxation`](crate::relax::Relaxation) for the detail pyramid.
+//!   cotangent stiffness (on the prolonged surface) and solvers are [`crate::numerics`].
+//!
+//! One Jacobi update of the implicit MCM system, as a relaxation for the detail pyramid, is
+//! [`crate::relax::MeanCurvatureStep`].
 //!
 //! The output is a *new* mesh: the coarse vertices come first (same order as the input's
 //! vertex slots), new vertices follow. No attributes are carried over.
@@ -18,12 +19,10 @@
 pub mod cascadic;
 mod halfedge_arrays;
 pub mod loop_scheme;
-pub mod mcm_relax;
 pub mod refine;
 
 pub use cascadic::{LevelReport, subdivide_mcm};
 pub use loop_scheme::{loop_step, subdivide_loop};
-pub use mcm_relax::MeanCurvatureStep;
 pub use refine::{Marking, Prolongation, Refined};
 
 use crate::mesh::Mesh;

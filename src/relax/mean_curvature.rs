@@ -16,8 +16,8 @@
 //! On a planar mesh the cotangent Laplacian annihilates linear functions at interior
 //! vertices, so those are fixed points there.
 
+use super::Relaxation;
 use crate::mesh::{Mesh, SlotIndex, VertexId, cotangent};
-use crate::relax::Relaxation;
 use glam::DVec3;
 use smallvec::SmallVec;
 
