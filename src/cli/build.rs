@@ -3,13 +3,13 @@
 //!
 //! Also holds loading a `.pyr` file into a [`ScanPyramid`] for `filter`, `spectrum`, `edit`.
 
-use super::filter::RelaxKind;
 use super::{BarProgress, Global};
-use crate::format::{self, BuildInfo, FormatError, RelaxationSpec, SizeReport};
+use crate::format::{self, BuildInfo, FormatError, SizeReport};
 use crate::io;
 use crate::mesh::PolygonMesh;
 use crate::pm::{PmOptions, ProgressiveMesh};
 use crate::pyramid::ScanPyramid;
+use crate::relax::{RelaxKind, RelaxationSpec};
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -30,7 +30,7 @@ pub struct BuildArgs {
 
 /// Runs `meshpyr build`.
 pub fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
-    let relaxation = args.relax.spec()?;
+    let relaxation = args.relax.spec();
     let input = super::read_input_mesh(&args.input)?;
     let start = Instant::now();
     let built = crate::mesh::Mesh::from_polygons(&input)

@@ -3,9 +3,10 @@
 //! the finer details follow.
 
 use super::Global;
-use super::filter::{FilterOptions, RelaxKind, load_pyramid};
+use super::filter::{FilterOptions, load_pyramid};
 use crate::io;
 use crate::pyramid::MoveHandle;
+use crate::relax::RelaxKind;
 use glam::DVec3;
 use std::path::PathBuf;
 

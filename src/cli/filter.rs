@@ -1,47 +1,18 @@
 //! `meshpyr filter IN -o OUT [--lowpass N] [--stopband A:B] [--enhance A:B=G] [--gain A:B=G]
 //! [--normal-only] [--relax …]`: band filters on the detail pyramid.
 //!
-//! Also holds what the pyramid subcommands share: the `--relax` choice and loading a mesh into
-//! a [`ScanPyramid`] with a progress bar.
+//! Also holds what the pyramid subcommands share: loading a mesh into a [`ScanPyramid`] with a
+//! progress bar.
 
 use super::{BarProgress, Global};
-use crate::format::RelaxationSpec;
 use crate::io;
 use crate::pyramid::{
     Filter, GainBand, LevelGains, LevelSpec, Pyramid, PyramidOptions, ScanPyramid,
 };
-use crate::relax::{Relaxation, SecondDifference};
+use crate::relax::{RelaxKind, Relaxation, RelaxationSpec, SecondDifference};
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-/// The relaxation operator used for prediction.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum RelaxKind {
-    /// Guskov's non-uniform second-difference operator.
-    #[default]
-    SecondDifference,
-    /// One Jacobi step of implicit mean-curvature motion (cotangent weights, lumped mass).
-    Mcm,
-    /// 1-ring average with weights that fall off with the vertex-normal difference, so the
-    /// prediction does not average across creases.
-    Normal,
-}
-
-impl RelaxKind {
-    /// The operator's recordable description, or an error saying it cannot drive the pyramid.
-    pub fn spec(self) -> anyhow::Result<RelaxationSpec> {
-        match self {
-            RelaxKind::SecondDifference => Ok(RelaxationSpec::of(&SecondDifference::default())),
-            RelaxKind::Mcm => Ok(RelaxationSpec::of_mean_curvature(
-                &crate::relax::MeanCurvatureStep::default(),
-            )),
-            RelaxKind::Normal => Ok(RelaxationSpec::of_normal_adaptive(
-                &crate::relax::NormalAdaptive::default(),
-            )),
-        }
-    }
-}
 
 /// Reads `path` and builds its progressive mesh and pyramid, reporting progress and timing;
 /// returns it with the relaxation it was analysed with. `relax` defaults to the
@@ -52,7 +23,7 @@ pub fn load_pyramid(
     relax: Option<RelaxKind>,
     global: &Global,
 ) -> anyhow::Result<(ScanPyramid, RelaxationSpec)> {
-    let wanted = relax.map(RelaxKind::spec).transpose()?;
+    let wanted = relax.map(RelaxKind::spec);
     if super::build::is_pyr_file(path) {
         let (scan, spec) = super::build::load_pyr_scan(path, global)?;
         if let Some(w) = wanted
@@ -67,10 +38,7 @@ pub fn load_pyramid(
         }
         return Ok((scan, spec));
     }
-    let spec = match wanted {
-        Some(s) => s,
-        None => RelaxKind::SecondDifference.spec()?,
-    };
+    let spec = wanted.unwrap_or_default();
     let input = io::read_mesh(path)?;
     let scan = build_pyramid(
         input,
@@ -261,8 +229,7 @@ pub fn demo_filters(
     let relaxation = SecondDifference::default();
     let scan = build_pyramid(input, &relaxation, stem, global)?;
     // The hierarchy, saved: `filter`, `spectrum` and `edit` take it instead of the mesh.
-    let (bytes, sizes) =
-        super::build::encode_pyr(&scan.input, &scan.pm, RelaxationSpec::of(&relaxation))?;
+    let (bytes, sizes) = super::build::encode_pyr(&scan.input, &scan.pm, relaxation.into())?;
     let pyr_path = dir.join(format!("{stem}.pyr"));
     io::write_atomic(&pyr_path, &bytes)?;
     global.say(format_args!(

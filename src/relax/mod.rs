@@ -12,10 +12,12 @@ use glam::DVec3;
 pub mod mean_curvature;
 pub mod normal_adaptive;
 pub mod second_difference;
+pub mod spec;
 
 pub use mean_curvature::MeanCurvatureStep;
 pub use normal_adaptive::NormalAdaptive;
 pub use second_difference::SecondDifference;
+pub use spec::{RelaxKind, RelaxationSpec};
 
 /// [`Relaxation::relax`] for an operator whose [`Relaxation::stencil`] describes it exactly:
 /// each vertex gets `Σ w · signal[j]` over its stencil (in stencil order), or keeps its value
