@@ -2,7 +2,7 @@
 //! `cargo run --release --example subdiv_timing -- tests/data/mushroom_quad.ply 5`.
 
 use meshpyr::mesh::Mesh;
-use meshpyr::subdiv::fem::{cotangent_stiffness, lumped_mass, system_matrix};
+use meshpyr::numerics::fem::{cotangent_stiffness, lumped_mass, system_matrix};
 use meshpyr::subdiv::refine::quadrisect;
 use std::time::Instant;
 

@@ -17,6 +17,7 @@ pub mod fuzzing;
 pub mod io;
 pub mod mesh;
 pub mod metrics;
+pub mod numerics;
 pub mod plot;
 pub mod pm;
 pub mod progress;

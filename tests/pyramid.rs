@@ -395,7 +395,7 @@ fn check_relaxation_drives_the_pyramid(op: &dyn meshpyr::relax::Relaxation, name
 fn mcm_relaxation_drives_the_pyramid() {
     // The MCM Jacobi step has a self weight; the pyramid starts each new vertex at its
     // survivor, so reconstruction stays exact.
-    check_relaxation_drives_the_pyramid(&meshpyr::subdiv::MeanCurvatureStep::default(), "mcm");
+    check_relaxation_drives_the_pyramid(&meshpyr::relax::MeanCurvatureStep::default(), "mcm");
 }
 
 #[test]
@@ -430,7 +430,7 @@ fn analysis_gives_the_same_pyramid_on_any_thread_count() {
     let (pm, _) = pyramid_of(&p, &t);
     // Two ranges of at least 1024 splits (the analysis' minimum) on 2 and 3 threads.
     assert!(pm.splits().len() >= 2 * 1024, "{}", pm.splits().len());
-    let mcm = meshpyr::subdiv::MeanCurvatureStep::default();
+    let mcm = meshpyr::relax::MeanCurvatureStep::default();
     let second_difference = SecondDifference::default();
     let operators: [&dyn meshpyr::relax::Relaxation; 2] = [&second_difference, &mcm];
     for op in operators {

@@ -1,17 +1,13 @@
 //! `meshpyr build IN -o OUT.pyr [--relax …]`: build the progressive mesh and save it with the
 //! exact input as a `.pyr` file (details are recomputed on load; see `formats/pyr.md`).
-//!
-//! Also holds loading a `.pyr` file into a [`ScanPyramid`] for `filter`, `spectrum`, `edit`.
 
-use super::filter::RelaxKind;
+use super::input::{encode_pyr, read_input_mesh};
 use super::{BarProgress, Global};
-use crate::format::{self, BuildInfo, FormatError, RelaxationSpec, SizeReport};
 use crate::io;
-use crate::mesh::PolygonMesh;
 use crate::pm::{PmOptions, ProgressiveMesh};
-use crate::pyramid::ScanPyramid;
+use crate::relax::RelaxKind;
 use anyhow::Context;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// Arguments of `meshpyr build`.
@@ -30,8 +26,8 @@ pub struct BuildArgs {
 
 /// Runs `meshpyr build`.
 pub fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
-    let relaxation = args.relax.spec()?;
-    let input = super::read_input_mesh(&args.input)?;
+    let relaxation = args.relax.spec();
+    let input = read_input_mesh(&args.input)?;
     let start = Instant::now();
     let built = crate::mesh::Mesh::from_polygons(&input)
         .with_context(|| format!("cannot build the mesh of {}", args.input.display()))?;
@@ -71,73 +67,4 @@ pub fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
     ));
     global.say(format_args!("  {}", pm.describe_base()));
     Ok(())
-}
-
-/// True when `path` is a `.pyr` file (by its signature; an unreadable file is "not").
-pub fn is_pyr_file(path: &Path) -> bool {
-    let mut head = [0u8; 8];
-    std::fs::File::open(path)
-        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
-        .is_ok_and(|_| format::is_pyr(&head))
-}
-
-/// Reads and decodes a whole `.pyr` file (validated), errors naming the file.
-pub fn load_pyr(path: &Path) -> anyhow::Result<format::PyrData> {
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-    format::decode(&bytes).with_context(|| format!("cannot load {}", path.display()))
-}
-
-/// Loads a `.pyr` file and recomputes its pyramid (the relaxation recorded in the file).
-pub fn load_pyr_scan(
-    path: &Path,
-    global: &Global,
-) -> anyhow::Result<(ScanPyramid, RelaxationSpec)> {
-    let start = Instant::now();
-    let data = load_pyr(path)?;
-    let spec = data.info.relaxation;
-    let loaded = start.elapsed().as_secs_f64();
-    let bar = global.progress("analysis");
-    let scan = data
-        .into_scan(&BarProgress(&bar))
-        .with_context(|| format!("cannot analyse {}", path.display()))?;
-    bar.finish_and_clear();
-    let p = &scan.pyramid;
-    global.say(format_args!(
-        "{}: {} vertices, levels {}..={} (loaded in {:.2} s, details recomputed in {:.2} s)",
-        path.display(),
-        scan.input.n_vertices(),
-        p.n_base_vertices(),
-        p.n_vertices(),
-        loaded,
-        start.elapsed().as_secs_f64() - loaded
-    ));
-    Ok((scan, spec))
-}
-
-/// Saves `scan` with new input positions as a `.pyr` file (same hierarchy, new originals).
-pub fn save_edited(
-    scan: &ScanPyramid,
-    input_positions: Vec<glam::DVec3>,
-    relaxation: RelaxationSpec,
-    path: &Path,
-) -> anyhow::Result<()> {
-    let (input, pm) = format::with_positions(&scan.input, &scan.source, &scan.pm, input_positions)
-        .context("cannot save the edit")?;
-    let (bytes, _) = encode_pyr(&input, &pm, relaxation).context("cannot save the edit")?;
-    io::write_atomic(path, &bytes)?;
-    Ok(())
-}
-
-/// The `.pyr` file of `input` with its hierarchy `pm` (built with the default options, as
-/// every command builds it) and the relaxation the pyramid is analysed with.
-pub fn encode_pyr(
-    input: &PolygonMesh,
-    pm: &ProgressiveMesh,
-    relaxation: RelaxationSpec,
-) -> Result<(Vec<u8>, SizeReport), FormatError> {
-    let info = BuildInfo {
-        pm_options: PmOptions::default(),
-        relaxation,
-    };
-    format::encode(input, pm, &info)
 }

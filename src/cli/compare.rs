@@ -30,7 +30,7 @@ pub struct CompareArgs {
 }
 
 fn load(path: &Path) -> anyhow::Result<Mesh> {
-    let poly = super::read_input_mesh(path)?;
+    let poly = super::input::read_input_mesh(path)?;
     Ok(Mesh::from_polygons(&poly)
         .with_context(|| format!("building a mesh from {}", path.display()))?
         .mesh)

@@ -33,7 +33,7 @@ pub struct ConvertArgs {
 /// Runs `meshpyr convert`.
 pub fn run(args: ConvertArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
-    let mesh = super::read_input_mesh(&args.input)?;
+    let mesh = super::input::read_input_mesh(&args.input)?;
     let opts = WriteOptions {
         ply_encoding: match args.ply_encoding {
             PlyEncodingArg::Ascii => PlyEncoding::Ascii,

@@ -2,9 +2,14 @@
 
 use super::Global;
 use super::info::mesh_info;
+use super::input::{build_pyramid, encode_pyr};
 use crate::io::{self, MeshFormat};
+use crate::mesh::PolygonMesh;
+use crate::pyramid::{Filter, Pyramid};
+use crate::relax::SecondDifference;
 use anyhow::Context;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 /// The bundled default scan (Stanford bunny, 37.7k vertices; see `tests/data/README.md`).
 pub const BUNDLED_SCAN: &[u8] = include_bytes!("../../tests/data/bunny.ply");
@@ -37,6 +42,103 @@ pub fn run(args: DemoArgs, global: &Global) -> anyhow::Result<()> {
     let input_path = args.out.join("bunny.ply");
     io::write_mesh(&input_path, &poly)?;
     global.say(format_args!("wrote {}", input_path.display()));
-    super::filter::demo_filters(poly, "bunny", &args.out, global)?;
+    demo_filters(poly, "bunny", &args.out, global)?;
+    Ok(())
+}
+
+/// The pyramid part of `meshpyr demo`: the paper's three Venus experiments (low-pass above
+/// level 1000, stop-band 1000–15000, enhancement ×2 on 1000–15000) on `input`, with the
+/// spectrum of each result and previews, written into `dir` with file names starting `stem`.
+fn demo_filters(input: PolygonMesh, stem: &str, dir: &Path, global: &Global) -> anyhow::Result<()> {
+    use crate::render::{RenderOptions, Triangles, render_panels};
+
+    let relaxation = SecondDifference::default();
+    let scan = build_pyramid(input, &relaxation, stem, global)?;
+    // The hierarchy, saved: `filter`, `spectrum` and `edit` take it instead of the mesh.
+    let (bytes, sizes) = encode_pyr(&scan.input, &scan.pm, relaxation.into())?;
+    let pyr_path = dir.join(format!("{stem}.pyr"));
+    io::write_atomic(&pyr_path, &bytes)?;
+    global.say(format_args!(
+        "saved the hierarchy: wrote {} ({:.1} bytes/vertex)",
+        pyr_path.display(),
+        sizes.total as f64 / scan.input.n_vertices().max(1) as f64
+    ));
+    let pyr = &scan.pyramid;
+    let experiments = Filter::paper_experiments();
+    let mut signals = vec![("input", pyr.synthesize(&Filter::default().resolve(1.0)))];
+    for (name, what, filter) in &experiments {
+        let start = Instant::now();
+        let out = pyr.synthesize(&filter.resolve(pyr.surface_area()));
+        let path = dir.join(format!("{stem}-{name}.ply"));
+        io::write_mesh(&path, &scan.output_mesh(&out))?;
+        global.say(format_args!(
+            "{what}: synthesised in {:.3} s, wrote {}",
+            start.elapsed().as_secs_f64(),
+            path.display()
+        ));
+        signals.push((name, out));
+    }
+
+    // Spectra: the input's, and each result re-analysed on the same hierarchy.
+    let mut spectra = vec![pyr.spectrum()];
+    for (_, s) in &signals[1..] {
+        let p = Pyramid::analyze_signal(&scan.pm, &relaxation, s, &crate::progress::NoProgress)?;
+        spectra.push(p.spectrum());
+    }
+    let others: Vec<(&str, &crate::pyramid::Spectrum)> = signals[1..]
+        .iter()
+        .map(|(n, _)| *n)
+        .zip(&spectra[1..])
+        .collect();
+    let chart = spectra[0].chart("input", &others);
+    let path = dir.join(format!("{stem}-spectrum.png"));
+    io::write_atomic(&path, &chart.encode_png()?)?;
+    let mut csv = String::new();
+    for ((name, _), s) in signals.iter().zip(&spectra) {
+        let table = s.to_csv();
+        let mut lines = table.lines();
+        let header = lines.next().unwrap_or_default();
+        if csv.is_empty() {
+            csv = format!("series,{header}\n");
+        }
+        for line in lines {
+            csv.push_str(&format!("{name},{line}\n"));
+        }
+    }
+    let csv_path = dir.join(format!("{stem}-spectrum.csv"));
+    io::write_atomic(&csv_path, csv.as_bytes())?;
+    global.say(format_args!(
+        "detail spectra (input and re-analysed results): wrote {} and {}",
+        path.display(),
+        csv_path.display()
+    ));
+
+    // Previews with one shared camera.
+    let faces = scan.pm.finest_faces();
+    let options = RenderOptions {
+        width: 400,
+        height: 400,
+        ..RenderOptions::default()
+    };
+    let panels: Vec<Triangles<'_>> = signals
+        .iter()
+        .map(|(_, s)| Triangles {
+            positions: s,
+            triangles: faces,
+        })
+        .collect();
+    let all = render_panels(&panels, &options);
+    let path = dir.join(format!("{stem}-preview.png"));
+    io::write_atomic(&path, &all.encode_png()?)?;
+    global.say(format_args!(
+        "previews side by side (input | low-pass | stop-band | enhanced): wrote {}",
+        path.display()
+    ));
+    for ((name, _), panel) in signals.iter().zip(&panels) {
+        let p = dir.join(format!("{stem}-{name}.png"));
+        let png = render_panels(std::slice::from_ref(panel), &options).encode_png()?;
+        io::write_atomic(&p, &png)?;
+        global.say(format_args!("preview of the {name}: wrote {}", p.display()));
+    }
     Ok(())
 }

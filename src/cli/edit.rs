@@ -3,11 +3,15 @@
 //! the finer details follow.
 
 use super::Global;
-use super::filter::{FilterOptions, RelaxKind, load_pyramid};
+use super::filter::{FilterOptions, resolve_reporting};
+use super::input::{encode_pyr, load_pyramid};
+use crate::format;
 use crate::io;
-use crate::pyramid::MoveHandle;
+use crate::pyramid::{MoveHandle, ScanPyramid};
+use crate::relax::{RelaxKind, RelaxationSpec};
+use anyhow::Context;
 use glam::DVec3;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// One `--move X,Y,Z:DX,DY,DZ`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -97,18 +101,28 @@ pub fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
             radius: args.radius,
         })
         .collect();
-    let gains = super::filter::resolve_reporting(
-        &args.filters.filter(),
-        p,
-        &args.input.display().to_string(),
-    );
+    let gains = resolve_reporting(&args.filters.filter(), p, &args.input.display().to_string());
     let out = p.edit(args.level, &handles, &gains)?;
     if writes_pyr {
         let positions = scan.to_input_positions(&out);
-        super::build::save_edited(&scan, positions, spec, &args.output)?;
+        save_edited(&scan, positions, spec, &args.output)?;
     } else {
         io::write_mesh(&args.output, &scan.output_mesh(&out))?;
     }
     global.say(format_args!("wrote {}", args.output.display()));
+    Ok(())
+}
+
+/// Saves `scan` with new input positions as a `.pyr` file (same hierarchy, new originals).
+fn save_edited(
+    scan: &ScanPyramid,
+    input_positions: Vec<DVec3>,
+    relaxation: RelaxationSpec,
+    path: &Path,
+) -> anyhow::Result<()> {
+    let (input, pm) = format::with_positions(&scan.input, &scan.source, &scan.pm, input_positions)
+        .context("cannot save the edit")?;
+    let (bytes, _) = encode_pyr(&input, &pm, relaxation).context("cannot save the edit")?;
+    io::write_atomic(path, &bytes)?;
     Ok(())
 }

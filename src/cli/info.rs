@@ -1,6 +1,7 @@
 //! `meshpyr info MESH [--json]`: counts, topology, size and what the builder repaired.
 
 use super::Global;
+use super::input::{is_pyr_file, load_pyr};
 use crate::mesh::{BuildReport, Mesh, PolygonMesh};
 use anyhow::Context;
 use serde::Serialize;
@@ -110,8 +111,8 @@ fn count_file_edges(poly: &PolygonMesh) -> usize {
 /// Runs `meshpyr info`.
 pub fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
     // A .pyr file is decoded once, for its stored input and its hierarchy.
-    let (poly, pm_base) = if super::build::is_pyr_file(&args.mesh) {
-        let data = super::build::load_pyr(&args.mesh)?;
+    let (poly, pm_base) = if is_pyr_file(&args.mesh) {
+        let data = load_pyr(&args.mesh)?;
         let base = data.pm.describe_base();
         (data.input, Some(base))
     } else {

@@ -1,5 +1,6 @@
 //! The `meshpyr` command line: one subcommand per module. Each subcommand lives in its own file
-//! with a clap `Args` struct and a `run` function.
+//! with a clap `Args` struct and a `run` function; `input` reads what they take (a mesh file or
+//! a `.pyr` file) as a mesh or a detail pyramid.
 
 /// `println!` for command output that returns the write error instead of panicking, so a
 /// closed pipe (`meshpyr info scan.ply | head -1`) ends the command quietly (see [`main`]).
@@ -17,6 +18,7 @@ mod edit;
 mod extract;
 mod filter;
 mod info;
+mod input;
 mod simplify;
 mod smooth;
 mod spectrum;
@@ -74,17 +76,6 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
         c.downcast_ref::<std::io::Error>()
             .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
     })
-}
-
-/// Reads the mesh a command works on: a mesh file, or a `.pyr` file (recognised by its
-/// signature, whatever its name), whose stored input mesh is restored exactly — the file the
-/// user built it from, so `info`, `convert`, `simplify`, `subdivide`, `smooth`, `compare` and
-/// `build` take the file they keep as well.
-pub fn read_input_mesh(path: &std::path::Path) -> anyhow::Result<crate::mesh::PolygonMesh> {
-    if build::is_pyr_file(path) {
-        return Ok(build::load_pyr(path)?.input);
-    }
-    Ok(crate::io::read_mesh(path)?)
 }
 
 /// Fails before any work when `path` has no mesh format we can write (the extension decides),

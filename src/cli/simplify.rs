@@ -53,7 +53,7 @@ pub fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
         (_, _, Some(e)) => SimplifyTarget::Error(e),
         _ => anyhow::bail!("one of --faces, --ratio, --error is required"),
     };
-    let mut input = super::read_input_mesh(&args.input)?;
+    let mut input = super::input::read_input_mesh(&args.input)?;
     let mut target = target;
     if let Some(fraction) = args.prune {
         anyhow::ensure!(

@@ -208,7 +208,7 @@ pub fn run(args: SmoothArgs, global: &Global) -> anyhow::Result<()> {
     if matches!(args.method, MethodArg::Adaptive | MethodArg::Anisotropic) {
         args.denoise_options().validate()?;
     }
-    let input = super::read_input_mesh(&args.input)?;
+    let input = super::input::read_input_mesh(&args.input)?;
     let built = Mesh::from_polygons(&input)
         .with_context(|| format!("building a mesh from {}", args.input.display()))?;
     if built.report.repaired_anything() {

@@ -1,8 +1,9 @@
 //! `meshpyr spectrum IN -o F.png [--csv F]`: detail energy per octave of levels, plotted.
 
 use super::Global;
-use super::filter::{RelaxKind, load_pyramid};
+use super::input::load_pyramid;
 use crate::io;
+use crate::relax::RelaxKind;
 use std::path::PathBuf;
 
 /// Arguments of `meshpyr spectrum`.

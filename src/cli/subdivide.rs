@@ -86,7 +86,7 @@ pub struct SubdivideArgs {
 /// Runs `meshpyr subdivide`.
 pub fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
-    let input = super::read_input_mesh(&args.input)?;
+    let input = super::input::read_input_mesh(&args.input)?;
     let built = Mesh::from_polygons(&input)
         .with_context(|| format!("building a mesh from {}", args.input.display()))?;
     if built.report.repaired_anything() {

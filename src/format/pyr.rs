@@ -18,7 +18,7 @@ use crate::pm::{
 };
 use crate::progress::Progress;
 use crate::pyramid::{Pyramid, PyramidError, ScanPyramid};
-use crate::relax::SecondDifference;
+use crate::relax::RelaxationSpec;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
@@ -46,108 +46,13 @@ const POLY: [u8; 4] = *b"POLY";
 const ATTR: [u8; 4] = *b"ATTR";
 const KNOWN: [[u8; 4]; 7] = [META, BASE, SPLT, ISOL, ORDR, POLY, ATTR];
 
-/// The relaxation operator the pyramid is analysed with, with its options.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub enum RelaxationSpec {
-    /// Guskov's second-difference operator.
-    SecondDifference {
-        /// [`SecondDifference::degenerate_area_ratio`].
-        degenerate_area_ratio: f64,
-    },
-    /// One Jacobi step of implicit mean-curvature motion
-    /// ([`MeanCurvatureStep`](crate::subdiv::MeanCurvatureStep)).
-    MeanCurvature {
-        /// [`MeanCurvatureStep::width`](crate::subdiv::MeanCurvatureStep::width).
-        width: f64,
-        /// [`MeanCurvatureStep::damping`](crate::subdiv::MeanCurvatureStep::damping).
-        damping: f64,
-    },
-    /// The normal-adaptive 1-ring average ([`NormalAdaptive`](crate::relax::NormalAdaptive)).
-    NormalAdaptive {
-        /// [`NormalAdaptive::normal_scale`](crate::relax::NormalAdaptive::normal_scale).
-        normal_scale: f64,
-    },
-}
-
-impl RelaxationSpec {
-    /// The operator.
-    pub fn operator(&self) -> Box<dyn crate::relax::Relaxation> {
-        match *self {
-            RelaxationSpec::SecondDifference {
-                degenerate_area_ratio,
-            } => Box::new(SecondDifference {
-                degenerate_area_ratio,
-            }),
-            RelaxationSpec::MeanCurvature { width, damping } => {
-                Box::new(crate::subdiv::MeanCurvatureStep { width, damping })
-            }
-            RelaxationSpec::NormalAdaptive { normal_scale } => {
-                Box::new(crate::relax::NormalAdaptive { normal_scale })
-            }
-        }
-    }
-
-    /// The spec of a second-difference operator.
-    pub fn of(op: &SecondDifference) -> Self {
-        RelaxationSpec::SecondDifference {
-            degenerate_area_ratio: op.degenerate_area_ratio,
-        }
-    }
-
-    /// The spec of a mean-curvature step.
-    pub fn of_mean_curvature(op: &crate::subdiv::MeanCurvatureStep) -> Self {
-        RelaxationSpec::MeanCurvature {
-            width: op.width,
-            damping: op.damping,
-        }
-    }
-
-    /// The spec of a normal-adaptive operator.
-    pub fn of_normal_adaptive(op: &crate::relax::NormalAdaptive) -> Self {
-        RelaxationSpec::NormalAdaptive {
-            normal_scale: op.normal_scale,
-        }
-    }
-
-    /// The operator's command-line name (`second-difference`, `mcm`, `normal`).
-    pub fn name(&self) -> &'static str {
-        self.operator().name()
-    }
-
-    /// `None` when every option is in its valid range, else what is wrong (a file could hold
-    /// anything).
-    pub fn invalid(&self) -> Option<&'static str> {
-        let ok = match *self {
-            RelaxationSpec::SecondDifference {
-                degenerate_area_ratio,
-            } => (0.0..1.0).contains(&degenerate_area_ratio),
-            RelaxationSpec::MeanCurvature { width, damping } => {
-                width > 0.0 && width.is_finite() && damping > 0.0 && damping <= 1.0
-            }
-            RelaxationSpec::NormalAdaptive { normal_scale } => {
-                normal_scale > 0.0 && normal_scale.is_finite()
-            }
-        };
-        (!ok).then_some("relaxation options out of range")
-    }
-}
-
 /// The build options recorded in the header.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct BuildInfo {
     /// How the progressive mesh was built.
     pub pm_options: PmOptions,
     /// The relaxation operator of the pyramid.
     pub relaxation: RelaxationSpec,
-}
-
-impl Default for BuildInfo {
-    fn default() -> Self {
-        BuildInfo {
-            pm_options: PmOptions::default(),
-            relaxation: RelaxationSpec::of(&SecondDifference::default()),
-        }
-    }
 }
 
 /// The `META` section (bincode 2 standard configuration). Fixed-size fields only: nothing in

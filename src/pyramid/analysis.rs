@@ -32,7 +32,7 @@ use crate::mesh::geometry::morton_codes;
 use crate::mesh::{SlotIndex, VertexId};
 use crate::pm::{FlatReplay, PmCursor, ProgressiveMesh};
 use crate::progress::Progress;
-use crate::relax::Relaxation;
+use crate::relax::{Relaxation, RingStencils};
 use glam::DVec3;
 
 impl Pyramid {
@@ -54,9 +54,6 @@ impl Pyramid {
         signal: &[DVec3],
         progress: &dyn Progress,
     ) -> Result<Pyramid, PyramidError> {
-        if !relaxation.has_linear_stencils() {
-            return Err(PyramidError::NonLinearRelaxation(relaxation.name()));
-        }
         let geometry = pm.original_positions();
         if signal.len() != geometry.len() {
             return Err(PyramidError::Invalid(format!(
@@ -72,7 +69,7 @@ impl Pyramid {
 
         // Step 1 for every split, then the storage order: wave by wave (see `waves`).
         let ranges = split_ranges(n_splits, rayon::current_num_threads());
-        let cursor = (!relaxation.has_ring_stencils()).then(|| pm.cursor());
+        let cursor = relaxation.as_ring_stencils().is_none().then(|| pm.cursor());
         let mut records = record_ranges(pm, relaxation, cursor, &ranges, progress)?;
         // One code width for the pyramid: the widest range's.
         let widest = records.iter().map(|r| r.widest).max().unwrap_or(0);
@@ -154,13 +151,13 @@ fn record_ranges(
     use rayon::prelude::*;
     let finest = ranges.len() - 1;
     let quiet = crate::progress::NoProgress;
-    if relaxation.has_ring_stencils() {
+    if let Some(rings) = relaxation.as_ring_stencils() {
         return ranges
             .par_iter()
             .enumerate()
             .map(|(r, range)| {
                 let report: &dyn Progress = if r == 0 { progress } else { &quiet };
-                record_range_on_rings(pm, relaxation, range.clone(), report)
+                record_range_on_rings(pm, rings, range.clone(), report)
             })
             .collect();
     }
@@ -186,7 +183,7 @@ const STENCIL_PREFETCH_AHEAD: usize = 4;
 /// vertex, its ring and their stencils and fans are those of level `n0 + k + 1`.
 fn record_range_on_rings(
     pm: &ProgressiveMesh,
-    relaxation: &dyn Relaxation,
+    rings: &dyn RingStencils,
     range: std::ops::Range<usize>,
     progress: &dyn Progress,
 ) -> Result<Records, PyramidError> {
@@ -226,12 +223,7 @@ fn record_range_on_rings(
         recorder.stencils.clear();
         recorder.stencil_lens.clear();
         let (stencils, lens) = (&mut recorder.stencils, &mut recorder.stencil_lens);
-        if !relaxation.ring_stencils(&replay, geometry, &touched, stencils, lens) {
-            return Err(PyramidError::Internal(format!(
-                "{} has no ring stencils",
-                relaxation.name()
-            )));
-        }
+        rings.ring_stencils(&replay, geometry, &touched, stencils, lens);
         recorder.record(k, &touched, s.survivor, |j, fan| {
             let (ring, boundary) = replay.ring_entries(j);
             fan.extend(ring.iter().map(|e| e.nbr));

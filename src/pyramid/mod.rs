@@ -60,11 +60,6 @@ use glam::DVec3;
 /// Why a pyramid could not be built or used.
 #[derive(Debug, thiserror::Error)]
 pub enum PyramidError {
-    /// The relaxation operator cannot be written as per-vertex linear weights.
-    #[error(
-        "the `{0}` relaxation is not linear in the signal; the detail pyramid needs an operator with fixed per-level weights"
-    )]
-    NonLinearRelaxation(&'static str),
     /// The mesh could not be turned into a half-edge mesh.
     #[error("cannot build the mesh: {0}")]
     Build(#[from] crate::mesh::BuildError),

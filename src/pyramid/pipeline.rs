@@ -39,10 +39,6 @@ impl ScanPyramid {
         options: &PyramidOptions,
         progress: &dyn Progress,
     ) -> Result<ScanPyramid, PyramidError> {
-        // Fail on the operator before spending time on the PM.
-        if !relaxation.has_linear_stencils() {
-            return Err(PyramidError::NonLinearRelaxation(relaxation.name()));
-        }
         let built = Mesh::from_polygons(&input)?;
         let pm =
             ProgressiveMesh::build(&built.mesh, &options.pm, &|x: f64| progress.update(0.5 * x))?;

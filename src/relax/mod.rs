@@ -1,23 +1,46 @@
-//! Relaxation operators: the plug-in point shared by the detail pyramid, the cascadic
-//! subdivider and the smoother.
+//! Relaxation operators: the linear smoothing steps the detail pyramid predicts and presmooths
+//! with (`--relax`).
 //!
-//! One shape fits all of them: *relax a set of vertices, Jacobi style* — every new value is
-//! computed from the old values, then the caller writes them all. Values live in flat arrays
-//! indexed by [`SlotIndex::slot`](crate::mesh::SlotIndex::slot), so an operator never hashes.
+//! Three operators, one file each:
+//! - [`second_difference`]: [`SecondDifference`], Guskov's non-uniform second-difference
+//!   operator (the default);
+//! - [`mean_curvature`]: [`MeanCurvatureStep`], one damped Jacobi step of implicit
+//!   mean-curvature motion (cotangent weights, lumped mass);
+//! - [`normal_adaptive`]: [`NormalAdaptive`], a 1-ring average whose weights fall off with the
+//!   vertex-normal difference, so it does not average across creases.
+//!
+//! [`spec`] names them: [`RelaxKind`] is the value of `--relax`, [`RelaxationSpec`] the
+//! operator with its parameters as a `.pyr` file records it.
+//!
+//! The contract ([`Relaxation`]): an operator is linear in the signal, its weights coming from
+//! the connectivity and a parameter geometry only (for the pyramid: the original positions of
+//! the level's vertices), never from the signal. So it is its stencils — per vertex,
+//! `(neighbour, weight)` pairs with the relaxed value `Σ w · signal[neighbour]` — which the
+//! pyramid records per level and re-filters with, without the mesh. A set of vertices is
+//! relaxed Jacobi style, every new value computed from the old ones ([`relax_by_stencils`]).
+//! Values live in flat arrays indexed by [`SlotIndex::slot`](crate::mesh::SlotIndex::slot), so
+//! an operator never hashes.
 
 use crate::mesh::{Mesh, VertexId};
 use crate::pm::FlatReplay;
 use glam::DVec3;
 
+pub mod mean_curvature;
 pub mod normal_adaptive;
 pub mod second_difference;
+pub mod spec;
 
+pub use mean_curvature::MeanCurvatureStep;
 pub use normal_adaptive::NormalAdaptive;
 pub use second_difference::SecondDifference;
+pub use spec::{RelaxKind, RelaxationSpec};
 
-/// [`Relaxation::relax`] for an operator whose [`Relaxation::stencil`] describes it exactly:
-/// each vertex gets `Σ w · signal[j]` over its stencil (in stencil order), or keeps its value
-/// where it has none.
+/// One relaxation of `vertices`, Jacobi style: `out[i]` gets `Σ w · signal[j]` over the
+/// stencil of `vertices[i]` (in stencil order), or keeps its value where it has none.
+///
+/// * `geometry[v.slot()]` — the parameter geometry the weights come from;
+/// * `signal[v.slot()]` — the values being smoothed (positions or details);
+/// * `out.len() == vertices.len()`.
 pub fn relax_by_stencils<R: Relaxation + ?Sized>(
     op: &R,
     mesh: &Mesh,
@@ -36,56 +59,27 @@ pub fn relax_by_stencils<R: Relaxation + ?Sized>(
     }
 }
 
-/// A local smoothing operator on mesh vertices.
+/// A local linear smoothing operator on mesh vertices; see the module docs.
 pub trait Relaxation: Sync {
     /// Short name used on the command line (`second-difference`, `mcm`, `normal`).
     fn name(&self) -> &'static str;
 
-    /// Computes new values for `vertices` from `signal` on the connectivity of `mesh`.
-    ///
-    /// * `geometry[v.slot()]` — the parameter geometry the weights come from (for the pyramid:
-    ///   the original positions of the vertices present at this level);
-    /// * `signal[v.slot()]` — the values being smoothed (positions or details);
-    /// * `out[i]` receives the relaxed value of `vertices[i]`; `out.len() == vertices.len()`.
+    /// The operator at `vertex` as fixed linear weights, from `geometry[v.slot()]` on the
+    /// connectivity of `mesh`: fills `out` with `(neighbour, w)` so that the relaxed value is
+    /// `Σ w · signal[neighbour]`, and returns `true`; returns `false` with `out` empty for a
+    /// vertex that keeps its value (an empty stencil with `true` is not allowed). The stencil
+    /// may contain `vertex` itself (a self weight); the detail pyramid starts a vertex being
+    /// predicted at its survivor's value, so a self weight reads that.
     ///
     /// Implementations must not panic on degenerate geometry (zero-area triangles, coincident
     /// vertices): where weights are undefined they fall back to a documented simpler rule.
-    fn relax(
-        &self,
-        mesh: &Mesh,
-        geometry: &[DVec3],
-        signal: &[DVec3],
-        vertices: &[VertexId],
-        out: &mut [DVec3],
-    );
-
-    /// True when [`Relaxation::stencil`] describes the operator exactly at every vertex (the
-    /// operator is linear in the signal, with weights from the mesh and the parameter geometry
-    /// only). Default `false`.
-    fn has_linear_stencils(&self) -> bool {
-        false
-    }
-
-    /// The operator as fixed linear weights at `vertex`: fills `out` with `(neighbour, w)` so
-    /// that the relaxed value is `Σ w · signal[neighbour]`, and returns `true`. Operators whose
-    /// result is not such a stencil (nonlinear in the signal) keep this default, which returns
-    /// `false`. An operator returning `true` for a vertex must give exactly that linear map in
-    /// [`Relaxation::relax`]; an empty stencil with `true` is not allowed (return `false` for a
-    /// vertex that keeps its value). The stencil may contain `vertex` itself (a self weight);
-    /// the detail pyramid starts a vertex being predicted at its survivor's value, so a self
-    /// weight reads that. The detail pyramid caches stencils per level with this, so
-    /// re-filtering needs no mesh at all.
     fn stencil(
         &self,
         mesh: &Mesh,
         geometry: &[DVec3],
         vertex: VertexId,
         out: &mut Vec<(VertexId, f64)>,
-    ) -> bool {
-        let _ = (mesh, geometry, vertex);
-        out.clear();
-        false
-    }
+    ) -> bool;
 
     /// [`Relaxation::stencil`] for several vertices at once: appends the stencil of each of
     /// `vertices` to `out` and its length to `lens` (`0` where `stencil` returns `false`).
@@ -112,17 +106,20 @@ pub trait Relaxation: Sync {
         }
     }
 
-    /// True when [`Relaxation::ring_stencils`] computes this operator's stencils. The detail
-    /// pyramid's analysis then records its weights on a [`FlatReplay`] walked up from the base
-    /// mesh, which is several times lighter on memory than a half-edge mesh. Default `false`.
-    fn has_ring_stencils(&self) -> bool {
-        false
+    /// The operator's stencils on a [`FlatReplay`], if it computes them there (default
+    /// `None`). The detail pyramid's analysis then records the weights on a replay walked up
+    /// from the base mesh, which is several times lighter on memory than a half-edge mesh.
+    fn as_ring_stencils(&self) -> Option<&dyn RingStencils> {
+        None
     }
+}
 
+/// The stencils of a [`Relaxation`] on the rings of a [`FlatReplay`]
+/// ([`Relaxation::as_ring_stencils`]).
+pub trait RingStencils: Sync {
     /// [`Relaxation::stencils`] on the rings of `replay` (the mesh of its current level), with
     /// vertices and stencil entries as PM indices: the weights of the half-edge mesh the replay
-    /// stands for, bit for bit when that mesh has the replay's slots. Returns `false`, appending
-    /// nothing, for an operator without this path (the default).
+    /// stands for, bit for bit when that mesh has the replay's slots.
     fn ring_stencils(
         &self,
         replay: &FlatReplay,
@@ -130,8 +127,5 @@ pub trait Relaxation: Sync {
         vertices: &[u32],
         out: &mut Vec<(u32, f64)>,
         lens: &mut Vec<usize>,
-    ) -> bool {
-        let _ = (replay, geometry, vertices, out, lens);
-        false
-    }
+    );
 }

@@ -114,21 +114,6 @@ impl Relaxation for NormalAdaptive {
         "normal"
     }
 
-    fn relax(
-        &self,
-        mesh: &Mesh,
-        geometry: &[DVec3],
-        signal: &[DVec3],
-        vertices: &[VertexId],
-        out: &mut [DVec3],
-    ) {
-        crate::relax::relax_by_stencils(self, mesh, geometry, signal, vertices, out);
-    }
-
-    fn has_linear_stencils(&self) -> bool {
-        true
-    }
-
     /// The neighbour weights (no self weight); `false` for an isolated vertex, which keeps its
     /// value.
     fn stencil(
@@ -147,6 +132,7 @@ impl Relaxation for NormalAdaptive {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::relax::relax_by_stencils;
 
     /// An (n+1)² grid; points with x > `fold` are bent up by 90° about the line x = fold.
     fn grid(n: usize, fold: Option<f64>) -> Mesh {
@@ -173,14 +159,14 @@ mod tests {
             }
             let c = vec![DVec3::new(1.5, -2.0, 0.25); g.len()];
             let mut out = vec![DVec3::ZERO; verts.len()];
-            op.relax(&m, &g, &c, &verts, &mut out);
+            relax_by_stencils(&op, &m, &g, &c, &verts, &mut out);
             assert!(out.iter().all(|x| (*x - c[0]).length() < 1e-14));
-            // relax equals the stencil exactly.
+            // The relaxation is the stencil exactly.
             let signal: Vec<DVec3> = g
                 .iter()
                 .map(|q| *q * 1.7 + DVec3::splat(q.x * q.y))
                 .collect();
-            op.relax(&m, &g, &signal, &verts, &mut out);
+            relax_by_stencils(&op, &m, &g, &signal, &verts, &mut out);
             let mut st = Vec::new();
             for (i, &v) in verts.iter().enumerate() {
                 assert!(op.stencil(&m, &g, v, &mut st));

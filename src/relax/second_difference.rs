@@ -28,7 +28,7 @@
 //!   then cancels catastrophically — a coarse level of a holed grid had weights summing to
 //!   1e15, and an identity filter moved vertices by 0.8 % of the diagonal.
 
-use super::Relaxation;
+use super::{Relaxation, RingStencils};
 use crate::mesh::{HalfedgeId, Mesh, SlotIndex, VertexId};
 use crate::pm::FlatReplay;
 use glam::DVec3;
@@ -317,44 +317,8 @@ impl Relaxation for SecondDifference {
         "second-difference"
     }
 
-    fn relax(
-        &self,
-        mesh: &Mesh,
-        geometry: &[DVec3],
-        signal: &[DVec3],
-        vertices: &[VertexId],
-        out: &mut [DVec3],
-    ) {
-        super::relax_by_stencils(self, mesh, geometry, signal, vertices, out);
-    }
-
-    fn has_linear_stencils(&self) -> bool {
-        true
-    }
-
-    fn has_ring_stencils(&self) -> bool {
-        true
-    }
-
-    /// Shares each edge's hinge coefficients among the batch's stencils, as
-    /// [`Relaxation::stencils`] does.
-    fn ring_stencils(
-        &self,
-        replay: &FlatReplay,
-        geometry: &[DVec3],
-        vertices: &[u32],
-        out: &mut Vec<(u32, f64)>,
-        lens: &mut Vec<usize>,
-    ) -> bool {
-        RING_FLAPS.with_borrow_mut(|cache| {
-            cache.clear();
-            for &v in vertices {
-                let start = out.len();
-                self.append_ring_stencil(replay, geometry, v, out, cache);
-                lens.push(out.len() - start);
-            }
-        });
-        true
+    fn as_ring_stencils(&self) -> Option<&dyn RingStencils> {
+        Some(self)
     }
 
     fn stencil(
@@ -391,6 +355,28 @@ impl Relaxation for SecondDifference {
                 lens.push(0);
             }
         }
+    }
+}
+
+impl RingStencils for SecondDifference {
+    /// Shares each edge's hinge coefficients among the batch's stencils, as
+    /// [`Relaxation::stencils`] does.
+    fn ring_stencils(
+        &self,
+        replay: &FlatReplay,
+        geometry: &[DVec3],
+        vertices: &[u32],
+        out: &mut Vec<(u32, f64)>,
+        lens: &mut Vec<usize>,
+    ) {
+        RING_FLAPS.with_borrow_mut(|cache| {
+            cache.clear();
+            for &v in vertices {
+                let start = out.len();
+                self.append_ring_stencil(replay, geometry, v, out, cache);
+                lens.push(out.len() - start);
+            }
+        });
     }
 }
 
@@ -562,7 +548,7 @@ struct RingFlap {
 type RingFlapCache = BatchMemo<u64, RingFlap>;
 
 thread_local! {
-    /// Each thread's flap memo for [`Relaxation::ring_stencils`], kept between batches (one
+    /// Each thread's flap memo for [`RingStencils::ring_stencils`], kept between batches (one
     /// per split in the analysis) so that starting a batch costs a generation bump, not a
     /// fresh 7 KB memo.
     static RING_FLAPS: std::cell::RefCell<RingFlapCache> =
@@ -600,6 +586,7 @@ pub fn apply_stencil(stencil: &[(VertexId, f64)], signal: &[DVec3]) -> DVec3 {
 mod tests {
     use super::*;
     use crate::mesh::Mesh;
+    use crate::relax::relax_by_stencils;
 
     fn cot(v: DVec3, a: DVec3, b: DVec3) -> f64 {
         let (u, w) = (a - v, b - v);
@@ -819,7 +806,7 @@ mod tests {
         let op = SecondDifference::default();
         let verts: Vec<VertexId> = mesh.vertices().collect();
         let mut out = vec![DVec3::ZERO; verts.len()];
-        op.relax(&mesh, &geometry, &signal, &verts, &mut out);
+        relax_by_stencils(&op, &mesh, &geometry, &signal, &verts, &mut out);
         let mut boundary_checked = 0;
         let mut s = Stencil::new();
         for (k, &v) in verts.iter().enumerate() {
@@ -889,7 +876,7 @@ mod tests {
             let (mut want, mut want_lens) = (Vec::new(), Vec::new());
             op.stencils(m, pos, &all, &mut want, &mut want_lens);
             let (mut got, mut got_lens) = (Vec::new(), Vec::new());
-            assert!(op.ring_stencils(&fast, pos, &ids, &mut got, &mut got_lens));
+            op.ring_stencils(&fast, pos, &ids, &mut got, &mut got_lens);
             assert_eq!(got_lens, want_lens, "split {i}");
             for (g, w) in got.iter().zip(&want) {
                 assert_eq!(g.0 as usize, w.0.slot(), "split {i}");
@@ -951,6 +938,7 @@ mod tests {
 
     #[test]
     fn isolated_triangle_and_degenerate_fans_fall_back_to_identity() {
+        let sd = SecondDifference::default();
         // One triangle: no interior edge anywhere.
         let p = [DVec3::ZERO, DVec3::X, DVec3::Y];
         let mesh = Mesh::from_triangles(&p, &[[0, 1, 2]]).unwrap().mesh;
@@ -958,7 +946,7 @@ mod tests {
         let signal = vec![DVec3::splat(1.0), DVec3::splat(2.0), DVec3::splat(3.0)];
         let verts: Vec<VertexId> = mesh.vertices().collect();
         let mut out = vec![DVec3::ZERO; 3];
-        SecondDifference::default().relax(&mesh, &geometry, &signal, &verts, &mut out);
+        relax_by_stencils(&sd, &mesh, &geometry, &signal, &verts, &mut out);
         assert_eq!(out, signal);
 
         // Two triangles sharing an edge, one of zero area: the only interior edge is skipped.
@@ -970,7 +958,7 @@ mod tests {
         let signal = geometry.clone();
         let verts: Vec<VertexId> = mesh.vertices().collect();
         let mut out = vec![DVec3::ZERO; 4];
-        SecondDifference::default().relax(&mesh, &geometry, &signal, &verts, &mut out);
+        relax_by_stencils(&sd, &mesh, &geometry, &signal, &verts, &mut out);
         assert_eq!(out, signal);
 
         // Coincident vertices (a zero-length edge) must not produce NaN either.
@@ -981,7 +969,7 @@ mod tests {
         let geometry = mesh.positions();
         let verts: Vec<VertexId> = mesh.vertices().collect();
         let mut out = vec![DVec3::ZERO; 4];
-        SecondDifference::default().relax(&mesh, &geometry, &geometry, &verts, &mut out);
+        relax_by_stencils(&sd, &mesh, &geometry, &geometry, &verts, &mut out);
         assert!(out.iter().all(|q| q.is_finite()));
     }
 
@@ -1031,7 +1019,8 @@ mod tests {
             .iter()
             .map(|q| DVec3::new(q.x * q.y, 1.0, q.z))
             .collect();
-        SecondDifference::default().relax(&mesh, &geometry, &signal, &[apex], &mut out);
+        let sd = SecondDifference::default();
+        relax_by_stencils(&sd, &mesh, &geometry, &signal, &[apex], &mut out);
         let c = hinge_coefficients(p[0], p[1], p[2], p[3], 1e-12).unwrap();
         let mut relaxed = signal.clone();
         relaxed[3] = out[0];

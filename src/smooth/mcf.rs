@@ -5,7 +5,7 @@
 //! ```
 //!
 //! with the lumped mass M and the cotangent stiffness K = −L of the *current* surface (both
-//! rebuilt every iteration, [`crate::subdiv::fem`]), i.e. one backward-Euler step of
+//! rebuilt every iteration, [`crate::numerics::fem`]), i.e. one backward-Euler step of
 //! ∂x/∂t = Δ_S x = −2H n. The step is unconditionally stable, so large time steps smooth in
 //! few iterations.
 //!
@@ -15,14 +15,14 @@
 //! iteration, while a sphere of radius R shrinks by about 2 dt/R = 2 L²/R per iteration.
 //!
 //! Negative edge weights (non-Delaunay edges, whose opposite angles sum to more than π) are
-//! clamped to zero ([`crate::subdiv::fem::clamp_negative_weights`]). Noisy scans are full of
+//! clamped to zero ([`crate::numerics::fem::clamp_negative_weights`]). Noisy scans are full of
 //! needle triangles whose clamped cotangents make the plain stiffness slightly indefinite, and
 //! with a large time step `M + dt K` then loses positive definiteness (the Cholesky factorisation
 //! of the noisy bunny broke down at dt = L²). With the clamp the matrix is diagonally dominant,
 //! hence positive definite for every dt; on a Delaunay mesh nothing changes.
 //!
 //! The system is solved by sparse Cholesky (faer, cargo feature `solver`), otherwise by
-//! Jacobi-preconditioned CG to a 1e-7 relative residual ([`SOLVE_TOLERANCE`]) ([`crate::subdiv::cascadic::solve_exact`]).
+//! Jacobi-preconditioned CG to a 1e-7 relative residual ([`SOLVE_TOLERANCE`]) ([`crate::numerics::solvers::solve_exact`]).
 //!
 //! Boundaries ([`Boundary`]): `Fixed` pins the rim (Dirichlet rows, their columns moved to the
 //! right-hand side so the system stays symmetric); `Smooth` uses the natural boundary
@@ -33,9 +33,9 @@
 
 use super::{Boundary, SmoothError};
 use crate::mesh::Mesh;
+use crate::numerics::fem::{clamp_negative_weights, mass_and_stiffness, mass_rhs, system_matrix};
+use crate::numerics::solvers::solve_exact;
 use crate::progress::Progress;
-use crate::subdiv::cascadic::solve_exact;
-use crate::subdiv::fem::{clamp_negative_weights, mass_and_stiffness, mass_rhs, system_matrix};
 use glam::DVec3;
 
 /// Relative residual the CG fallback (and the Cholesky check) must reach. Not tighter: after
@@ -116,7 +116,7 @@ pub fn implicit_mcf(
 /// Turns the rows of pinned vertices into identity rows with their positions on the right,
 /// and moves their columns to the right-hand side of the other rows (keeps A symmetric).
 fn pin_rows(
-    a: &mut crate::subdiv::fem::SymmetricCsr,
+    a: &mut crate::numerics::fem::SymmetricCsr,
     b: &mut [[f64; 3]],
     x: &[DVec3],
     pinned: &[bool],

@@ -6,25 +6,23 @@
 //!   [`Mesh`] plus the [`Prolongation`] (which coarse vertices every new vertex interpolates);
 //!   the level loops run quadrisection on flat half-edge arrays (`halfedge_arrays`) instead;
 //! - [`loop_scheme`]: Loop's scheme with the usual boundary rules;
-//! - [`fem`]: lumped mass and cotangent stiffness on the prolonged surface (flat CSR arrays);
 //! - [`cascadic`]: the level loop `(M + αL) x_k = M · I x_0` with damped Jacobi, CG or exact
-//!   solves, the cascadic schedule and the local filter-width expansion;
-//! - [`mcm_relax`]: [`MeanCurvatureStep`], one Jacobi update of the implicit MCM system as a
-//!   [`Relaxation`](crate::relax::Relaxation) for the detail pyramid.
+//!   solves, the cascadic schedule and the local filter-width expansion; the lumped mass,
+//!   cotangent stiffness (on the prolonged surface) and solvers are [`crate::numerics`].
+//!
+//! One Jacobi update of the implicit MCM system, as a relaxation for the detail pyramid, is
+//! [`crate::relax::MeanCurvatureStep`].
 //!
 //! The output is a *new* mesh: the coarse vertices come first (same order as the input's
 //! vertex slots), new vertices follow. No attributes are carried over.
 
 pub mod cascadic;
-pub mod fem;
 mod halfedge_arrays;
 pub mod loop_scheme;
-pub mod mcm_relax;
 pub mod refine;
 
 pub use cascadic::{LevelReport, subdivide_mcm};
 pub use loop_scheme::{loop_step, subdivide_loop};
-pub use mcm_relax::MeanCurvatureStep;
 pub use refine::{Marking, Prolongation, Refined};
 
 use crate::mesh::Mesh;

@@ -218,9 +218,9 @@ pub(crate) fn quadrisect_connectivity(
 /// of the fine triangles: every fine edge lies in a known pair of fine triangles (corner
 /// triangles `4t + k`, centre `4t + 3`, as [`quad_topology`] lays them out), so each row is a
 /// handful of index lookups and a sort of at most a vertex's valence. `tri_weights` are the
-/// fine triangles' [`triangle_weights`](super::fem::triangle_weights).
+/// fine triangles' [`triangle_weights`](crate::numerics::fem::triangle_weights).
 ///
-/// Gives exactly [`cotangent_stiffness`](super::fem::cotangent_stiffness)'s matrix, bit for
+/// Gives exactly [`cotangent_stiffness`](crate::numerics::fem::cotangent_stiffness)'s matrix, bit for
 /// bit (an entry's two terms commute, the diagonal sums in column order as there). Returns
 /// `None` when the coarse mesh is not one the layout covers (two faces sharing more than one
 /// edge), and the caller falls back to the general assembly.
@@ -228,7 +228,7 @@ pub(crate) fn quadrisection_stiffness(
     mesh: &HalfedgeArrays,
     topo: &QuadTopology,
     tri_weights: &[[f64; 4]],
-) -> Option<super::fem::SymmetricCsr> {
+) -> Option<crate::numerics::fem::SymmetricCsr> {
     if tri_weights.len() != 4 * mesh.n_faces() {
         return None;
     }
@@ -358,7 +358,7 @@ pub(crate) fn quadrisection_stiffness(
     } else {
         fill(0..n, &mut col, &mut val)?;
     }
-    Some(super::fem::SymmetricCsr {
+    Some(crate::numerics::fem::SymmetricCsr {
         row_start,
         col,
         val,
@@ -787,7 +787,7 @@ mod tests {
 
     #[test]
     fn quadrisection_stiffness_is_the_general_assembly_bit_for_bit() {
-        use crate::subdiv::fem::{cotangent_stiffness, triangle_weights};
+        use crate::numerics::fem::{cotangent_stiffness, triangle_weights};
         let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
         // Closed with a valence-4 vertex (octahedron), open with boundary corners (a jittered
         // grid with a hole and an isolated vertex), checked at every level, with and without

@@ -1,0 +1,158 @@
+//! The input of the commands: a mesh file or a `.pyr` file (recognised by its signature,
+//! whatever its name), read as a mesh or turned into a detail pyramid, and the `.pyr` file a
+//! hierarchy is saved as.
+
+use super::{BarProgress, Global};
+use crate::format::{self, BuildInfo, FormatError, SizeReport};
+use crate::io;
+use crate::mesh::PolygonMesh;
+use crate::pm::{PmOptions, ProgressiveMesh};
+use crate::pyramid::{PyramidOptions, ScanPyramid};
+use crate::relax::{RelaxKind, Relaxation, RelaxationSpec};
+use anyhow::Context;
+use std::path::Path;
+use std::time::Instant;
+
+/// Reads the mesh a command works on: a mesh file, or a `.pyr` file (recognised by its
+/// signature, whatever its name), whose stored input mesh is restored exactly — the file the
+/// user built it from, so `info`, `convert`, `simplify`, `subdivide`, `smooth`, `compare` and
+/// `build` take the file they keep as well.
+pub fn read_input_mesh(path: &Path) -> anyhow::Result<PolygonMesh> {
+    if is_pyr_file(path) {
+        return Ok(load_pyr(path)?.input);
+    }
+    Ok(io::read_mesh(path)?)
+}
+
+/// True when `path` is a `.pyr` file (by its signature; an unreadable file is "not").
+pub fn is_pyr_file(path: &Path) -> bool {
+    let mut head = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
+        .is_ok_and(|_| format::is_pyr(&head))
+}
+
+/// Reads and decodes a whole `.pyr` file (validated), errors naming the file.
+pub fn load_pyr(path: &Path) -> anyhow::Result<format::PyrData> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    format::decode(&bytes).with_context(|| format!("cannot load {}", path.display()))
+}
+
+/// Reads `path` and builds its progressive mesh and pyramid, reporting progress and timing;
+/// returns it with the relaxation it was analysed with. `relax` defaults to the
+/// second-difference operator. A `.pyr` file (detected by its signature) is loaded instead and
+/// analysed with the relaxation recorded in it; asking for another one is an error.
+pub fn load_pyramid(
+    path: &Path,
+    relax: Option<RelaxKind>,
+    global: &Global,
+) -> anyhow::Result<(ScanPyramid, RelaxationSpec)> {
+    let wanted = relax.map(RelaxKind::spec);
+    if is_pyr_file(path) {
+        let (scan, spec) = load_pyr_scan(path, global)?;
+        if let Some(w) = wanted
+            && w != spec
+        {
+            anyhow::bail!(
+                "{} was built with --relax {}; rebuild it with `meshpyr build --relax {}` to use that operator",
+                path.display(),
+                spec.name(),
+                w.name()
+            );
+        }
+        return Ok((scan, spec));
+    }
+    let spec = wanted.unwrap_or_default();
+    let input = io::read_mesh(path)?;
+    let scan = build_pyramid(
+        input,
+        spec.operator().as_ref(),
+        &path.display().to_string(),
+        global,
+    )?;
+    Ok((scan, spec))
+}
+
+/// Loads a `.pyr` file and recomputes its pyramid (the relaxation recorded in the file).
+fn load_pyr_scan(path: &Path, global: &Global) -> anyhow::Result<(ScanPyramid, RelaxationSpec)> {
+    let start = Instant::now();
+    let data = load_pyr(path)?;
+    let spec = data.info.relaxation;
+    let loaded = start.elapsed().as_secs_f64();
+    let bar = global.progress("analysis");
+    let scan = data
+        .into_scan(&BarProgress(&bar))
+        .with_context(|| format!("cannot analyse {}", path.display()))?;
+    bar.finish_and_clear();
+    let p = &scan.pyramid;
+    global.say(format_args!(
+        "{}: {} vertices, levels {}..={} (loaded in {:.2} s, details recomputed in {:.2} s)",
+        path.display(),
+        scan.input.n_vertices(),
+        p.n_base_vertices(),
+        p.n_vertices(),
+        loaded,
+        start.elapsed().as_secs_f64() - loaded
+    ));
+    Ok((scan, spec))
+}
+
+/// Builds the pyramid of an already-read mesh; `name` is used in messages.
+pub fn build_pyramid(
+    input: PolygonMesh,
+    relaxation: &dyn Relaxation,
+    name: &str,
+    global: &Global,
+) -> anyhow::Result<ScanPyramid> {
+    let start = Instant::now();
+    let bar = global.progress("pyramid");
+    let scan = ScanPyramid::build(
+        input,
+        relaxation,
+        &PyramidOptions::default(),
+        &BarProgress(&bar),
+    )
+    .with_context(|| format!("cannot build the detail pyramid of {name}"))?;
+    bar.finish_and_clear();
+    let p = &scan.pyramid;
+    global.say(format_args!(
+        "{name}: {} vertices, levels {}..={}, {} details ({} relaxation) in {:.2} s",
+        scan.input.positions.len(),
+        p.n_base_vertices(),
+        p.n_vertices(),
+        p.n_details(),
+        p.relaxation(),
+        start.elapsed().as_secs_f64()
+    ));
+    Ok(scan)
+}
+
+/// The `.pyr` file of `input` with its hierarchy `pm` (built with the default options, as
+/// every command builds it) and the relaxation the pyramid is analysed with.
+pub fn encode_pyr(
+    input: &PolygonMesh,
+    pm: &ProgressiveMesh,
+    relaxation: RelaxationSpec,
+) -> Result<(Vec<u8>, SizeReport), FormatError> {
+    let info = BuildInfo {
+        pm_options: PmOptions::default(),
+        relaxation,
+    };
+    format::encode(input, pm, &info)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::ValueEnum;
+
+    /// Error messages name the operators by [`RelaxationSpec::name`] and tell the user to pass
+    /// that to `--relax`.
+    #[test]
+    fn every_relax_value_is_its_operators_name() {
+        for kind in RelaxKind::value_variants() {
+            let value = kind.to_possible_value().expect("no hidden values");
+            assert_eq!(kind.spec().name(), value.get_name());
+        }
+    }
+}

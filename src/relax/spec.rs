@@ -1,0 +1,144 @@
+//! The operators by name and with their parameters: [`RelaxKind`] is what `--relax` chooses,
+//! [`RelaxationSpec`] what a `.pyr` file records, so that a loader rebuilds the very operator
+//! the pyramid was analysed with.
+//!
+//! [`RelaxationSpec`] is serialised into the `META` section (`formats/pyr.md`): its variant
+//! order and its field names and order are part of the file format.
+
+use super::{MeanCurvatureStep, NormalAdaptive, Relaxation, SecondDifference};
+use serde::{Deserialize, Serialize};
+
+/// An operator without its parameters: the values of the command line's `--relax`.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
+pub enum RelaxKind {
+    /// Guskov's non-uniform second-difference operator.
+    #[default]
+    SecondDifference,
+    /// One Jacobi step of implicit mean-curvature motion (cotangent weights, lumped mass).
+    Mcm,
+    /// 1-ring average with weights that fall off with the vertex-normal difference, so the
+    /// prediction does not average across creases.
+    Normal,
+}
+
+impl RelaxKind {
+    /// The operator of this kind with its default parameters.
+    pub fn spec(self) -> RelaxationSpec {
+        match self {
+            RelaxKind::SecondDifference => SecondDifference::default().into(),
+            RelaxKind::Mcm => MeanCurvatureStep::default().into(),
+            RelaxKind::Normal => NormalAdaptive::default().into(),
+        }
+    }
+}
+
+/// The relaxation operator the pyramid is analysed with, with its options.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub enum RelaxationSpec {
+    /// Guskov's second-difference operator.
+    SecondDifference {
+        /// [`SecondDifference::degenerate_area_ratio`].
+        degenerate_area_ratio: f64,
+    },
+    /// One Jacobi step of implicit mean-curvature motion ([`MeanCurvatureStep`]).
+    MeanCurvature {
+        /// [`MeanCurvatureStep::width`].
+        width: f64,
+        /// [`MeanCurvatureStep::damping`].
+        damping: f64,
+    },
+    /// The normal-adaptive 1-ring average ([`NormalAdaptive`]).
+    NormalAdaptive {
+        /// [`NormalAdaptive::normal_scale`].
+        normal_scale: f64,
+    },
+}
+
+/// The default operator: [`RelaxKind::default`] with its default parameters.
+impl Default for RelaxationSpec {
+    fn default() -> Self {
+        RelaxKind::default().spec()
+    }
+}
+
+impl From<SecondDifference> for RelaxationSpec {
+    fn from(op: SecondDifference) -> Self {
+        RelaxationSpec::SecondDifference {
+            degenerate_area_ratio: op.degenerate_area_ratio,
+        }
+    }
+}
+
+impl From<MeanCurvatureStep> for RelaxationSpec {
+    fn from(op: MeanCurvatureStep) -> Self {
+        RelaxationSpec::MeanCurvature {
+            width: op.width,
+            damping: op.damping,
+        }
+    }
+}
+
+impl From<NormalAdaptive> for RelaxationSpec {
+    fn from(op: NormalAdaptive) -> Self {
+        RelaxationSpec::NormalAdaptive {
+            normal_scale: op.normal_scale,
+        }
+    }
+}
+
+impl RelaxationSpec {
+    /// The operator.
+    pub fn operator(&self) -> Box<dyn Relaxation> {
+        match *self {
+            RelaxationSpec::SecondDifference {
+                degenerate_area_ratio,
+            } => Box::new(SecondDifference {
+                degenerate_area_ratio,
+            }),
+            RelaxationSpec::MeanCurvature { width, damping } => {
+                Box::new(MeanCurvatureStep { width, damping })
+            }
+            RelaxationSpec::NormalAdaptive { normal_scale } => {
+                Box::new(NormalAdaptive { normal_scale })
+            }
+        }
+    }
+
+    /// The operator's command-line name (`second-difference`, `mcm`, `normal`).
+    pub fn name(&self) -> &'static str {
+        self.operator().name()
+    }
+
+    /// `None` when every option is in its valid range, else what is wrong (a file could hold
+    /// anything).
+    pub fn invalid(&self) -> Option<&'static str> {
+        let ok = match *self {
+            RelaxationSpec::SecondDifference {
+                degenerate_area_ratio,
+            } => (0.0..1.0).contains(&degenerate_area_ratio),
+            RelaxationSpec::MeanCurvature { width, damping } => {
+                width > 0.0 && width.is_finite() && damping > 0.0 && damping <= 1.0
+            }
+            RelaxationSpec::NormalAdaptive { normal_scale } => {
+                normal_scale > 0.0 && normal_scale.is_finite()
+            }
+        };
+        (!ok).then_some("relaxation options out of range")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_default_is_guskovs_operator_with_its_defaults() {
+        assert_eq!(
+            RelaxationSpec::default(),
+            RelaxationSpec::SecondDifference {
+                degenerate_area_ratio: SecondDifference::default().degenerate_area_ratio
+            }
+        );
+    }
+}
