@@ -11,7 +11,6 @@
 use meshpyr::io;
 use meshpyr::progress::NoProgress;
 use meshpyr::pyramid::{LevelGains, MoveHandle, PyramidOptions, ScanPyramid};
-use meshpyr::relax::SecondDifference;
 use meshpyr::render::{RenderOptions, Triangles, render_panels};
 use std::path::PathBuf;
 
@@ -24,9 +23,8 @@ fn main() -> anyhow::Result<()> {
     let output = PathBuf::from(args.next().unwrap_or_else(|| "multires-edit.ply".into()));
     let level: usize = args.next().map_or(Ok(500), |s| s.parse())?;
 
-    let scan = ScanPyramid::build(
+    let scan = ScanPyramid::build_with(
         io::read_mesh(&input)?,
-        &SecondDifference::default(),
         &PyramidOptions::default(),
         &NoProgress,
     )?;

@@ -31,9 +31,8 @@ fn main() -> anyhow::Result<()> {
         || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/bunny.ply"),
         PathBuf::from,
     );
-    let scan = ScanPyramid::build(
+    let scan = ScanPyramid::build_with(
         meshpyr::io::read_mesh(&input)?,
-        &SecondDifference::default(),
         &PyramidOptions::default(),
         &NoProgress,
     )?;

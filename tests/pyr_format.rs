@@ -106,8 +106,7 @@ fn f64_positions_are_kept_exactly() {
 #[test]
 fn loaded_pyramid_has_identical_details_and_synthesis() {
     let input = io::read_mesh(&data("joint.ply")).unwrap();
-    let relax = meshpyr::relax::SecondDifference::default();
-    let scan = ScanPyramid::build(input.clone(), &relax, &Default::default(), &NoProgress).unwrap();
+    let scan = ScanPyramid::build_with(input.clone(), &Default::default(), &NoProgress).unwrap();
     let (bytes, _) = format::encode(&scan.input, &scan.pm, &BuildInfo::default()).unwrap();
     let loaded = format::decode(&bytes)
         .unwrap()

@@ -20,13 +20,7 @@ fn data(name: &str) -> std::path::PathBuf {
 
 fn scan(name: &str) -> ScanPyramid {
     let input = io::read_mesh(&data(name)).unwrap();
-    ScanPyramid::build(
-        input,
-        &SecondDifference::default(),
-        &PyramidOptions::default(),
-        &NoProgress,
-    )
-    .unwrap()
+    ScanPyramid::build_with(input, &PyramidOptions::default(), &NoProgress).unwrap()
 }
 
 fn bunny() -> &'static ScanPyramid {

@@ -2,7 +2,7 @@
 
 use super::Global;
 use super::info::mesh_info;
-use super::input::{build_pyramid, encode_pyr};
+use super::input::build_pyramid;
 use crate::io::{self, MeshFormat};
 use crate::mesh::PolygonMesh;
 use crate::pyramid::{Filter, Pyramid};
@@ -53,9 +53,9 @@ fn demo_filters(input: PolygonMesh, stem: &str, dir: &Path, global: &Global) -> 
     use crate::render::{RenderOptions, Triangles, render_panels};
 
     let relaxation = SecondDifference::default();
-    let scan = build_pyramid(input, &relaxation, stem, global)?;
+    let scan = build_pyramid(input, relaxation.into(), stem, global)?;
     // The hierarchy, saved: `filter`, `spectrum` and `edit` take it instead of the mesh.
-    let (bytes, sizes) = encode_pyr(&scan.input, &scan.pm, relaxation.into())?;
+    let (bytes, sizes) = scan.to_pyr_bytes()?;
     let pyr_path = dir.join(format!("{stem}.pyr"));
     io::write_atomic(&pyr_path, &bytes)?;
     global.say(format_args!(

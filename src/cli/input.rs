@@ -8,7 +8,7 @@ use crate::io;
 use crate::mesh::PolygonMesh;
 use crate::pm::{PmOptions, ProgressiveMesh};
 use crate::pyramid::{PyramidOptions, ScanPyramid};
-use crate::relax::{RelaxKind, Relaxation, RelaxationSpec};
+use crate::relax::{RelaxKind, RelaxationSpec};
 use anyhow::Context;
 use std::path::Path;
 use std::time::Instant;
@@ -64,12 +64,7 @@ pub fn load_pyramid(
     }
     let spec = wanted.unwrap_or_default();
     let input = io::read_mesh(path)?;
-    let scan = build_pyramid(
-        input,
-        spec.operator().as_ref(),
-        &path.display().to_string(),
-        global,
-    )?;
+    let scan = build_pyramid(input, spec, &path.display().to_string(), global)?;
     Ok((scan, spec))
 }
 
@@ -100,19 +95,18 @@ fn load_pyr_scan(path: &Path, global: &Global) -> anyhow::Result<(ScanPyramid, R
 /// Builds the pyramid of an already-read mesh; `name` is used in messages.
 pub fn build_pyramid(
     input: PolygonMesh,
-    relaxation: &dyn Relaxation,
+    relaxation: RelaxationSpec,
     name: &str,
     global: &Global,
 ) -> anyhow::Result<ScanPyramid> {
     let start = Instant::now();
     let bar = global.progress("pyramid");
-    let scan = ScanPyramid::build(
-        input,
+    let options = PyramidOptions {
         relaxation,
-        &PyramidOptions::default(),
-        &BarProgress(&bar),
-    )
-    .with_context(|| format!("cannot build the detail pyramid of {name}"))?;
+        ..PyramidOptions::default()
+    };
+    let scan = ScanPyramid::build_with(input, &options, &BarProgress(&bar))
+        .with_context(|| format!("cannot build the detail pyramid of {name}"))?;
     bar.finish_and_clear();
     let p = &scan.pyramid;
     global.say(format_args!(

@@ -6,8 +6,8 @@ pub mod pyr;
 pub mod varint;
 
 pub use pyr::{
-    BuildInfo, LevelMesh, MAJOR, MINOR, OLDEST_MAJOR, PyrData, SizeReport, decode, encode,
-    is_pyr, read_level, with_positions,
+    BuildInfo, LevelMesh, MAJOR, MINOR, OLDEST_MAJOR, PyrData, SizeReport, decode, encode, is_pyr,
+    read_level, with_positions,
 };
 pub(crate) use pyr::{fix_checksums, fuzz_read_pyr};
 

@@ -17,7 +17,7 @@ use crate::pm::{
     FaceBuckets, FlatReplay, PmOptions, PmParts, ProgressiveMesh, VertexSplit, canonical_sorted,
 };
 use crate::progress::Progress;
-use crate::pyramid::{Pyramid, PyramidError, ScanPyramid};
+use crate::pyramid::{Pyramid, PyramidError, PyramidOptions, ScanPyramid};
 use crate::relax::RelaxationSpec;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -115,6 +115,10 @@ impl PyrData {
             source,
             pm: self.pm,
             pyramid,
+            options: PyramidOptions {
+                pm: self.info.pm_options,
+                relaxation: self.info.relaxation,
+            },
         })
     }
 }

@@ -62,12 +62,7 @@ pub(crate) fn fuzz_pyramid(data: &[u8]) {
     let relax = SecondDifference::default();
     let [one, three] = pools();
     let Ok(scan) = one.install(|| {
-        ScanPyramid::build(
-            input.clone(),
-            &relax,
-            &PyramidOptions::default(),
-            &NoProgress,
-        )
+        ScanPyramid::build_with(input.clone(), &PyramidOptions::default(), &NoProgress)
     }) else {
         return;
     };

@@ -39,6 +39,13 @@ impl LevelSpec {
     }
 }
 
+/// A plain number is a vertex count: `Filter::new().lowpass(1000)`.
+impl From<usize> for LevelSpec {
+    fn from(n: usize) -> Self {
+        LevelSpec::Vertices(n)
+    }
+}
+
 /// The level whose typical edge length is `size` on a surface of area `area`
 /// (`n = 2A / (√3 h²)`, rounded; `usize::MAX` for a zero size).
 pub fn level_for_feature_size(size: f64, area: f64) -> usize {
@@ -156,10 +163,15 @@ pub struct Filter {
 }
 
 impl Filter {
-    /// Zero every level above `n`.
-    pub fn lowpass(mut self, n: LevelSpec) -> Self {
+    /// The identity filter (every gain 1), to build on with the methods below.
+    pub fn new() -> Self {
+        Filter::default()
+    }
+
+    /// Zero every level above `n` (a vertex count, or a [`LevelSpec`]).
+    pub fn lowpass(mut self, n: impl Into<LevelSpec>) -> Self {
         self.bands.push(GainBand {
-            from: n,
+            from: n.into(),
             to: None,
             gain: 0.0,
         });
@@ -167,17 +179,23 @@ impl Filter {
     }
 
     /// Zero the levels in `(a, b]`.
-    pub fn stopband(self, a: LevelSpec, b: LevelSpec) -> Self {
+    pub fn stopband(self, a: impl Into<LevelSpec>, b: impl Into<LevelSpec>) -> Self {
         self.gain(a, b, 0.0)
     }
 
-    /// Multiply the levels in `(a, b]` by `g`.
-    pub fn gain(mut self, a: LevelSpec, b: LevelSpec, g: f64) -> Self {
+    /// Multiply the levels in `(a, b]` by `g` (`g > 1` enhances).
+    pub fn gain(mut self, a: impl Into<LevelSpec>, b: impl Into<LevelSpec>, g: f64) -> Self {
         self.bands.push(GainBand {
-            from: a,
-            to: Some(b),
+            from: a.into(),
+            to: Some(b.into()),
             gain: g,
         });
+        self
+    }
+
+    /// Scale only the normal component of the details.
+    pub fn normal_only(mut self) -> Self {
+        self.normal_only = true;
         self
     }
 

@@ -51,7 +51,7 @@ pub(crate) mod waves;
 pub use edit::{MoveHandle, falloff};
 pub(crate) use fuzz::fuzz_pyramid;
 pub use gains::{Filter, GainBand, GainParseError, LevelGains, LevelSpec};
-pub use pipeline::{PyramidOptions, ScanPyramid};
+pub use pipeline::{PyrFileError, PyramidOptions, ScanPyramid};
 pub use spectrum::{BandEnergy, Spectrum};
 
 use crate::pm::PmError;

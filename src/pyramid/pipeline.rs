@@ -3,21 +3,34 @@
 //! vertices and faces in the same order** (attributes untouched), so per-vertex data still
 //! lines up after filtering.
 
-use super::{Pyramid, PyramidError};
+use super::{MoveHandle, Pyramid, PyramidError, Spectrum};
+use crate::format::{self, BuildInfo, FormatError, PyrData, SizeReport};
+use crate::io::IoError;
 use crate::mesh::{Mesh, PolygonMesh, SourceMap};
 use crate::pm::{PmOptions, ProgressiveMesh};
-use crate::progress::Progress;
-use crate::relax::Relaxation;
+use crate::progress::{NoProgress, Progress};
+use crate::pyramid::Filter;
+use crate::relax::RelaxationSpec;
 use glam::DVec3;
+use std::ops::RangeInclusive;
+use std::path::{Path, PathBuf};
 
-/// Options for building a [`ScanPyramid`].
+/// How a [`ScanPyramid`] is built: what a `.pyr` file records, so that loading it rebuilds the
+/// very same pyramid.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PyramidOptions {
     /// How the progressive mesh is built (defaults: collapse as far as legal).
     pub pm: PmOptions,
+    /// The relaxation operator that predicts each level from the coarser one (default: Guskov's
+    /// second differences).
+    pub relaxation: RelaxationSpec,
 }
 
-/// A scan with its progressive mesh and detail pyramid.
+/// A scan with its progressive mesh and detail pyramid: the library's front door for
+/// filtering, editing and saving (see the [crate docs](crate)).
+///
+/// Every mesh it returns is the input mesh with new positions: the same vertices and faces in
+/// the same order, attributes untouched.
 pub struct ScanPyramid {
     /// The mesh as read.
     pub input: PolygonMesh,
@@ -29,13 +42,80 @@ pub struct ScanPyramid {
     pub pm: ProgressiveMesh,
     /// The pyramid of the input's positions.
     pub pyramid: Pyramid,
+    /// What it was built with.
+    pub options: PyramidOptions,
+}
+
+/// Why a `.pyr` file could not be saved or opened as a [`ScanPyramid`]. Errors of
+/// [`ScanPyramid::load`] and [`ScanPyramid::save`] name the file.
+#[derive(Debug, thiserror::Error)]
+pub enum PyrFileError {
+    /// Reading or writing the file failed.
+    #[error(transparent)]
+    Io(#[from] IoError),
+    /// The bytes are not a valid `.pyr` file, or the hierarchy cannot be encoded.
+    #[error("{}{error}", file_prefix(path))]
+    Format {
+        /// The file, when there is one.
+        path: Option<PathBuf>,
+        /// What is wrong.
+        error: FormatError,
+    },
+    /// The pyramid could not be rebuilt from the file's hierarchy.
+    #[error("{}{error}", file_prefix(path))]
+    Pyramid {
+        /// The file, when there is one.
+        path: Option<PathBuf>,
+        /// What is wrong.
+        error: PyramidError,
+    },
+}
+
+fn file_prefix(path: &Option<PathBuf>) -> String {
+    path.as_ref()
+        .map(|p| format!("{}: ", p.display()))
+        .unwrap_or_default()
+}
+
+impl PyrFileError {
+    fn in_file(self, file: &Path) -> PyrFileError {
+        match self {
+            PyrFileError::Format { error, .. } => PyrFileError::Format {
+                path: Some(file.to_path_buf()),
+                error,
+            },
+            PyrFileError::Pyramid { error, .. } => PyrFileError::Pyramid {
+                path: Some(file.to_path_buf()),
+                error,
+            },
+            io => io,
+        }
+    }
+}
+
+impl From<FormatError> for PyrFileError {
+    fn from(error: FormatError) -> Self {
+        PyrFileError::Format { path: None, error }
+    }
+}
+
+impl From<PyramidError> for PyrFileError {
+    fn from(error: PyramidError) -> Self {
+        PyrFileError::Pyramid { path: None, error }
+    }
 }
 
 impl ScanPyramid {
-    /// Builds everything; `progress` runs 0 → 0.5 for the PM and 0.5 → 1 for the analysis.
-    pub fn build(
+    /// The pyramid of `input` with the default options: the progressive mesh collapsed as far
+    /// as legal, details predicted with Guskov's second differences.
+    pub fn build(input: &PolygonMesh) -> Result<ScanPyramid, PyramidError> {
+        ScanPyramid::build_with(input.clone(), &PyramidOptions::default(), &NoProgress)
+    }
+
+    /// Builds everything with `options`; `progress` runs 0 → 0.5 for the PM and 0.5 → 1 for
+    /// the analysis.
+    pub fn build_with(
         input: PolygonMesh,
-        relaxation: &dyn Relaxation,
         options: &PyramidOptions,
         progress: &dyn Progress,
     ) -> Result<ScanPyramid, PyramidError> {
@@ -44,13 +124,86 @@ impl ScanPyramid {
             ProgressiveMesh::build(&built.mesh, &options.pm, &|x: f64| progress.update(0.5 * x))?;
         let source = built.source;
         drop(built.mesh);
-        let pyramid = Pyramid::analyze(&pm, relaxation, &|x: f64| progress.update(0.5 + 0.5 * x))?;
+        let relaxation = options.relaxation.operator();
+        let pyramid = Pyramid::analyze(&pm, relaxation.as_ref(), &|x: f64| {
+            progress.update(0.5 + 0.5 * x)
+        })?;
         Ok(ScanPyramid {
             input,
             source,
             pm,
             pyramid,
+            options: options.clone(),
         })
+    }
+
+    /// The levels, as vertex counts: from the base mesh's to the input's (repaired) vertices.
+    pub fn levels(&self) -> RangeInclusive<usize> {
+        self.pyramid.n_base_vertices()..=self.pyramid.n_vertices()
+    }
+
+    /// The input with `filter` applied to its details (unit gains give the input back to
+    /// rounding). Bands beyond the levels act on the levels they cover.
+    pub fn filter(&self, filter: &Filter) -> PolygonMesh {
+        let gains = filter.resolve(self.pyramid.surface_area());
+        self.output_mesh(&self.pyramid.synthesize(&gains))
+    }
+
+    /// A multiresolution edit: moves the vertices of level `level` by `handles` (each with a
+    /// smooth falloff over its radius), then resynthesises the finest level with `filter`'s
+    /// gains, so the details ride along in their local frames.
+    pub fn edit(
+        &self,
+        level: usize,
+        handles: &[MoveHandle],
+        filter: &Filter,
+    ) -> Result<PolygonMesh, PyramidError> {
+        let gains = filter.resolve(self.pyramid.surface_area());
+        let signal = self.pyramid.edit(level, handles, &gains)?;
+        Ok(self.output_mesh(&signal))
+    }
+
+    /// The detail energy per band of levels.
+    pub fn spectrum(&self) -> Spectrum {
+        self.pyramid.spectrum()
+    }
+
+    /// The `.pyr` file of this pyramid: its hierarchy with the exact input, and the options to
+    /// rebuild it (formats/pyr.md), with its size by section.
+    pub fn to_pyr_bytes(&self) -> Result<(Vec<u8>, SizeReport), FormatError> {
+        let info = BuildInfo {
+            pm_options: self.options.pm.clone(),
+            relaxation: self.options.relaxation,
+        };
+        format::encode(&self.input, &self.pm, &info)
+    }
+
+    /// Opens a `.pyr` file's bytes: the hierarchy as saved, and the pyramid recomputed
+    /// bit-identical to the one that was saved.
+    pub fn from_pyr_bytes(bytes: &[u8], progress: &dyn Progress) -> Result<Self, PyrFileError> {
+        let data: PyrData = format::decode(bytes)?;
+        Ok(data.into_scan(progress)?)
+    }
+
+    /// Saves [`Self::to_pyr_bytes`] to `path`, atomically (an existing file is replaced only
+    /// once the new one is complete).
+    pub fn save(&self, path: impl AsRef<Path>) -> Result<(), PyrFileError> {
+        let path = path.as_ref();
+        let (bytes, _) = self
+            .to_pyr_bytes()
+            .map_err(|e| PyrFileError::from(e).in_file(path))?;
+        crate::io::write_atomic(path, &bytes)?;
+        Ok(())
+    }
+
+    /// Opens the `.pyr` file at `path` ([`Self::from_pyr_bytes`]).
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, PyrFileError> {
+        let path = path.as_ref();
+        let bytes = std::fs::read(path).map_err(|error| IoError::Io {
+            path: path.to_path_buf(),
+            error,
+        })?;
+        Self::from_pyr_bytes(&bytes, &NoProgress).map_err(|e| e.in_file(path))
     }
 
     /// Maps a signal in PM order onto the input's vertices (split copies averaged, vertices
