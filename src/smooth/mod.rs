@@ -13,6 +13,8 @@
 //!
 //! Measure results with [`crate::metrics::error`] (E_v, E_n, Hausdorff).
 
+use crate::mesh::{Mesh, PolygonMesh};
+
 pub mod dual;
 pub mod fitting;
 pub mod kernel;
@@ -44,6 +46,9 @@ pub enum Boundary {
 /// Why smoothing could not run.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SmoothError {
+    /// The input cannot be turned into a half-edge mesh.
+    #[error(transparent)]
+    Build(#[from] crate::mesh::BuildError),
     /// A parameter is out of its range.
     #[error("{0}")]
     InvalidParameter(String),
@@ -58,4 +63,22 @@ pub enum SmoothError {
         /// What the solver reported.
         reason: String,
     },
+}
+
+/// [`denoise`] on a mesh as read from a file (repaired first, as every command does): the
+/// input with new positions, its vertices, faces and attributes unchanged. Vertices the repair
+/// dropped keep their positions. Progress is not reported; call [`denoise`] for that and for
+/// the statistics.
+pub fn denoise_mesh(
+    input: &PolygonMesh,
+    options: &DenoiseOptions,
+) -> Result<PolygonMesh, SmoothError> {
+    let built = Mesh::from_polygons(input)?;
+    let result = denoise(&built.mesh, options, &crate::progress::NoProgress)?;
+    Ok(PolygonMesh {
+        positions: built
+            .source
+            .to_input_positions(&result.positions, &input.positions),
+        ..input.clone()
+    })
 }

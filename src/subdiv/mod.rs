@@ -25,7 +25,7 @@ pub use cascadic::{LevelReport, subdivide_mcm};
 pub use loop_scheme::{loop_step, subdivide_loop};
 pub use refine::{Marking, Prolongation, Refined};
 
-use crate::mesh::Mesh;
+use crate::mesh::{Mesh, PolygonMesh};
 use crate::progress::Progress;
 use glam::DVec3;
 
@@ -173,6 +173,9 @@ impl Subdivision {
 /// Why a subdivision could not run.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SubdivError {
+    /// The input cannot be turned into a half-edge mesh.
+    #[error(transparent)]
+    Build(#[from] crate::mesh::BuildError),
     /// The input has no triangle.
     #[error("the mesh has no triangles to subdivide")]
     NoFaces,
@@ -302,6 +305,21 @@ pub fn subdivide(
         Scheme::Loop => subdivide_loop(mesh, options.levels, progress),
         Scheme::Mcm => subdivide_mcm(mesh, options, progress),
     }
+}
+
+/// [`subdivide`] on a mesh as read from a file (repaired first, as every command does): the
+/// subdivided triangle mesh. Progress is not reported; call [`subdivide`] for that and for the
+/// per-level statistics.
+pub fn subdivide_mesh(
+    input: &PolygonMesh,
+    options: &SubdivOptions,
+) -> Result<PolygonMesh, SubdivError> {
+    let built = Mesh::from_polygons(input)?;
+    let result = subdivide(&built.mesh, options, &crate::progress::NoProgress)?;
+    Ok(PolygonMesh::from_triangle_vec(
+        result.positions,
+        result.triangles,
+    ))
 }
 
 /// Faces beyond which refinement's `u32` element indices could overflow (a quadrisection
