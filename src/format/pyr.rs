@@ -5,12 +5,19 @@
 //! Details of the detail pyramid are *not* stored: the analysis is a deterministic function of
 //! the hierarchy, the original positions and the relaxation operator, so a loader recomputes
 //! them bit for bit ([`PyrData::into_scan`]).
+//!
+//! This module holds the types a file decodes to, the relaxation registry and [`encode`] and
+//! [`decode`], which assemble a file from its sections; each concern has a child module: the
+//! header and `META` (`meta`), the hierarchy (`hierarchy`, with `positions` and the `SPLT`
+//! blocks in `split_block`, decoded on another core by `decode_ahead`), and the user's mesh
+//! (`input_side`, `attributes`). `edit` prepares an edited scan for saving; `fuzz` holds the
+//! fuzz target's body.
 
 use super::FormatError;
 use super::container::{Container, REQUIRED, Section, write_container};
-use super::varint::{ByteReader, put_ivarint, put_uvarint};
+use super::varint::ByteReader;
 use crate::mesh::{Built, Mesh, PolygonMesh, ScalarType, SourceMap};
-use crate::pm::{FlatReplay, PmOptions, PmParts, ProgressiveMesh, canonical_sorted};
+use crate::pm::{PmOptions, PmParts, ProgressiveMesh};
 use crate::progress::Progress;
 use crate::pyramid::{Pyramid, PyramidError, ScanPyramid};
 use crate::relax::SecondDifference;
@@ -24,6 +31,8 @@ mod fuzz;
 mod hierarchy;
 mod input_side;
 mod meta;
+mod positions;
+mod split_block;
 
 pub use edit::with_positions;
 pub use fuzz::{fix_checksums, fuzz_read_pyr};
@@ -31,9 +40,14 @@ pub use hierarchy::read_level;
 
 use attributes::encode_attributes;
 use hierarchy::{
-    Progressive, exactly_f32, put_position, read_positions, read_progressive, wrap_once,
+    Progressive, encode_base, encode_isolated, encode_splits, read_isolated, read_progressive,
 };
-use input_side::{InputSide, built_faces, decode_input_side, encode_polygons};
+use input_side::{
+    InputSide, decode_input_side, encode_polygons, encode_vertex_order, finest_faces,
+    restore_input_positions,
+};
+use meta::{build_info, describe, encode_meta};
+use positions::exactly_f32;
 
 /// Major version written. 2.0 codes the split errors as varint deltas of their bit patterns
 /// (1.x stored them as raw f32); readers take majors 1 and 2 and refuse others.
@@ -292,200 +306,7 @@ fn internal(reason: &str) -> FormatError {
     corrupt(0, format!("cannot encode: {reason}"))
 }
 
-/// Encodes `input` with its hierarchy `pm` (built from `Mesh::from_polygons(input)`).
-pub fn encode(
-    input: &PolygonMesh,
-    pm: &ProgressiveMesh,
-    info: &BuildInfo,
-) -> Result<(Vec<u8>, SizeReport), FormatError> {
-    let positions = pm.original_positions();
-    let n_total = positions.len();
-    let n_base = pm.n_base_vertices();
-    let n_fin = pm.n_vertices();
-    if pm.pm_to_mesh().len() != n_total || input.positions.len() > n_total {
-        return Err(internal(
-            "the progressive mesh does not belong to this input",
-        ));
-    }
-    // The input positions are restored from the PM positions through the vertex order, so
-    // check now that this is exact.
-    for (i, &s) in pm.pm_to_mesh().iter().enumerate() {
-        if let Some(p) = input.positions.get(s as usize)
-            && p.to_array().map(f64::to_bits) != positions[i].to_array().map(f64::to_bits)
-        {
-            return Err(internal(
-                "the progressive mesh does not belong to this input",
-            ));
-        }
-    }
-    let f32 = positions.iter().all(|&p| exactly_f32(p));
-    let width = if f32 { 4 } else { 8 };
-    let mut sizes = SizeReport::default();
-
-    let (lo, hi) = positions.iter().fold(
-        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
-        |(lo, hi), &p| (lo.min(p), hi.max(p)),
-    );
-    let (lo, hi) = if n_total == 0 {
-        (DVec3::ZERO, DVec3::ZERO)
-    } else {
-        (lo, hi)
-    };
-    let o = &info.pm_options;
-    let meta = Meta {
-        n_input_vertices: input.positions.len() as u64,
-        n_input_faces: input.n_faces() as u64,
-        n_vertices: n_total as u64,
-        n_base: n_base as u64,
-        n_splits: pm.splits().len() as u64,
-        splits_per_block: SPLITS_PER_BLOCK,
-        position_bits: if f32 { 32 } else { 64 },
-        bbox_min: lo.to_array(),
-        bbox_max: hi.to_array(),
-        relaxation: info.relaxation,
-        target_vertices: o.target_vertices as u64,
-        target_faces: o.target_faces as u64,
-        max_error: o.max_error,
-        max_normal_angle_degrees: o.max_normal_angle_degrees,
-        min_quality: o.min_quality,
-        max_valence: o.max_valence as u64,
-        boundary_weight: o.boundary_weight,
-    };
-    let meta_bytes = bincode::serde::encode_to_vec(&meta, bincode::config::standard())
-        .map_err(|e| internal(&e.to_string()))?;
-
-    // BASE: positions, then triangles as zig-zag deltas.
-    let base_tris = pm.base_triangles();
-    let mut base = Vec::new();
-    for &p in &positions[..n_base] {
-        put_position(&mut base, p, f32);
-    }
-    let before = base.len();
-    put_uvarint(&mut base, base_tris.len() as u64);
-    let mut prev = 0i64;
-    for t in &base_tris {
-        put_ivarint(&mut base, i64::from(t[0]) - prev);
-        put_ivarint(&mut base, i64::from(t[1]) - i64::from(t[0]));
-        put_ivarint(&mut base, i64::from(t[2]) - i64::from(t[0]));
-        prev = i64::from(t[0]);
-    }
-    sizes.pm_connectivity += base.len() - before;
-    sizes.positions += before;
-
-    // SPLT: blocks of split records, replayed on the base mesh to code wings as ring indices.
-    // The replay is sequential and most of a save; the sections after it do not depend on it,
-    // so they are encoded on another core meanwhile.
-    let encode_splits = || -> Result<(Vec<u8>, SizeReport), FormatError> {
-        let mut sizes = SizeReport::default();
-        let mut replay = FlatReplay::new(&positions[..n_base], &base_tris, pm.splits().len())
-            .map_err(|e| internal(&e.to_string()))?;
-        let mut splt = Vec::with_capacity(pm.splits().len() * (4 + 4 + 3 * width) + 64);
-        let mut payload = Vec::new();
-        for (b, chunk) in pm.splits().chunks(SPLITS_PER_BLOCK as usize).enumerate() {
-            let first = n_base + b * SPLITS_PER_BLOCK as usize;
-            payload.clear();
-            payload.reserve(chunk.len() * (4 + 4 + 3 * width));
-            for (k, s) in chunk.iter().enumerate() {
-                replay.prefetch_upcoming(k, |j| chunk.get(j).map(|t| t.survivor));
-                put_uvarint(&mut payload, u64::from(s.vertex - 1 - s.survivor));
-                let (il, ir) = replay
-                    .wing_indices(s)
-                    .map_err(|e| internal(&e.to_string()))?;
-                let valence = replay.listed_valence();
-                put_uvarint(&mut payload, il.map_or(0, |i| i as u64 + 1));
-                let rc = match (il, ir) {
-                    (_, None) => 0,
-                    (Some(l), Some(r)) => wrap_once((r + valence - l) as u64, valence as u64) + 1,
-                    (None, Some(r)) => r as u64 + 1,
-                };
-                put_uvarint(&mut payload, rc);
-                replay
-                    .apply_indexed(s.vertex, s.survivor, il, ir)
-                    .map_err(|e| internal(&e.to_string()))?;
-            }
-            sizes.pm_connectivity += payload.len() + 12;
-            // Errors as deltas of their bit patterns: successive splits have similar errors,
-            // and positive floats order like their bits, so the deltas are short (about 2
-            // bytes on scans, against 4 raw) and the coding is exact for any value.
-            let before = payload.len();
-            let mut prev = 0u32;
-            for e in &pm.split_errors()[first - n_base..first - n_base + chunk.len()] {
-                let bits = e.to_bits();
-                put_ivarint(&mut payload, i64::from(bits) - i64::from(prev));
-                prev = bits;
-            }
-            sizes.split_errors += payload.len() - before;
-            for &p in &positions[first..first + chunk.len()] {
-                put_position(&mut payload, p, f32);
-            }
-            sizes.positions += chunk.len() * 3 * width;
-            splt.extend_from_slice(&(chunk.len() as u32).to_le_bytes());
-            splt.extend_from_slice(&(payload.len() as u32).to_le_bytes());
-            splt.extend_from_slice(&crc32fast::hash(&payload).to_le_bytes());
-            splt.extend_from_slice(&payload);
-        }
-        Ok((splt, sizes))
-    };
-    let encode_rest = || {
-        let mut isol = Vec::new();
-        for &p in &positions[n_fin..] {
-            put_position(&mut isol, p, f32);
-        }
-        let mut ordr = Vec::with_capacity(n_total * 3);
-        for &s in pm.pm_to_mesh() {
-            put_uvarint(&mut ordr, u64::from(s));
-        }
-        (isol, ordr, encode_polygons(input), encode_attributes(input))
-    };
-    let (splits, (isol, ordr, poly, attr)) = rayon::join(encode_splits, encode_rest);
-    let (splt, split_sizes) = splits?;
-    sizes.pm_connectivity += split_sizes.pm_connectivity;
-    sizes.positions += split_sizes.positions + isol.len();
-    sizes.split_errors += split_sizes.split_errors;
-    sizes.trailing = ordr.len() + poly.len() + attr.len();
-
-    let sections = [
-        Section {
-            tag: META,
-            flags: REQUIRED,
-            bytes: meta_bytes,
-        },
-        Section {
-            tag: BASE,
-            flags: REQUIRED,
-            bytes: base,
-        },
-        Section {
-            tag: SPLT,
-            flags: REQUIRED,
-            bytes: splt,
-        },
-        Section {
-            tag: ISOL,
-            flags: REQUIRED,
-            bytes: isol,
-        },
-        Section {
-            tag: ORDR,
-            flags: REQUIRED,
-            bytes: ordr,
-        },
-        Section {
-            tag: POLY,
-            flags: REQUIRED,
-            bytes: poly,
-        },
-        Section {
-            tag: ATTR,
-            flags: REQUIRED,
-            bytes: attr,
-        },
-    ];
-    let bytes = write_container(MAJOR, MINOR, &sections);
-    sizes.total = bytes.len();
-    Ok((bytes, sizes))
-}
-
+/// The section `tag` of a file being read, which must be there.
 fn required<'a>(c: &Container<'a>, tag: [u8; 4]) -> Result<ByteReader<'a>, FormatError> {
     c.section(tag)?.ok_or_else(|| {
         corrupt(
@@ -493,6 +314,72 @@ fn required<'a>(c: &Container<'a>, tag: [u8; 4]) -> Result<ByteReader<'a>, Forma
             format!("section {} is missing", super::container::tag_name(tag)),
         )
     })
+}
+
+/// Encodes `input` with its hierarchy `pm` (built from `Mesh::from_polygons(input)`).
+pub fn encode(
+    input: &PolygonMesh,
+    pm: &ProgressiveMesh,
+    info: &BuildInfo,
+) -> Result<(Vec<u8>, SizeReport), FormatError> {
+    check_pm_belongs(input, pm)?;
+    let f32 = pm.original_positions().iter().all(|&p| exactly_f32(p));
+    let meta = encode_meta(&describe(input, pm, info, f32))?;
+    let base_tris = pm.base_triangles();
+    let (base, mut sizes) = encode_base(pm, &base_tris, f32);
+    // The split replay is sequential and most of a save; the sections after it do not depend
+    // on it, so they are encoded on another core meanwhile.
+    let (splits, (isol, ordr, poly, attr)) = rayon::join(
+        || encode_splits(pm, &base_tris, f32),
+        || {
+            (
+                encode_isolated(pm, f32),
+                encode_vertex_order(pm),
+                encode_polygons(input),
+                encode_attributes(input),
+            )
+        },
+    );
+    let (splt, split_sizes) = splits?;
+    sizes.pm_connectivity += split_sizes.pm_connectivity;
+    sizes.positions += split_sizes.positions + isol.len();
+    sizes.split_errors += split_sizes.split_errors;
+    sizes.trailing = ordr.len() + poly.len() + attr.len();
+    let sections = [
+        (META, meta),
+        (BASE, base),
+        (SPLT, splt),
+        (ISOL, isol),
+        (ORDR, ordr),
+        (POLY, poly),
+        (ATTR, attr),
+    ]
+    .map(|(tag, bytes)| Section {
+        tag,
+        flags: REQUIRED,
+        bytes,
+    });
+    let bytes = write_container(MAJOR, MINOR, &sections);
+    sizes.total = bytes.len();
+    Ok((bytes, sizes))
+}
+
+/// The input positions are restored from the PM positions through the vertex order, so check
+/// now that this is exact.
+fn check_pm_belongs(input: &PolygonMesh, pm: &ProgressiveMesh) -> Result<(), FormatError> {
+    let positions = pm.original_positions();
+    let foreign = || internal("the progressive mesh does not belong to this input");
+    if pm.pm_to_mesh().len() != positions.len() || input.positions.len() > positions.len() {
+        return Err(foreign());
+    }
+    for (i, &s) in pm.pm_to_mesh().iter().enumerate() {
+        if let Some(p) = input.positions.get(s as usize)
+            && p.to_array().map(f64::to_bits) != positions[i].to_array().map(f64::to_bits)
+        {
+            return Err(foreign());
+        }
+    }
+    Ok(())
 }
 
 /// Decodes a complete file: the hierarchy (validated), the user's mesh, and the build options.
@@ -504,16 +391,7 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
     // ahead of the replay). Errors come in the order a sequential reader meets them: the
     // progressive part, ISOL, then the input's side.
     let (c, p, input_side) = read_progressive(bytes, None, decode_input_side)?;
-    if p.truncated {
-        return Err(FormatError::Truncated {
-            offset: bytes.len() as u64,
-            what: format!(
-                "the file (it holds levels up to {} of {})",
-                p.meta.n_base as usize + p.splits.len(),
-                p.meta.n_base + p.meta.n_splits
-            ),
-        });
-    }
+    check_complete(&p, bytes.len())?;
     let Progressive {
         meta,
         mut positions,
@@ -522,14 +400,7 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
         replay,
         ..
     } = p;
-    let f32 = meta.position_bits == 32;
-    let n_total = meta.n_vertices as usize;
-    let n_fin = positions.len();
-    let mut r = required(&c, ISOL)?;
-    read_positions(&mut r, n_total - n_fin, f32, &mut positions)?;
-    if !r.is_empty() {
-        return Err(corrupt(r.offset(), "trailing bytes in ISOL"));
-    }
+    read_isolated(&c, &meta, &mut positions)?;
     let InputSide {
         pm_to_mesh,
         mesh_to_pm,
@@ -537,24 +408,8 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
         mut input,
         clean_faces,
     } = input_side?;
-    // Vertex copies the builder made (order entries past the input's vertices) have no row.
-    for (i, &s) in pm_to_mesh.iter().enumerate() {
-        if let Some(p) = input.positions.get_mut(s as usize) {
-            *p = positions[i];
-        }
-    }
-    // The finest faces, checked to be exactly what the splits rebuild: read off a clean
-    // triangle input, else from the builder's repaired mesh.
-    let (faces, built) = match clean_faces.filter(|c| replay.has_faces(&c.buckets)) {
-        Some(clean) => (clean.faces, None),
-        None => {
-            let (faces, built) = built_faces(&input, &mesh_to_pm, n_total, &positions)?;
-            if canonical_sorted(&faces, n_total) != replay.canonical_faces() {
-                return Err(corrupt(0, "the splits do not rebuild the finest faces"));
-            }
-            (faces, Some(built))
-        }
-    };
+    restore_input_positions(&mut input, &pm_to_mesh, &positions);
+    let (faces, built) = finest_faces(&input, clean_faces, &replay, &mesh_to_pm, &positions)?;
     let pm = ProgressiveMesh::from_checked_parts(
         PmParts {
             n_base: meta.n_base as usize,
@@ -568,24 +423,27 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
         permutation.then_some(mesh_to_pm),
     )
     .map_err(|e| corrupt(0, e.to_string()))?;
-    let info = BuildInfo {
-        pm_options: PmOptions {
-            target_vertices: meta.target_vertices as usize,
-            target_faces: meta.target_faces as usize,
-            max_error: meta.max_error,
-            max_normal_angle_degrees: meta.max_normal_angle_degrees,
-            min_quality: meta.min_quality,
-            max_valence: meta.max_valence as usize,
-            boundary_weight: meta.boundary_weight,
-        },
-        relaxation: meta.relaxation,
-    };
     Ok(PyrData {
         input,
         built,
         pm,
-        info,
+        info: build_info(&meta),
     })
+}
+
+/// A truncated file holds a valid hierarchy up to some level, but not the whole file.
+fn check_complete(p: &Progressive, file_len: usize) -> Result<(), FormatError> {
+    if p.truncated {
+        return Err(FormatError::Truncated {
+            offset: file_len as u64,
+            what: format!(
+                "the file (it holds levels up to {} of {})",
+                p.meta.n_base as usize + p.splits.len(),
+                p.meta.n_base + p.meta.n_splits
+            ),
+        });
+    }
+    Ok(())
 }
 
 /// True when `bytes` start with the `.pyr` signature.

@@ -1,68 +1,99 @@
-//! The hierarchy codec: positions (f32 when exact, else f64), the split records' wing coding,
-//! and the progressive reader that replays the base mesh (`BASE`) through the split blocks
-//! (`SPLT`), shared by the full decoder and the level reader.
+//! The hierarchy codec: the base mesh (`BASE`), the split blocks (`SPLT`) and the vertices
+//! without faces (`ISOL`), written from a progressive mesh; and the progressive reader that
+//! replays the base mesh through the split blocks, shared by the full decoder and the level
+//! reader.
 
 use crate::format::FormatError;
 use crate::format::container::Container;
-use crate::format::varint::ByteReader;
-use crate::pm::{FlatReplay, VertexSplit};
+use crate::format::varint::{ByteReader, put_ivarint, put_uvarint};
+use crate::pm::{FlatReplay, ProgressiveMesh, VertexSplit};
 use glam::DVec3;
 
 use super::decode_ahead::SplitBlocks;
 use super::meta::{check_version, read_meta};
-use super::{BASE, LevelMesh, Meta, corrupt, required};
+use super::positions::{put_position, read_positions};
+use super::split_block::{put_block, put_split_errors, put_split_records, wing_indices};
+use super::{
+    BASE, ISOL, LevelMesh, Meta, SPLITS_PER_BLOCK, SizeReport, corrupt, internal, required,
+};
 
-pub(super) fn put_position(out: &mut Vec<u8>, p: DVec3, f32: bool) {
-    for c in p.to_array() {
-        if f32 {
-            out.extend_from_slice(&(c as f32).to_le_bytes());
-        } else {
-            out.extend_from_slice(&c.to_le_bytes());
-        }
-    }
-}
+// ---------------------------------------------------------------------------------------------
+// Writing
 
-pub(super) fn exactly_f32(p: DVec3) -> bool {
-    p.to_array()
-        .iter()
-        .all(|&c| ((c as f32) as f64).to_bits() == c.to_bits())
-}
-
-fn read_position(r: &mut ByteReader<'_>, f32: bool) -> Result<DVec3, FormatError> {
-    let mut c = [0f64; 3];
-    for x in &mut c {
-        *x = if f32 {
-            f64::from(f32::from_le_bytes(r.array("position")?))
-        } else {
-            r.f64("position")?
-        };
-    }
-    let p = DVec3::from_array(c);
-    if !p.is_finite() {
-        return Err(corrupt(r.offset(), "non-finite position"));
-    }
-    Ok(p)
-}
-
-pub(super) fn read_positions(
-    r: &mut ByteReader<'_>,
-    n: usize,
+/// `BASE`: the base positions, then the base triangles as zig-zag deltas; with its sizes.
+pub(super) fn encode_base(
+    pm: &ProgressiveMesh,
+    base_tris: &[[u32; 3]],
     f32: bool,
-    out: &mut Vec<DVec3>,
-) -> Result<(), FormatError> {
-    let width = if f32 { 12 } else { 24 };
-    if n.saturating_mul(width) > r.remaining() {
-        return Err(FormatError::Truncated {
-            offset: r.offset(),
-            what: "positions".into(),
-        });
+) -> (Vec<u8>, SizeReport) {
+    let mut base = Vec::new();
+    for &p in &pm.original_positions()[..pm.n_base_vertices()] {
+        put_position(&mut base, p, f32);
     }
-    out.reserve(n);
-    for _ in 0..n {
-        out.push(read_position(r, f32)?);
+    let before = base.len();
+    put_uvarint(&mut base, base_tris.len() as u64);
+    let mut prev = 0i64;
+    for t in base_tris {
+        put_ivarint(&mut base, i64::from(t[0]) - prev);
+        put_ivarint(&mut base, i64::from(t[1]) - i64::from(t[0]));
+        put_ivarint(&mut base, i64::from(t[2]) - i64::from(t[0]));
+        prev = i64::from(t[0]);
     }
-    Ok(())
+    let sizes = SizeReport {
+        pm_connectivity: base.len() - before,
+        positions: before,
+        ..SizeReport::default()
+    };
+    (base, sizes)
 }
+
+/// `SPLT`: blocks of split records, replayed on the base mesh to code wings as ring indices;
+/// with its sizes.
+pub(super) fn encode_splits(
+    pm: &ProgressiveMesh,
+    base_tris: &[[u32; 3]],
+    f32: bool,
+) -> Result<(Vec<u8>, SizeReport), FormatError> {
+    let positions = pm.original_positions();
+    let n_base = pm.n_base_vertices();
+    let width = if f32 { 4 } else { 8 };
+    let mut sizes = SizeReport::default();
+    let mut replay = FlatReplay::new(&positions[..n_base], base_tris, pm.splits().len())
+        .map_err(|e| internal(&e.to_string()))?;
+    let mut splt = Vec::with_capacity(pm.splits().len() * (4 + 4 + 3 * width) + 64);
+    let mut payload = Vec::new();
+    for (b, chunk) in pm.splits().chunks(SPLITS_PER_BLOCK as usize).enumerate() {
+        let first = n_base + b * SPLITS_PER_BLOCK as usize;
+        payload.clear();
+        payload.reserve(chunk.len() * (4 + 4 + 3 * width));
+        put_split_records(&mut payload, &mut replay, chunk)?;
+        sizes.pm_connectivity += payload.len() + 12;
+        let before = payload.len();
+        put_split_errors(
+            &mut payload,
+            &pm.split_errors()[first - n_base..first - n_base + chunk.len()],
+        );
+        sizes.split_errors += payload.len() - before;
+        for &p in &positions[first..first + chunk.len()] {
+            put_position(&mut payload, p, f32);
+        }
+        sizes.positions += chunk.len() * 3 * width;
+        put_block(&mut splt, chunk.len(), &payload);
+    }
+    Ok((splt, sizes))
+}
+
+/// `ISOL`: the positions of the vertices after the finest level (no face uses them).
+pub(super) fn encode_isolated(pm: &ProgressiveMesh, f32: bool) -> Vec<u8> {
+    let mut isol = Vec::new();
+    for &p in &pm.original_positions()[pm.n_vertices()..] {
+        put_position(&mut isol, p, f32);
+    }
+    isol
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading
 
 /// The parsed header and the progressive part, shared by the full and the level readers.
 pub(super) struct Progressive {
@@ -73,14 +104,6 @@ pub(super) struct Progressive {
     pub(super) splits: Vec<VertexSplit>,
     pub(super) positions: Vec<DVec3>,
     pub(super) errors: Vec<f32>,
-}
-
-/// `x mod n` for `x < 2n`: the right wing's code is `(r − l) mod valence` and decodes as
-/// `(l + code) mod valence`, both with `l, r < valence`, so a compare and subtract does
-/// instead of a division per split.
-#[inline]
-pub(super) fn wrap_once(x: u64, n: u64) -> u64 {
-    if x >= n { x - n } else { x }
 }
 
 /// The progressive part of `bytes` up to `max_level` (default: all), with `also` run on
@@ -112,13 +135,57 @@ fn replay_progressive(
     blocks: &SplitBlocks<'_>,
     file_len: usize,
 ) -> Result<Progressive, FormatError> {
-    let f32 = meta.position_bits == 32;
     let n_base = meta.n_base as usize;
-    let n_splits = meta.n_splits as usize;
+    // Every split takes at least 3 record bytes and a position, so the file size caps the
+    // room reserved for the replay.
+    let hint = (meta.n_splits as usize).min(file_len / 15);
+    let (mut positions, mut replay) = decode_base(c, meta, hint)?;
+    let want = blocks.wanted();
+    let mut splits: Vec<VertexSplit> = Vec::with_capacity(want.min(hint));
+    let mut errors: Vec<f32> = Vec::with_capacity(want.min(hint));
+    positions.reserve(want.min(hint));
+    for k in 0..blocks.len() {
+        let block = blocks.take(k)?;
+        positions.extend_from_slice(&block.positions);
+        replay_block(&mut replay, &block.records, n_base, &mut splits)?;
+        errors.extend_from_slice(&block.errors);
+        if let Some(e) = block.trailing {
+            return Err(e);
+        }
+    }
+    blocks.end()?;
+    Ok(Progressive {
+        meta: meta.clone(),
+        truncated: c.is_truncated(),
+        replay,
+        splits,
+        positions,
+        errors,
+    })
+}
 
+/// `BASE`: the base positions, and the replay started on the base triangles with room for
+/// `hint` splits.
+fn decode_base(
+    c: &Container<'_>,
+    meta: &Meta,
+    hint: usize,
+) -> Result<(Vec<DVec3>, FlatReplay), FormatError> {
+    let n_base = meta.n_base as usize;
     let mut r = required(c, BASE)?;
     let mut positions = Vec::new();
-    read_positions(&mut r, n_base, f32, &mut positions)?;
+    read_positions(&mut r, n_base, meta.position_bits == 32, &mut positions)?;
+    let base_faces = read_base_faces(&mut r, n_base)?;
+    if !r.is_empty() {
+        return Err(corrupt(r.offset(), "trailing bytes in BASE"));
+    }
+    let replay = FlatReplay::new(&positions, &base_faces, hint)
+        .map_err(|e| corrupt(r.offset(), e.to_string()))?;
+    Ok((positions, replay))
+}
+
+/// The base triangles, coded as [`encode_base`] writes them.
+fn read_base_faces(r: &mut ByteReader<'_>, n_base: usize) -> Result<Vec<[u32; 3]>, FormatError> {
     let n_faces = r.count(r.remaining() as u64 / 3, "base face count")?;
     let mut base_faces = Vec::with_capacity(n_faces);
     let mut prev = 0i64;
@@ -134,61 +201,46 @@ fn replay_progressive(
         base_faces.push(t);
         prev = a;
     }
-    if !r.is_empty() {
-        return Err(corrupt(r.offset(), "trailing bytes in BASE"));
-    }
-    // Every split takes at least 3 record bytes and a position, so the file size caps the
-    // room reserved for the replay.
-    let hint = n_splits.min(file_len / 15);
-    let mut replay = FlatReplay::new(&positions, &base_faces, hint)
-        .map_err(|e| corrupt(r.offset(), e.to_string()))?;
+    Ok(base_faces)
+}
 
-    let want: usize = blocks.blocks.iter().map(|b| b.used).sum();
-    let mut splits: Vec<VertexSplit> = Vec::with_capacity(want.min(hint));
-    let mut errors: Vec<f32> = Vec::with_capacity(want.min(hint));
-    positions.reserve(want.min(hint));
-    for k in 0..blocks.blocks.len() {
-        let block = blocks.take(k)?;
-        positions.extend_from_slice(&block.positions);
-        let decoded = &block.records;
-        for (k, &(survivor, lc, rc, at)) in decoded.iter().enumerate() {
-            replay.prefetch_upcoming(k, |j| decoded.get(j).map(|r| r.0));
-            let vertex = (n_base + splits.len()) as u32;
-            let deg = replay
-                .valence(survivor)
-                .map_err(|e| corrupt(at, e.to_string()))? as u64;
-            if lc > deg || rc > deg {
-                return Err(corrupt(at, "wing index past the survivor's ring"));
-            }
-            let il = lc.checked_sub(1);
-            // l, r < deg (checked above).
-            let ir = rc
-                .checked_sub(1)
-                .map(|r| il.map_or(r, |l| wrap_once(l + r, deg)));
-            let s = replay
-                .apply_indexed(
-                    vertex,
-                    survivor,
-                    il.map(|i| i as usize),
-                    ir.map(|i| i as usize),
-                )
-                .map_err(|e| corrupt(at, e.to_string()))?;
-            splits.push(s);
-        }
-        errors.extend_from_slice(&block.errors);
-        if let Some(e) = block.trailing {
-            return Err(e);
-        }
+/// Applies a block's decoded records to `replay`, appending the splits they make.
+fn replay_block(
+    replay: &mut FlatReplay,
+    records: &[(u32, u64, u64, u64)],
+    n_base: usize,
+    splits: &mut Vec<VertexSplit>,
+) -> Result<(), FormatError> {
+    for (k, &(survivor, lc, rc, at)) in records.iter().enumerate() {
+        replay.prefetch_upcoming(k, |j| records.get(j).map(|r| r.0));
+        let vertex = (n_base + splits.len()) as u32;
+        let deg = replay
+            .valence(survivor)
+            .map_err(|e| corrupt(at, e.to_string()))? as u64;
+        let (il, ir) = wing_indices(lc, rc, deg)
+            .ok_or_else(|| corrupt(at, "wing index past the survivor's ring"))?;
+        let s = replay
+            .apply_indexed(vertex, survivor, il, ir)
+            .map_err(|e| corrupt(at, e.to_string()))?;
+        splits.push(s);
     }
-    blocks.end.clone()?;
-    Ok(Progressive {
-        meta: meta.clone(),
-        truncated: c.is_truncated(),
-        replay,
-        splits,
-        positions,
-        errors,
-    })
+    Ok(())
+}
+
+/// `ISOL`: appends the positions of the vertices without faces to `positions` (which holds
+/// those of the finest level), making up the file's `n_vertices`.
+pub(super) fn read_isolated(
+    c: &Container<'_>,
+    meta: &Meta,
+    positions: &mut Vec<DVec3>,
+) -> Result<(), FormatError> {
+    let n_missing = meta.n_vertices as usize - positions.len();
+    let mut r = required(c, ISOL)?;
+    read_positions(&mut r, n_missing, meta.position_bits == 32, positions)?;
+    if !r.is_empty() {
+        return Err(corrupt(r.offset(), "trailing bytes in ISOL"));
+    }
+    Ok(())
 }
 
 /// Reads level `level` (default: the finest in the file) from the progressive part only. A

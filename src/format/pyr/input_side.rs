@@ -6,13 +6,22 @@ use crate::format::FormatError;
 use crate::format::container::Container;
 use crate::format::varint::{ByteReader, put_ivarint, put_uvarint};
 use crate::mesh::{Built, Mesh, PolygonMesh, SlotIndex};
-use crate::pm::FaceBuckets;
+use crate::pm::{FaceBuckets, FlatReplay, ProgressiveMesh, canonical_sorted};
 use glam::DVec3;
 
 use super::attributes::decode_attributes;
 use super::{ATTR, Meta, ORDR, POLY, corrupt, required};
 
-/// Encodes the polygons: per face its degree, then its indices, each as a zig-zag delta from
+/// `ORDR`: the input vertex of each PM vertex.
+pub(super) fn encode_vertex_order(pm: &ProgressiveMesh) -> Vec<u8> {
+    let mut ordr = Vec::with_capacity(pm.original_positions().len() * 3);
+    for &s in pm.pm_to_mesh() {
+        put_uvarint(&mut ordr, u64::from(s));
+    }
+    ordr
+}
+
+/// `POLY`: the polygons, per face its degree, then its indices, each as a zig-zag delta from
 /// the previous index in the stream (neighbouring faces share vertices, so deltas are small).
 pub(super) fn encode_polygons(m: &PolygonMesh) -> Vec<u8> {
     let mut out = Vec::with_capacity(m.face_indices.len() * 2 + m.n_faces());
@@ -85,46 +94,19 @@ pub(super) struct CleanFaces {
     pub(super) buckets: FaceBuckets,
 }
 
+/// The input's side of the file (see [`InputSide`]), decoded and checked.
 pub(super) fn decode_input_side(c: &Container<'_>, meta: &Meta) -> Result<InputSide, FormatError> {
     let n_total = meta.n_vertices as usize;
-    let mut r = required(c, ORDR)?;
-    if n_total > r.remaining() {
-        return Err(FormatError::Truncated {
-            offset: r.offset(),
-            what: "vertex order".into(),
-        });
-    }
-    let mut pm_to_mesh = Vec::with_capacity(n_total);
-    for _ in 0..n_total {
-        pm_to_mesh.push(r.count(n_total as u64, "vertex order")? as u32);
-    }
-    if !r.is_empty() {
-        return Err(corrupt(r.offset(), "trailing bytes in ORDR"));
-    }
+    let pm_to_mesh = read_vertex_order(c, n_total)?;
     let n_input = meta.n_input_vertices as usize;
+    check_order_covers(&pm_to_mesh, n_input)?;
     let mut input = PolygonMesh::new();
     input.positions = vec![DVec3::ZERO; n_input];
-    let mut seen = vec![false; n_input];
-    for &s in &pm_to_mesh {
-        if let Some(x) = seen.get_mut(s as usize) {
-            *x = true;
-        }
-    }
-    if seen.iter().any(|&x| !x) {
-        return Err(corrupt(0, "vertex order does not cover the input vertices"));
-    }
     let mut r = required(c, POLY)?;
     decode_polygons(&mut r, meta.n_input_faces, n_input, &mut input)?;
     let mut r = required(c, ATTR)?;
     decode_attributes(&mut r, &mut input)?;
-    let mut mesh_to_pm = vec![u32::MAX; n_total];
-    let mut permutation = true;
-    for (i, &s) in pm_to_mesh.iter().enumerate() {
-        if let Some(m) = mesh_to_pm.get_mut(s as usize) {
-            permutation &= *m == u32::MAX;
-            *m = i as u32;
-        }
-    }
+    let (mesh_to_pm, permutation) = invert_order(&pm_to_mesh, n_total);
     // The positions are placeholders (all finite, as the stored ones are: `read_position`
     // refuses others), so this checks the polygons and attributes here, off the replay's
     // critical path.
@@ -139,6 +121,87 @@ pub(super) fn decode_input_side(c: &Container<'_>, meta: &Meta) -> Result<InputS
         input,
         clean_faces,
     })
+}
+
+/// `ORDR`: the input vertex of each of the `n_total` PM vertices.
+fn read_vertex_order(c: &Container<'_>, n_total: usize) -> Result<Vec<u32>, FormatError> {
+    let mut r = required(c, ORDR)?;
+    if n_total > r.remaining() {
+        return Err(FormatError::Truncated {
+            offset: r.offset(),
+            what: "vertex order".into(),
+        });
+    }
+    let mut pm_to_mesh = Vec::with_capacity(n_total);
+    for _ in 0..n_total {
+        pm_to_mesh.push(r.count(n_total as u64, "vertex order")? as u32);
+    }
+    if !r.is_empty() {
+        return Err(corrupt(r.offset(), "trailing bytes in ORDR"));
+    }
+    Ok(pm_to_mesh)
+}
+
+/// Every input vertex must come from some PM vertex, or its position would be lost.
+fn check_order_covers(pm_to_mesh: &[u32], n_input: usize) -> Result<(), FormatError> {
+    let mut seen = vec![false; n_input];
+    for &s in pm_to_mesh {
+        if let Some(x) = seen.get_mut(s as usize) {
+            *x = true;
+        }
+    }
+    if seen.iter().any(|&x| !x) {
+        return Err(corrupt(0, "vertex order does not cover the input vertices"));
+    }
+    Ok(())
+}
+
+/// The inverse of `pm_to_mesh` over `n_total` mesh vertices, and whether it is exact (see
+/// [`InputSide::mesh_to_pm`]).
+fn invert_order(pm_to_mesh: &[u32], n_total: usize) -> (Vec<u32>, bool) {
+    let mut mesh_to_pm = vec![u32::MAX; n_total];
+    let mut permutation = true;
+    for (i, &s) in pm_to_mesh.iter().enumerate() {
+        if let Some(m) = mesh_to_pm.get_mut(s as usize) {
+            permutation &= *m == u32::MAX;
+            *m = i as u32;
+        }
+    }
+    (mesh_to_pm, permutation)
+}
+
+/// Gives the input's vertices their positions from the hierarchy's `positions`.
+pub(super) fn restore_input_positions(
+    input: &mut PolygonMesh,
+    pm_to_mesh: &[u32],
+    positions: &[DVec3],
+) {
+    // Vertex copies the builder made (order entries past the input's vertices) have no row.
+    for (i, &s) in pm_to_mesh.iter().enumerate() {
+        if let Some(p) = input.positions.get_mut(s as usize) {
+            *p = positions[i];
+        }
+    }
+}
+
+/// The finest faces in PM indices, checked to be exactly what the splits rebuild in `replay`:
+/// read off a clean triangle input, else from the builder's repaired mesh (returned too).
+pub(super) fn finest_faces(
+    input: &PolygonMesh,
+    clean_faces: Option<CleanFaces>,
+    replay: &FlatReplay,
+    mesh_to_pm: &[u32],
+    positions: &[DVec3],
+) -> Result<(Vec<[u32; 3]>, Option<Built>), FormatError> {
+    if let Some(clean) = clean_faces.filter(|c| replay.has_faces(&c.buckets)) {
+        return Ok((clean.faces, None));
+    }
+    let n_total = positions.len();
+    let (faces, built) = built_faces(input, mesh_to_pm, n_total, positions)?;
+    if canonical_sorted(&faces, n_total) != replay.canonical_faces() {
+        return Err(corrupt(0, "the splits do not rebuild the finest faces"));
+    }
+    Ok((faces, Some(built)))
 }
 
 /// The finest faces in PM indices read straight off the input, when the input is a clean
@@ -171,7 +234,7 @@ fn clean_triangle_faces(
 
 /// The finest faces in PM indices from the repaired half-edge mesh of `input` (any polygons,
 /// any repairs), checking that the builder's vertices are the stored ones.
-pub(super) fn built_faces(
+fn built_faces(
     input: &PolygonMesh,
     mesh_to_pm: &[u32],
     n_total: usize,

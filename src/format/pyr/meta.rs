@@ -1,13 +1,73 @@
-//! The checks on a file's header (version, required sections) and the `META` section, the
-//! bincode-coded summary (counts, position width, build options) every reader starts from.
+//! The `META` section, the bincode-coded summary (counts, position width, bounding box, build
+//! options) every reader starts from, and the checks on a file's header (version, required
+//! sections) that come before it.
 
 use crate::format::FormatError;
 use crate::format::container::Container;
+use crate::mesh::PolygonMesh;
+use crate::pm::{PmOptions, ProgressiveMesh};
+use glam::DVec3;
 
-use super::{KNOWN, MAJOR, META, MINOR, Meta, OLDEST_MAJOR, corrupt, required};
+use super::{
+    BuildInfo, KNOWN, MAJOR, META, MINOR, Meta, OLDEST_MAJOR, SPLITS_PER_BLOCK, corrupt, internal,
+    required,
+};
 
 /// Largest `META` section a reader decodes.
 const MAX_META: usize = 4096;
+
+// ---------------------------------------------------------------------------------------------
+// Writing
+
+/// The `META` of `input` with its hierarchy `pm`, positions stored as f32 when `f32`.
+pub(super) fn describe(
+    input: &PolygonMesh,
+    pm: &ProgressiveMesh,
+    info: &BuildInfo,
+    f32: bool,
+) -> Meta {
+    let (lo, hi) = bounding_box(pm.original_positions());
+    let o = &info.pm_options;
+    Meta {
+        n_input_vertices: input.positions.len() as u64,
+        n_input_faces: input.n_faces() as u64,
+        n_vertices: pm.original_positions().len() as u64,
+        n_base: pm.n_base_vertices() as u64,
+        n_splits: pm.splits().len() as u64,
+        splits_per_block: SPLITS_PER_BLOCK,
+        position_bits: if f32 { 32 } else { 64 },
+        bbox_min: lo.to_array(),
+        bbox_max: hi.to_array(),
+        relaxation: info.relaxation,
+        target_vertices: o.target_vertices as u64,
+        target_faces: o.target_faces as u64,
+        max_error: o.max_error,
+        max_normal_angle_degrees: o.max_normal_angle_degrees,
+        min_quality: o.min_quality,
+        max_valence: o.max_valence as u64,
+        boundary_weight: o.boundary_weight,
+    }
+}
+
+/// The corners of the box around `positions` (zero for none).
+fn bounding_box(positions: &[DVec3]) -> (DVec3, DVec3) {
+    if positions.is_empty() {
+        return (DVec3::ZERO, DVec3::ZERO);
+    }
+    positions.iter().fold(
+        (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+        |(lo, hi), &p| (lo.min(p), hi.max(p)),
+    )
+}
+
+/// The `META` section's bytes.
+pub(super) fn encode_meta(meta: &Meta) -> Result<Vec<u8>, FormatError> {
+    bincode::serde::encode_to_vec(meta, bincode::config::standard())
+        .map_err(|e| internal(&e.to_string()))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Reading
 
 pub(super) fn check_version(c: &Container<'_>) -> Result<(), FormatError> {
     if !(OLDEST_MAJOR..=MAJOR).contains(&c.major) {
@@ -61,4 +121,20 @@ pub(super) fn read_meta(c: &Container<'_>) -> Result<Meta, FormatError> {
         return Err(corrupt(at, "inconsistent counts in META"));
     }
     Ok(meta)
+}
+
+/// The build options `meta` records.
+pub(super) fn build_info(meta: &Meta) -> BuildInfo {
+    BuildInfo {
+        pm_options: PmOptions {
+            target_vertices: meta.target_vertices as usize,
+            target_faces: meta.target_faces as usize,
+            max_error: meta.max_error,
+            max_normal_angle_degrees: meta.max_normal_angle_degrees,
+            min_quality: meta.min_quality,
+            max_valence: meta.max_valence as usize,
+            boundary_weight: meta.boundary_weight,
+        },
+        relaxation: meta.relaxation,
+    }
 }
