@@ -4,18 +4,14 @@
 use glam::DVec3;
 
 use super::header::{ElementDef, PropKind};
+use super::plan::{Out, Plan};
 use super::rows::Ctx;
+use super::types::empty_col;
 use crate::io::{IoError, err_byte};
 use crate::mesh::{AttributeData, ScalarType};
 
 /// Decodes one fixed-offset scalar column of a fixed-stride binary block.
-pub(super) fn column(
-    block: &[u8],
-    stride: usize,
-    off: usize,
-    t: ScalarType,
-    big: bool,
-) -> AttributeData {
+fn column(block: &[u8], stride: usize, off: usize, t: ScalarType, big: bool) -> AttributeData {
     macro_rules! col {
         ($ty:ty, $var:ident) => {{
             const N: usize = std::mem::size_of::<$ty>();
@@ -185,4 +181,60 @@ pub(super) fn float_positions(
         ));
     }
     Ok(Some(out))
+}
+
+/// Bytes per row of an element of scalars only.
+pub(super) fn row_stride(plans: &[Plan]) -> usize {
+    plans
+        .iter()
+        .map(|p| match p {
+            Plan::Scalar { t, .. } => t.size(),
+            _ => 0,
+        })
+        .sum()
+}
+
+/// The columns of a fixed-stride block starting at byte `start`, position columns checked
+/// for non-finite values. With `positions_decoded` (x, y, z already read by
+/// [`float_positions`]) the position columns are left empty.
+pub(super) fn scalar_columns(
+    plans: &[Plan],
+    block: &[u8],
+    stride: usize,
+    start: usize,
+    big: bool,
+    positions_decoded: bool,
+) -> Result<Vec<Out>, IoError> {
+    let mut off = 0;
+    let mut outs = Vec::with_capacity(plans.len());
+    for plan in plans {
+        let Plan::Scalar { t, finite } = *plan else {
+            unreachable!()
+        };
+        if finite && positions_decoded {
+            outs.push(Out::Col(empty_col(t, 0)));
+            off += t.size();
+            continue;
+        }
+        let col = column(block, stride, off, t, big);
+        if let Some(i) = first_non_finite(&col, finite) {
+            return Err(err_byte(
+                (start + i * stride + off) as u64,
+                format!("vertex {i} has a non-finite coordinate"),
+            ));
+        }
+        outs.push(Out::Col(col));
+        off += t.size();
+    }
+    Ok(outs)
+}
+
+/// The first non-finite value of a position column (`finite`: the column holds positions);
+/// integers are always finite.
+fn first_non_finite(col: &AttributeData, finite: bool) -> Option<usize> {
+    match (col, finite) {
+        (AttributeData::F32(v), true) => v.iter().position(|x| !x.is_finite()),
+        (AttributeData::F64(v), true) => v.iter().position(|x| !x.is_finite()),
+        _ => None,
+    }
 }

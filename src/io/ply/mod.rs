@@ -21,6 +21,11 @@
 //! is `F32`; otherwise `float` if every coordinate is an f32 value and `double` if not), then `face` (`list uchar int vertex_indices`, or `uint` counts for
 //! polygons with more than 255 corners), then the extra elements.
 
+use super::IoError;
+use crate::mesh::PolygonMesh;
+use header::parse_header;
+use reader::{BodyReader, vertex_count};
+
 mod fast;
 mod header;
 mod plan;
@@ -31,5 +36,18 @@ mod types;
 mod validate;
 mod writer;
 
-pub use reader::read;
+/// Reads a PLY file (any encoding).
+pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
+    let header = parse_header(bytes)?;
+    let nv = vertex_count(&header)?;
+    let mut body = BodyReader::new(bytes, &header, nv);
+    let mut mesh = PolygonMesh::new();
+    mesh.comments = header.comments;
+    for el in &header.elements {
+        body.read_element(el, &mut mesh)?;
+    }
+    body.finish(&mut mesh);
+    Ok(mesh)
+}
+
 pub use writer::write;

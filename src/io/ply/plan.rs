@@ -31,6 +31,17 @@ pub(super) enum Role {
     Extra,
 }
 
+impl Role {
+    /// The role of an element, by its name.
+    pub(super) fn of(el: &ElementDef) -> Role {
+        match el.name.as_str() {
+            "vertex" => Role::Vertex,
+            "face" => Role::Face,
+            _ => Role::Extra,
+        }
+    }
+}
+
 pub(super) fn plan_element(el: &ElementDef, role: &Role) -> Result<Vec<Plan>, IoError> {
     let mut plans = Vec::with_capacity(el.props.len());
     let mut have_indices = false;
