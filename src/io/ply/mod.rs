@@ -18,13 +18,23 @@
 //!   and are rejected with an error.
 //!
 //! The writer emits `vertex` (`double` positions when `position_type` is `F64`, `float` when it
-//! is `F32`; otherwise `float` if every coordinate is an f32 value and `double` if not), then `face` (`list uchar int vertex_indices`, or `uint` counts for
-//! polygons with more than 255 corners), then the extra elements.
+//! is `F32`; otherwise `float` if every coordinate is an f32 value and `double` if not), then
+//! `face` (`list uchar int vertex_indices`, or `uint` counts for polygons with more than 255
+//! corners), then the extra elements.
+//!
+//! Layout of the module: [`read()`] parses the header (`header`), checks the vertex count and
+//! reads element by element (`reader`: a plan per property from `plan`, then the binary fast
+//! paths of `fast` or the value-by-value reader of `rows` over the sources of `source`).
+//! [`write()`] validates the mesh (`validate`), chooses the stored types and writes the header
+//! (`write_header`), then the body (`write_body`). `types` holds the PLY type names.
 
-use super::IoError;
+use super::{IoError, PlyEncoding};
 use crate::mesh::PolygonMesh;
 use header::parse_header;
 use reader::{BodyReader, vertex_count};
+use validate::validate;
+use write_body::{ascii_body, binary_body};
+use write_header::{Layout, header_text};
 
 mod fast;
 mod header;
@@ -34,7 +44,8 @@ mod rows;
 mod source;
 mod types;
 mod validate;
-mod writer;
+mod write_body;
+mod write_header;
 
 /// Reads a PLY file (any encoding).
 pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
@@ -50,4 +61,14 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     Ok(mesh)
 }
 
-pub use writer::write;
+/// Writes a PLY file.
+pub fn write(mesh: &PolygonMesh, encoding: PlyEncoding) -> Result<Vec<u8>, IoError> {
+    validate(mesh)?;
+    let layout = Layout::of(mesh)?;
+    let header = header_text(mesh, encoding, &layout);
+    Ok(match encoding {
+        PlyEncoding::Ascii => ascii_body(header, mesh, &layout).into_bytes(),
+        PlyEncoding::BinaryLittleEndian => binary_body(header.into_bytes(), mesh, &layout, false),
+        PlyEncoding::BinaryBigEndian => binary_body(header.into_bytes(), mesh, &layout, true),
+    })
+}
