@@ -184,178 +184,240 @@ fn per_vertex<const N: usize>(
 
 /// Reads an OBJ file.
 pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
-    let mut mesh = PolygonMesh::new();
-    let mut colours: Vec<[f32; 3]> = Vec::new();
-    let mut all_coloured = true;
-    let mut ws: Vec<(u32, f64)> = Vec::new();
-    let mut texcoords: Vec<[f32; 2]> = Vec::new();
-    let mut normals: Vec<[f32; 3]> = Vec::new();
-    let mut corner_vt: Vec<u32> = Vec::new();
-    let mut corner_vn: Vec<u32> = Vec::new();
-    let mut vs = IndexSpace::new("vertex", "vertices");
-    let mut vts = IndexSpace::new("texture coordinate", "texture coordinates");
-    let mut vns = IndexSpace::new("normal", "normals");
-    let mut in_preamble = true;
-    let mut tp = TextPositions::new();
-
+    let mut reader = ObjReader::new();
     for (line, l) in logical_lines(bytes) {
+        reader.read_line(line, &l)?;
+    }
+    reader.finish()
+}
+
+/// What the statements read so far have given.
+struct ObjReader {
+    mesh: PolygonMesh,
+    tp: TextPositions,
+    /// Vertex colours, while every vertex has one.
+    colours: Vec<[f32; 3]>,
+    all_coloured: bool,
+    /// `w` of the vertices that have one.
+    ws: Vec<(u32, f64)>,
+    texcoords: Vec<[f32; 2]>,
+    normals: Vec<[f32; 3]>,
+    /// Per face corner, its texture coordinate and normal (`NONE` when it has none).
+    corner_vt: Vec<u32>,
+    corner_vn: Vec<u32>,
+    vs: IndexSpace,
+    vts: IndexSpace,
+    vns: IndexSpace,
+    /// No statement yet: comments are kept.
+    in_preamble: bool,
+}
+
+impl ObjReader {
+    fn new() -> Self {
+        ObjReader {
+            mesh: PolygonMesh::new(),
+            tp: TextPositions::new(),
+            colours: Vec::new(),
+            all_coloured: true,
+            ws: Vec::new(),
+            texcoords: Vec::new(),
+            normals: Vec::new(),
+            corner_vt: Vec::new(),
+            corner_vn: Vec::new(),
+            vs: IndexSpace::new("vertex", "vertices"),
+            vts: IndexSpace::new("texture coordinate", "texture coordinates"),
+            vns: IndexSpace::new("normal", "normals"),
+            in_preamble: true,
+        }
+    }
+
+    /// One logical line: a statement, a comment or nothing.
+    #[inline]
+    fn read_line(&mut self, line: u64, l: &[u8]) -> Result<(), IoError> {
         let (data, comment) = match l.iter().position(|&b| b == b'#') {
             Some(i) => (&l[..i], Some(&l[i + 1..])),
-            None => (&l[..], None),
+            None => (l, None),
         };
         let toks: Vec<&[u8]> = text::tokens(data).collect();
         let Some((&kw, args)) = toks.split_first() else {
-            if in_preamble && let Some(c) = comment {
+            if self.in_preamble
+                && let Some(c) = comment
+            {
                 let c = c.strip_prefix(b" ").unwrap_or(c);
-                mesh.comments
+                self.mesh
+                    .comments
                     .push(String::from_utf8_lossy(text::strip_cr(c)).into_owned());
             }
-            continue;
+            return Ok(());
         };
-        in_preamble = false;
+        self.in_preamble = false;
         match kw {
-            b"v" => {
-                let n = args.len();
-                if !matches!(n, 3 | 4 | 6 | 7) {
-                    return Err(err_line(
-                        line,
-                        format!("a v line needs x y z [w] [r g b], found {n} values"),
-                    ));
-                }
-                let mut p = [0f64; 3];
-                for (o, t) in p.iter_mut().zip(args) {
-                    *o = text::parse_f64(t).ok_or_else(|| {
-                        err_line(line, format!("bad coordinate {}", text::show(t)))
-                    })?;
-                }
-                let idx = tp.len();
-                if !p.iter().all(|c| c.is_finite()) {
-                    return Err(err_line(
-                        line,
-                        format!("vertex {} has a non-finite coordinate", idx + 1),
-                    ));
-                }
-                if idx >= u32::MAX as usize {
-                    return Err(err_line(line, "more than 2^32 - 1 vertices"));
-                }
-                tp.push([args[0], args[1], args[2]], p);
-                vs.count += 1;
-                if n == 4 || n == 7 {
-                    let w = text::parse_f64(args[3])
-                        .ok_or_else(|| err_line(line, format!("bad w {}", text::show(args[3]))))?;
-                    ws.push((idx as u32, w));
-                }
-                if n >= 6 {
-                    let c: [f32; 3] = parse_floats(&args[n - 3..], line, "colour")?;
-                    if all_coloured {
-                        colours.push(c);
-                    }
-                } else {
-                    all_coloured = false;
-                    colours = Vec::new();
-                }
-            }
-            b"vt" => {
-                if !(1..=3).contains(&args.len()) {
-                    return Err(err_line(line, "a vt line needs 1 to 3 values"));
-                }
-                let mut uv: [f32; 2] = [0.0; 2];
-                let vals: [f32; 3] = parse_floats(args, line, "texture coordinate")?;
-                uv.copy_from_slice(&vals[..2]);
-                if args.len() == 1 {
-                    uv[1] = 0.0;
-                }
-                texcoords.push(uv);
-                vts.count += 1;
-            }
-            b"vn" => {
-                if args.len() != 3 {
-                    return Err(err_line(line, "a vn line needs 3 values"));
-                }
-                normals.push(parse_floats(args, line, "normal")?);
-                vns.count += 1;
-            }
-            b"f" => {
-                if args.is_empty() {
-                    return Err(err_line(line, "a face without vertices"));
-                }
-                for corner in args {
-                    let mut parts = corner.split(|&b| b == b'/');
-                    let v = parts.next().unwrap_or(b"");
-                    let vt = parts.next().filter(|t| !t.is_empty());
-                    let vn = parts.next().filter(|t| !t.is_empty());
-                    if parts.next().is_some() {
-                        return Err(err_line(
-                            line,
-                            format!("bad face corner {}", text::show(corner)),
-                        ));
-                    }
-                    mesh.face_indices.push(vs.resolve(v, line)?);
-                    corner_vt.push(match vt {
-                        Some(t) => vts.resolve(t, line)?,
-                        None => NONE,
-                    });
-                    corner_vn.push(match vn {
-                        Some(t) => vns.resolve(t, line)?,
-                        None => NONE,
-                    });
-                }
-                let len = u32::try_from(mesh.face_indices.len())
-                    .map_err(|_| err_line(line, "more than 2^32 - 1 face corners"))?;
-                mesh.face_starts.push(len);
-            }
+            b"v" => self.read_vertex(line, args),
+            b"vt" => self.read_texcoord(line, args),
+            b"vn" => self.read_normal(line, args),
+            b"f" => self.read_face(line, args),
             k if k.iter().all(|b| b.is_ascii_alphanumeric() || *b == b'_') => {
                 // o, g, s, usemtl, mtllib, l, p, curves, … : tolerated, not kept.
+                Ok(())
             }
-            k => {
+            k => Err(err_line(
+                line,
+                format!("unknown statement {}", text::show(k)),
+            )),
+        }
+    }
+
+    /// `v x y z [w] [r g b]`.
+    #[inline]
+    fn read_vertex(&mut self, line: u64, args: &[&[u8]]) -> Result<(), IoError> {
+        let n = args.len();
+        if !matches!(n, 3 | 4 | 6 | 7) {
+            return Err(err_line(
+                line,
+                format!("a v line needs x y z [w] [r g b], found {n} values"),
+            ));
+        }
+        let mut p = [0f64; 3];
+        for (o, t) in p.iter_mut().zip(args) {
+            *o = text::parse_f64(t)
+                .ok_or_else(|| err_line(line, format!("bad coordinate {}", text::show(t))))?;
+        }
+        let idx = self.tp.len();
+        if !p.iter().all(|c| c.is_finite()) {
+            return Err(err_line(
+                line,
+                format!("vertex {} has a non-finite coordinate", idx + 1),
+            ));
+        }
+        if idx >= u32::MAX as usize {
+            return Err(err_line(line, "more than 2^32 - 1 vertices"));
+        }
+        self.tp.push([args[0], args[1], args[2]], p);
+        self.vs.count += 1;
+        if n == 4 || n == 7 {
+            let w = text::parse_f64(args[3])
+                .ok_or_else(|| err_line(line, format!("bad w {}", text::show(args[3]))))?;
+            self.ws.push((idx as u32, w));
+        }
+        if n >= 6 {
+            let c: [f32; 3] = parse_floats(&args[n - 3..], line, "colour")?;
+            if self.all_coloured {
+                self.colours.push(c);
+            }
+        } else {
+            self.all_coloured = false;
+            self.colours = Vec::new();
+        }
+        Ok(())
+    }
+
+    /// `vt u [v [w]]`.
+    #[inline]
+    fn read_texcoord(&mut self, line: u64, args: &[&[u8]]) -> Result<(), IoError> {
+        if !(1..=3).contains(&args.len()) {
+            return Err(err_line(line, "a vt line needs 1 to 3 values"));
+        }
+        let mut uv: [f32; 2] = [0.0; 2];
+        let vals: [f32; 3] = parse_floats(args, line, "texture coordinate")?;
+        uv.copy_from_slice(&vals[..2]);
+        if args.len() == 1 {
+            uv[1] = 0.0;
+        }
+        self.texcoords.push(uv);
+        self.vts.count += 1;
+        Ok(())
+    }
+
+    /// `vn x y z`.
+    #[inline]
+    fn read_normal(&mut self, line: u64, args: &[&[u8]]) -> Result<(), IoError> {
+        if args.len() != 3 {
+            return Err(err_line(line, "a vn line needs 3 values"));
+        }
+        self.normals.push(parse_floats(args, line, "normal")?);
+        self.vns.count += 1;
+        Ok(())
+    }
+
+    /// `f` with corners `v`, `v/vt`, `v//vn` or `v/vt/vn`.
+    #[inline]
+    fn read_face(&mut self, line: u64, args: &[&[u8]]) -> Result<(), IoError> {
+        if args.is_empty() {
+            return Err(err_line(line, "a face without vertices"));
+        }
+        for corner in args {
+            let mut parts = corner.split(|&b| b == b'/');
+            let v = parts.next().unwrap_or(b"");
+            let vt = parts.next().filter(|t| !t.is_empty());
+            let vn = parts.next().filter(|t| !t.is_empty());
+            if parts.next().is_some() {
                 return Err(err_line(
                     line,
-                    format!("unknown statement {}", text::show(k)),
+                    format!("bad face corner {}", text::show(corner)),
                 ));
             }
+            self.mesh.face_indices.push(self.vs.resolve(v, line)?);
+            self.corner_vt.push(match vt {
+                Some(t) => self.vts.resolve(t, line)?,
+                None => NONE,
+            });
+            self.corner_vn.push(match vn {
+                Some(t) => self.vns.resolve(t, line)?,
+                None => NONE,
+            });
         }
+        let len = u32::try_from(self.mesh.face_indices.len())
+            .map_err(|_| err_line(line, "more than 2^32 - 1 face corners"))?;
+        self.mesh.face_starts.push(len);
+        Ok(())
     }
-    vs.check()?;
-    vts.check()?;
-    vns.check()?;
 
-    (mesh.positions, mesh.position_type) = tp.finish();
-    let nv = mesh.positions.len();
-    if !ws.is_empty() {
-        let mut w = vec![1.0f64; nv];
-        for (i, x) in ws {
-            w[i as usize] = x;
+    /// Checks forward references, then turns the per-vertex and per-corner data into
+    /// attributes.
+    fn finish(self) -> Result<PolygonMesh, IoError> {
+        self.vs.check()?;
+        self.vts.check()?;
+        self.vns.check()?;
+        let mut mesh = self.mesh;
+        (mesh.positions, mesh.position_type) = self.tp.finish();
+        let nv = mesh.positions.len();
+        push_w(&mut mesh, self.ws);
+        if self.all_coloured && nv > 0 {
+            push_columns(&mut mesh, &self.colours, &["red", "green", "blue"]);
         }
+        if let Some(uv) = per_vertex(nv, &mesh.face_indices, &self.corner_vt, &self.texcoords) {
+            push_columns(&mut mesh, &uv, &["u", "v"]);
+        }
+        if let Some(n) = per_vertex(nv, &mesh.face_indices, &self.corner_vn, &self.normals) {
+            push_columns(&mut mesh, &n, &["nx", "ny", "nz"]);
+        }
+        Ok(mesh)
+    }
+}
+
+/// The attribute `w` (1 where a vertex has none), when any vertex has one.
+fn push_w(mesh: &mut PolygonMesh, ws: Vec<(u32, f64)>) {
+    if ws.is_empty() {
+        return;
+    }
+    let mut w = vec![1.0f64; mesh.positions.len()];
+    for (i, x) in ws {
+        w[i as usize] = x;
+    }
+    mesh.vertex_attributes.push(Attribute {
+        name: "w".into(),
+        data: AttributeData::F64(w),
+    });
+}
+
+/// One f32 vertex attribute per name, column `k` from component `k` of `vals`.
+fn push_columns<const N: usize>(mesh: &mut PolygonMesh, vals: &[[f32; N]], names: &[&str]) {
+    for (k, name) in names.iter().enumerate() {
         mesh.vertex_attributes.push(Attribute {
-            name: "w".into(),
-            data: AttributeData::F64(w),
+            name: (*name).into(),
+            data: AttributeData::F32(vals.iter().map(|c| c[k]).collect()),
         });
     }
-    if all_coloured && nv > 0 {
-        for (k, name) in ["red", "green", "blue"].into_iter().enumerate() {
-            mesh.vertex_attributes.push(Attribute {
-                name: name.into(),
-                data: AttributeData::F32(colours.iter().map(|c| c[k]).collect()),
-            });
-        }
-    }
-    if let Some(uv) = per_vertex(nv, &mesh.face_indices, &corner_vt, &texcoords) {
-        for (k, name) in ["u", "v"].into_iter().enumerate() {
-            mesh.vertex_attributes.push(Attribute {
-                name: name.into(),
-                data: AttributeData::F32(uv.iter().map(|c| c[k]).collect()),
-            });
-        }
-    }
-    if let Some(n) = per_vertex(nv, &mesh.face_indices, &corner_vn, &normals) {
-        for (k, name) in ["nx", "ny", "nz"].into_iter().enumerate() {
-            mesh.vertex_attributes.push(Attribute {
-                name: name.into(),
-                data: AttributeData::F32(n.iter().map(|c| c[k]).collect()),
-            });
-        }
-    }
-    Ok(mesh)
 }
 
 /// A float-typed vertex attribute column, or `None`.

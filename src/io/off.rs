@@ -73,59 +73,104 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
         lines: Lines::new(bytes, 1),
         last: 0,
     };
-    let Some((hline, htoks)) = lines.next(Some(&mut mesh.comments)) else {
+    let header = read_header(&mut lines, &mut mesh.comments)?;
+    let (positions, vertices) = read_vertices(&mut lines, &header)?;
+    (mesh.positions, mesh.position_type) = positions.finish();
+    let face_colours = read_faces(&mut lines, &header, &mut mesh)?;
+    push_vertex_attributes(&mut mesh, &header, &vertices);
+    push_face_colours(&mut mesh, &header, face_colours);
+    Ok(mesh)
+}
+
+/// What the header announces: the optional vertex data (`ST`, `C`, `N`) and the counts.
+struct OffHeader {
+    uvs: bool,
+    colours: bool,
+    normals: bool,
+    nv: u64,
+    nf: u64,
+}
+
+impl OffHeader {
+    /// The number of values every vertex line has besides a colour.
+    fn fixed_values(&self) -> usize {
+        3 + if self.normals { 3 } else { 0 } + if self.uvs { 2 } else { 0 }
+    }
+}
+
+/// The keyword line (if any) and the counts line; comments before the counts are kept.
+fn read_header(lines: &mut OffLines, comments: &mut Vec<String>) -> Result<OffHeader, IoError> {
+    let Some((hline, htoks)) = lines.next(Some(comments)) else {
         return Err(err_line(lines.last.max(1), "empty file (no OFF header)"));
     };
-    let (mut st, mut c, mut n) = (false, false, false);
-    let count_toks: Vec<&[u8]>;
-    let count_line;
-    if text::parse_i64(htoks[0]).is_some() {
+    let ((uvs, colours, normals), count_line, count_toks) = if text::parse_i64(htoks[0]).is_some() {
         // No keyword: the first line holds the counts.
-        count_toks = htoks;
-        count_line = hline;
+        ((false, false, false), hline, htoks)
     } else {
-        let mut kw = htoks[0];
-        if let Some(r) = kw.strip_prefix(b"ST") {
-            st = true;
-            kw = r;
-        }
-        if let Some(r) = kw.strip_prefix(b"C") {
-            c = true;
-            kw = r;
-        }
-        if let Some(r) = kw.strip_prefix(b"N") {
-            n = true;
-            kw = r;
-        }
-        if kw.starts_with(b"4") || kw.starts_with(b"n") {
-            return Err(err_line(
-                hline,
-                "4OFF / nOFF (non-3D) files are not supported",
-            ));
-        }
-        if kw != b"OFF" {
-            return Err(err_line(
-                hline,
-                format!("not an OFF file (header {})", text::show(htoks[0])),
-            ));
-        }
-        if htoks.get(1) == Some(&&b"BINARY"[..]) {
-            return Err(err_line(hline, "binary OFF is not supported"));
-        }
+        let flags = parse_keyword(&htoks, hline)?;
         if htoks.len() > 1 {
-            count_toks = htoks[1..].to_vec();
-            count_line = hline;
+            (flags, hline, htoks[1..].to_vec())
         } else {
-            let Some((l, t)) = lines.next(Some(&mut mesh.comments)) else {
+            let Some((l, t)) = lines.next(Some(comments)) else {
                 return Err(err_line(
                     lines.last + 1,
                     "the file ends before the counts line",
                 ));
             };
-            count_toks = t;
-            count_line = l;
+            (flags, l, t)
         }
+    };
+    let (nv, nf) = parse_counts(&count_toks, count_line, lines.lines.rest_len())?;
+    Ok(OffHeader {
+        uvs,
+        colours,
+        normals,
+        nv,
+        nf,
+    })
+}
+
+/// `[ST][C][N]OFF` (and an optional `BINARY`, rejected): whether vertices have texture
+/// coordinates, colours and normals.
+fn parse_keyword(htoks: &[&[u8]], hline: u64) -> Result<(bool, bool, bool), IoError> {
+    let (mut st, mut c, mut n) = (false, false, false);
+    let mut kw = htoks[0];
+    if let Some(r) = kw.strip_prefix(b"ST") {
+        st = true;
+        kw = r;
     }
+    if let Some(r) = kw.strip_prefix(b"C") {
+        c = true;
+        kw = r;
+    }
+    if let Some(r) = kw.strip_prefix(b"N") {
+        n = true;
+        kw = r;
+    }
+    if kw.starts_with(b"4") || kw.starts_with(b"n") {
+        return Err(err_line(
+            hline,
+            "4OFF / nOFF (non-3D) files are not supported",
+        ));
+    }
+    if kw != b"OFF" {
+        return Err(err_line(
+            hline,
+            format!("not an OFF file (header {})", text::show(htoks[0])),
+        ));
+    }
+    if htoks.get(1) == Some(&&b"BINARY"[..]) {
+        return Err(err_line(hline, "binary OFF is not supported"));
+    }
+    Ok((st, c, n))
+}
+
+/// `vertices faces [edges]`, checked against the `rest_len` bytes that follow.
+fn parse_counts(
+    count_toks: &[&[u8]],
+    count_line: u64,
+    rest_len: usize,
+) -> Result<(u64, u64), IoError> {
     if !(2..=3).contains(&count_toks.len()) {
         return Err(err_line(
             count_line,
@@ -138,7 +183,7 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
         parse_count(e, count_line)?;
     }
     // Each vertex line needs at least "0 0 0\n", each face line "0\n".
-    let left = lines.lines.rest_len() as u64 + 1;
+    let left = rest_len as u64 + 1;
     let need = nv.saturating_mul(6).saturating_add(nf.saturating_mul(2));
     if need > left {
         return Err(err_line(
@@ -149,130 +194,214 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     if nv > u32::MAX as u64 {
         return Err(err_line(count_line, "more than 2^32 - 1 vertices"));
     }
-    let (nv_us, nf_us) = (nv as usize, nf as usize); // bounded by the file size
+    Ok((nv, nf))
+}
 
-    let fixed = 3 + if n { 3 } else { 0 } + if st { 2 } else { 0 };
-    let mut normals: Vec<[f32; 3]> = Vec::new();
-    let mut colours: Vec<[f32; 4]> = Vec::new();
-    let mut any_alpha = false;
-    let mut uvs: Vec<[f32; 2]> = Vec::new();
-    let mut tp = TextPositions::new();
-    tp.reserve(nv_us);
-    for i in 0..nv_us {
+/// The vertex lines' data besides positions, in file order.
+struct VertexData {
+    normals: Vec<[f32; 3]>,
+    colours: Vec<[f32; 4]>,
+    any_alpha: bool,
+    uvs: Vec<[f32; 2]>,
+}
+
+fn read_vertices(
+    lines: &mut OffLines,
+    h: &OffHeader,
+) -> Result<(TextPositions, VertexData), IoError> {
+    let mut positions = TextPositions::new();
+    let mut data = VertexData {
+        normals: Vec::new(),
+        colours: Vec::new(),
+        any_alpha: false,
+        uvs: Vec::new(),
+    };
+    let nv = h.nv;
+    positions.reserve(nv as usize); // bounded by the file size
+    for i in 0..nv as usize {
         let Some((line, toks)) = lines.next(None) else {
             return Err(err_line(
                 lines.last + 1,
                 format!("the file ends after {i} of {nv} vertices"),
             ));
         };
-        let ncol = toks.len().saturating_sub(fixed);
-        let ok = if c {
-            toks.len() >= fixed && (ncol == 3 || ncol == 4)
-        } else {
-            toks.len() == fixed
-        };
-        if !ok {
-            return Err(err_line(
-                line,
-                format!(
-                    "vertex {i} has {} values, expected {}",
-                    toks.len(),
-                    if c {
-                        format!("{} or {}", fixed + 3, fixed + 4)
-                    } else {
-                        fixed.to_string()
-                    }
-                ),
-            ));
-        }
-        let mut p = [0f64; 3];
-        for (o, t) in p.iter_mut().zip(&toks) {
-            *o = text::parse_f64(t)
-                .ok_or_else(|| err_line(line, format!("bad coordinate {}", text::show(t))))?;
-        }
-        if !p.iter().all(|x| x.is_finite()) {
-            return Err(err_line(
-                line,
-                format!("vertex {i} has a non-finite coordinate"),
-            ));
-        }
-        tp.push([toks[0], toks[1], toks[2]], p);
+        data.push_line(&mut positions, h, i, line, &toks)?;
+    }
+    Ok((positions, data))
+}
+
+impl VertexData {
+    /// Vertex `i`: `x y z [nx ny nz] [r g b [a]] [u v]`.
+    #[inline]
+    fn push_line(
+        &mut self,
+        positions: &mut TextPositions,
+        h: &OffHeader,
+        i: usize,
+        line: u64,
+        toks: &[&[u8]],
+    ) -> Result<(), IoError> {
+        let ncol = check_vertex_values(h, i, line, toks.len())?;
+        let p = parse_position(i, line, toks)?;
+        positions.push([toks[0], toks[1], toks[2]], p);
         let mut k = 3;
-        if n {
-            normals.push(floats(&toks[k..k + 3], line, "normal")?);
+        if h.normals {
+            self.normals.push(floats(&toks[k..k + 3], line, "normal")?);
             k += 3;
         }
-        if c {
+        if h.colours {
             let mut col: [f32; 4] = floats(&toks[k..k + ncol], line, "colour")?;
             if ncol == 3 {
                 col[3] = 1.0;
             } else {
-                any_alpha = true;
+                self.any_alpha = true;
             }
-            colours.push(col);
+            self.colours.push(col);
             k += ncol;
         }
-        if st {
-            uvs.push(floats(&toks[k..k + 2], line, "texture coordinate")?);
+        if h.uvs {
+            self.uvs
+                .push(floats(&toks[k..k + 2], line, "texture coordinate")?);
         }
+        Ok(())
     }
+}
 
-    (mesh.positions, mesh.position_type) = tp.finish();
-    let mut face_colours: Vec<[f32; 4]> = Vec::new();
-    let mut all_faces_coloured = true;
-    let mut any_face_alpha = false;
-    mesh.face_starts.reserve(nf_us);
-    for f in 0..nf_us {
+/// Checks that vertex `i` has the values the header announces; returns its colour's length.
+#[inline]
+fn check_vertex_values(h: &OffHeader, i: usize, line: u64, n: usize) -> Result<usize, IoError> {
+    let fixed = h.fixed_values();
+    let ncol = n.saturating_sub(fixed);
+    let ok = if h.colours {
+        n >= fixed && (ncol == 3 || ncol == 4)
+    } else {
+        n == fixed
+    };
+    if !ok {
+        return Err(err_line(
+            line,
+            format!(
+                "vertex {i} has {n} values, expected {}",
+                if h.colours {
+                    format!("{} or {}", fixed + 3, fixed + 4)
+                } else {
+                    fixed.to_string()
+                }
+            ),
+        ));
+    }
+    Ok(ncol)
+}
+
+/// The (finite) position of vertex `i`, its line's first three values.
+#[inline]
+fn parse_position(i: usize, line: u64, toks: &[&[u8]]) -> Result<[f64; 3], IoError> {
+    let mut p = [0f64; 3];
+    for (o, t) in p.iter_mut().zip(toks) {
+        *o = text::parse_f64(t)
+            .ok_or_else(|| err_line(line, format!("bad coordinate {}", text::show(t))))?;
+    }
+    if !p.iter().all(|x| x.is_finite()) {
+        return Err(err_line(
+            line,
+            format!("vertex {i} has a non-finite coordinate"),
+        ));
+    }
+    Ok(p)
+}
+
+/// Per-face colours, kept only when every face has one.
+struct FaceColours {
+    colours: Vec<[f32; 4]>,
+    all: bool,
+    any_alpha: bool,
+}
+
+/// Reads the face lines into `mesh`; returns their colours.
+fn read_faces(
+    lines: &mut OffLines,
+    h: &OffHeader,
+    mesh: &mut PolygonMesh,
+) -> Result<FaceColours, IoError> {
+    let mut colours = FaceColours {
+        colours: Vec::new(),
+        all: true,
+        any_alpha: false,
+    };
+    let nf = h.nf;
+    mesh.face_starts.reserve(nf as usize); // bounded by the file size
+    for f in 0..nf as usize {
         let Some((line, toks)) = lines.next(None) else {
             return Err(err_line(
                 lines.last + 1,
                 format!("the file ends after {f} of {nf} faces"),
             ));
         };
-        let len = text::parse_i64(toks[0])
-            .filter(|&l| l >= 0)
-            .ok_or_else(|| err_line(line, format!("bad face length {}", text::show(toks[0]))))?
-            as u64;
-        let have = toks.len() as u64 - 1;
-        if len > have {
+        let len = push_face(mesh, h.nv, f, line, &toks)?;
+        colours.push_line_rest(f, line, &toks[1 + len..])?;
+    }
+    Ok(colours)
+}
+
+/// Face `f`: `n i1 … in`, indices checked against the `nv` vertices; returns `n`.
+#[inline]
+fn push_face(
+    mesh: &mut PolygonMesh,
+    nv: u64,
+    f: usize,
+    line: u64,
+    toks: &[&[u8]],
+) -> Result<usize, IoError> {
+    let len = text::parse_i64(toks[0])
+        .filter(|&l| l >= 0)
+        .ok_or_else(|| err_line(line, format!("bad face length {}", text::show(toks[0]))))?
+        as u64;
+    let have = toks.len() as u64 - 1;
+    if len > have {
+        return Err(err_line(
+            line,
+            format!("face {f} claims {len} vertices but the line has {have} values"),
+        ));
+    }
+    let len = len as usize;
+    for t in &toks[1..=len] {
+        let i = text::parse_i64(t)
+            .ok_or_else(|| err_line(line, format!("bad vertex index {}", text::show(t))))?;
+        if i < 0 {
+            return Err(err_line(line, format!("face {f} has negative index {i}")));
+        }
+        if i as u64 >= nv {
             return Err(err_line(
                 line,
-                format!("face {f} claims {len} vertices but the line has {have} values"),
+                format!("face {f} has index {i} but the file has {nv} vertices"),
             ));
         }
-        let len = len as usize;
-        for t in &toks[1..=len] {
-            let i = text::parse_i64(t)
-                .ok_or_else(|| err_line(line, format!("bad vertex index {}", text::show(t))))?;
-            if i < 0 {
-                return Err(err_line(line, format!("face {f} has negative index {i}")));
-            }
-            if i as u64 >= nv {
-                return Err(err_line(
-                    line,
-                    format!("face {f} has index {i} but the file has {nv} vertices"),
-                ));
-            }
-            mesh.face_indices.push(i as u32);
-        }
-        let total = u32::try_from(mesh.face_indices.len())
-            .map_err(|_| err_line(line, "more than 2^32 - 1 face indices"))?;
-        mesh.face_starts.push(total);
-        let rest = &toks[1 + len..];
+        mesh.face_indices.push(i as u32);
+    }
+    let total = u32::try_from(mesh.face_indices.len())
+        .map_err(|_| err_line(line, "more than 2^32 - 1 face indices"))?;
+    mesh.face_starts.push(total);
+    Ok(len)
+}
+
+impl FaceColours {
+    /// The values after face `f`'s indices: nothing, a colour-map index, or an RGB(A) colour.
+    #[inline]
+    fn push_line_rest(&mut self, f: usize, line: u64, rest: &[&[u8]]) -> Result<(), IoError> {
         match rest.len() {
             0 | 1 => {
                 // No colour or a colour-map index: not kept.
-                all_faces_coloured = false;
+                self.all = false;
             }
             3 | 4 => {
                 let mut col: [f32; 4] = floats(rest, line, "face colour")?;
                 if rest.len() == 3 {
                     col[3] = 1.0;
                 } else {
-                    any_face_alpha = true;
+                    self.any_alpha = true;
                 }
-                if all_faces_coloured {
-                    face_colours.push(col);
+                if self.all {
+                    self.colours.push(col);
                 }
             }
             k => {
@@ -282,41 +411,57 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
                 ));
             }
         }
+        Ok(())
     }
+}
 
-    let push4 = |out: &mut Vec<Attribute>, vals: &[[f32; 4]], names: &[&str]| {
-        for (k, name) in names.iter().enumerate() {
-            out.push(Attribute {
-                name: (*name).into(),
-                data: AttributeData::F32(vals.iter().map(|c| c[k]).collect()),
-            });
-        }
-    };
-    if n {
-        let n4: Vec<[f32; 4]> = normals.iter().map(|v| [v[0], v[1], v[2], 0.0]).collect();
-        push4(&mut mesh.vertex_attributes, &n4, &["nx", "ny", "nz"]);
+/// Normals, colours and texture coordinates as the vertex attributes `nx`,`ny`,`nz`,
+/// `red`,`green`,`blue`[,`alpha`] and `u`,`v`.
+fn push_vertex_attributes(mesh: &mut PolygonMesh, h: &OffHeader, v: &VertexData) {
+    if h.normals {
+        let n4: Vec<[f32; 4]> = v.normals.iter().map(|v| [v[0], v[1], v[2], 0.0]).collect();
+        push_columns(&mut mesh.vertex_attributes, &n4, &["nx", "ny", "nz"]);
     }
-    if c {
-        let names: &[&str] = if any_alpha {
-            &["red", "green", "blue", "alpha"]
-        } else {
-            &["red", "green", "blue"]
-        };
-        push4(&mut mesh.vertex_attributes, &colours, names);
+    if h.colours {
+        push_columns(
+            &mut mesh.vertex_attributes,
+            &v.colours,
+            colour_names(v.any_alpha),
+        );
     }
-    if st {
-        let uv4: Vec<[f32; 4]> = uvs.iter().map(|v| [v[0], v[1], 0.0, 0.0]).collect();
-        push4(&mut mesh.vertex_attributes, &uv4, &["u", "v"]);
+    if h.uvs {
+        let uv4: Vec<[f32; 4]> = v.uvs.iter().map(|v| [v[0], v[1], 0.0, 0.0]).collect();
+        push_columns(&mut mesh.vertex_attributes, &uv4, &["u", "v"]);
     }
-    if all_faces_coloured && nf > 0 {
-        let names: &[&str] = if any_face_alpha {
-            &["red", "green", "blue", "alpha"]
-        } else {
-            &["red", "green", "blue"]
-        };
-        push4(&mut mesh.face_attributes, &face_colours, names);
+}
+
+/// Face colours as the face attributes `red`,`green`,`blue`[,`alpha`] when every face has one.
+fn push_face_colours(mesh: &mut PolygonMesh, h: &OffHeader, c: FaceColours) {
+    if c.all && h.nf > 0 {
+        push_columns(
+            &mut mesh.face_attributes,
+            &c.colours,
+            colour_names(c.any_alpha),
+        );
     }
-    Ok(mesh)
+}
+
+fn colour_names(alpha: bool) -> &'static [&'static str] {
+    if alpha {
+        &["red", "green", "blue", "alpha"]
+    } else {
+        &["red", "green", "blue"]
+    }
+}
+
+/// One f32 column per name, column `k` from component `k` of `vals`.
+fn push_columns(out: &mut Vec<Attribute>, vals: &[[f32; 4]], names: &[&str]) {
+    for (k, name) in names.iter().enumerate() {
+        out.push(Attribute {
+            name: (*name).into(),
+            data: AttributeData::F32(vals.iter().map(|c| c[k]).collect()),
+        });
+    }
 }
 
 /// Columns for a group of attribute names, if all exist with a usable type.

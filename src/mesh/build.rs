@@ -21,11 +21,14 @@
 //! faces keep the order of the triangles they come from. [`SourceMap`] maps mesh vertices and
 //! faces back onto the input, so processed results can be written in the user's layout.
 
-use super::halfedge::{FaceId, FaceRecord, HalfedgeRecord, Mesh, VertexRecord};
+use super::halfedge::{
+    FaceId, FaceRecord, HalfedgeId, HalfedgeRecord, Mesh, VertexId, VertexRecord,
+};
 use super::polygon::PolygonMesh;
 use glam::DVec3;
 use rayon::prelude::*;
 use serde::Serialize;
+use slotmap::SlotMap;
 use std::sync::atomic::{AtomicU8, AtomicU32, AtomicU64, Ordering};
 
 /// What the builder changed, in counts. All zero for a clean manifold triangle mesh.
@@ -696,26 +699,77 @@ fn repair_triangles(
     report: &mut BuildReport,
 ) -> (CornerTable, Vec<u32>) {
     let nv = positions.len();
-    let nt = input_tris.len();
-    let nh = 3 * nt;
     let mut tris = std::borrow::Cow::Borrowed(input_tris);
-    let from = |tris: &[[u32; 3]], c: u32| tris[(c / 3) as usize][(c % 3) as usize];
+    report.zero_area_faces = count_zero_area(positions, &tris);
 
-    report.zero_area_faces = tris
-        .par_iter()
+    // --- 1. pair half-edges (see `pair_halfedges`).
+    let (mut mate, mut flags, any_same_direction) = pair_halfedges(positions, &tris, report);
+
+    // --- 2. consistent orientation per component (see `orient_components`).
+    let state = orient_components(&tris, &mut mate, any_same_direction, report);
+    if state.contains(&2) {
+        flip_triangles(&mut tris, &mut mate, &mut flags, &state, report);
+    }
+    drop(state);
+    let tris: &[[u32; 3]] = &tris;
+
+    // --- 3. one mesh vertex per fan (see `assign_fans`).
+    let (corner_vertex, vertex_source, seen) = assign_fans(tris, &mate, nv);
+    if vertex_source.len() > nv {
+        report.non_manifold_vertices =
+            count_pinched_vertices(tris, &mate, &flags, &vertex_source[nv..], nv);
+    }
+    // --- 3b. no two distinct edges on one vertex pair (see `detach_multi_edges`).
+    let (corner_vertex, vertex_source, seen) = detach_multi_edges(
+        tris,
+        &mut mate,
+        nv,
+        (corner_vertex, vertex_source, seen),
+        report,
+    );
+    report.unreferenced_vertices = seen.iter().filter(|s| !**s).count();
+    drop(seen);
+    report.split_vertices = vertex_source.len() - nv;
+    drop(flags);
+    (
+        CornerTable {
+            corner_vertex,
+            mate,
+        },
+        vertex_source,
+    )
+}
+
+/// The input vertex half-edge `c` leaves.
+#[inline]
+fn corner_from(tris: &[[u32; 3]], c: u32) -> u32 {
+    tris[(c / 3) as usize][(c % 3) as usize]
+}
+
+/// The number of triangles of zero area.
+fn count_zero_area(positions: &[DVec3], tris: &[[u32; 3]]) -> usize {
+    tris.par_iter()
         .with_min_len(PAR_MIN)
         .filter(|t| {
             let [a, b, c] = t.map(|i| positions[i as usize]);
             (b - a).cross(c - a).length_squared() == 0.0
         })
-        .count();
+        .count()
+}
 
-    // --- 1. pair half-edges (see `pair_halfedges`).
-    let (mut mate, mut flags, any_same_direction) = pair_halfedges(positions, &tris, report);
-
-    // --- 2. consistent orientation per component (breadth-first over paired edges). When
-    // every pair already runs in opposite directions the given orientation is consistent (a
-    // non-orientable surface always has a same-direction pair), so the walk is skipped.
+/// Step 2 of the build: a consistent orientation per component, by a breadth-first walk over
+/// paired edges; the majority orientation of each component wins and a pair that contradicts
+/// the walk is cut (counted in the report). Returns per triangle 1 (kept) or 2 (flipped).
+/// When every pair already runs in opposite directions (`!any_same_direction`) the given
+/// orientation is consistent (a non-orientable surface always has a same-direction pair), so
+/// the walk is skipped.
+fn orient_components(
+    tris: &[[u32; 3]],
+    mate: &mut [u32],
+    any_same_direction: bool,
+    report: &mut BuildReport,
+) -> Vec<u8> {
+    let nt = tris.len();
     let mut state = vec![if any_same_direction { 0u8 } else { 1 }; nt]; // 0 unvisited, 1 kept, 2 flipped
     let mut queue: Vec<u32> = Vec::new();
     for seed in 0..nt {
@@ -737,7 +791,7 @@ fn repair_triangles(
                 }
                 let u = (m / 3) as usize;
                 // Twins run opposite ways when both triangles share a state.
-                let same_dir = from(&tris, c) == from(&tris, m);
+                let same_dir = corner_from(tris, c) == corner_from(tris, m);
                 let want = if same_dir { 3 - state[t] } else { state[t] };
                 if state[u] == 0 {
                     state[u] = want;
@@ -756,68 +810,91 @@ fn repair_triangles(
             }
         }
     }
-    if state.contains(&2) {
-        // Flip [a,b,c] -> [a,c,b]: local half-edge j becomes 2 - j (reversed).
-        let remap = |c: u32| {
-            if state[(c / 3) as usize] == 2 {
-                c - c % 3 + (2 - c % 3)
-            } else {
-                c
-            }
-        };
-        let mut mate2 = vec![NONE; nh];
-        let mut flags2 = vec![0u8; nh];
-        for c in 0..nh as u32 {
-            let m = mate[c as usize];
-            mate2[remap(c) as usize] = if m == NONE { NONE } else { remap(m) };
-            flags2[remap(c) as usize] = flags[c as usize];
-        }
-        mate = mate2;
-        flags = flags2;
-        let t = tris.to_mut();
-        for (tri, &st) in t.iter_mut().zip(&state) {
-            if st == 2 {
-                tri.swap(1, 2);
-                report.flipped_faces += 1;
-            }
-        }
-    }
-    drop(state);
-    let tris: &[[u32; 3]] = &tris;
+    state
+}
 
-    // --- 3. one mesh vertex per fan (see `assign_fans`).
-    let (mut corner_vertex, mut vertex_source, mut seen) = assign_fans(tris, &mate, nv);
-    if vertex_source.len() > nv {
-        // Pinched vertices (counted on the first fan split, so the count describes the input,
-        // not the detaching below): split although no non-manifold or cut edge (unpaired but
-        // shared) touches them.
-        let mut split = vec![0u8; nv]; // 1 split, 2 split and touched by such an edge
-        for &s in &vertex_source[nv..] {
-            split[s as usize] = 1;
+/// Flips the triangles whose `state` is 2, `[a,b,c] -> [a,c,b]`, carrying the mates and flags
+/// of their half-edges along (local half-edge j becomes 2 - j, reversed).
+fn flip_triangles(
+    tris: &mut std::borrow::Cow<[[u32; 3]]>,
+    mate: &mut Vec<u32>,
+    flags: &mut Vec<u8>,
+    state: &[u8],
+    report: &mut BuildReport,
+) {
+    let nh = 3 * tris.len();
+    let remap = |c: u32| {
+        if state[(c / 3) as usize] == 2 {
+            c - c % 3 + (2 - c % 3)
+        } else {
+            c
         }
-        let explained = |e: u32| {
-            let f = flags[e as usize];
-            f & NON_MANIFOLD != 0 || (mate[e as usize] == NONE && f & SHARED != 0)
-        };
-        for c in 0..nh as u32 {
-            let v = from(tris, c) as usize;
-            if split[v] == 1 && (explained(c) || explained(prev_c(c))) {
-                split[v] = 2;
-            }
-        }
-        report.non_manifold_vertices = split.iter().filter(|&&s| s == 1).count();
+    };
+    let mut mate2 = vec![NONE; nh];
+    let mut flags2 = vec![0u8; nh];
+    for c in 0..nh as u32 {
+        let m = mate[c as usize];
+        mate2[remap(c) as usize] = if m == NONE { NONE } else { remap(m) };
+        flags2[remap(c) as usize] = flags[c as usize];
     }
-    // --- 3b. after fan splitting two distinct edges may still join the same two vertices (a
-    // multi-edge: e.g. two pairs of a non-manifold edge whose fans meet again around both
-    // endpoints). A half-edge mesh can hold that but a triangle list cannot express it, and
-    // every later stage (the PM's base mesh, the .pyr file) rebuilds from triangles. Detach
-    // one endpoint into one copy per triangle (unpair all its edges) and split fans again;
-    // each round removes pairings, so this ends.
-    // Only edges shared by more than two triangles, or cut to orient, can leave two edges
-    // on one vertex pair: each other pair of vertices has a single edge group of at most two
-    // triangles, which stays one edge whatever the fan splitting does.
+    *mate = mate2;
+    *flags = flags2;
+    let t = tris.to_mut();
+    for (tri, &st) in t.iter_mut().zip(state) {
+        if st == 2 {
+            tri.swap(1, 2);
+            report.flipped_faces += 1;
+        }
+    }
+}
+
+/// Pinched vertices: input vertices split into several fans (`copies_of` lists the input vertex
+/// of each copy) although no non-manifold or cut edge (unpaired but shared) touches them.
+/// Counted on the first fan split, so the count describes the input, not the detaching after.
+fn count_pinched_vertices(
+    tris: &[[u32; 3]],
+    mate: &[u32],
+    flags: &[u8],
+    copies_of: &[u32],
+    nv: usize,
+) -> usize {
+    let mut split = vec![0u8; nv]; // 1 split, 2 split and touched by such an edge
+    for &s in copies_of {
+        split[s as usize] = 1;
+    }
+    let explained = |e: u32| {
+        let f = flags[e as usize];
+        f & NON_MANIFOLD != 0 || (mate[e as usize] == NONE && f & SHARED != 0)
+    };
+    for c in 0..3 * tris.len() as u32 {
+        let v = corner_from(tris, c) as usize;
+        if split[v] == 1 && (explained(c) || explained(prev_c(c))) {
+            split[v] = 2;
+        }
+    }
+    split.iter().filter(|&&s| s == 1).count()
+}
+
+/// After fan splitting two distinct edges may still join the same two vertices (a multi-edge:
+/// e.g. two pairs of a non-manifold edge whose fans meet again around both endpoints). A
+/// half-edge mesh can hold that but a triangle list cannot express it, and every later stage
+/// (the PM's base mesh, the .pyr file) rebuilds from triangles. Detach one endpoint into one
+/// copy per triangle (unpair all its edges) and split fans again; each round removes
+/// pairings, so this ends. Takes and returns [`assign_fans`]' result.
+///
+/// Only edges shared by more than two triangles, or cut to orient, can leave two edges on one
+/// vertex pair: each other pair of vertices has a single edge group of at most two triangles,
+/// which stays one edge whatever the fan splitting does.
+fn detach_multi_edges(
+    tris: &[[u32; 3]],
+    mate: &mut [u32],
+    nv: usize,
+    fans: (Vec<u32>, Vec<u32>, Vec<bool>),
+    report: &mut BuildReport,
+) -> (Vec<u32>, Vec<u32>, Vec<bool>) {
+    let (mut corner_vertex, mut vertex_source, mut seen) = fans;
     let mut detach = if report.non_manifold_edges > 0 || report.orientation_cuts > 0 {
-        multi_edge_vertices(&mate, &corner_vertex, vertex_source.len())
+        multi_edge_vertices(mate, &corner_vertex, vertex_source.len())
     } else {
         Vec::new()
     };
@@ -827,7 +904,7 @@ fn repair_triangles(
         for &u in &detach {
             marked[u as usize] = true;
         }
-        for c in 0..nh as u32 {
+        for c in 0..mate.len() as u32 {
             if marked[corner_vertex[c as usize] as usize] {
                 for e in [c, prev_c(c)] {
                     let m = mate[e as usize];
@@ -838,34 +915,64 @@ fn repair_triangles(
                 }
             }
         }
-        (corner_vertex, vertex_source, seen) = assign_fans(tris, &mate, nv);
-        detach = multi_edge_vertices(&mate, &corner_vertex, vertex_source.len());
+        (corner_vertex, vertex_source, seen) = assign_fans(tris, mate, nv);
+        detach = multi_edge_vertices(mate, &corner_vertex, vertex_source.len());
     }
-    report.unreferenced_vertices = seen.iter().filter(|s| !**s).count();
-    drop(seen);
-    report.split_vertices = vertex_source.len() - nv;
-    drop(flags);
-    (
-        CornerTable {
-            corner_vertex,
-            mate,
-        },
-        vertex_source,
-    )
+    (corner_vertex, vertex_source, seen)
 }
 
 /// Step 4 of the build: the half-edge records of a corner table. Handles are predicted with
 /// `fresh_key`: half-edge c is insertion c, boundary half-edges follow in order of their
 /// interior twins.
 fn assemble(positions: &[DVec3], corners: &CornerTable, source: &SourceMap) -> Mesh {
-    let CornerTable {
-        corner_vertex,
-        mate,
-    } = corners;
-    let vertex_source = &source.vertex_source;
-    let nh = corner_vertex.len();
-    let nt = nh / 3;
-    let n_total = vertex_source.len();
+    let links = Links::of(corners, source.vertex_source.len());
+    // The three record maps are independent: the half-edges (most of the memory, so most of
+    // the page faults) fill on one thread while the vertices and faces fill on another.
+    let mut mesh = Mesh::new();
+    let (vertices, faces, halfedges) = (&mut mesh.vertices, &mut mesh.faces, &mut mesh.halfedges);
+    rayon::join(
+        || {
+            insert_vertices(vertices, positions, &source.vertex_source, &links);
+            insert_faces(faces, corners.corner_vertex.len() / 3);
+        },
+        || insert_halfedges(halfedges, corners, &links),
+    );
+    mesh
+}
+
+/// How the records link up beyond the corner table: the boundary half-edges and the
+/// half-edge each vertex stores.
+struct Links {
+    /// The slot of each corner's boundary twin (`NONE` for a paired half-edge).
+    boundary_index: Vec<u32>,
+    n_boundary: u32,
+    /// Per vertex its single boundary out-going and in-coming half-edge (unique after fan
+    /// splitting), or `NONE`.
+    boundary_out: Vec<u32>,
+    boundary_in: Vec<u32>,
+    /// Per vertex its first corner, or `NONE`.
+    first_corner: Vec<u32>,
+}
+
+impl Links {
+    fn of(corners: &CornerTable, n_vertices: usize) -> Links {
+        let (boundary_index, n_boundary) = number_boundary_halfedges(&corners.mate);
+        let (boundary_out, boundary_in) =
+            boundary_ends(&corners.corner_vertex, &boundary_index, n_vertices);
+        Links {
+            boundary_index,
+            n_boundary,
+            boundary_out,
+            boundary_in,
+            first_corner: first_corners(&corners.corner_vertex, n_vertices),
+        }
+    }
+}
+
+/// The slot of the boundary twin of every unpaired half-edge (after all `mate.len()` interior
+/// ones, in corner order), and how many there are.
+fn number_boundary_halfedges(mate: &[u32]) -> (Vec<u32>, u32) {
+    let nh = mate.len();
     let mut boundary_index = vec![NONE; nh];
     let mut n_boundary = 0u32;
     for (c, &m) in mate.iter().enumerate() {
@@ -874,91 +981,120 @@ fn assemble(positions: &[DVec3], corners: &CornerTable, source: &SourceMap) -> M
             n_boundary += 1;
         }
     }
-    // Per vertex its single boundary out-going and in-coming half-edge (unique after fan
-    // splitting). The boundary twin of c leaves c's head and arrives at c's tail.
-    let mut boundary_out = vec![NONE; n_total];
-    let mut boundary_in = vec![NONE; n_total];
-    for c in 0..nh as u32 {
+    (boundary_index, n_boundary)
+}
+
+/// Per vertex its boundary out-going and in-coming half-edge. The boundary twin of c leaves
+/// c's head and arrives at c's tail.
+fn boundary_ends(
+    corner_vertex: &[u32],
+    boundary_index: &[u32],
+    n_vertices: usize,
+) -> (Vec<u32>, Vec<u32>) {
+    let mut boundary_out = vec![NONE; n_vertices];
+    let mut boundary_in = vec![NONE; n_vertices];
+    for c in 0..corner_vertex.len() as u32 {
         let b = boundary_index[c as usize];
         if b != NONE {
             boundary_out[corner_vertex[next_c(c) as usize] as usize] = b;
             boundary_in[corner_vertex[c as usize] as usize] = b;
         }
     }
-    // A vertex's half-edge: its boundary out-going one, else its first corner's.
-    let mut first_corner = vec![NONE; n_total];
+    (boundary_out, boundary_in)
+}
+
+/// Per vertex the first corner at it.
+fn first_corners(corner_vertex: &[u32], n_vertices: usize) -> Vec<u32> {
+    let mut first_corner = vec![NONE; n_vertices];
     for (c, &v) in corner_vertex.iter().enumerate() {
         let f = &mut first_corner[v as usize];
         if *f == NONE {
             *f = c as u32;
         }
     }
-    // The three record maps are independent: the half-edges (most of the memory, so most of
-    // the page faults) fill on one thread while the vertices and faces fill on another.
-    let mut mesh = Mesh::new();
-    let (vertices, faces, halfedges) = (&mut mesh.vertices, &mut mesh.faces, &mut mesh.halfedges);
-    rayon::join(
-        || {
-            vertices.reserve(n_total);
-            for (i, &s) in vertex_source.iter().enumerate() {
-                let halfedge = if boundary_out[i] != NONE {
-                    Some(fresh_key(boundary_out[i] as usize))
-                } else if first_corner[i] != NONE {
-                    Some(fresh_key(first_corner[i] as usize))
-                } else {
-                    None
-                };
-                let _k = vertices.insert(VertexRecord {
-                    halfedge,
-                    position: positions[s as usize],
-                });
-                debug_assert_eq!(_k, fresh_key(i));
-            }
-            faces.reserve(nt);
-            for t in 0..nt {
-                let _k = faces.insert(FaceRecord {
-                    halfedge: fresh_key(3 * t),
-                });
-                debug_assert_eq!(_k, fresh_key::<FaceId>(t));
-            }
-        },
-        || {
-            halfedges.reserve(nh + n_boundary as usize);
-            for c in 0..nh as u32 {
-                let m = mate[c as usize];
-                let twin = if m != NONE {
-                    m
-                } else {
-                    boundary_index[c as usize]
-                };
-                let _k = halfedges.insert(HalfedgeRecord {
-                    to: fresh_key(corner_vertex[next_c(c) as usize] as usize),
-                    next: fresh_key(next_c(c) as usize),
-                    prev: fresh_key(prev_c(c) as usize),
-                    twin: fresh_key(twin as usize),
-                    face: Some(fresh_key((c / 3) as usize)),
-                });
-                debug_assert_eq!(_k, fresh_key(c as usize));
-            }
-            for c in 0..nh as u32 {
-                let b = boundary_index[c as usize];
-                if b == NONE {
-                    continue;
-                }
-                // b runs from c's head back to c's tail; the boundary loop goes on from the
-                // tail and comes in at the head.
-                let tail = corner_vertex[c as usize] as usize;
-                let head = corner_vertex[next_c(c) as usize] as usize;
-                let _k = halfedges.insert(HalfedgeRecord {
-                    to: fresh_key(tail),
-                    next: fresh_key(boundary_out[tail] as usize),
-                    prev: fresh_key(boundary_in[head] as usize),
-                    twin: fresh_key(c as usize),
-                    face: None,
-                });
-                debug_assert_eq!(_k, fresh_key(b as usize));
-            }
-        },
-    );
-    mesh
+    first_corner
+}
+
+/// Vertex `i` at the position of its input vertex; its half-edge is its boundary out-going
+/// one, else its first corner's.
+fn insert_vertices(
+    vertices: &mut SlotMap<VertexId, VertexRecord>,
+    positions: &[DVec3],
+    vertex_source: &[u32],
+    links: &Links,
+) {
+    vertices.reserve(vertex_source.len());
+    for (i, &s) in vertex_source.iter().enumerate() {
+        let halfedge = if links.boundary_out[i] != NONE {
+            Some(fresh_key(links.boundary_out[i] as usize))
+        } else if links.first_corner[i] != NONE {
+            Some(fresh_key(links.first_corner[i] as usize))
+        } else {
+            None
+        };
+        let _k = vertices.insert(VertexRecord {
+            halfedge,
+            position: positions[s as usize],
+        });
+        debug_assert_eq!(_k, fresh_key(i));
+    }
+}
+
+/// Face `t` stores half-edge `3t`.
+fn insert_faces(faces: &mut SlotMap<FaceId, FaceRecord>, nt: usize) {
+    faces.reserve(nt);
+    for t in 0..nt {
+        let _k = faces.insert(FaceRecord {
+            halfedge: fresh_key(3 * t),
+        });
+        debug_assert_eq!(_k, fresh_key::<FaceId>(t));
+    }
+}
+
+/// The interior half-edges in corner order, then the boundary ones.
+fn insert_halfedges(
+    halfedges: &mut SlotMap<HalfedgeId, HalfedgeRecord>,
+    corners: &CornerTable,
+    links: &Links,
+) {
+    let CornerTable {
+        corner_vertex,
+        mate,
+    } = corners;
+    let nh = corner_vertex.len();
+    halfedges.reserve(nh + links.n_boundary as usize);
+    for c in 0..nh as u32 {
+        let m = mate[c as usize];
+        let twin = if m != NONE {
+            m
+        } else {
+            links.boundary_index[c as usize]
+        };
+        let _k = halfedges.insert(HalfedgeRecord {
+            to: fresh_key(corner_vertex[next_c(c) as usize] as usize),
+            next: fresh_key(next_c(c) as usize),
+            prev: fresh_key(prev_c(c) as usize),
+            twin: fresh_key(twin as usize),
+            face: Some(fresh_key((c / 3) as usize)),
+        });
+        debug_assert_eq!(_k, fresh_key(c as usize));
+    }
+    for c in 0..nh as u32 {
+        let b = links.boundary_index[c as usize];
+        if b == NONE {
+            continue;
+        }
+        // b runs from c's head back to c's tail; the boundary loop goes on from the
+        // tail and comes in at the head.
+        let tail = corner_vertex[c as usize] as usize;
+        let head = corner_vertex[next_c(c) as usize] as usize;
+        let _k = halfedges.insert(HalfedgeRecord {
+            to: fresh_key(tail),
+            next: fresh_key(links.boundary_out[tail] as usize),
+            prev: fresh_key(links.boundary_in[head] as usize),
+            twin: fresh_key(c as usize),
+            face: None,
+        });
+        debug_assert_eq!(_k, fresh_key(b as usize));
+    }
 }

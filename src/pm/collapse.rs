@@ -211,6 +211,46 @@ pub fn vertex_split(
     position: DVec3,
 ) -> Result<VertexId, SplitError> {
     let v = survivor;
+    check_split_vertices(mesh, v, left, right)?;
+    let wings = find_wings(mesh, v, left, right)?;
+    let fan = collect_fan(mesh, &wings)?;
+    let s1 = wings.s2.map(|s| mesh.twin(s));
+    let t1 = wings.t2.map(|t| mesh.twin(t));
+    let new = insert_records(mesh, position, left.is_some(), right.is_some());
+    redirect_fan(mesh, &fan, wings.t2, s1, new.u);
+    link_new_edge(mesh, &new, v);
+    match (left, new.h1, new.h2, t1, wings.t2) {
+        (Some(vl), Some(h1), Some(h2), Some(t1), Some(t2)) => {
+            rebuild_left_face(mesh, &new, vl, [h1, h2], [t1, t2])
+        }
+        _ => splice_boundary_h(mesh, new.h, wings.bout)?,
+    }
+    match (right, new.o1, new.o2, s1, wings.s2) {
+        (Some(vr), Some(o1), Some(o2), Some(s1), Some(s2)) => {
+            rebuild_right_face(mesh, &new, v, vr, [o1, o2], [s1, s2])
+        }
+        _ => splice_boundary_o(mesh, new.o, &fan)?,
+    }
+    set_canonical(mesh, new.u, new.h);
+    set_canonical(mesh, v, new.o);
+    if let (Some(vl), Some(h2)) = (left, new.h2) {
+        set_canonical(mesh, vl, h2);
+    }
+    if let (Some(vr), Some(o2)) = (right, new.o2) {
+        set_canonical(mesh, vr, o2);
+    }
+    Ok(new.u)
+}
+
+/// The record's vertices exist and can describe a collapse: at least one wing, two different
+/// wings, neither of them the survivor.
+#[inline]
+fn check_split_vertices(
+    mesh: &Mesh,
+    v: VertexId,
+    left: Option<VertexId>,
+    right: Option<VertexId>,
+) -> Result<(), SplitError> {
     for x in [Some(v), left, right].into_iter().flatten() {
         if !mesh.contains_vertex(x) {
             return Err(SplitError::MissingVertex);
@@ -223,6 +263,26 @@ pub fn vertex_split(
     {
         return Err(SplitError::Inconsistent);
     }
+    Ok(())
+}
+
+/// The survivor's half-edges to the wings, and its boundary out-going half-edge when a wing is
+/// missing.
+struct Wings {
+    /// `v → v_l`.
+    t2: Option<HalfedgeId>,
+    /// `v → v_r`.
+    s2: Option<HalfedgeId>,
+    bout: Option<HalfedgeId>,
+}
+
+#[inline]
+fn find_wings(
+    mesh: &Mesh,
+    v: VertexId,
+    left: Option<VertexId>,
+    right: Option<VertexId>,
+) -> Result<Wings, SplitError> {
     let find = |x: VertexId| mesh.find_halfedge(v, x).ok_or(SplitError::Inconsistent);
     let t2 = left.map(find).transpose()?;
     let s2 = right.map(find).transpose()?;
@@ -236,8 +296,16 @@ pub fn vertex_split(
             Some(b)
         }
     };
-    // The fan that moves to the new vertex (out-going half-edges of v, CCW).
-    let start = match (t2, bout) {
+    Ok(Wings { t2, s2, bout })
+}
+
+/// The fan that moves to the new vertex: the survivor's out-going half-edges, counter-clockwise
+/// from the edge to the left wing (or the one after the boundary out-edge) to the edge to the
+/// right wing (exclusive; or through the boundary out-edge).
+#[inline]
+fn collect_fan(mesh: &Mesh, wings: &Wings) -> Result<SmallVec<[HalfedgeId; 16]>, SplitError> {
+    let (t2, s2) = (wings.t2, wings.s2);
+    let start = match (t2, wings.bout) {
         (Some(t2), _) => t2,
         (None, Some(b)) => ccw(mesh, b),
         (None, None) => return Err(SplitError::Inconsistent),
@@ -276,30 +344,70 @@ pub fn vertex_split(
     if s2.is_some() && fan.iter().any(|&g| mesh.is_boundary_halfedge(g)) {
         return Err(SplitError::Inconsistent);
     }
-    let s1 = s2.map(|s| mesh.twin(s));
-    let t1 = t2.map(|t| mesh.twin(t));
+    Ok(fan)
+}
 
-    // Insert in the reverse order of half_edge_collapse's frees.
+/// The records a split creates (the `Option`s exist when their wing does).
+struct NewRecords {
+    u: VertexId,
+    /// `v → u`.
+    o: HalfedgeId,
+    /// `u → v`.
+    h: HalfedgeId,
+    o2: Option<HalfedgeId>,
+    o1: Option<HalfedgeId>,
+    h2: Option<HalfedgeId>,
+    h1: Option<HalfedgeId>,
+    fr: Option<FaceId>,
+    fl: Option<FaceId>,
+}
+
+/// Inserts the new records in the reverse order of [`half_edge_collapse`]'s frees, so each
+/// lands in the slot the collapse freed.
+#[inline]
+fn insert_records(mesh: &mut Mesh, position: DVec3, has_left: bool, has_right: bool) -> NewRecords {
     let u = mesh.vertices.insert(VertexRecord {
         halfedge: None,
         position,
     });
     let o = placeholder(mesh);
     let h = placeholder(mesh);
-    let (o2, o1) = if right.is_some() {
+    let (o2, o1) = if has_right {
         (Some(placeholder(mesh)), Some(placeholder(mesh)))
     } else {
         (None, None)
     };
-    let (h2, h1) = if left.is_some() {
+    let (h2, h1) = if has_left {
         (Some(placeholder(mesh)), Some(placeholder(mesh)))
     } else {
         (None, None)
     };
-    let fr = right.map(|_| mesh.faces.insert(FaceRecord { halfedge: o }));
-    let fl = left.map(|_| mesh.faces.insert(FaceRecord { halfedge: h }));
+    let fr = has_right.then(|| mesh.faces.insert(FaceRecord { halfedge: o }));
+    let fl = has_left.then(|| mesh.faces.insert(FaceRecord { halfedge: h }));
+    NewRecords {
+        u,
+        o,
+        h,
+        o2,
+        o1,
+        h2,
+        h1,
+        fr,
+        fl,
+    }
+}
 
-    for &g in &fan {
+/// Every half-edge that arrived at `v` from the fan (but the left wing's, which `t2`'s new twin
+/// takes over) and the right wing's `s1` now arrives at `u`.
+#[inline]
+fn redirect_fan(
+    mesh: &mut Mesh,
+    fan: &[HalfedgeId],
+    t2: Option<HalfedgeId>,
+    s1: Option<HalfedgeId>,
+    u: VertexId,
+) {
+    for &g in fan {
         if Some(g) != t2 {
             let t = mesh.halfedges[g].twin;
             mesh.halfedges[t].to = u;
@@ -308,96 +416,120 @@ pub fn vertex_split(
     if let Some(s1) = s1 {
         mesh.halfedges[s1].to = u;
     }
+}
+
+/// The new edge `h = u → v`, `o = v → u`, on the faces that will be left and right of it.
+#[inline]
+fn link_new_edge(mesh: &mut Mesh, new: &NewRecords, v: VertexId) {
     {
-        let r = &mut mesh.halfedges[h];
+        let r = &mut mesh.halfedges[new.h];
         r.to = v;
-        r.twin = o;
-        r.face = fl;
+        r.twin = new.o;
+        r.face = new.fl;
     }
     {
-        let r = &mut mesh.halfedges[o];
-        r.to = u;
-        r.twin = h;
-        r.face = fr;
+        let r = &mut mesh.halfedges[new.o];
+        r.to = new.u;
+        r.twin = new.h;
+        r.face = new.fr;
     }
-    match (left, h1, h2, t1, t2) {
-        (Some(vl), Some(h1), Some(h2), Some(t1), Some(t2)) => {
-            mesh.halfedges[h1] = HalfedgeRecord {
-                to: vl,
-                next: h2,
-                prev: h,
-                twin: t1,
-                face: fl,
-            };
-            mesh.halfedges[h2] = HalfedgeRecord {
-                to: u,
-                next: h,
-                prev: h1,
-                twin: t2,
-                face: fl,
-            };
-            mesh.halfedges[h].next = h1;
-            mesh.halfedges[h].prev = h2;
-            mesh.halfedges[t1].twin = h1;
-            mesh.halfedges[t2].twin = h2;
-            if let Some(fl) = fl {
-                mesh.faces[fl].halfedge = min_slot([h, h1, h2]);
-            }
-        }
-        _ => {
-            // h is a boundary half-edge: splice it in front of v's boundary out-edge.
-            let b = bout.ok_or(SplitError::Inconsistent)?;
-            let bin = mesh.halfedges[b].prev;
-            mesh.halfedges[h].prev = bin;
-            mesh.halfedges[h].next = b;
-            mesh.halfedges[bin].next = h;
-            mesh.halfedges[b].prev = h;
-        }
+}
+
+/// The face `f_l = (u, v, v_l)`: `h`, `h1 = v → v_l`, `h2 = v_l → u`, twinned with `t1`, `t2`.
+#[inline]
+fn rebuild_left_face(
+    mesh: &mut Mesh,
+    new: &NewRecords,
+    vl: VertexId,
+    [h1, h2]: [HalfedgeId; 2],
+    [t1, t2]: [HalfedgeId; 2],
+) {
+    let (h, fl) = (new.h, new.fl);
+    mesh.halfedges[h1] = HalfedgeRecord {
+        to: vl,
+        next: h2,
+        prev: h,
+        twin: t1,
+        face: fl,
+    };
+    mesh.halfedges[h2] = HalfedgeRecord {
+        to: new.u,
+        next: h,
+        prev: h1,
+        twin: t2,
+        face: fl,
+    };
+    mesh.halfedges[h].next = h1;
+    mesh.halfedges[h].prev = h2;
+    mesh.halfedges[t1].twin = h1;
+    mesh.halfedges[t2].twin = h2;
+    if let Some(fl) = fl {
+        mesh.faces[fl].halfedge = min_slot([h, h1, h2]);
     }
-    match (right, o1, o2, s1, s2) {
-        (Some(vr), Some(o1), Some(o2), Some(s1), Some(s2)) => {
-            mesh.halfedges[o1] = HalfedgeRecord {
-                to: vr,
-                next: o2,
-                prev: o,
-                twin: s1,
-                face: fr,
-            };
-            mesh.halfedges[o2] = HalfedgeRecord {
-                to: v,
-                next: o,
-                prev: o1,
-                twin: s2,
-                face: fr,
-            };
-            mesh.halfedges[o].next = o1;
-            mesh.halfedges[o].prev = o2;
-            mesh.halfedges[s1].twin = o1;
-            mesh.halfedges[s2].twin = o2;
-            if let Some(fr) = fr {
-                mesh.faces[fr].halfedge = min_slot([o, o1, o2]);
-            }
-        }
-        _ => {
-            // o is a boundary half-edge: it runs v→u in front of u's boundary out-edge, the
-            // last half-edge of the fan.
-            let gk = *fan.last().ok_or(SplitError::Inconsistent)?;
-            let p = mesh.halfedges[gk].prev;
-            mesh.halfedges[o].prev = p;
-            mesh.halfedges[o].next = gk;
-            mesh.halfedges[p].next = o;
-            mesh.halfedges[gk].prev = o;
-        }
+}
+
+/// Without a left face `h` is a boundary half-edge: spliced in front of v's boundary
+/// out-edge.
+#[inline]
+fn splice_boundary_h(
+    mesh: &mut Mesh,
+    h: HalfedgeId,
+    bout: Option<HalfedgeId>,
+) -> Result<(), SplitError> {
+    let b = bout.ok_or(SplitError::Inconsistent)?;
+    let bin = mesh.halfedges[b].prev;
+    mesh.halfedges[h].prev = bin;
+    mesh.halfedges[h].next = b;
+    mesh.halfedges[bin].next = h;
+    mesh.halfedges[b].prev = h;
+    Ok(())
+}
+
+/// The face `f_r = (v, u, v_r)`: `o`, `o1 = u → v_r`, `o2 = v_r → v`, twinned with `s1`, `s2`.
+#[inline]
+fn rebuild_right_face(
+    mesh: &mut Mesh,
+    new: &NewRecords,
+    v: VertexId,
+    vr: VertexId,
+    [o1, o2]: [HalfedgeId; 2],
+    [s1, s2]: [HalfedgeId; 2],
+) {
+    let (o, fr) = (new.o, new.fr);
+    mesh.halfedges[o1] = HalfedgeRecord {
+        to: vr,
+        next: o2,
+        prev: o,
+        twin: s1,
+        face: fr,
+    };
+    mesh.halfedges[o2] = HalfedgeRecord {
+        to: v,
+        next: o,
+        prev: o1,
+        twin: s2,
+        face: fr,
+    };
+    mesh.halfedges[o].next = o1;
+    mesh.halfedges[o].prev = o2;
+    mesh.halfedges[s1].twin = o1;
+    mesh.halfedges[s2].twin = o2;
+    if let Some(fr) = fr {
+        mesh.faces[fr].halfedge = min_slot([o, o1, o2]);
     }
-    set_canonical(mesh, u, h);
-    set_canonical(mesh, v, o);
-    if let (Some(vl), Some(h2)) = (left, h2) {
-        set_canonical(mesh, vl, h2);
-    }
-    if let (Some(vr), Some(o2)) = (right, o2) {
-        set_canonical(mesh, vr, o2);
-    }
-    Ok(u)
+}
+
+/// Without a right face `o` is a boundary half-edge: it runs v→u in front of u's boundary
+/// out-edge, the last half-edge of the fan.
+#[inline]
+fn splice_boundary_o(mesh: &mut Mesh, o: HalfedgeId, fan: &[HalfedgeId]) -> Result<(), SplitError> {
+    let gk = *fan.last().ok_or(SplitError::Inconsistent)?;
+    let p = mesh.halfedges[gk].prev;
+    mesh.halfedges[o].prev = p;
+    mesh.halfedges[o].next = gk;
+    mesh.halfedges[p].next = o;
+    mesh.halfedges[gk].prev = o;
+    Ok(())
 }
 
 /// Reusable per-vertex marks for the link-condition test (indexed by vertex slot).

@@ -128,8 +128,16 @@ fn sorted_triangles(tris: impl Iterator<Item = [u32; 3]>) -> Vec<[u32; 3]> {
 /// otherwise.
 pub(crate) fn fuzz_operations(data: &[u8]) {
     let mut r = Bytes { data, pos: 0 };
-    let (mut pos, tris) = mesh_from_bytes(&mut r);
-    snap_corners(&mut r, &mut pos, &tris);
+    let mesh = built_mesh(&mut r);
+    check_collapses_undone(&mut r, &mesh);
+    let pm = progressive_mesh(&mut r, &mesh);
+    check_level_walk(&mut r, &pm);
+}
+
+/// A generated mesh through the builder, which must succeed and produce a valid mesh.
+fn built_mesh(r: &mut Bytes) -> Mesh {
+    let (mut pos, tris) = mesh_from_bytes(r);
+    snap_corners(r, &mut pos, &tris);
     let built = match Mesh::from_triangles(&pos, &tris) {
         Ok(b) => b,
         Err(e) => panic!("builder failed on a generated mesh: {e}"),
@@ -138,59 +146,64 @@ pub(crate) fn fuzz_operations(data: &[u8]) {
     if let Err(e) = mesh.validate() {
         panic!("builder output invalid: {e}");
     }
+    mesh
+}
 
-    // Raw primitives: random legal collapses, undone in stack order.
-    {
-        let mut m = mesh.clone();
-        let original = MeshRecords::of(&m);
-        let legality = Legality {
-            max_valence: 3 + (r.u8() % 40) as usize,
-            min_normal_cos: -1.0,
-            min_quality: 0.0,
-        };
-        let mut marks = Marks::default();
-        let mut stack = Vec::new();
-        // Re-inserted vertices get new generations: track the live handle of every slot.
-        let mut handle: Vec<crate::mesh::VertexId> = vec![Default::default(); m.n_vertices()];
-        for v in m.vertices() {
-            handle[v.slot()] = v;
-        }
-        let rounds = r.u8() % 16;
-        for _ in 0..rounds {
-            let hs: Vec<HalfedgeId> = m.halfedges().collect();
-            if hs.is_empty() {
-                break;
-            }
-            let h = hs[r.u8() as usize % hs.len()];
-            if is_collapse_legal(&m, h, &legality, &mut marks) {
-                let before = MeshRecords::of(&m);
-                let u = m.from_vertex(h);
-                let p = m.position(u);
-                let topo = half_edge_collapse(&mut m, h);
-                if let Err(e) = m.validate() {
-                    panic!("collapse broke the mesh: {e}");
-                }
-                stack.push((topo, p, before));
-            }
-        }
-        while let Some((topo, p, before)) = stack.pop() {
-            let h = |x: crate::mesh::VertexId| handle[x.slot()];
-            match vertex_split(&mut m, h(topo.to), topo.left.map(h), topo.right.map(h), p) {
-                Ok(u) => {
-                    assert_eq!(u.slot(), topo.from.slot(), "split reused another slot");
-                    handle[u.slot()] = u;
-                }
-                Err(e) => panic!("split of a collapse failed: {e}"),
-            }
-            assert_eq!(
-                MeshRecords::of(&m),
-                before,
-                "split∘collapse is not the identity"
-            );
-        }
-        assert_eq!(MeshRecords::of(&m), original);
+/// Raw primitives: random legal collapses, undone in stack order, must give back the records
+/// exactly, split by split.
+fn check_collapses_undone(r: &mut Bytes, mesh: &Mesh) {
+    let mut m = mesh.clone();
+    let original = MeshRecords::of(&m);
+    let legality = Legality {
+        max_valence: 3 + (r.u8() % 40) as usize,
+        min_normal_cos: -1.0,
+        min_quality: 0.0,
+    };
+    let mut marks = Marks::default();
+    let mut stack = Vec::new();
+    // Re-inserted vertices get new generations: track the live handle of every slot.
+    let mut handle: Vec<crate::mesh::VertexId> = vec![Default::default(); m.n_vertices()];
+    for v in m.vertices() {
+        handle[v.slot()] = v;
     }
+    let rounds = r.u8() % 16;
+    for _ in 0..rounds {
+        let hs: Vec<HalfedgeId> = m.halfedges().collect();
+        if hs.is_empty() {
+            break;
+        }
+        let h = hs[r.u8() as usize % hs.len()];
+        if is_collapse_legal(&m, h, &legality, &mut marks) {
+            let before = MeshRecords::of(&m);
+            let u = m.from_vertex(h);
+            let p = m.position(u);
+            let topo = half_edge_collapse(&mut m, h);
+            if let Err(e) = m.validate() {
+                panic!("collapse broke the mesh: {e}");
+            }
+            stack.push((topo, p, before));
+        }
+    }
+    while let Some((topo, p, before)) = stack.pop() {
+        let h = |x: crate::mesh::VertexId| handle[x.slot()];
+        match vertex_split(&mut m, h(topo.to), topo.left.map(h), topo.right.map(h), p) {
+            Ok(u) => {
+                assert_eq!(u.slot(), topo.from.slot(), "split reused another slot");
+                handle[u.slot()] = u;
+            }
+            Err(e) => panic!("split of a collapse failed: {e}"),
+        }
+        assert_eq!(
+            MeshRecords::of(&m),
+            before,
+            "split∘collapse is not the identity"
+        );
+    }
+    assert_eq!(MeshRecords::of(&m), original);
+}
 
+/// A progressive mesh of `mesh` with options from the bytes.
+fn progressive_mesh(r: &mut Bytes, mesh: &Mesh) -> ProgressiveMesh {
     let opts = PmOptions {
         target_vertices: (r.u8() % 8) as usize,
         max_normal_angle_degrees: 30.0 + (r.u8() % 151) as f64,
@@ -198,36 +211,20 @@ pub(crate) fn fuzz_operations(data: &[u8]) {
         max_valence: 4 + (r.u8() % 30) as usize,
         ..PmOptions::default()
     };
-    let pm = match ProgressiveMesh::build(&mesh, &opts, &NoProgress) {
+    match ProgressiveMesh::build(mesh, &opts, &NoProgress) {
         Ok(pm) => pm,
         Err(e) => panic!("build failed: {e}"),
-    };
+    }
+}
+
+/// Collapses, splits and level jumps from the rest of the bytes, checking the cursor after
+/// each; walking back to the finest level must give back its records exactly.
+fn check_level_walk(r: &mut Bytes, pm: &ProgressiveMesh) {
     let n0 = pm.n_base_vertices();
     let n = pm.n_vertices();
     let mut cursor = pm.cursor();
     let finest = MeshRecords::of(cursor.mesh());
-    let check = |c: &super::PmCursor| {
-        let m = c.mesh();
-        if let Err(e) = m.validate() {
-            panic!("cursor mesh invalid at level {}: {e}", c.level());
-        }
-        assert_eq!(m.n_vertices(), c.level());
-        assert_eq!(m.n_faces(), pm.n_faces_at(c.level()));
-        for v in m.vertices() {
-            let i = v.slot();
-            assert!(i < c.level(), "vertex slot {i} beyond level {}", c.level());
-            assert_eq!(
-                m.position(v).to_array().map(f64::to_bits),
-                pm.original_positions()[i].to_array().map(f64::to_bits)
-            );
-        }
-        let (_, faces) = m.to_triangles();
-        assert_eq!(
-            sorted_triangles(faces.into_iter()),
-            sorted_triangles(pm.level_triangles(c.level()).into_iter())
-        );
-    };
-    check(&cursor);
+    check_cursor(pm, &cursor);
     while r.more() {
         match r.u8() % 4 {
             0 => {
@@ -252,12 +249,36 @@ pub(crate) fn fuzz_operations(data: &[u8]) {
                 assert!(pm.n_faces_at(cursor.level()) <= f || cursor.level() == n0);
             }
         }
-        check(&cursor);
+        check_cursor(pm, &cursor);
     }
     cursor.seek(n);
     assert_eq!(
         MeshRecords::of(cursor.mesh()),
         finest,
         "walking back to the finest level is not exact"
+    );
+}
+
+/// The cursor's mesh is valid, has the level's counts, the original positions bit for bit
+/// and the level's triangles.
+fn check_cursor(pm: &ProgressiveMesh, c: &super::PmCursor) {
+    let m = c.mesh();
+    if let Err(e) = m.validate() {
+        panic!("cursor mesh invalid at level {}: {e}", c.level());
+    }
+    assert_eq!(m.n_vertices(), c.level());
+    assert_eq!(m.n_faces(), pm.n_faces_at(c.level()));
+    for v in m.vertices() {
+        let i = v.slot();
+        assert!(i < c.level(), "vertex slot {i} beyond level {}", c.level());
+        assert_eq!(
+            m.position(v).to_array().map(f64::to_bits),
+            pm.original_positions()[i].to_array().map(f64::to_bits)
+        );
+    }
+    let (_, faces) = m.to_triangles();
+    assert_eq!(
+        sorted_triangles(faces.into_iter()),
+        sorted_triangles(pm.level_triangles(c.level()).into_iter())
     );
 }

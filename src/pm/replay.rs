@@ -156,6 +156,25 @@ impl Rings {
         Ok(k)
     }
 
+    /// Points the far ends of a split's fan at the new vertex `u` instead of `v`, except the
+    /// first when it is the edge to the left wing (`has_left`), which stays with the wing's twin
+    /// (`vertex_split` re-pairs it).
+    #[inline(always)]
+    fn redirect_fan(
+        &mut self,
+        fan: [&[Entry]; 2],
+        has_left: bool,
+        v: u32,
+        u: u32,
+    ) -> Result<(), SplitError> {
+        for (k, e) in fan[0].iter().chain(fan[1]).enumerate() {
+            if k != 0 || !has_left {
+                self.rename(e.nbr, v, u)?;
+            }
+        }
+        Ok(())
+    }
+
     /// Inserts `e` at position `at` of `v`'s ring where it already lives (the inline line, or
     /// an overflow block with room); `false`, changing nothing, when the ring must move.
     /// A split inserts into both wings' rings; shifting a few entries in place costs a
@@ -573,192 +592,57 @@ impl FlatReplay {
     fn split(&mut self, il: Option<usize>, ir: Option<usize>) -> Result<(), SplitError> {
         let v = self.ring_of;
         let ring = self.ring.as_slice();
-        let n = ring.len();
-        if n == 0 {
-            return Err(SplitError::Inconsistent);
-        }
-        let left = il.map(|i| ring[i].nbr);
-        let right = ir.map(|i| ring[i].nbr);
-        if (left.is_none() && right.is_none())
-            || (left.is_some() && left == right)
-            || left == Some(v)
-            || right == Some(v)
-        {
-            return Err(SplitError::Inconsistent);
-        }
         let v_boundary = self.rings.boundary(v);
-        // Only entry 0 of a boundary vertex is a boundary half-edge.
-        let is_boundary = |k: usize| v_boundary && k == 0;
-        if (left.is_none() || right.is_none()) && !v_boundary {
-            return Err(SplitError::Inconsistent);
-        }
-        let start = il.unwrap_or(1 % n);
-        // The fan as a count of entries from `start`.
-        let mut m = 0;
-        match ir {
-            Some(ir) => {
-                let mut e = start;
-                while e != ir {
-                    if m > n || is_boundary(e) {
-                        return Err(SplitError::Inconsistent);
-                    }
-                    m += 1;
-                    e = if e + 1 == n { 0 } else { e + 1 };
-                }
-            }
-            None => {
-                let mut e = start;
-                loop {
-                    if m > n {
-                        return Err(SplitError::Inconsistent);
-                    }
-                    m += 1;
-                    if is_boundary(e) {
-                        break;
-                    }
-                    e = if e + 1 == n { 0 } else { e + 1 };
-                }
-            }
-        }
-        // The ring read from `start` on: the fan is its first `m` entries, v keeps the rest.
-        // Slices rather than an index with a wrap per entry (which cost more than the rest of
-        // a split's arithmetic).
-        let (fan, rest) = if start + m <= n {
-            (
-                [&ring[start..start + m], &[][..]],
-                [&ring[start + m..], &ring[..start]],
-            )
-        } else {
-            let wrap = start + m - n;
-            (
-                [&ring[start..], &ring[..wrap]],
-                [&ring[wrap..start], &[][..]],
-            )
-        };
-
-        // Slots in `vertex_split`'s insertion order.
+        let (left, right) = check_wings(ring, v, il, ir, v_boundary)?;
+        let start = il.unwrap_or(1 % ring.len());
+        let m = fan_length(ring.len(), start, ir, v_boundary)?;
+        let (fan, rest) = cut_fan(ring, start, m);
         let u = self.rings.len() as u32;
-        let base = self.n_halfedges;
-        let (o, h) = (base, base + 1);
-        let mut next = base + 2;
-        // (NIL for the pair of a missing wing.)
-        let (o2, o1) = if right.is_some() {
-            next += 2;
-            (next - 2, next - 1)
-        } else {
-            (NIL, NIL)
+        let slots = SplitSlots::allocate(
+            &mut self.n_halfedges,
+            &mut self.face_he,
+            left.is_some(),
+            right.is_some(),
+        );
+        self.rings.redirect_fan(fan, il.is_some(), v, u)?;
+        let new_rings = NewRings {
+            v,
+            u,
+            left,
+            right,
+            v_boundary,
+            old_first: ring[0].slot,
+            fan,
+            m,
+            rest,
+            len_u: m + 1 + usize::from(right.is_some()),
+            len_v: ring.len() - m + 1 + usize::from(left.is_some()),
+            slots,
         };
-        let (h2, h1) = if left.is_some() {
-            next += 2;
-            (next - 2, next - 1)
-        } else {
-            (NIL, NIL)
-        };
-        self.n_halfedges = next;
-        if right.is_some() {
-            self.face_he.push(o);
-        }
-        if left.is_some() {
-            self.face_he.push(h);
-        }
-
-        // The fan's far ends now point at u (the edge to the left wing stays with the wing's
-        // twin, which `vertex_split` re-pairs).
-        for (k, e) in fan[0].iter().chain(fan[1]).enumerate() {
-            if k != 0 || il.is_none() {
-                self.rings.rename(e.nbr, v, u)?;
-            }
-        }
-
-        // u: (u→v) then the fan then (u→v_r); canonical: h without a left face, the old
-        // boundary out-edge (the fan's last) without a right face, else the smallest slot.
-        // v: what is left of its ring from the fan's end round to its start, then (v→v_l),
-        // then (v→u). Canonical: o without a right face, the unchanged boundary out-edge of a
-        // boundary v, else the smallest slot.
-        let old_first = ring[0].slot;
-        let len_u = m + 1 + usize::from(right.is_some());
-        let len_v = n - m + 1 + usize::from(left.is_some());
-        if self.ring.inline && len_u <= INLINE && len_v <= INLINE {
+        if self.ring.inline && new_rings.len_u <= INLINE && new_rings.len_v <= INLINE {
             // The common case (every ring at most 15 long): both rings built on the stack and
             // written into their lines whole, with no scratch vector and no `memmove`.
             let mut seq = [BLANK; 2 * INLINE + 2];
-            seq[0] = Entry { nbr: v, slot: h };
-            let k = put_run(&mut seq, 1, fan);
-            if let Some(r) = right {
-                seq[k] = Entry { nbr: r, slot: o1 };
-            }
-            let (u_start, u_boundary) = match (left, right) {
-                (None, _) => (0, true),
-                (_, None) => (m, true),
-                _ => (min_slot(&seq[..len_u]), false),
-            };
-            let mut line = Line {
-                hdr: Entry {
-                    nbr: len_u as u32 | if u_boundary { BOUNDARY } else { 0 },
-                    slot: NIL,
-                },
-                e: [BLANK; INLINE],
-            };
-            write_rotated(&mut line.e, &mut seq, len_u, u_start);
-            self.rings.lines.push(line);
-
-            let mut k = put_run(&mut seq, 0, rest);
-            if let Some(l) = left {
-                seq[k] = Entry { nbr: l, slot: h1 };
-                k += 1;
-            }
-            seq[k] = Entry { nbr: u, slot: o };
-            let v_start = if right.is_none() {
-                len_v - 1
-            } else if v_boundary {
-                seq[..len_v]
-                    .iter()
-                    .position(|x| x.slot == old_first)
-                    .ok_or(SplitError::Inconsistent)?
-            } else {
-                min_slot(&seq[..len_v])
-            };
-            let line = &mut self.rings.lines[v as usize];
-            write_rotated(&mut line.e, &mut seq, len_v, v_start);
-            line.hdr.nbr = len_v as u32 | if v_boundary { BOUNDARY } else { 0 };
+            new_rings.push_u_line(&mut self.rings, &mut seq);
+            new_rings.rewrite_v_line(&mut self.rings, &mut seq)?;
         } else {
-            self.scratch.clear();
-            self.scratch.push(Entry { nbr: v, slot: h });
-            self.scratch.extend_from_slice(fan[0]);
-            self.scratch.extend_from_slice(fan[1]);
-            if let Some(r) = right {
-                self.scratch.push(Entry { nbr: r, slot: o1 });
-            }
-            let (u_start, u_boundary) = match (left, right) {
-                (None, _) => (0, true),
-                (_, None) => (m, true),
-                _ => (min_slot(&self.scratch), false),
-            };
-            self.rings.push_empty();
-            self.rings.set(u, &self.scratch, u_start, u_boundary);
-
-            self.scratch.clear();
-            self.scratch.extend_from_slice(rest[0]);
-            self.scratch.extend_from_slice(rest[1]);
-            if let Some(l) = left {
-                self.scratch.push(Entry { nbr: l, slot: h1 });
-            }
-            self.scratch.push(Entry { nbr: u, slot: o });
-            let v_start = if right.is_none() {
-                self.scratch.len() - 1
-            } else if v_boundary {
-                self.scratch
-                    .iter()
-                    .position(|x| x.slot == old_first)
-                    .ok_or(SplitError::Inconsistent)?
-            } else {
-                min_slot(&self.scratch)
-            };
-            self.rings.set(v, &self.scratch, v_start, v_boundary);
+            new_rings.push_u_ring(&mut self.rings, &mut self.scratch);
+            new_rings.set_v_ring(&mut self.rings, &mut self.scratch)?;
         }
+        self.link_wings(v, u, left, right, slots)
+    }
 
-        // The wings gain an edge to u just before their edge to v; their canonical half-edge
-        // (old, or boundary) stays entry 0.
+    /// The wings gain an edge to u just before their edge to v; their canonical half-edge
+    /// (old, or boundary) stays entry 0.
+    #[inline(always)]
+    fn link_wings(
+        &mut self,
+        v: u32,
+        u: u32,
+        left: Option<u32>,
+        right: Option<u32>,
+        slots: SplitSlots,
+    ) -> Result<(), SplitError> {
         if let Some(l) = left {
             let k = self
                 .rings
@@ -766,12 +650,26 @@ impl FlatReplay {
                 .iter()
                 .position(|x| x.nbr == v)
                 .ok_or(SplitError::Inconsistent)?;
-            self.insert_before(l, k, Entry { nbr: u, slot: h2 });
+            self.insert_before(
+                l,
+                k,
+                Entry {
+                    nbr: u,
+                    slot: slots.h2,
+                },
+            );
         }
         if let Some(r) = right {
             // v_r's old edge to v now runs to u; the new o2 = v_r→v goes before it.
             let k = self.rings.rename(r, v, u)?;
-            self.insert_before(r, k, Entry { nbr: v, slot: o2 });
+            self.insert_before(
+                r,
+                k,
+                Entry {
+                    nbr: v,
+                    slot: slots.o2,
+                },
+            );
         }
         Ok(())
     }
@@ -935,6 +833,292 @@ fn bucket(t: &[u32; 3], n: usize) -> usize {
 /// per vertex), which is several times faster than a comparison sort of a million faces.
 pub fn canonical_sorted(faces: &[[u32; 3]], n_vertices: usize) -> Vec<[u32; 3]> {
     FaceBuckets::new(faces, n_vertices).into_sorted()
+}
+
+/// The wings' vertices (from their indices in `v`'s listed ring), checked as `vertex_split`
+/// checks them: at least one wing, two different wings, neither is `v`, and a missing wing
+/// only at a boundary vertex.
+#[inline(always)]
+fn check_wings(
+    ring: &[Entry],
+    v: u32,
+    il: Option<usize>,
+    ir: Option<usize>,
+    v_boundary: bool,
+) -> Result<(Option<u32>, Option<u32>), SplitError> {
+    if ring.is_empty() {
+        return Err(SplitError::Inconsistent);
+    }
+    let left = il.map(|i| ring[i].nbr);
+    let right = ir.map(|i| ring[i].nbr);
+    if (left.is_none() && right.is_none())
+        || (left.is_some() && left == right)
+        || left == Some(v)
+        || right == Some(v)
+    {
+        return Err(SplitError::Inconsistent);
+    }
+    if (left.is_none() || right.is_none()) && !v_boundary {
+        return Err(SplitError::Inconsistent);
+    }
+    Ok((left, right))
+}
+
+/// The number of entries of an `n`-entry ring that move to the new vertex, counted from
+/// `start`: up to the right wing's entry `ir` (exclusive), or through the boundary out-edge.
+/// Only entry 0 of a boundary vertex is a boundary half-edge.
+#[inline(always)]
+fn fan_length(
+    n: usize,
+    start: usize,
+    ir: Option<usize>,
+    v_boundary: bool,
+) -> Result<usize, SplitError> {
+    let is_boundary = |k: usize| v_boundary && k == 0;
+    let mut m = 0;
+    let mut e = start;
+    match ir {
+        Some(ir) => {
+            while e != ir {
+                if m > n || is_boundary(e) {
+                    return Err(SplitError::Inconsistent);
+                }
+                m += 1;
+                e = if e + 1 == n { 0 } else { e + 1 };
+            }
+        }
+        None => loop {
+            if m > n {
+                return Err(SplitError::Inconsistent);
+            }
+            m += 1;
+            if is_boundary(e) {
+                break;
+            }
+            e = if e + 1 == n { 0 } else { e + 1 };
+        },
+    }
+    Ok(m)
+}
+
+/// The ring read from `start` on, cut into the fan (its first `m` entries) and the rest, which
+/// `v` keeps; each as at most two slices. Slices rather than an index with a wrap per entry
+/// (which cost more than the rest of a split's arithmetic).
+#[inline(always)]
+fn cut_fan(ring: &[Entry], start: usize, m: usize) -> (Run<'_>, Run<'_>) {
+    let n = ring.len();
+    if start + m <= n {
+        (
+            [&ring[start..start + m], &[][..]],
+            [&ring[start + m..], &ring[..start]],
+        )
+    } else {
+        let wrap = start + m - n;
+        (
+            [&ring[start..], &ring[..wrap]],
+            [&ring[wrap..start], &[][..]],
+        )
+    }
+}
+
+/// A cyclic run of a ring, in at most two pieces.
+type Run<'a> = [&'a [Entry]; 2];
+
+/// The half-edge slots a split creates, in `vertex_split`'s insertion order (`NIL` for the
+/// pair of a missing wing).
+#[derive(Clone, Copy)]
+struct SplitSlots {
+    o: u32,
+    h: u32,
+    o2: u32,
+    o1: u32,
+    h2: u32,
+    h1: u32,
+}
+
+impl SplitSlots {
+    /// Takes the next slots and records the new faces' stored half-edges (`fr` then `fl`).
+    #[inline(always)]
+    fn allocate(
+        n_halfedges: &mut u32,
+        face_he: &mut Vec<u32>,
+        has_left: bool,
+        has_right: bool,
+    ) -> SplitSlots {
+        let base = *n_halfedges;
+        let (o, h) = (base, base + 1);
+        let mut next = base + 2;
+        let (o2, o1) = if has_right {
+            next += 2;
+            (next - 2, next - 1)
+        } else {
+            (NIL, NIL)
+        };
+        let (h2, h1) = if has_left {
+            next += 2;
+            (next - 2, next - 1)
+        } else {
+            (NIL, NIL)
+        };
+        *n_halfedges = next;
+        if has_right {
+            face_he.push(o);
+        }
+        if has_left {
+            face_he.push(h);
+        }
+        SplitSlots {
+            o,
+            h,
+            o2,
+            o1,
+            h2,
+            h1,
+        }
+    }
+}
+
+/// The two rings a split writes. u: (u→v) then the fan then (u→v_r); canonical: h without a
+/// left face, the old boundary out-edge (the fan's last) without a right face, else the
+/// smallest slot. v: what is left of its ring from the fan's end round to its start, then
+/// (v→v_l), then (v→u); canonical: o without a right face, the unchanged boundary out-edge of
+/// a boundary v, else the smallest slot.
+struct NewRings<'a> {
+    v: u32,
+    u: u32,
+    left: Option<u32>,
+    right: Option<u32>,
+    v_boundary: bool,
+    /// The slot of `v`'s canonical half-edge before the split.
+    old_first: u32,
+    fan: Run<'a>,
+    /// The fan's length.
+    m: usize,
+    rest: Run<'a>,
+    len_u: usize,
+    len_v: usize,
+    slots: SplitSlots,
+}
+
+impl NewRings<'_> {
+    /// Where u's ring starts, and whether it starts at a boundary out-edge.
+    #[inline(always)]
+    fn u_start(&self, ring_u: &[Entry]) -> (usize, bool) {
+        match (self.left, self.right) {
+            (None, _) => (0, true),
+            (_, None) => (self.m, true),
+            _ => (min_slot(ring_u), false),
+        }
+    }
+
+    /// Where v's new ring starts.
+    #[inline(always)]
+    fn v_start(&self, ring_v: &[Entry]) -> Result<usize, SplitError> {
+        Ok(if self.right.is_none() {
+            self.len_v - 1
+        } else if self.v_boundary {
+            ring_v
+                .iter()
+                .position(|x| x.slot == self.old_first)
+                .ok_or(SplitError::Inconsistent)?
+        } else {
+            min_slot(ring_v)
+        })
+    }
+
+    /// Builds u's ring in `seq` and pushes it as a new line.
+    #[inline(always)]
+    fn push_u_line(&self, rings: &mut Rings, seq: &mut [Entry; 2 * INLINE + 2]) {
+        seq[0] = Entry {
+            nbr: self.v,
+            slot: self.slots.h,
+        };
+        let k = put_run(seq, 1, self.fan);
+        if let Some(r) = self.right {
+            seq[k] = Entry {
+                nbr: r,
+                slot: self.slots.o1,
+            };
+        }
+        let (u_start, u_boundary) = self.u_start(&seq[..self.len_u]);
+        let mut line = Line {
+            hdr: Entry {
+                nbr: self.len_u as u32 | if u_boundary { BOUNDARY } else { 0 },
+                slot: NIL,
+            },
+            e: [BLANK; INLINE],
+        };
+        write_rotated(&mut line.e, seq, self.len_u, u_start);
+        rings.lines.push(line);
+    }
+
+    /// Builds v's new ring in `seq` and writes it over v's line.
+    #[inline(always)]
+    fn rewrite_v_line(
+        &self,
+        rings: &mut Rings,
+        seq: &mut [Entry; 2 * INLINE + 2],
+    ) -> Result<(), SplitError> {
+        let mut k = put_run(seq, 0, self.rest);
+        if let Some(l) = self.left {
+            seq[k] = Entry {
+                nbr: l,
+                slot: self.slots.h1,
+            };
+            k += 1;
+        }
+        seq[k] = Entry {
+            nbr: self.u,
+            slot: self.slots.o,
+        };
+        let v_start = self.v_start(&seq[..self.len_v])?;
+        let line = &mut rings.lines[self.v as usize];
+        write_rotated(&mut line.e, seq, self.len_v, v_start);
+        line.hdr.nbr = self.len_v as u32 | if self.v_boundary { BOUNDARY } else { 0 };
+        Ok(())
+    }
+
+    /// [`Self::push_u_line`] for rings that may not fit a line: built in `scratch`.
+    #[inline(always)]
+    fn push_u_ring(&self, rings: &mut Rings, scratch: &mut Vec<Entry>) {
+        scratch.clear();
+        scratch.push(Entry {
+            nbr: self.v,
+            slot: self.slots.h,
+        });
+        scratch.extend_from_slice(self.fan[0]);
+        scratch.extend_from_slice(self.fan[1]);
+        if let Some(r) = self.right {
+            scratch.push(Entry {
+                nbr: r,
+                slot: self.slots.o1,
+            });
+        }
+        let (u_start, u_boundary) = self.u_start(scratch);
+        rings.push_empty();
+        rings.set(self.u, scratch, u_start, u_boundary);
+    }
+
+    /// [`Self::rewrite_v_line`] for rings that may not fit a line: built in `scratch`.
+    #[inline(always)]
+    fn set_v_ring(&self, rings: &mut Rings, scratch: &mut Vec<Entry>) -> Result<(), SplitError> {
+        scratch.clear();
+        scratch.extend_from_slice(self.rest[0]);
+        scratch.extend_from_slice(self.rest[1]);
+        if let Some(l) = self.left {
+            scratch.push(Entry {
+                nbr: l,
+                slot: self.slots.h1,
+            });
+        }
+        scratch.push(Entry {
+            nbr: self.u,
+            slot: self.slots.o,
+        });
+        let v_start = self.v_start(scratch)?;
+        rings.set(self.v, scratch, v_start, self.v_boundary);
+        Ok(())
+    }
 }
 
 /// Index of the entry with the smallest half-edge slot.

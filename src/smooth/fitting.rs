@@ -156,105 +156,78 @@ impl<'a> Fitting<'a> {
         options: &FitOptions,
         progress: &dyn Progress,
     ) -> FitReport {
-        let nv = positions.len();
         let mut report = FitReport::default();
-        let mut energy = self.energy(positions);
+        let energy = self.energy(positions);
         report.initial_energy = energy;
         report.final_energy = energy;
         if !(energy.is_finite() && options.step_cap > 0.0) {
             return report;
         }
-        let mut old_normals: Vec<DVec3> = vec![DVec3::ZERO; self.surface.n_faces()];
-        let mut grad = vec![DVec3::ZERO; nv];
-        // The previous iteration's gradient, for Polak–Ribière (buffers swap each iteration).
-        let mut prev_grad = vec![DVec3::ZERO; nv];
-        let mut dir = vec![DVec3::ZERO; nv];
-        let mut trial = positions.to_vec();
-        self.gradient(positions, &mut grad);
-        for (d, g) in dir.iter_mut().zip(&grad) {
-            *d = -*g;
-        }
-        let mut grad_sq = dot(&grad, &grad);
-        let mut alpha_guess = f64::INFINITY;
-        let mut steepest = true;
-        let mut stalled = 0;
-        while report.iterations < options.max_iterations && grad_sq > 0.0 {
-            let mut slope = dot(&grad, &dir);
-            if slope.is_nan() || slope >= 0.0 {
-                for (d, g) in dir.iter_mut().zip(&grad) {
-                    *d = -*g;
-                }
-                slope = -grad_sq;
-                steepest = true;
-            }
-            let longest = max_length(&dir);
+        let mut cg = Cg::start(self, positions, energy);
+        while report.iterations < options.max_iterations && cg.grad_sq > 0.0 {
+            let slope = cg.descent_slope();
+            let longest = max_length(&cg.dir);
             if !(longest > 0.0 && longest.is_finite()) {
                 break;
             }
             let alpha_max = options.step_cap / longest;
-            let mut alpha = alpha_guess.min(alpha_max);
-            self.surface_normals(positions, &mut old_normals);
-            let mut accepted = None;
-            for _ in 0..=options.max_halvings {
-                trial
-                    .par_iter_mut()
-                    .with_min_len(4096)
-                    .zip(positions.par_iter())
-                    .zip(dir.par_iter())
-                    .for_each(|((t, p), d)| *t = *p + alpha * *d);
-                match self.trial_energy(&trial, &old_normals) {
-                    Some(e) if e <= energy + options.armijo * alpha * slope => {
-                        accepted = Some(e);
-                        break;
-                    }
-                    Some(_) => {}
-                    None => report.rejected_flips += 1,
-                }
-                alpha *= 0.5;
-            }
-            let Some(new_energy) = accepted else {
-                if steepest {
+            self.surface_normals(positions, &mut cg.old_normals);
+            let Some((new_energy, alpha)) =
+                self.line_search(positions, &mut cg, alpha_max, slope, options, &mut report)
+            else {
+                if cg.steepest {
                     break; // not even a tiny steepest-descent step helps: converged
                 }
-                // Retry the iteration along the steepest descent.
-                steepest = true;
-                for (d, g) in dir.iter_mut().zip(&grad) {
-                    *d = -*g;
-                }
-                alpha_guess = f64::INFINITY;
+                cg.restart_steepest();
                 continue;
             };
-            positions.copy_from_slice(&trial);
+            positions.copy_from_slice(&cg.trial);
             report.iterations += 1;
-            let decrease = energy - new_energy;
-            energy = new_energy;
-            report.final_energy = energy;
+            let decrease = cg.energy - new_energy;
+            cg.energy = new_energy;
+            report.final_energy = new_energy;
             progress.update(report.iterations as f64 / options.max_iterations as f64);
-            if decrease <= options.tolerance * energy.abs() {
-                stalled += 1;
-                if stalled >= STALL_ITERATIONS {
-                    break;
-                }
-            } else {
-                stalled = 0;
+            if cg.stalled(decrease, options.tolerance) {
+                break;
             }
-            // Polak–Ribière+: β = max(0, g⁺·(g⁺ − g)/‖g‖²).
-            std::mem::swap(&mut grad, &mut prev_grad);
-            self.gradient(positions, &mut grad);
-            let new_sq = dot(&grad, &grad);
-            let cross = dot(&grad, &prev_grad);
-            let beta = ((new_sq - cross) / grad_sq).max(0.0);
-            let beta = if beta.is_finite() { beta } else { 0.0 };
-            for (d, g) in dir.iter_mut().zip(&grad) {
-                *d = beta * *d - *g;
-            }
-            steepest = beta == 0.0;
-            grad_sq = new_sq;
+            cg.polak_ribiere(self, positions);
             // Let the next search start a little beyond this step.
-            alpha_guess = 2.0 * alpha;
+            cg.alpha_guess = 2.0 * alpha;
         }
         progress.update(1.0);
         report
+    }
+
+    /// Armijo backtracking along `cg.dir` from a step of at most `alpha_max`, halving the
+    /// step on a failed test or a flipped face; the accepted energy (its point in `cg.trial`)
+    /// and step.
+    fn line_search(
+        &self,
+        positions: &[DVec3],
+        cg: &mut Cg,
+        alpha_max: f64,
+        slope: f64,
+        options: &FitOptions,
+        report: &mut FitReport,
+    ) -> Option<(f64, f64)> {
+        let mut alpha = cg.alpha_guess.min(alpha_max);
+        for _ in 0..=options.max_halvings {
+            cg.trial
+                .par_iter_mut()
+                .with_min_len(4096)
+                .zip(positions.par_iter())
+                .zip(cg.dir.par_iter())
+                .for_each(|((t, p), d)| *t = *p + alpha * *d);
+            match self.trial_energy(&cg.trial, &cg.old_normals) {
+                Some(e) if e <= cg.energy + options.armijo * alpha * slope => {
+                    return Some((e, alpha));
+                }
+                Some(_) => {}
+                None => report.rejected_flips += 1,
+            }
+            alpha *= 0.5;
+        }
+        None
     }
 
     fn surface_normals(&self, positions: &[DVec3], out: &mut [DVec3]) {
@@ -290,6 +263,106 @@ impl<'a> Fitting<'a> {
             total += c?;
         }
         total.is_finite().then_some(total)
+    }
+}
+
+/// The conjugate-gradient iteration's state besides the positions.
+struct Cg {
+    energy: f64,
+    grad: Vec<DVec3>,
+    /// The previous iteration's gradient, for Polak–Ribière (buffers swap each iteration).
+    prev_grad: Vec<DVec3>,
+    dir: Vec<DVec3>,
+    /// The point a line search tries.
+    trial: Vec<DVec3>,
+    /// The faces' area vectors before the step, for the flip test.
+    old_normals: Vec<DVec3>,
+    grad_sq: f64,
+    alpha_guess: f64,
+    /// `dir` is the steepest descent.
+    steepest: bool,
+    /// Consecutive iterations with a small decrease.
+    stalled: usize,
+}
+
+impl Cg {
+    /// Starts along the steepest descent at `positions`, whose energy is `energy`.
+    fn start(fitting: &Fitting, positions: &[DVec3], energy: f64) -> Cg {
+        let nv = positions.len();
+        let old_normals: Vec<DVec3> = vec![DVec3::ZERO; fitting.surface.n_faces()];
+        let mut grad = vec![DVec3::ZERO; nv];
+        let prev_grad = vec![DVec3::ZERO; nv];
+        let mut dir = vec![DVec3::ZERO; nv];
+        let trial = positions.to_vec();
+        fitting.gradient(positions, &mut grad);
+        for (d, g) in dir.iter_mut().zip(&grad) {
+            *d = -*g;
+        }
+        let grad_sq = dot(&grad, &grad);
+        Cg {
+            energy,
+            grad,
+            prev_grad,
+            dir,
+            trial,
+            old_normals,
+            grad_sq,
+            alpha_guess: f64::INFINITY,
+            steepest: true,
+            stalled: 0,
+        }
+    }
+
+    /// The slope along `dir`, which turns to the steepest descent when it is no descent.
+    fn descent_slope(&mut self) -> f64 {
+        let slope = dot(&self.grad, &self.dir);
+        if slope.is_nan() || slope >= 0.0 {
+            self.set_steepest_dir();
+            self.steepest = true;
+            return -self.grad_sq;
+        }
+        slope
+    }
+
+    fn set_steepest_dir(&mut self) {
+        for (d, g) in self.dir.iter_mut().zip(&self.grad) {
+            *d = -*g;
+        }
+    }
+
+    /// Retries the iteration along the steepest descent.
+    fn restart_steepest(&mut self) {
+        self.steepest = true;
+        self.set_steepest_dir();
+        self.alpha_guess = f64::INFINITY;
+    }
+
+    /// Counts a decrease of less than `tolerance` times the energy; true after
+    /// [`STALL_ITERATIONS`] in a row.
+    fn stalled(&mut self, decrease: f64, tolerance: f64) -> bool {
+        if decrease <= tolerance * self.energy.abs() {
+            self.stalled += 1;
+            self.stalled >= STALL_ITERATIONS
+        } else {
+            self.stalled = 0;
+            false
+        }
+    }
+
+    /// The next direction at the new `positions`, Polak–Ribière+:
+    /// β = max(0, g⁺·(g⁺ − g)/‖g‖²).
+    fn polak_ribiere(&mut self, fitting: &Fitting, positions: &[DVec3]) {
+        std::mem::swap(&mut self.grad, &mut self.prev_grad);
+        fitting.gradient(positions, &mut self.grad);
+        let new_sq = dot(&self.grad, &self.grad);
+        let cross = dot(&self.grad, &self.prev_grad);
+        let beta = ((new_sq - cross) / self.grad_sq).max(0.0);
+        let beta = if beta.is_finite() { beta } else { 0.0 };
+        for (d, g) in self.dir.iter_mut().zip(&self.grad) {
+            *d = beta * *d - *g;
+        }
+        self.steepest = beta == 0.0;
+        self.grad_sq = new_sq;
     }
 }
 
