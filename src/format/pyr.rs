@@ -6,8 +6,8 @@
 //! the hierarchy, the original positions and the relaxation operator, so a loader recomputes
 //! them bit for bit ([`PyrData::into_scan`]).
 //!
-//! This module holds the types a file decodes to (the relaxation is `relax::RelaxationSpec`), [`encode`] and
-//! [`decode`], which assemble a file from its sections; each concern has a child module: the
+//! This module holds the types a file decodes to (the relaxation is `relax::RelaxationSpec`),
+//! and [`encode`] and [`decode`], which assemble a file from its sections; each concern has a child module: the
 //! header and `META` (`meta`), the hierarchy (`hierarchy`, with `positions` and the `SPLT`
 //! blocks in `split_block`, decoded on another core by `decode_ahead`), and the user's mesh
 //! (`input_side`, `attributes`). `edit` prepares an edited scan for saving; `fuzz` holds the
