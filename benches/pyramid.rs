@@ -8,7 +8,7 @@ use glam::DVec3;
 use meshpyr::mesh::{Mesh, PolygonMesh};
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Filter, Pyramid};
+use meshpyr::pyramid::{Filter, DetailPyramid};
 use meshpyr::relax::SecondDifference;
 use std::hint::black_box;
 use std::time::Duration;
@@ -54,9 +54,9 @@ fn bench(c: &mut Criterion) {
         });
         let pm = ProgressiveMesh::build(mesh, &PmOptions::default(), &NoProgress).unwrap();
         g.bench_with_input(BenchmarkId::new("analysis", name), &pm, |b, pm| {
-            b.iter(|| Pyramid::analyze(black_box(pm), &relax, &NoProgress).unwrap())
+            b.iter(|| DetailPyramid::analyze(black_box(pm), &relax, &NoProgress).unwrap())
         });
-        let pyr = Pyramid::analyze(&pm, &relax, &NoProgress).unwrap();
+        let pyr = DetailPyramid::analyze(&pm, &relax, &NoProgress).unwrap();
         // The paper's three Venus filters: enhancement (every level still needs its frames),
         // low-pass and stop-band (removed levels skip them).
         for (filter_name, _, filter) in Filter::paper_experiments() {

@@ -10,7 +10,7 @@
 
 use meshpyr::io;
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{LevelGains, MoveHandle, PyramidOptions, ScanPyramid};
+use meshpyr::pyramid::{LevelGains, MoveHandle, PyramidOptions, Pyramid};
 use meshpyr::render::{RenderOptions, Triangles, render_panels};
 use std::path::PathBuf;
 
@@ -23,7 +23,7 @@ fn main() -> anyhow::Result<()> {
     let output = PathBuf::from(args.next().unwrap_or_else(|| "multires-edit.ply".into()));
     let level: usize = args.next().map_or(Ok(500), |s| s.parse())?;
 
-    let scan = ScanPyramid::build_with(
+    let scan = Pyramid::build_with(
         io::read_mesh(&input)?,
         &PyramidOptions::default(),
         &NoProgress,

@@ -7,7 +7,7 @@
 use meshpyr::mesh::Mesh;
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Filter, LevelSpec, Pyramid, PyramidOptions, ScanPyramid};
+use meshpyr::pyramid::{Filter, LevelSpec, DetailPyramid, PyramidOptions, Pyramid};
 use meshpyr::relax::SecondDifference;
 use std::io::Write;
 use std::path::PathBuf;
@@ -31,7 +31,7 @@ fn main() -> anyhow::Result<()> {
         || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/bunny.ply"),
         PathBuf::from,
     );
-    let scan = ScanPyramid::build_with(
+    let scan = Pyramid::build_with(
         meshpyr::io::read_mesh(&input)?,
         &PyramidOptions::default(),
         &NoProgress,
@@ -93,7 +93,7 @@ fn main() -> anyhow::Result<()> {
     let pm = ProgressiveMesh::build(&mesh, &pm_opts, &NoProgress)?;
     let relax = SecondDifference::default();
     let analysis = time(&mut || {
-        std::hint::black_box(Pyramid::analyze(&pm, &relax, &NoProgress).ok());
+        std::hint::black_box(DetailPyramid::analyze(&pm, &relax, &NoProgress).ok());
     });
     writeln!(
         out,

@@ -12,7 +12,7 @@ use meshpyr::format::{self, BuildInfo};
 use meshpyr::mesh::Mesh;
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Filter, Pyramid};
+use meshpyr::pyramid::{Filter, DetailPyramid};
 use meshpyr::relax::SecondDifference;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -42,7 +42,7 @@ fn main() -> anyhow::Result<()> {
     let info = BuildInfo::default();
     let relax = SecondDifference::default();
     let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &NoProgress)?;
-    let pyramid = Pyramid::analyze(&pm, &relax, &NoProgress)?;
+    let pyramid = DetailPyramid::analyze(&pm, &relax, &NoProgress)?;
     let (bytes, _) = format::encode(&mesh_file, &pm, &info)?;
     println!(
         "{}: {} vertices, {} splits, .pyr file {} bytes; min / median of {runs} runs (synthesis, save, load: {})",
@@ -59,7 +59,7 @@ fn main() -> anyhow::Result<()> {
         );
     });
     let analysis = min_median(runs, || {
-        std::hint::black_box(Pyramid::analyze(&pm, &relax, &NoProgress).ok());
+        std::hint::black_box(DetailPyramid::analyze(&pm, &relax, &NoProgress).ok());
     });
     let ms = |(a, b): (f64, f64)| format!("{:9.2} / {:9.2} ms", a * 1e3, b * 1e3);
     println!("PM build              {}", ms(build));

@@ -1,12 +1,89 @@
 //! # meshpyr
 //!
-//! A multiresolution mesh editing engine built on a progressive-mesh hierarchy.
+//! Multiresolution editing of triangle meshes, built on a progressive-mesh hierarchy.
 //!
-//! Modules, one concept each: [`mesh`] (file-level polygons and the half-edge mesh),
-//! [`io`] (OBJ/PLY/OFF/STL), [`pm`] (the progressive mesh), [`relax`] (relaxation operators),
-//! [`smooth`] (denoising), [`metrics`] (error metrics and curvature), and `cli` (the
-//! `meshpyr` command line; the default feature `cli`, without which the library depends on no
-//! argument parser, progress bar or error-report crate).
+//! The data flow:
+//!
+//! 1. A [`PolygonMesh`] is a mesh as a file holds it ([`read_mesh`], [`write_mesh`]: OBJ, PLY,
+//!    OFF, STL, optionally gzipped).
+//! 2. Its [`ProgressiveMesh`] is a hierarchy of quadric-error half-edge collapses whose vertex
+//!    splits undo them exactly. [`simplify`] cuts it at a face count, a ratio or an error.
+//! 3. Its [`Pyramid`] keeps, for every level, the details that a relaxation operator fails to
+//!    predict from the coarser level (Guskov, Sweldens and Schröder 1999). Scaling the details
+//!    per level gives low-pass, stop-band and enhancement [`Filter`]s. Moving a coarse level
+//!    and resynthesising is a multiresolution [edit](Pyramid::edit).
+//! 4. A `.pyr` file ([`Pyramid::save`], [`Pyramid::load`]) keeps the hierarchy with the exact
+//!    input, compact, versioned and checksummed.
+//!
+//! Every mesh a [`Pyramid`] returns is its input with new positions: the same vertices and
+//! faces in the same order, and the same attributes.
+//!
+//! ## Quick start
+//!
+//! Low-pass a scan to its 500 coarsest levels:
+//!
+//! ```
+//! use meshpyr::{Filter, Pyramid};
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let scan = meshpyr::read_mesh("tests/data/mc/mc_bunny_vox40.ply")?;
+//! let pyramid = Pyramid::build(&scan)?;
+//! let smooth = pyramid.filter(&Filter::new().lowpass(500));
+//! meshpyr::write_mesh(std::env::temp_dir().join("bunny-lowpass.ply"), &smooth)?;
+//! # assert_eq!(smooth.n_vertices(), scan.n_vertices());
+//! # Ok(()) }
+//! ```
+//!
+//! The other jobs, one line each, with `scan` and `pyramid` as above:
+//!
+//! ```
+//! # use meshpyr::{Filter, MoveHandle, Pyramid, SimplifyTarget};
+//! # use glam::DVec3;
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! # let scan = meshpyr::read_mesh("tests/data/mc/mc_bunny_vox40.ply")?;
+//! # let pyramid = Pyramid::build(&scan)?;
+//! # let dir = std::env::temp_dir();
+//! // Simplify to 1 % of the triangles (or to the floor of the topology; `stop` says which).
+//! let coarse = meshpyr::simplify(&scan, SimplifyTarget::Ratio(0.01), &Default::default(), &meshpyr::NoProgress)?;
+//! // Enhance the details of levels 200 to 2000 twofold, normal components only.
+//! let sharp = pyramid.filter(&Filter::new().gain(200, 2000, 2.0).normal_only());
+//! // Pull level 200 up around a point; the finer details ride along.
+//! let handle = MoveHandle { center: scan.positions[0], displacement: DVec3::Y * 0.01, radius: 0.05 };
+//! let edited = pyramid.edit(200, &[handle], &Filter::new())?;
+//! // The detail energy per band of levels.
+//! let spectrum = pyramid.spectrum();
+//! // Save the hierarchy with the exact input, and open it again.
+//! pyramid.save(dir.join("bunny.pyr"))?;
+//! let again = Pyramid::load(dir.join("bunny.pyr"))?;
+//! // Denoise, keeping creases (Ohtake, Belyaev and Seidel 2002).
+//! let denoised = meshpyr::denoise_mesh(&scan, &Default::default())?;
+//! // Subdivide twice by cascadic mean-curvature motion (Diewald, Morigi and Rumpf 2001).
+//! let fine = meshpyr::subdivide_mesh(&coarse.mesh, &meshpyr::SubdivOptions { levels: 2, ..Default::default() })?;
+//! # assert!(coarse.mesh.n_faces() < scan.n_faces() && fine.n_faces() > coarse.mesh.n_faces());
+//! # assert_eq!((sharp.n_vertices(), edited.n_vertices(), denoised.n_vertices()), (scan.n_vertices(), scan.n_vertices(), scan.n_vertices()));
+//! # assert!(!spectrum.bands.is_empty() && again.levels() == pyramid.levels());
+//! # Ok(()) }
+//! ```
+//!
+//! ## Modules
+//!
+//! The front door above is re-exported here. The modules hold the rest, for callers who need
+//! more control:
+//!
+//! - [`mesh`]: the file-level [`PolygonMesh`], the half-edge [`mesh::Mesh`] and its repairs;
+//! - [`io`]: the mesh file formats;
+//! - [`pm`]: the progressive mesh and simplification;
+//! - [`pyramid`]: the detail pyramid, filters, edits and spectra;
+//! - [`relax`]: the relaxation operators that predict one level from the next;
+//! - [`format`]: the `.pyr` file;
+//! - [`smooth`]: denoising;
+//! - [`subdiv`]: subdivision of coarse meshes;
+//! - [`metrics`]: distances and curvature;
+//! - [`numerics`]: the finite elements and solvers that subdivision and smoothing share;
+//! - [`render`] and [`plot`]: the previews and charts of the demo;
+//! - [`progress`]: progress reporting.
+//!
+//! Without default features (`meshpyr = { version = "…", default-features = false }`) the
+//! crate is the library alone, without the command line's dependencies.
 #![warn(missing_docs)]
 
 #[cfg(feature = "cli")]
@@ -26,3 +103,12 @@ pub mod relax;
 pub mod render;
 pub mod smooth;
 pub mod subdiv;
+
+pub use io::{read_mesh, write_mesh};
+pub use mesh::PolygonMesh;
+pub use pm::{ProgressiveMesh, Simplified, SimplifyTarget, simplify};
+pub use progress::NoProgress;
+pub use pyramid::{Filter, MoveHandle, PyrFileError, Pyramid, PyramidOptions, Spectrum};
+pub use relax::RelaxationSpec;
+pub use smooth::{DenoiseOptions, denoise_mesh};
+pub use subdiv::{SubdivOptions, subdivide_mesh};

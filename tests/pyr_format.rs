@@ -9,7 +9,7 @@ use meshpyr::io;
 use meshpyr::mesh::{Mesh, PolygonMesh};
 use meshpyr::pm::ProgressiveMesh;
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Pyramid, ScanPyramid};
+use meshpyr::pyramid::{DetailPyramid, Pyramid};
 use std::path::PathBuf;
 
 fn build(input: &PolygonMesh) -> (ProgressiveMesh, Vec<u8>) {
@@ -106,7 +106,7 @@ fn f64_positions_are_kept_exactly() {
 #[test]
 fn loaded_pyramid_has_identical_details_and_synthesis() {
     let input = io::read_mesh(&data("joint.ply")).unwrap();
-    let scan = ScanPyramid::build_with(input.clone(), &Default::default(), &NoProgress).unwrap();
+    let scan = Pyramid::build_with(input.clone(), &Default::default(), &NoProgress).unwrap();
     let (bytes, _) = format::encode(&scan.input, &scan.pm, &BuildInfo::default()).unwrap();
     let loaded = format::decode(&bytes)
         .unwrap()
@@ -128,7 +128,7 @@ fn loaded_pyramid_has_identical_details_and_synthesis() {
         .lowpass(meshpyr::pyramid::LevelSpec::Vertices(60))
         .resolve(a.surface_area());
     assert_eq!(bits(&a.synthesize(&gains)), bits(&b.synthesize(&gains)));
-    let _ = Pyramid::analyze; // the loader's path
+    let _ = DetailPyramid::analyze; // the loader's path
 }
 
 #[test]

@@ -8,7 +8,7 @@ use glam::DVec3;
 use meshpyr::mesh::{Mesh, SlotIndex};
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Filter, LevelGains, LevelSpec, MoveHandle, Pyramid};
+use meshpyr::pyramid::{Filter, LevelGains, LevelSpec, MoveHandle, DetailPyramid};
 use meshpyr::relax::SecondDifference;
 
 /// Icosphere with `levels` 1-to-4 subdivisions, made bumpy and (deterministically) noisy.
@@ -51,10 +51,10 @@ fn bumpy_grid(n: usize) -> (Vec<DVec3>, Vec<[u32; 3]>) {
     (p, t)
 }
 
-fn pyramid_of(p: &[DVec3], t: &[[u32; 3]]) -> (ProgressiveMesh, Pyramid) {
+fn pyramid_of(p: &[DVec3], t: &[[u32; 3]]) -> (ProgressiveMesh, DetailPyramid) {
     let mesh = Mesh::from_triangles(p, t).unwrap().mesh;
     let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &NoProgress).unwrap();
-    let pyr = Pyramid::analyze(&pm, &SecondDifference::default(), &NoProgress).unwrap();
+    let pyr = DetailPyramid::analyze(&pm, &SecondDifference::default(), &NoProgress).unwrap();
     (pm, pyr)
 }
 
@@ -92,7 +92,7 @@ fn max_dist(a: &[DVec3], b: &[DVec3]) -> f64 {
         .fold(0.0, f64::max)
 }
 
-fn assert_reconstructs(p: &[DVec3], t: &[[u32; 3]]) -> (ProgressiveMesh, Pyramid) {
+fn assert_reconstructs(p: &[DVec3], t: &[[u32; 3]]) -> (ProgressiveMesh, DetailPyramid) {
     let (pm, pyr) = pyramid_of(p, t);
     assert!(pyr.n_splits() > 0);
     let out = pyr.synthesize(&LevelGains::unit());
@@ -150,7 +150,7 @@ fn reconstruction_does_not_depend_on_the_presmoothing() {
         })
         .collect();
     let pyr =
-        Pyramid::analyze_signal(&pm, &SecondDifference::default(), &signal, &NoProgress).unwrap();
+        DetailPyramid::analyze_signal(&pm, &SecondDifference::default(), &signal, &NoProgress).unwrap();
     let out = pyr.synthesize(&LevelGains::unit());
     // Frames built from a wild signal are badly conditioned (tiny, twisted predicted fans), so
     // rounding grows more than for a surface (1e-12 there); still far from any modelling error.
@@ -370,7 +370,7 @@ fn check_relaxation_drives_the_pyramid(op: &dyn meshpyr::relax::Relaxation, name
     let (p, t) = noisy_height_field(30, 0.004);
     let mesh = Mesh::from_triangles(&p, &t).unwrap().mesh;
     let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &NoProgress).unwrap();
-    let pyr = Pyramid::analyze(&pm, op, &NoProgress).unwrap();
+    let pyr = DetailPyramid::analyze(&pm, op, &NoProgress).unwrap();
     assert_eq!(pyr.relaxation(), name);
     let out = pyr.synthesize(&LevelGains::unit());
     let err = max_dist(&out, pm.original_positions());
@@ -435,7 +435,7 @@ fn analysis_gives_the_same_pyramid_on_any_thread_count() {
     let operators: [&dyn meshpyr::relax::Relaxation; 2] = [&second_difference, &mcm];
     for op in operators {
         let analyse = |threads: usize| {
-            on_threads(threads, || Pyramid::analyze(&pm, op, &NoProgress)).unwrap()
+            on_threads(threads, || DetailPyramid::analyze(&pm, op, &NoProgress)).unwrap()
         };
         let one = analyse(1);
         for threads in [2, 3] {

@@ -6,7 +6,7 @@ use meshpyr::io;
 use meshpyr::mesh::{Mesh, SlotIndex};
 use meshpyr::progress::NoProgress;
 use meshpyr::pyramid::{
-    Filter, LevelGains, LevelSpec, Pyramid, PyramidOptions, ScanPyramid, Spectrum,
+    Filter, LevelGains, LevelSpec, DetailPyramid, PyramidOptions, Pyramid, Spectrum,
 };
 use meshpyr::relax::SecondDifference;
 use std::path::Path;
@@ -18,19 +18,19 @@ fn data(name: &str) -> std::path::PathBuf {
         .join(name)
 }
 
-fn scan(name: &str) -> ScanPyramid {
+fn scan(name: &str) -> Pyramid {
     let input = io::read_mesh(&data(name)).unwrap();
-    ScanPyramid::build_with(input, &PyramidOptions::default(), &NoProgress).unwrap()
+    Pyramid::build_with(input, &PyramidOptions::default(), &NoProgress).unwrap()
 }
 
-fn bunny() -> &'static ScanPyramid {
-    static BUNNY: OnceLock<ScanPyramid> = OnceLock::new();
+fn bunny() -> &'static Pyramid {
+    static BUNNY: OnceLock<Pyramid> = OnceLock::new();
     BUNNY.get_or_init(|| scan("bunny.ply"))
 }
 
 /// Mean |normal component of the umbrella vector| over all vertices (a curvature-noise
 /// measure), on the finest connectivity.
-fn roughness(s: &ScanPyramid, x: &[DVec3]) -> f64 {
+fn roughness(s: &Pyramid, x: &[DVec3]) -> f64 {
     let faces = s.pm.finest_faces();
     let mesh = Mesh::from_triangles(&x[..s.pm.n_vertices()], faces)
         .unwrap()
@@ -49,7 +49,7 @@ fn roughness(s: &ScanPyramid, x: &[DVec3]) -> f64 {
 }
 
 /// RMS angle (radians) between the normals of adjacent faces.
-fn dihedral_rms(s: &ScanPyramid, x: &[DVec3]) -> f64 {
+fn dihedral_rms(s: &Pyramid, x: &[DVec3]) -> f64 {
     let mesh = Mesh::from_triangles(&x[..s.pm.n_vertices()], s.pm.finest_faces())
         .unwrap()
         .mesh;
@@ -85,7 +85,7 @@ fn filtered(f: Filter) -> Vec<DVec3> {
 
 fn respectrum(x: &[DVec3]) -> Spectrum {
     let s = bunny();
-    Pyramid::analyze_signal(&s.pm, &SecondDifference::default(), x, &NoProgress)
+    DetailPyramid::analyze_signal(&s.pm, &SecondDifference::default(), x, &NoProgress)
         .unwrap()
         .spectrum()
 }

@@ -7,7 +7,7 @@ use super::filter::{FilterOptions, resolve_reporting};
 use super::input::{encode_pyr, load_pyramid};
 use crate::format;
 use crate::io;
-use crate::pyramid::{MoveHandle, ScanPyramid};
+use crate::pyramid::{MoveHandle, Pyramid};
 use crate::relax::{RelaxKind, RelaxationSpec};
 use anyhow::Context;
 use glam::DVec3;
@@ -115,7 +115,7 @@ pub fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
 
 /// Saves `scan` with new input positions as a `.pyr` file (same hierarchy, new originals).
 fn save_edited(
-    scan: &ScanPyramid,
+    scan: &Pyramid,
     input_positions: Vec<DVec3>,
     relaxation: RelaxationSpec,
     path: &Path,

@@ -6,7 +6,7 @@
 use super::Global;
 use super::input::load_pyramid;
 use crate::io;
-use crate::pyramid::{Filter, GainBand, LevelGains, LevelSpec, Pyramid};
+use crate::pyramid::{Filter, GainBand, LevelGains, LevelSpec, DetailPyramid};
 use crate::relax::RelaxKind;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -65,7 +65,7 @@ impl FilterOptions {
 /// a word, and for every band that reaches below the coarsest level (a low-pass to fewer
 /// vertices than the base has), which would otherwise silently do less. `name` is the input,
 /// for the message.
-pub fn resolve_reporting(filter: &Filter, pyramid: &Pyramid, name: &str) -> LevelGains {
+pub fn resolve_reporting(filter: &Filter, pyramid: &DetailPyramid, name: &str) -> LevelGains {
     let gains = filter.resolve(pyramid.surface_area());
     // Splits create the levels (base, finest]; a band (a, b] reaches them when it is not
     // empty and overlaps them.

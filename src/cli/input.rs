@@ -7,7 +7,7 @@ use crate::format::{self, BuildInfo, FormatError, SizeReport};
 use crate::io;
 use crate::mesh::PolygonMesh;
 use crate::pm::{PmOptions, ProgressiveMesh};
-use crate::pyramid::{PyramidOptions, ScanPyramid};
+use crate::pyramid::{PyramidOptions, Pyramid};
 use crate::relax::{RelaxKind, RelaxationSpec};
 use anyhow::Context;
 use std::path::Path;
@@ -46,7 +46,7 @@ pub fn load_pyramid(
     path: &Path,
     relax: Option<RelaxKind>,
     global: &Global,
-) -> anyhow::Result<(ScanPyramid, RelaxationSpec)> {
+) -> anyhow::Result<(Pyramid, RelaxationSpec)> {
     let wanted = relax.map(RelaxKind::spec);
     if is_pyr_file(path) {
         let (scan, spec) = load_pyr_scan(path, global)?;
@@ -69,7 +69,7 @@ pub fn load_pyramid(
 }
 
 /// Loads a `.pyr` file and recomputes its pyramid (the relaxation recorded in the file).
-fn load_pyr_scan(path: &Path, global: &Global) -> anyhow::Result<(ScanPyramid, RelaxationSpec)> {
+fn load_pyr_scan(path: &Path, global: &Global) -> anyhow::Result<(Pyramid, RelaxationSpec)> {
     let start = Instant::now();
     let data = load_pyr(path)?;
     let spec = data.info.relaxation;
@@ -98,14 +98,14 @@ pub fn build_pyramid(
     relaxation: RelaxationSpec,
     name: &str,
     global: &Global,
-) -> anyhow::Result<ScanPyramid> {
+) -> anyhow::Result<Pyramid> {
     let start = Instant::now();
     let bar = global.progress("pyramid");
     let options = PyramidOptions {
         relaxation,
         ..PyramidOptions::default()
     };
-    let scan = ScanPyramid::build_with(input, &options, &BarProgress(&bar))
+    let scan = Pyramid::build_with(input, &options, &BarProgress(&bar))
         .with_context(|| format!("cannot build the detail pyramid of {name}"))?;
     bar.finish_and_clear();
     let p = &scan.pyramid;

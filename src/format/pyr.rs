@@ -19,7 +19,7 @@ use super::varint::ByteReader;
 use crate::mesh::{Built, Mesh, PolygonMesh, ScalarType, SourceMap};
 use crate::pm::{PmOptions, PmParts, ProgressiveMesh};
 use crate::progress::Progress;
-use crate::pyramid::{Pyramid, PyramidError, PyramidOptions, ScanPyramid};
+use crate::pyramid::{DetailPyramid, PyramidError, PyramidOptions, Pyramid};
 use crate::relax::RelaxationSpec;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -119,9 +119,9 @@ pub struct PyrData {
 impl PyrData {
     /// Recomputes the detail pyramid (bit-identical to the one the file was built with) and
     /// returns the whole scan.
-    pub fn into_scan(self, progress: &dyn Progress) -> Result<ScanPyramid, PyramidError> {
+    pub fn into_scan(self, progress: &dyn Progress) -> Result<Pyramid, PyramidError> {
         let op = self.info.relaxation.operator();
-        let pyramid = Pyramid::analyze(&self.pm, op.as_ref(), progress)?;
+        let pyramid = DetailPyramid::analyze(&self.pm, op.as_ref(), progress)?;
         // A file whose input needed no repair was loaded without building the half-edge mesh
         // (see `clean_triangle_faces`): its mesh is the input itself, vertex for vertex and
         // face for face.
@@ -133,7 +133,7 @@ impl PyrData {
                 input_vertices: self.input.positions.len(),
             },
         };
-        Ok(ScanPyramid {
+        Ok(Pyramid {
             input: self.input,
             source,
             pm: self.pm,

@@ -288,7 +288,8 @@ pub fn is_gzip(path: &Path) -> bool {
 
 /// Reads a mesh file; the format comes from the extension (`.gz` files are decompressed
 /// first, see [`gunzip`]).
-pub fn read_mesh(path: &Path) -> Result<PolygonMesh, IoError> {
+pub fn read_mesh(path: impl AsRef<Path>) -> Result<PolygonMesh, IoError> {
+    let path = path.as_ref();
     let format = MeshFormat::from_path(path)?;
     let mut bytes = std::fs::read(path).map_err(|error| IoError::Io {
         path: path.to_path_buf(),
@@ -358,8 +359,8 @@ pub fn read_mesh_bytes(bytes: &[u8], format: MeshFormat) -> Result<PolygonMesh, 
 }
 
 /// Writes a mesh atomically with default options; the format comes from the extension.
-pub fn write_mesh(path: &Path, mesh: &PolygonMesh) -> Result<(), IoError> {
-    write_mesh_with(path, mesh, &WriteOptions::default())
+pub fn write_mesh(path: impl AsRef<Path>, mesh: &PolygonMesh) -> Result<(), IoError> {
+    write_mesh_with(path.as_ref(), mesh, &WriteOptions::default())
 }
 
 /// Writes a mesh atomically (see [`write_atomic`]); the format comes from the extension.

@@ -27,7 +27,7 @@ use super::synthesis::{
     Scratch, decode, local_frames, predict_values, prefetch_next_split, presmooth_local,
 };
 use super::waves::{SharedSignal, Waves, run_waves};
-use super::{CodeWidth, Codes, Pyramid, PyramidError, SplitOffsets};
+use super::{CodeWidth, Codes, DetailPyramid, PyramidError, SplitOffsets};
 use crate::mesh::geometry::morton_codes;
 use crate::mesh::{SlotIndex, VertexId};
 use crate::pm::{FlatReplay, PmCursor, ProgressiveMesh};
@@ -35,13 +35,13 @@ use crate::progress::Progress;
 use crate::relax::{Relaxation, RingStencils};
 use glam::DVec3;
 
-impl Pyramid {
+impl DetailPyramid {
     /// Analyses the original positions of `pm` (the surface itself).
     pub fn analyze(
         pm: &ProgressiveMesh,
         relaxation: &dyn Relaxation,
         progress: &dyn Progress,
-    ) -> Result<Pyramid, PyramidError> {
+    ) -> Result<DetailPyramid, PyramidError> {
         Self::analyze_signal(pm, relaxation, pm.original_positions(), progress)
     }
 
@@ -53,7 +53,7 @@ impl Pyramid {
         relaxation: &dyn Relaxation,
         signal: &[DVec3],
         progress: &dyn Progress,
-    ) -> Result<Pyramid, PyramidError> {
+    ) -> Result<DetailPyramid, PyramidError> {
         let geometry = pm.original_positions();
         if signal.len() != geometry.len() {
             return Err(PyramidError::Invalid(format!(
@@ -100,7 +100,7 @@ impl Pyramid {
         });
         progress.update(1.0);
 
-        Ok(Pyramid {
+        Ok(DetailPyramid {
             n_base,
             n_finest,
             passthrough: signal[n_finest..].to_vec(),

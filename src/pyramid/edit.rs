@@ -4,7 +4,7 @@
 //! being smeared or left behind.
 
 use super::gains::LevelGains;
-use super::{Pyramid, PyramidError};
+use super::{DetailPyramid, PyramidError};
 use glam::DVec3;
 
 /// Drag the coarse vertices near `center` by `displacement`, fading smoothly to nothing at
@@ -31,7 +31,7 @@ pub fn falloff(d: f64, r: f64) -> f64 {
     t * t * t
 }
 
-impl Pyramid {
+impl DetailPyramid {
     /// Moves the vertices of level `level` with `handles` (weights from their distances to each
     /// handle's centre in the level's own signal; several handles add up), then resynthesises
     /// the finest level with `gains`. Returns the finest signal in PM order.

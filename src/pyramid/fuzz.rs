@@ -1,7 +1,7 @@
 //! The body of the `pyramid_ops` fuzz target, kept in the library so that the committed corpus
 //! is replayed by `cargo test` without cargo-fuzz.
 
-use super::{Filter, LevelGains, LevelSpec, MoveHandle, Pyramid, PyramidOptions, ScanPyramid};
+use super::{Filter, LevelGains, LevelSpec, MoveHandle, DetailPyramid, PyramidOptions, Pyramid};
 use crate::mesh::PolygonMesh;
 use crate::pm::fuzz::{Bytes, mesh_from_bytes};
 use crate::progress::NoProgress;
@@ -62,7 +62,7 @@ pub(crate) fn fuzz_pyramid(data: &[u8]) {
     let relax = SecondDifference::default();
     let [one, three] = pools();
     let Ok(scan) = one.install(|| {
-        ScanPyramid::build_with(input.clone(), &PyramidOptions::default(), &NoProgress)
+        Pyramid::build_with(input.clone(), &PyramidOptions::default(), &NoProgress)
     }) else {
         return;
     };
@@ -70,7 +70,7 @@ pub(crate) fn fuzz_pyramid(data: &[u8]) {
     let (n0, n) = (pyr.n_base_vertices(), pyr.n_vertices());
 
     let again = three
-        .install(|| Pyramid::analyze(&scan.pm, &relax, &NoProgress))
+        .install(|| DetailPyramid::analyze(&scan.pm, &relax, &NoProgress))
         .expect("the analysis succeeded on one thread");
     assert!(pyr.base() == again.base(), "base differs on 3 threads");
     for k in 0..pyr.n_splits() {

@@ -51,7 +51,7 @@ pub(crate) mod waves;
 pub use edit::{MoveHandle, falloff};
 pub(crate) use fuzz::fuzz_pyramid;
 pub use gains::{Filter, GainBand, GainParseError, LevelGains, LevelSpec};
-pub use pipeline::{PyrFileError, PyramidOptions, ScanPyramid};
+pub use pipeline::{PyrFileError, PyramidOptions, Pyramid};
 pub use spectrum::{BandEnergy, Spectrum};
 
 use crate::pm::PmError;
@@ -75,7 +75,7 @@ pub enum PyramidError {
 }
 
 /// A Burt–Adelson detail pyramid: base signal, details, and the per-level weights and fans
-/// synthesis needs. Build one with [`Pyramid::analyze`]; see the [module docs](self).
+/// synthesis needs. Build one with [`DetailPyramid::analyze`]; see the [module docs](self).
 ///
 /// All vertex indices are PM indices. Per-split data is stored wave by wave (module `waves`:
 /// the splits of a wave read nothing another writes, so synthesis may run them at once), each
@@ -93,7 +93,7 @@ pub enum PyramidError {
 ///   linear precision).
 /// * `details`: per touched entry its detail in the local frame `(t1, t2, n)`.
 #[derive(Clone, Debug)]
-pub struct Pyramid {
+pub struct DetailPyramid {
     pub(crate) n_base: usize,
     pub(crate) n_finest: usize,
     /// Signal values of the vertices with no face (PM indices `n_finest..`), passed through.
@@ -113,7 +113,7 @@ pub struct Pyramid {
     pub(crate) bbox_diagonal: f64,
 }
 
-/// Start of one split's records in each stream of a [`Pyramid`].
+/// Start of one split's records in each stream of a [`DetailPyramid`].
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct SplitOffsets {
     pub locals: usize,
@@ -203,7 +203,7 @@ impl Codes {
     }
 }
 
-impl Pyramid {
+impl DetailPyramid {
     /// Number of vertices of the coarsest level, `n0`.
     pub fn n_base_vertices(&self) -> usize {
         self.n_base
@@ -214,7 +214,7 @@ impl Pyramid {
         self.n_finest
     }
 
-    /// Length of the signals [`Pyramid::synthesize`] returns: the finest level plus the vertices
+    /// Length of the signals [`DetailPyramid::synthesize`] returns: the finest level plus the vertices
     /// no face refers to (which pass through unchanged).
     pub fn signal_len(&self) -> usize {
         self.n_finest + self.passthrough.len()
@@ -304,7 +304,7 @@ mod tests {
         });
         let mesh = Mesh::from_triangles(&p, &t).unwrap().mesh;
         let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &NoProgress).unwrap();
-        let narrow = Pyramid::analyze(&pm, &SecondDifference::default(), &NoProgress).unwrap();
+        let narrow = DetailPyramid::analyze(&pm, &SecondDifference::default(), &NoProgress).unwrap();
         let Codes::Byte(c) = &narrow.codes else {
             panic!("a small mesh should get 8-bit codes");
         };
@@ -362,7 +362,7 @@ mod tests {
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| Pyramid::analyze(&pm, &SecondDifference::default(), &NoProgress))
+                .install(|| DetailPyramid::analyze(&pm, &SecondDifference::default(), &NoProgress))
                 .unwrap()
         };
         let (one, two) = (on(1), on(2));
@@ -370,7 +370,7 @@ mod tests {
             matches!(one.codes, Codes::Narrow(_)),
             "the apex needs 16-bit codes"
         );
-        let codes = |p: &Pyramid| with_codes!(&p.codes, c => c.iter().map(|&x| frames::LocalIndex::at(x)).collect::<Vec<usize>>());
+        let codes = |p: &DetailPyramid| with_codes!(&p.codes, c => c.iter().map(|&x| frames::LocalIndex::at(x)).collect::<Vec<usize>>());
         let bits = |v: &[DVec3]| {
             v.iter()
                 .map(|x| x.to_array().map(f64::to_bits))

@@ -3,7 +3,7 @@
 //! vertices and faces in the same order** (attributes untouched), so per-vertex data still
 //! lines up after filtering.
 
-use super::{MoveHandle, Pyramid, PyramidError, Spectrum};
+use super::{MoveHandle, DetailPyramid, PyramidError, Spectrum};
 use crate::format::{self, BuildInfo, FormatError, PyrData, SizeReport};
 use crate::io::IoError;
 use crate::mesh::{Mesh, PolygonMesh, SourceMap};
@@ -15,7 +15,7 @@ use glam::DVec3;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
 
-/// How a [`ScanPyramid`] is built: what a `.pyr` file records, so that loading it rebuilds the
+/// How a [`Pyramid`] is built: what a `.pyr` file records, so that loading it rebuilds the
 /// very same pyramid.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PyramidOptions {
@@ -31,7 +31,7 @@ pub struct PyramidOptions {
 ///
 /// Every mesh it returns is the input mesh with new positions: the same vertices and faces in
 /// the same order, attributes untouched.
-pub struct ScanPyramid {
+pub struct Pyramid {
     /// The mesh as read.
     pub input: PolygonMesh,
     /// Where each vertex of the repaired mesh came from in the input. The repaired half-edge
@@ -41,13 +41,13 @@ pub struct ScanPyramid {
     /// The hierarchy.
     pub pm: ProgressiveMesh,
     /// The pyramid of the input's positions.
-    pub pyramid: Pyramid,
+    pub pyramid: DetailPyramid,
     /// What it was built with.
     pub options: PyramidOptions,
 }
 
-/// Why a `.pyr` file could not be saved or opened as a [`ScanPyramid`]. Errors of
-/// [`ScanPyramid::load`] and [`ScanPyramid::save`] name the file.
+/// Why a `.pyr` file could not be saved or opened as a [`Pyramid`]. Errors of
+/// [`Pyramid::load`] and [`Pyramid::save`] name the file.
 #[derive(Debug, thiserror::Error)]
 pub enum PyrFileError {
     /// Reading or writing the file failed.
@@ -63,7 +63,7 @@ pub enum PyrFileError {
     },
     /// The pyramid could not be rebuilt from the file's hierarchy.
     #[error("{}{error}", file_prefix(path))]
-    Pyramid {
+    DetailPyramid {
         /// The file, when there is one.
         path: Option<PathBuf>,
         /// What is wrong.
@@ -84,7 +84,7 @@ impl PyrFileError {
                 path: Some(file.to_path_buf()),
                 error,
             },
-            PyrFileError::Pyramid { error, .. } => PyrFileError::Pyramid {
+            PyrFileError::DetailPyramid { error, .. } => PyrFileError::DetailPyramid {
                 path: Some(file.to_path_buf()),
                 error,
             },
@@ -101,15 +101,15 @@ impl From<FormatError> for PyrFileError {
 
 impl From<PyramidError> for PyrFileError {
     fn from(error: PyramidError) -> Self {
-        PyrFileError::Pyramid { path: None, error }
+        PyrFileError::DetailPyramid { path: None, error }
     }
 }
 
-impl ScanPyramid {
+impl Pyramid {
     /// The pyramid of `input` with the default options: the progressive mesh collapsed as far
     /// as legal, details predicted with Guskov's second differences.
-    pub fn build(input: &PolygonMesh) -> Result<ScanPyramid, PyramidError> {
-        ScanPyramid::build_with(input.clone(), &PyramidOptions::default(), &NoProgress)
+    pub fn build(input: &PolygonMesh) -> Result<Pyramid, PyramidError> {
+        Pyramid::build_with(input.clone(), &PyramidOptions::default(), &NoProgress)
     }
 
     /// Builds everything with `options`; `progress` runs 0 → 0.5 for the PM and 0.5 → 1 for
@@ -118,17 +118,17 @@ impl ScanPyramid {
         input: PolygonMesh,
         options: &PyramidOptions,
         progress: &dyn Progress,
-    ) -> Result<ScanPyramid, PyramidError> {
+    ) -> Result<Pyramid, PyramidError> {
         let built = Mesh::from_polygons(&input)?;
         let pm =
             ProgressiveMesh::build(&built.mesh, &options.pm, &|x: f64| progress.update(0.5 * x))?;
         let source = built.source;
         drop(built.mesh);
         let relaxation = options.relaxation.operator();
-        let pyramid = Pyramid::analyze(&pm, relaxation.as_ref(), &|x: f64| {
+        let pyramid = DetailPyramid::analyze(&pm, relaxation.as_ref(), &|x: f64| {
             progress.update(0.5 + 0.5 * x)
         })?;
-        Ok(ScanPyramid {
+        Ok(Pyramid {
             input,
             source,
             pm,

@@ -5,7 +5,7 @@
 //! each band: the number of levels and details, the energy `Σ |d|²` relative to the squared
 //! bounding-box diagonal, and the RMS detail length relative to the diagonal.
 
-use super::Pyramid;
+use super::DetailPyramid;
 use super::gains::feature_size_of_level;
 use crate::plot::{BarChart, PALETTE, Series, compact_count};
 use crate::render::Image;
@@ -37,7 +37,7 @@ pub struct Spectrum {
     pub bands: Vec<BandEnergy>,
 }
 
-impl Pyramid {
+impl DetailPyramid {
     /// The detail spectrum of the pyramid (octave bands).
     pub fn spectrum(&self) -> Spectrum {
         let diag2 = (self.bbox_diagonal * self.bbox_diagonal).max(f64::MIN_POSITIVE);

@@ -6,7 +6,7 @@
 //! `local_frames`), so both passes evaluate identical arithmetic in identical order; with unit
 //! gains synthesis returns the analysed signal up to rounding.
 //!
-//! Each split works on its *local table* (see [`Pyramid`]): the values of the few dozen vertices
+//! Each split works on its *local table* (see [`DetailPyramid`]): the values of the few dozen vertices
 //! it reads are gathered once into a small contiguous buffer, predicted and framed there, and
 //! only the touched vertices are written back. All per-split records are read front to back:
 //! they are stored wave by wave (`waves`), and the splits of a large wave, which read nothing
@@ -15,7 +15,7 @@
 use super::frames::{Frame, LocalIndex, frame_min_length, vertex_frame};
 use super::gains::LevelGains;
 use super::waves::{SharedSignal, run_waves};
-use super::{Codes, Pyramid, PyramidError, SplitOffsets};
+use super::{Codes, DetailPyramid, PyramidError, SplitOffsets};
 use glam::DVec3;
 
 /// One touched entry of a split record, decoded: where its stencil indices, weights and fan
@@ -189,7 +189,7 @@ pub(crate) fn local_frames<I: LocalIndex>(
     }
 }
 
-impl Pyramid {
+impl DetailPyramid {
     /// Computes the values the split stored at `slot` gives its touched vertices (the new
     /// vertex, then its 1-ring) from `f = f^(n−1)`, and writes them into `f`.
     #[inline]
@@ -287,8 +287,8 @@ impl Pyramid {
     }
 }
 
-impl Pyramid {
-    /// The finest signal (positions, PM order, [`Pyramid::signal_len`] long) with the details
+impl DetailPyramid {
+    /// The finest signal (positions, PM order, [`DetailPyramid::signal_len`] long) with the details
     /// of every level `n` scaled by `gains` — the filtered surface. Unit gains reproduce the
     /// analysed signal to rounding.
     pub fn synthesize(&self, gains: &LevelGains) -> Vec<DVec3> {
@@ -324,7 +324,7 @@ impl Pyramid {
         with_codes!(&self.codes, c => self.synthesize_splits(c, f, splits, gains))
     }
 
-    /// [`Pyramid::synthesize_range`] from `from` to the finest level, checking that `f` fits.
+    /// [`DetailPyramid::synthesize_range`] from `from` to the finest level, checking that `f` fits.
     pub fn resynthesize_from(
         &self,
         mut f: Vec<DVec3>,
