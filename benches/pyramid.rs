@@ -8,7 +8,7 @@ use glam::DVec3;
 use meshpyr::mesh::{Mesh, PolygonMesh};
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Filter, DetailPyramid};
+use meshpyr::pyramid::{DetailPyramid, Filter};
 use meshpyr::relax::SecondDifference;
 use std::hint::black_box;
 use std::time::Duration;

@@ -10,7 +10,7 @@
 
 use meshpyr::io;
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{LevelGains, MoveHandle, PyramidOptions, Pyramid};
+use meshpyr::pyramid::{LevelGains, MoveHandle, Pyramid, PyramidOptions};
 use meshpyr::render::{RenderOptions, Triangles, render_panels};
 use std::path::PathBuf;
 

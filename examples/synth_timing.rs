@@ -7,7 +7,7 @@
 use meshpyr::mesh::Mesh;
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Filter, LevelSpec, DetailPyramid, PyramidOptions, Pyramid};
+use meshpyr::pyramid::{DetailPyramid, Filter, LevelSpec, Pyramid, PyramidOptions};
 use meshpyr::relax::SecondDifference;
 use std::io::Write;
 use std::path::PathBuf;

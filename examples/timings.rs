@@ -12,7 +12,7 @@ use meshpyr::format::{self, BuildInfo};
 use meshpyr::mesh::Mesh;
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Filter, DetailPyramid};
+use meshpyr::pyramid::{DetailPyramid, Filter};
 use meshpyr::relax::SecondDifference;
 use std::path::PathBuf;
 use std::time::Instant;

@@ -8,7 +8,7 @@ use glam::DVec3;
 use meshpyr::mesh::{Mesh, SlotIndex};
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Filter, LevelGains, LevelSpec, MoveHandle, DetailPyramid};
+use meshpyr::pyramid::{DetailPyramid, Filter, LevelGains, LevelSpec, MoveHandle};
 use meshpyr::relax::SecondDifference;
 
 /// Icosphere with `levels` 1-to-4 subdivisions, made bumpy and (deterministically) noisy.
@@ -150,7 +150,8 @@ fn reconstruction_does_not_depend_on_the_presmoothing() {
         })
         .collect();
     let pyr =
-        DetailPyramid::analyze_signal(&pm, &SecondDifference::default(), &signal, &NoProgress).unwrap();
+        DetailPyramid::analyze_signal(&pm, &SecondDifference::default(), &signal, &NoProgress)
+            .unwrap();
     let out = pyr.synthesize(&LevelGains::unit());
     // Frames built from a wild signal are badly conditioned (tiny, twisted predicted fans), so
     // rounding grows more than for a surface (1e-12 there); still far from any modelling error.

@@ -6,7 +6,7 @@ use meshpyr::io;
 use meshpyr::mesh::{Mesh, SlotIndex};
 use meshpyr::progress::NoProgress;
 use meshpyr::pyramid::{
-    Filter, LevelGains, LevelSpec, DetailPyramid, PyramidOptions, Pyramid, Spectrum,
+    DetailPyramid, Filter, LevelGains, LevelSpec, Pyramid, PyramidOptions, Spectrum,
 };
 use meshpyr::relax::SecondDifference;
 use std::path::Path;

@@ -5,7 +5,7 @@ use super::info::mesh_info;
 use super::input::build_pyramid;
 use crate::io::{self, MeshFormat};
 use crate::mesh::PolygonMesh;
-use crate::pyramid::{Filter, DetailPyramid};
+use crate::pyramid::{DetailPyramid, Filter};
 use crate::relax::SecondDifference;
 use anyhow::Context;
 use std::path::{Path, PathBuf};
@@ -82,7 +82,8 @@ fn demo_filters(input: PolygonMesh, stem: &str, dir: &Path, global: &Global) -> 
     // Spectra: the input's, and each result re-analysed on the same hierarchy.
     let mut spectra = vec![pyr.spectrum()];
     for (_, s) in &signals[1..] {
-        let p = DetailPyramid::analyze_signal(&scan.pm, &relaxation, s, &crate::progress::NoProgress)?;
+        let p =
+            DetailPyramid::analyze_signal(&scan.pm, &relaxation, s, &crate::progress::NoProgress)?;
         spectra.push(p.spectrum());
     }
     let others: Vec<(&str, &crate::pyramid::Spectrum)> = signals[1..]

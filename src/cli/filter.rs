@@ -6,7 +6,7 @@
 use super::Global;
 use super::input::load_pyramid;
 use crate::io;
-use crate::pyramid::{Filter, GainBand, LevelGains, LevelSpec, DetailPyramid};
+use crate::pyramid::{DetailPyramid, Filter, GainBand, LevelGains, LevelSpec};
 use crate::relax::RelaxKind;
 use std::path::PathBuf;
 use std::time::Instant;

@@ -7,7 +7,7 @@ use crate::format::{self, BuildInfo, FormatError, SizeReport};
 use crate::io;
 use crate::mesh::PolygonMesh;
 use crate::pm::{PmOptions, ProgressiveMesh};
-use crate::pyramid::{PyramidOptions, Pyramid};
+use crate::pyramid::{Pyramid, PyramidOptions};
 use crate::relax::{RelaxKind, RelaxationSpec};
 use anyhow::Context;
 use std::path::Path;

@@ -19,7 +19,7 @@ use super::varint::ByteReader;
 use crate::mesh::{Built, Mesh, PolygonMesh, ScalarType, SourceMap};
 use crate::pm::{PmOptions, PmParts, ProgressiveMesh};
 use crate::progress::Progress;
-use crate::pyramid::{DetailPyramid, PyramidError, PyramidOptions, Pyramid};
+use crate::pyramid::{DetailPyramid, Pyramid, PyramidError, PyramidOptions};
 use crate::relax::RelaxationSpec;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};

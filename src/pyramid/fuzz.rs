@@ -1,7 +1,7 @@
 //! The body of the `pyramid_ops` fuzz target, kept in the library so that the committed corpus
 //! is replayed by `cargo test` without cargo-fuzz.
 
-use super::{Filter, LevelGains, LevelSpec, MoveHandle, DetailPyramid, PyramidOptions, Pyramid};
+use super::{DetailPyramid, Filter, LevelGains, LevelSpec, MoveHandle, Pyramid, PyramidOptions};
 use crate::mesh::PolygonMesh;
 use crate::pm::fuzz::{Bytes, mesh_from_bytes};
 use crate::progress::NoProgress;
@@ -61,9 +61,9 @@ pub(crate) fn fuzz_pyramid(data: &[u8]) {
     let input = PolygonMesh::from_triangles(pos, &tris);
     let relax = SecondDifference::default();
     let [one, three] = pools();
-    let Ok(scan) = one.install(|| {
-        Pyramid::build_with(input.clone(), &PyramidOptions::default(), &NoProgress)
-    }) else {
+    let Ok(scan) =
+        one.install(|| Pyramid::build_with(input.clone(), &PyramidOptions::default(), &NoProgress))
+    else {
         return;
     };
     let pyr = &scan.pyramid;

@@ -51,7 +51,7 @@ pub(crate) mod waves;
 pub use edit::{MoveHandle, falloff};
 pub(crate) use fuzz::fuzz_pyramid;
 pub use gains::{Filter, GainBand, GainParseError, LevelGains, LevelSpec};
-pub use pipeline::{PyrFileError, PyramidOptions, Pyramid};
+pub use pipeline::{PyrFileError, Pyramid, PyramidOptions};
 pub use spectrum::{BandEnergy, Spectrum};
 
 use crate::pm::PmError;
@@ -304,7 +304,8 @@ mod tests {
         });
         let mesh = Mesh::from_triangles(&p, &t).unwrap().mesh;
         let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &NoProgress).unwrap();
-        let narrow = DetailPyramid::analyze(&pm, &SecondDifference::default(), &NoProgress).unwrap();
+        let narrow =
+            DetailPyramid::analyze(&pm, &SecondDifference::default(), &NoProgress).unwrap();
         let Codes::Byte(c) = &narrow.codes else {
             panic!("a small mesh should get 8-bit codes");
         };

@@ -3,7 +3,7 @@
 //! vertices and faces in the same order** (attributes untouched), so per-vertex data still
 //! lines up after filtering.
 
-use super::{MoveHandle, DetailPyramid, PyramidError, Spectrum};
+use super::{DetailPyramid, MoveHandle, PyramidError, Spectrum};
 use crate::format::{self, BuildInfo, FormatError, PyrData, SizeReport};
 use crate::io::IoError;
 use crate::mesh::{Mesh, PolygonMesh, SourceMap};
