@@ -69,18 +69,20 @@
 //! The front door above is re-exported here. The modules hold the rest, for callers who need
 //! more control:
 //!
-//! - [`mesh`]: the file-level [`PolygonMesh`], the half-edge [`mesh::Mesh`] and its repairs;
-//! - [`io`]: the mesh file formats;
-//! - [`pm`]: the progressive mesh and simplification;
-//! - [`pyramid`]: the detail pyramid, filters, edits and spectra;
-//! - [`relax`]: the relaxation operators that predict one level from the next;
-//! - [`format`]: the `.pyr` file;
-//! - [`smooth`]: denoising;
-//! - [`subdiv`]: subdivision of coarse meshes;
-//! - [`metrics`]: distances and curvature;
-//! - [`numerics`]: the finite elements and solvers that subdivision and smoothing share;
-//! - [`render`] and [`plot`]: the previews and charts of the demo;
-//! - [`progress`]: progress reporting.
+//! | module | what it holds |
+//! |---|---|
+//! | [`mesh`] | the file-level [`PolygonMesh`], the half-edge [`mesh::Mesh`] and its repairs |
+//! | [`io`] | the mesh file formats |
+//! | [`pm`] | the progressive mesh and simplification |
+//! | [`pyramid`] | the detail pyramid, filters, edits and spectra |
+//! | [`relax`] | the relaxation operators that predict one level from the next |
+//! | [`format`] | the `.pyr` file |
+//! | [`smooth`] | denoising |
+//! | [`subdiv`] | subdivision of coarse meshes |
+//! | [`metrics`] | distances and curvature |
+//! | [`numerics`] | the finite elements and solvers that subdivision and smoothing share |
+//! | [`render`], [`plot`] | the previews and charts of the demo |
+//! | [`progress`] | progress reporting |
 //!
 //! Without default features (`meshpyr = { version = "…", default-features = false }`) the
 //! crate is the library alone, without the command line's dependencies.
