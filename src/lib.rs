@@ -7,7 +7,7 @@
 //! 1. A [`PolygonMesh`] is a mesh as a file holds it ([`read_mesh`], [`write_mesh`]: OBJ, PLY,
 //!    OFF, STL, optionally gzipped).
 //! 2. Its [`ProgressiveMesh`] is a hierarchy of quadric-error half-edge collapses whose vertex
-//!    splits undo them exactly. [`simplify`] cuts it at a face count, a ratio or an error.
+//!    splits undo them exactly. [`simplify()`] cuts it at a face count, a ratio or an error.
 //! 3. Its [`Pyramid`] keeps, for every level, the details that a relaxation operator fails to
 //!    predict from the coarser level (Guskov, Sweldens and Schröder 1999). Scaling the details
 //!    per level gives low-pass, stop-band and enhancement [`Filter`]s. Moving a coarse level
@@ -76,7 +76,7 @@
 //! | [`pm`] | the progressive mesh and simplification |
 //! | [`pyramid`] | the detail pyramid, filters, edits and spectra |
 //! | [`relax`] | the relaxation operators that predict one level from the next |
-//! | [`format`] | the `.pyr` file |
+//! | [`format`](mod@format) | the `.pyr` file |
 //! | [`smooth`] | denoising |
 //! | [`subdiv`] | subdivision of coarse meshes |
 //! | [`metrics`] | distances and curvature |

@@ -1,5 +1,5 @@
 //! Mesh smoothing (denoising) of noisy scans, keeping the connectivity: every smoother is a
-//! plain function over a [`Mesh`](crate::mesh::Mesh) that returns new positions indexed like
+//! plain function over a [`Mesh`] that returns new positions indexed like
 //! [`Mesh::positions`](crate::mesh::Mesh::positions) (vertex slot order).
 //!
 //! - Ohtake–Belyaev–Seidel feature-preserving smoothing ([`denoise`]): an adaptive (or
