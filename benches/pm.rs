@@ -15,7 +15,7 @@ use std::path::Path;
 
 fn bench_pm(c: &mut Criterion) {
     let bunny =
-        read_mesh(&Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bunny.ply")).unwrap();
+        read_mesh(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bunny.ply")).unwrap();
     let mesh = Mesh::from_polygons(&bunny).unwrap().mesh;
     let mut g = c.benchmark_group("pm");
     g.sample_size(10);

@@ -75,7 +75,7 @@
 //! - [`pyramid`]: the detail pyramid, filters, edits and spectra;
 //! - [`relax`]: the relaxation operators that predict one level from the next;
 //! - [`format`]: the `.pyr` file;
-//! - [`smooth`]: denoising;
+//! - [`smooth`]: denoising and smoothing;
 //! - [`subdiv`]: subdivision of coarse meshes;
 //! - [`metrics`]: distances and curvature;
 //! - [`numerics`]: the finite elements and solvers that subdivision and smoothing share;

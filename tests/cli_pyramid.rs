@@ -284,7 +284,7 @@ fn demo_writes_filtered_versions_spectrum_and_previews() {
         assert!(log.contains(name), "the demo says where {name} went: {log}");
     }
     let input = io::read_mesh(Path::new(&data("bunny.ply"))).unwrap();
-    let low = io::read_mesh(&dir.join("bunny-lowpass.ply")).unwrap();
+    let low = io::read_mesh(dir.join("bunny-lowpass.ply")).unwrap();
     assert_eq!(input.face_indices, low.face_indices);
     assert_ne!(input.positions, low.positions);
     let csv = std::fs::read_to_string(dir.join("bunny-spectrum.csv")).unwrap();

@@ -29,7 +29,7 @@ fn compressed_files_read_like_the_plain_ones() {
         "cube_degenerate_om.obj",
         "spider_assimp.stl",
     ] {
-        let plain = read_mesh(&data(name)).unwrap();
+        let plain = read_mesh(data(name)).unwrap();
         let gz = scratch("io_gzip", &format!("{name}.gz"));
         std::fs::write(&gz, gzip(&data_bytes(name))).unwrap();
         assert_eq!(read_mesh(&gz).unwrap(), plain, "{name}");
@@ -38,7 +38,7 @@ fn compressed_files_read_like_the_plain_ones() {
 
 #[test]
 fn writing_gz_compresses_deterministically_and_round_trips() {
-    let m = read_mesh(&data("bunny.ply")).unwrap();
+    let m = read_mesh(data("bunny.ply")).unwrap();
     let a = scratch("io_gzip", "a.ply.gz");
     let b = scratch("io_gzip", "b.ply.gz");
     write_mesh(&a, &m).unwrap();

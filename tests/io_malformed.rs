@@ -89,7 +89,7 @@ fn every_prefix(bytes: &[u8], f: MeshFormat) {
 
 #[test]
 fn truncated_at_every_byte() {
-    let tet = read_mesh(&data("tetrahedron.ply")).unwrap();
+    let tet = read_mesh(data("tetrahedron.ply")).unwrap();
     every_prefix(&data_bytes("tetrahedron.ply"), MeshFormat::Ply);
     for enc in ENCODINGS {
         let b = write_mesh_bytes(&rich_mesh(), MeshFormat::Ply, &ply(enc)).unwrap();
@@ -179,7 +179,7 @@ fn non_finite_coordinates_are_rejected_with_the_vertex() {
         "vertex 1",
     );
 
-    let mut m = read_mesh(&data("tetrahedron.ply")).unwrap();
+    let mut m = read_mesh(data("tetrahedron.ply")).unwrap();
     let mut b = write_mesh_bytes(&m, MeshFormat::Ply, &Default::default()).unwrap();
     let body = b.len() - (4 * 12 + 4 * 13);
     b[body + 12 * 2 + 4..body + 12 * 2 + 8].copy_from_slice(&f32::INFINITY.to_le_bytes());
@@ -230,7 +230,7 @@ fn non_finite_coordinates_are_rejected_with_the_vertex() {
 #[test]
 fn bad_indices_are_rejected_with_their_place() {
     // Binary PLY: index 40000 in a 4-vertex file, at its byte offset.
-    let m = read_mesh(&data("tetrahedron.ply")).unwrap();
+    let m = read_mesh(data("tetrahedron.ply")).unwrap();
     let mut b = write_mesh_bytes(&m, MeshFormat::Ply, &Default::default()).unwrap();
     let faces = b.len() - 4 * 13;
     let at = faces + 13 + 1 + 4; // face 1, second index
@@ -399,7 +399,7 @@ fn error_display_names_file_line_and_reason() {
             p.display()
         )
     );
-    let e = read_mesh(&dir.path().join("missing.ply")).unwrap_err();
+    let e = read_mesh(dir.path().join("missing.ply")).unwrap_err();
     assert!(matches!(e, IoError::Io { .. }), "{e}");
     assert!(e.to_string().contains("missing.ply"));
     let e = read_mesh(std::path::Path::new("mesh.xyz")).unwrap_err();

@@ -136,7 +136,7 @@ fn ply_rs_bw_reads_our_files_identically() {
         "joint.ply",
         "planar_pymeshfix_vtk.ply",
     ] {
-        meshes.push(read_mesh(&data(name)).unwrap());
+        meshes.push(read_mesh(data(name)).unwrap());
     }
     let mut dbl = rich_mesh();
     dbl.position_type = Some(meshpyr::mesh::ScalarType::F64);
@@ -321,7 +321,7 @@ fn tobj_agrees_on_triangle_geometry() {
     assert_eq!(m.n_vertices(), 5);
     assert_eq!(ours(&m), load(src));
     // A mesh written by us and the real OBJ test file.
-    let dodo = read_mesh(&data("dodecahedron_poly.ply")).unwrap();
+    let dodo = read_mesh(data("dodecahedron_poly.ply")).unwrap();
     let b = write_mesh_bytes(&dodo, MeshFormat::Obj, &Default::default()).unwrap();
     let r = read_mesh_bytes(&b, MeshFormat::Obj).unwrap();
     assert_eq!(ours(&r), load(&b));

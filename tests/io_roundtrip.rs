@@ -107,7 +107,7 @@ fn real_ply_files_round_trip_bit_exactly() {
         "joint.ply",
         "planar_pymeshfix_vtk.ply",
     ] {
-        let m = read_mesh(&data(name)).unwrap();
+        let m = read_mesh(data(name)).unwrap();
         assert!(m.n_vertices() > 0 && m.n_faces() > 0);
         for enc in ENCODINGS {
             let r = trip(&m, MeshFormat::Ply, &ply(enc));
@@ -128,7 +128,7 @@ fn real_ply_files_round_trip_bit_exactly() {
 
 #[test]
 fn vtk_obj_info_is_kept_as_a_comment() {
-    let m = read_mesh(&data("planar_pymeshfix_vtk.ply")).unwrap();
+    let m = read_mesh(data("planar_pymeshfix_vtk.ply")).unwrap();
     assert_eq!(m.n_vertices(), 1403);
     assert_eq!(m.n_faces(), 2553);
     assert_eq!(
@@ -157,7 +157,7 @@ fn obj_round_trip_keeps_positions_faces_and_attributes() {
     assert_eq!(position_bits(&r), position_bits(&m));
 
     // f32-typed positions are written with f32 shortest formatting and re-read bit-exactly.
-    let tet = read_mesh(&data("joint.ply")).unwrap();
+    let tet = read_mesh(data("joint.ply")).unwrap();
     let r = trip(&tet, MeshFormat::Obj, &Default::default());
     assert_eq!(position_bits(&r), position_bits(&tet));
     assert_eq!(r.face_indices, tet.face_indices);
@@ -224,7 +224,7 @@ fn obj_reader_handles_the_syntax_zoo() {
 
 #[test]
 fn obj_conflicting_corner_normals_are_dropped_positions_kept() {
-    let m = read_mesh(&data("cube_degenerate_om.obj")).unwrap();
+    let m = read_mesh(data("cube_degenerate_om.obj")).unwrap();
     assert_eq!(m.n_vertices(), 8);
     assert_eq!(m.n_faces(), 14);
     assert_eq!(m.face(10), &[1, 5, 7, 7, 1]);
@@ -252,21 +252,21 @@ fn off_round_trips_and_variants() {
         "cone20.off",
         "sphere_highval.off",
     ] {
-        let m = read_mesh(&data(name)).unwrap();
+        let m = read_mesh(data(name)).unwrap();
         let r = trip(&m, MeshFormat::Off, &Default::default());
         assert_eq!(r, m, "{name}");
         assert_eq!(position_bits(&r), position_bits(&m));
     }
-    let m = read_mesh(&data("cube_quad.off")).unwrap();
+    let m = read_mesh(data("cube_quad.off")).unwrap();
     assert_eq!(
         (m.n_vertices(), m.n_faces(), m.face(0)),
         (8, 6, &[0, 3, 7, 4][..])
     );
-    let m = read_mesh(&data("sphere_highval.off")).unwrap();
+    let m = read_mesh(data("sphere_highval.off")).unwrap();
     assert_eq!(m.comments[0], "Output of a CGAL tool");
 
     // Per-face colours are kept.
-    let m = read_mesh(&data("mushroom_quad.off")).unwrap();
+    let m = read_mesh(data("mushroom_quad.off")).unwrap();
     assert_eq!((m.n_vertices(), m.n_faces()), (226, 240));
     let names: Vec<_> = m.face_attributes.iter().map(|a| a.name.as_str()).collect();
     assert_eq!(names, ["red", "green", "blue"]);
@@ -304,10 +304,10 @@ fn off_round_trips_and_variants() {
 
 #[test]
 fn stl_binary_and_ascii_weld_and_round_trip() {
-    let a = read_mesh(&data("back_to_back_scad.stl")).unwrap();
+    let a = read_mesh(data("back_to_back_scad.stl")).unwrap();
     assert_eq!((a.n_vertices(), a.n_faces()), (6, 10));
     assert_eq!(a.position_type, Some(ScalarType::F32));
-    let b = read_mesh(&data("spider_assimp.stl")).unwrap();
+    let b = read_mesh(data("spider_assimp.stl")).unwrap();
     assert_eq!((b.n_vertices(), b.n_faces()), (722, 1368));
     for m in [a, b] {
         for binary in [true, false] {
@@ -320,7 +320,7 @@ fn stl_binary_and_ascii_weld_and_round_trip() {
         }
     }
     // The welded STL agrees with the converted PLY of the same model (first-occurrence order).
-    let stl = read_mesh(&data("back_to_back_scad.stl")).unwrap();
+    let stl = read_mesh(data("back_to_back_scad.stl")).unwrap();
     let first = stl.positions[..3].to_vec();
     assert_eq!(
         first,
@@ -334,7 +334,7 @@ fn stl_binary_and_ascii_weld_and_round_trip() {
 
 #[test]
 fn stl_writer_triangulates_polygons_and_recomputes_normals() {
-    let m = read_mesh(&data("cube_quad.off")).unwrap();
+    let m = read_mesh(data("cube_quad.off")).unwrap();
     let b = write_mesh_bytes(&m, MeshFormat::Stl, &Default::default()).unwrap();
     assert_eq!(b.len(), 84 + 50 * 12);
     assert!(!b.starts_with(b"solid"));
@@ -349,7 +349,7 @@ fn stl_writer_triangulates_polygons_and_recomputes_normals() {
 
 #[test]
 fn cross_format_conversions_keep_geometry() {
-    let m = read_mesh(&data("dodecahedron_poly.ply")).unwrap();
+    let m = read_mesh(data("dodecahedron_poly.ply")).unwrap();
     for f in [MeshFormat::Obj, MeshFormat::Off, MeshFormat::Ply] {
         let b = write_mesh_bytes(&m, f, &Default::default()).unwrap();
         let r = read_mesh_bytes(&b, f).unwrap();

@@ -113,7 +113,7 @@ fn simplify_reaches_one_percent_or_says_why_not() {
         "mc/mc_armadillo_open52.ply",
         "elephant_holes.ply",
     ] {
-        let input = read_mesh(&data(name)).unwrap();
+        let input = read_mesh(data(name)).unwrap();
         let faces = input.n_triangles();
         let done = simplify(
             &input,

@@ -27,7 +27,7 @@ fn error_bits(errors: &[f32]) -> Vec<u32> {
 }
 
 fn tetra() -> PolygonMesh {
-    io::read_mesh(&data("tetrahedron.ply")).unwrap()
+    io::read_mesh(data("tetrahedron.ply")).unwrap()
 }
 
 /// Everything the user's file holds, compared bit for bit.
@@ -52,7 +52,7 @@ fn meshes() -> Vec<(String, PolygonMesh)> {
         "planar_pymeshfix_vtk.ply",
     ]
     .iter()
-    .map(|n| (n.to_string(), io::read_mesh(&data(n)).unwrap()))
+    .map(|n| (n.to_string(), io::read_mesh(data(n)).unwrap()))
     .collect();
     v.push(("rich_mesh".into(), rich_mesh()));
     v
@@ -93,7 +93,7 @@ fn decode_restores_input_and_hierarchy_exactly() {
 
 #[test]
 fn f64_positions_are_kept_exactly() {
-    let mut m = io::read_mesh(&data("joint.ply")).unwrap();
+    let mut m = io::read_mesh(data("joint.ply")).unwrap();
     for p in &mut m.positions {
         p.x += 1e-9 * p.y; // not representable as f32
     }
@@ -105,7 +105,7 @@ fn f64_positions_are_kept_exactly() {
 
 #[test]
 fn loaded_pyramid_has_identical_details_and_synthesis() {
-    let input = io::read_mesh(&data("joint.ply")).unwrap();
+    let input = io::read_mesh(data("joint.ply")).unwrap();
     let scan = Pyramid::build_with(input.clone(), &Default::default(), &NoProgress).unwrap();
     let (bytes, _) = format::encode(&scan.input, &scan.pm, &BuildInfo::default()).unwrap();
     let loaded = format::decode(&bytes)
@@ -133,7 +133,7 @@ fn loaded_pyramid_has_identical_details_and_synthesis() {
 
 #[test]
 fn levels_match_the_progressive_mesh() {
-    let input = io::read_mesh(&data("joint.ply")).unwrap();
+    let input = io::read_mesh(data("joint.ply")).unwrap();
     let (pm, bytes) = build(&input);
     for level in [
         pm.n_base_vertices(),
@@ -167,7 +167,7 @@ fn levels_match_the_progressive_mesh() {
 #[test]
 fn every_truncation_gives_a_prefix_level_or_a_clean_error() {
     for name in ["tetrahedron.ply", "joint.ply"] {
-        let input = io::read_mesh(&data(name)).unwrap();
+        let input = io::read_mesh(data(name)).unwrap();
         let (pm, bytes) = build(&input);
         let mut levels = Vec::new();
         for cut in 0..bytes.len() {
@@ -194,7 +194,7 @@ fn every_truncation_gives_a_prefix_level_or_a_clean_error() {
 
 #[test]
 fn bit_flips_are_errors_or_harmless() {
-    let (_, bytes) = build(&io::read_mesh(&data("joint.ply")).unwrap());
+    let (_, bytes) = build(&io::read_mesh(data("joint.ply")).unwrap());
     let original = format::decode(&bytes).unwrap().input;
     for i in 0..bytes.len() {
         // One bit per byte, varying which, keeps the test short.
@@ -218,7 +218,7 @@ fn bit_flips_are_errors_or_harmless() {
 /// the decoders themselves must refuse it or produce a consistent result, never panic.
 #[test]
 fn damage_with_fixed_checksums_never_panics() {
-    let (_, bytes) = build(&io::read_mesh(&data("joint.ply")).unwrap());
+    let (_, bytes) = build(&io::read_mesh(data("joint.ply")).unwrap());
     assert!(fuzzing::fix_checksums(&bytes) == bytes);
     let mut accepted = 0;
     // Every 7th byte keeps the test at a few seconds; the fuzzer covers the rest.
@@ -289,7 +289,7 @@ fn golden(name: &str) -> PathBuf {
 #[test]
 fn golden_files_are_byte_identical() {
     for (file, mesh) in [("tetra.pyr", "tetrahedron.ply"), ("joint.pyr", "joint.ply")] {
-        let (_, bytes) = build(&io::read_mesh(&data(mesh)).unwrap());
+        let (_, bytes) = build(&io::read_mesh(data(mesh)).unwrap());
         let path = golden(file);
         if std::env::var_os("MESHPYR_REGENERATE_GOLDEN").is_some() {
             std::fs::create_dir_all(path.parent().unwrap()).unwrap();
@@ -304,7 +304,7 @@ fn golden_files_are_byte_identical() {
         );
         // And the stored file still decodes to the mesh.
         let d = format::decode(&stored).unwrap();
-        assert_eq!(d.input, io::read_mesh(&data(mesh)).unwrap());
+        assert_eq!(d.input, io::read_mesh(data(mesh)).unwrap());
     }
 }
 
@@ -317,7 +317,7 @@ fn format_1_files_still_load() {
     for (file, mesh) in [("tetra.pyr", "tetrahedron.ply"), ("joint.pyr", "joint.ply")] {
         let old = std::fs::read(golden(&format!("v1/{file}"))).unwrap();
         assert_eq!(&old[8..10], &1u16.to_le_bytes(), "{file}: not a 1.x file");
-        let input = io::read_mesh(&data(mesh)).unwrap();
+        let input = io::read_mesh(data(mesh)).unwrap();
         let d = format::decode(&old).unwrap();
         assert_same_mesh(&input, &d.input, file);
         assert_eq!(d.pm.n_vertices(), input.n_vertices(), "{file}");
@@ -343,7 +343,7 @@ fn format_1_files_still_load() {
 /// errors, and jumps across the whole `u32` range, come back with the same bits.
 #[test]
 fn split_errors_round_trip_for_any_bits() {
-    let input = io::read_mesh(&data("joint.ply")).unwrap();
+    let input = io::read_mesh(data("joint.ply")).unwrap();
     let (pm, _) = build(&input);
     let odd = [
         0u32,
@@ -379,7 +379,7 @@ fn split_errors_round_trip_for_any_bits() {
 fn damaged_split_errors_are_typed_errors() {
     use meshpyr::format::container::{Container, Section, write_container};
     use meshpyr::format::varint::{ByteReader, put_ivarint};
-    let (_, bytes) = build(&io::read_mesh(&data("joint.ply")).unwrap());
+    let (_, bytes) = build(&io::read_mesh(data("joint.ply")).unwrap());
     let c = Container::parse(&bytes).unwrap();
     // (payload, offset of its errors, split count) → new payload.
     type Edit<'a> = &'a dyn Fn(&[u8], usize, usize) -> Vec<u8>;
@@ -461,7 +461,7 @@ fn fuzz_corpus_replays() {
 #[test]
 #[ignore = "bunny: a few seconds in release; run with --ignored"]
 fn bunny_round_trip() {
-    let input = io::read_mesh(&data("bunny.ply")).unwrap();
+    let input = io::read_mesh(data("bunny.ply")).unwrap();
     let (_, bytes) = build(&input);
     let d = format::decode(&bytes).unwrap();
     assert_eq!(d.input, input);
@@ -512,7 +512,7 @@ fn fix_section_checksums(bytes: &mut [u8]) {
 /// first a sequential reader meets), must not depend on the thread count.
 #[test]
 fn split_blocks_decode_the_same_on_any_thread_count() {
-    let input = io::read_mesh(&data("fandisk.ply")).unwrap();
+    let input = io::read_mesh(data("fandisk.ply")).unwrap();
     let (_, bytes) = build(&input);
     let (_, blocks) = split_blocks(&bytes);
     assert!(

@@ -19,7 +19,7 @@ fn data(name: &str) -> std::path::PathBuf {
 }
 
 fn scan(name: &str) -> Pyramid {
-    let input = io::read_mesh(&data(name)).unwrap();
+    let input = io::read_mesh(data(name)).unwrap();
     Pyramid::build_with(input, &PyramidOptions::default(), &NoProgress).unwrap()
 }
 

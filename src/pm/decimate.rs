@@ -1039,7 +1039,7 @@ mod tests {
             "back_to_back_scad.stl",
             "sphere_highval.ply",
         ] {
-            let input = crate::io::read_mesh(&dir.join(name)).unwrap();
+            let input = crate::io::read_mesh(dir.join(name)).unwrap();
             let mesh = Mesh::from_polygons(&input).unwrap().mesh;
             let target = mesh.n_faces() / 50;
             total += assert_same_as_reference(&mesh, &params(target, f64::INFINITY, 100.0));
@@ -1059,7 +1059,7 @@ mod tests {
             "mc_implicit_n40.ply",
             "mc_armadillo_open52.ply",
         ] {
-            let input = crate::io::read_mesh(&dir.join(name)).unwrap();
+            let input = crate::io::read_mesh(dir.join(name)).unwrap();
             let mesh = Mesh::from_polygons(&input).unwrap().mesh;
             assert_same_as_reference(&mesh, &params(0, f64::INFINITY, 100.0));
             let (_, _, outcome) = decimate(
@@ -1124,7 +1124,7 @@ mod tests {
     fn the_result_does_not_depend_on_the_thread_count() {
         // Big enough for the parallel candidate scan and sort.
         let input = crate::io::read_mesh(
-            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bunny.ply"),
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/bunny.ply"),
         )
         .unwrap();
         let mesh = Mesh::from_polygons(&input).unwrap().mesh;
@@ -1148,7 +1148,7 @@ mod tests {
     #[test]
     fn builder_corner_table_equals_the_mesh_it_builds() {
         let input = crate::io::read_mesh(
-            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/snowden_lo.ply"),
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/snowden_lo.ply"),
         )
         .unwrap();
         let repaired = CornerTable::from_polygons(&input).unwrap();

@@ -161,7 +161,7 @@ pub fn rich_mesh() -> PolygonMesh {
 
 /// Reads `tests/data/<name>.ply` into a half-edge mesh.
 pub fn load(name: &str) -> meshpyr::mesh::Mesh {
-    let poly = meshpyr::io::read_mesh(&data(&format!("{name}.ply")))
+    let poly = meshpyr::io::read_mesh(data(&format!("{name}.ply")))
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     meshpyr::mesh::Mesh::from_polygons(&poly)
         .expect("valid mesh")
