@@ -92,7 +92,11 @@ pub struct SourceMap {
 impl SourceMap {
     /// Maps per-mesh-vertex values back onto the input's vertices. A vertex that was split
     /// gets the mean of its copies; vertices no face refers to get `fallback[i]`.
-    pub fn to_input_positions(&self, mesh_values: &[DVec3], fallback: &[DVec3]) -> Vec<DVec3> {
+    pub(crate) fn to_input_positions(
+        &self,
+        mesh_values: &[DVec3],
+        fallback: &[DVec3],
+    ) -> Vec<DVec3> {
         let mut out = fallback.to_vec();
         let mut sum = vec![DVec3::ZERO; self.input_vertices];
         let mut count = vec![0u32; self.input_vertices];
@@ -178,7 +182,7 @@ impl Mesh {
 /// half-edges follow in the order of their interior twins. Flat consumers (the decimator behind
 /// `meshpyr simplify`) use it directly and skip the records.
 #[derive(Clone, Debug)]
-pub struct CornerTable {
+pub(crate) struct CornerTable {
     /// Mesh vertex of every corner.
     pub corner_vertex: Vec<u32>,
     /// The twin half-edge of every half-edge, `u32::MAX` on a boundary.
@@ -187,7 +191,7 @@ pub struct CornerTable {
 
 /// A [`CornerTable`] with the repair report and the map back onto the input.
 #[derive(Clone, Debug)]
-pub struct Repaired {
+pub(crate) struct Repaired {
     /// The repaired triangles.
     pub corners: CornerTable,
     /// What the builder changed.

@@ -27,7 +27,7 @@ impl UnionFind {
     }
 
     /// Joins the sets of `a` and `b`.
-    pub fn union(&mut self, a: u32, b: u32) {
+    pub(crate) fn union(&mut self, a: u32, b: u32) {
         let (a, b) = (self.find(a), self.find(b));
         if a != b {
             self.parent[a.max(b) as usize] = a.min(b);

@@ -115,7 +115,7 @@ pub(crate) struct FlatMesh {
 impl FlatMesh {
     /// The working mesh of the builder's output: vertex `i` at `positions[i]`, half-edge ids
     /// equal to the slots [`Mesh::from_polygons`] would give (`CornerTable` docs).
-    pub fn from_corners(positions: Vec<DVec3>, corners: &CornerTable) -> FlatMesh {
+    pub(crate) fn from_corners(positions: Vec<DVec3>, corners: &CornerTable) -> FlatMesh {
         let nh = corners.corner_vertex.len();
         let nb = corners.mate.iter().filter(|&&m| m == NONE).count();
         let mut twin = Vec::with_capacity(nh + nb);
@@ -234,7 +234,7 @@ impl FlatMesh {
     }
 
     /// The vertices that still have faces, in slot order.
-    pub fn survivors(&self) -> Vec<u32> {
+    pub(crate) fn survivors(&self) -> Vec<u32> {
         (0..self.vertices.len() as u32)
             .filter(|&v| self.vertices[v as usize].corner != NONE)
             .collect()
@@ -728,7 +728,7 @@ impl Schedule {
 
     /// How many collapses this pass may make: relaxed passes do a small share of the faces
     /// left, the cheapest first, then hand back to the full rules.
-    pub fn budget(&self, n_faces: usize) -> usize {
+    pub(crate) fn budget(&self, n_faces: usize) -> usize {
         match self.relaxation {
             Relaxation::None => usize::MAX,
             _ => (n_faces / 64).max(1),
@@ -737,7 +737,12 @@ impl Schedule {
 
     /// After a pass: whether decimation is over, i.e. a full pass with every rule relaxed
     /// found no legal collapse.
-    pub fn pass_ended(&mut self, collapsed: bool, error_cut: f64, params: &DecimateParams) -> bool {
+    pub(crate) fn pass_ended(
+        &mut self,
+        collapsed: bool,
+        error_cut: f64,
+        params: &DecimateParams,
+    ) -> bool {
         if collapsed {
             *self = Schedule::new();
             return false;

@@ -116,7 +116,7 @@ impl Waves {
 
     /// The slot where split `k` is stored.
     #[inline]
-    pub fn slot_of(&self, k: usize) -> usize {
+    pub(crate) fn slot_of(&self, k: usize) -> usize {
         self.slot_of[k] as usize
     }
 
@@ -127,7 +127,7 @@ impl Waves {
     }
 
     /// The slots of wave `w`.
-    pub fn wave(&self, w: usize) -> Range<usize> {
+    pub(crate) fn wave(&self, w: usize) -> Range<usize> {
         self.starts[w] as usize..self.starts[w + 1] as usize
     }
 
@@ -180,7 +180,7 @@ impl<'a> SharedSignal<'a> {
 
     /// A cache hint for vertex `i`'s value (any `i`: it is never dereferenced).
     #[inline(always)]
-    pub fn prefetch(&self, i: usize) {
+    pub(crate) fn prefetch(&self, i: usize) {
         crate::pm::prefetch::prefetch(self.cells.as_ptr().wrapping_add(i));
     }
 

@@ -12,7 +12,7 @@ use glam::DVec3;
 
 /// The dual graph: for each face, its (up to) three neighbours and the dual edge lengths.
 #[derive(Clone, Debug, Default)]
-pub struct DualGraph {
+pub(crate) struct DualGraph {
     /// `neighbors[f][k]`: the face across edge `k` of `f`, or [`NO_FACE`].
     pub neighbors: Vec<[u32; 3]>,
     /// `lengths[f][k]`: `|C_f − M_k| + |M_k − C_g|`, with `M_k` the midpoint of edge `k`
@@ -47,11 +47,6 @@ impl DualGraph {
     pub fn len(&self) -> usize {
         self.neighbors.len()
     }
-
-    /// True without faces.
-    pub fn is_empty(&self) -> bool {
-        self.neighbors.is_empty()
-    }
 }
 
 /// Length of the dual edge `P–Q` (base length `length`) in the metric centred at the source
@@ -64,7 +59,7 @@ impl DualGraph {
 /// `rho = 0` gives the isotropic length. The reading of the garbled source is reconstructed;
 /// this function is the one place that fixes how the three terms combine.
 #[inline]
-pub fn edge_weight(length: f64, rho: f64, n_o: DVec3, n_p: DVec3, n_q: DVec3) -> f64 {
+pub(crate) fn edge_weight(length: f64, rho: f64, n_o: DVec3, n_p: DVec3, n_q: DVec3) -> f64 {
     if rho == 0.0 {
         return length;
     }
@@ -76,7 +71,7 @@ pub fn edge_weight(length: f64, rho: f64, n_o: DVec3, n_p: DVec3, n_q: DVec3) ->
 /// Reusable Dijkstra workspace for one thread: distances stamped with a generation counter so
 /// a new search needs no clearing, a binary min-heap, and the result ball.
 #[derive(Clone, Debug, Default)]
-pub struct DualBall {
+pub(crate) struct DualBall {
     /// Tentative distance and the generation that wrote it, side by side for one cache miss.
     dist: Vec<(f64, u32)>,
     generation: u32,

@@ -74,7 +74,7 @@ pub fn schedule(levels: usize, finest_steps: usize, beta: f64, cap: usize) -> Ve
 }
 
 /// Mean length of the edges at each vertex (0 for an isolated vertex), indexed by slot.
-pub fn vertex_grid_size(mesh: &Mesh) -> Vec<f64> {
+pub(crate) fn vertex_grid_size(mesh: &Mesh) -> Vec<f64> {
     let mut h = vec![0.0; mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0)];
     for v in mesh.vertices() {
         let (s, n) = mesh

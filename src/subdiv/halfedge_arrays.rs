@@ -82,7 +82,7 @@ impl HalfedgeArrays {
 
     /// The slotmap mesh with this connectivity and `positions` (one per vertex); element `i`
     /// here is slot `i` there.
-    pub fn to_mesh(&self, positions: &[DVec3]) -> Mesh {
+    pub(crate) fn to_mesh(&self, positions: &[DVec3]) -> Mesh {
         use crate::mesh::halfedge::{FaceRecord, HalfedgeRecord, VertexRecord};
         debug_assert_eq!(positions.len(), self.n_vertices());
         let mut mesh = Mesh::new();
@@ -151,13 +151,13 @@ impl HalfedgeArrays {
 
     /// True if `h` has no face.
     #[inline]
-    pub fn is_boundary(&self, h: u32) -> bool {
+    pub(crate) fn is_boundary(&self, h: u32) -> bool {
         self.get(h).face == NONE
     }
 
     /// The three half-edges of face `t`, from its stored one (as [`Mesh::face_halfedges`]).
     #[inline]
-    pub fn face_halfedges(&self, t: usize) -> [u32; 3] {
+    pub(crate) fn face_halfedges(&self, t: usize) -> [u32; 3] {
         let h = self.face_halfedge[t];
         let e = self.get(h);
         [h, e.next, e.prev]
@@ -194,7 +194,7 @@ impl HalfedgeArrays {
     }
 
     /// The out-going half-edges of vertex `v`, in [`Mesh::outgoing`]'s order.
-    pub fn outgoing(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
+    pub(crate) fn outgoing(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
         let start = self.vertex_halfedge[v as usize];
         let mut current = (start != NONE).then_some(start);
         std::iter::from_fn(move || {
