@@ -48,7 +48,12 @@ const GLYPH_W: i64 = 6 * TEXT_SCALE;
 
 impl BarChart {
     /// A chart with the default size.
-    pub fn new(title: &str, x_label: &str, y_label: &str, categories: Vec<String>) -> BarChart {
+    pub(crate) fn new(
+        title: &str,
+        x_label: &str,
+        y_label: &str,
+        categories: Vec<String>,
+    ) -> BarChart {
         BarChart {
             title: title.into(),
             x_label: x_label.into(),

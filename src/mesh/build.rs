@@ -203,7 +203,7 @@ pub(crate) struct Repaired {
 impl CornerTable {
     /// Runs the builder's repairs (see the module docs) without making half-edge records.
     /// Fails like [`Mesh::from_polygons`].
-    pub fn from_polygons(input: &PolygonMesh) -> Result<Repaired, BuildError> {
+    pub(crate) fn from_polygons(input: &PolygonMesh) -> Result<Repaired, BuildError> {
         let mut report = BuildReport::default();
         let nv = input.positions.len();
         if let Some(vertex) = input.positions.iter().position(|p| !p.is_finite()) {
@@ -251,7 +251,7 @@ impl CornerTable {
     }
 
     /// Number of triangles.
-    pub fn n_triangles(&self) -> usize {
+    pub(crate) fn n_triangles(&self) -> usize {
         self.corner_vertex.len() / 3
     }
 }

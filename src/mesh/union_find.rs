@@ -10,14 +10,14 @@ pub(crate) struct UnionFind {
 
 impl UnionFind {
     /// `n` singletons.
-    pub fn new(n: usize) -> UnionFind {
+    pub(super) fn new(n: usize) -> UnionFind {
         UnionFind {
             parent: (0..n as u32).collect(),
         }
     }
 
     /// The representative of `x`'s set.
-    pub fn find(&mut self, mut x: u32) -> u32 {
+    pub(super) fn find(&mut self, mut x: u32) -> u32 {
         let p = &mut self.parent;
         while p[x as usize] != x {
             p[x as usize] = p[p[x as usize] as usize];

@@ -164,7 +164,7 @@ pub(crate) struct TriangleBvh {
 impl TriangleBvh {
     /// Builds the hierarchy over `triangles` indexing `positions`. Indices out of range are the
     /// caller's bug (mesh triangles are always in range) and panic.
-    pub fn new(positions: &[DVec3], triangles: &[[u32; 3]]) -> TriangleBvh {
+    pub(crate) fn new(positions: &[DVec3], triangles: &[[u32; 3]]) -> TriangleBvh {
         let corners: Vec<[DVec3; 3]> = triangles
             .iter()
             .map(|t| t.map(|i| positions[i as usize]))
@@ -189,7 +189,7 @@ impl TriangleBvh {
 
     /// The closest point to `p` on any triangle (`None` when there are no triangles). Exact;
     /// ties go to the smallest triangle index.
-    pub fn closest(&self, p: DVec3) -> Option<Closest> {
+    pub(crate) fn closest(&self, p: DVec3) -> Option<Closest> {
         if self.nodes.is_empty() {
             return None;
         }
@@ -243,7 +243,7 @@ impl TriangleBvh {
     }
 
     /// Distance from `p` to the surface (infinite when there are no triangles).
-    pub fn distance(&self, p: DVec3) -> f64 {
+    pub(crate) fn distance(&self, p: DVec3) -> f64 {
         self.closest(p)
             .map_or(f64::INFINITY, |c| c.distance_squared.sqrt())
     }

@@ -7,7 +7,7 @@
 use super::fem::SymmetricCsr;
 
 /// `steps` damped Jacobi sweeps `x ← x − ω D⁻¹ (A x − b)` on `K` columns.
-pub fn jacobi<const K: usize>(
+pub(crate) fn jacobi<const K: usize>(
     a: &SymmetricCsr,
     b: &[[f64; K]],
     x: &mut [[f64; K]],

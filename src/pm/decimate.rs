@@ -132,7 +132,7 @@ impl FlatMesh {
     /// The working mesh of any valid half-edge mesh: triangle `t` is the `t`-th face in slot
     /// order with corners starting at its stored half-edge (as [`Mesh::face_vertices`]), and
     /// boundary half-edges are numbered in slot order.
-    pub fn from_mesh(mesh: &Mesh) -> FlatMesh {
+    pub(super) fn from_mesh(mesh: &Mesh) -> FlatMesh {
         let n_vslots = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
         let n_hslots = mesh.halfedges().map(|h| h.slot() + 1).max().unwrap_or(0);
         let mut positions = vec![DVec3::ZERO; n_vslots];
@@ -229,7 +229,7 @@ impl FlatMesh {
     }
 
     /// Number of live triangles.
-    pub fn n_faces(&self) -> usize {
+    pub(super) fn n_faces(&self) -> usize {
         self.n_faces
     }
 
@@ -241,7 +241,7 @@ impl FlatMesh {
     }
 
     /// The live triangles in triangle order, each starting at its first corner.
-    pub fn triangles(&self) -> Vec<[u32; 3]> {
+    pub(super) fn triangles(&self) -> Vec<[u32; 3]> {
         self.corners
             .chunks_exact(3)
             .filter(|t| t[0].vertex != NONE)
@@ -714,7 +714,7 @@ pub(crate) struct Schedule {
 }
 
 impl Schedule {
-    pub fn new() -> Schedule {
+    pub(super) fn new() -> Schedule {
         Schedule {
             use_goal: true,
             relaxation: Relaxation::None,
@@ -722,7 +722,7 @@ impl Schedule {
     }
 
     /// The rules of this pass.
-    pub fn legality(&self, params: &DecimateParams) -> Legality {
+    pub(super) fn legality(&self, params: &DecimateParams) -> Legality {
         params.legality.relaxed(self.relaxation)
     }
 

@@ -83,7 +83,7 @@ impl Quadric {
 
     /// Componentwise sum.
     #[inline]
-    pub fn add(&mut self, o: &Quadric) {
+    pub(crate) fn add(&mut self, o: &Quadric) {
         for k in 0..6 {
             self.a[k] += o.a[k];
         }
@@ -96,7 +96,7 @@ impl Quadric {
 
     /// The sum of two quadrics.
     #[inline]
-    pub fn sum(&self, o: &Quadric) -> Quadric {
+    pub(crate) fn sum(&self, o: &Quadric) -> Quadric {
         let mut q = *self;
         q.add(o);
         q
@@ -104,7 +104,7 @@ impl Quadric {
 
     /// `xᵀAx + 2bᵀx + c`: the weighted sum of squared plane distances (length⁴ with area weights).
     #[inline]
-    pub fn raw(&self, p: DVec3) -> f64 {
+    pub(crate) fn raw(&self, p: DVec3) -> f64 {
         let a = &self.a;
         let (x, y, z) = (p.x, p.y, p.z);
         x * (a[0] * x + 2.0 * (a[1] * y + a[2] * z + self.b[0]))
@@ -116,7 +116,7 @@ impl Quadric {
     /// The normalised error at `p`: [`Quadric::raw`] divided by the face weight (a mean squared
     /// distance, length²). Never negative or NaN for finite input.
     #[inline]
-    pub fn error(&self, p: DVec3) -> f64 {
+    pub(crate) fn error(&self, p: DVec3) -> f64 {
         let r = self.raw(p).max(0.0);
         let e = if self.weight > 0.0 {
             r / self.weight

@@ -791,7 +791,7 @@ pub(crate) struct FaceBuckets {
 impl FaceBuckets {
     /// Buckets `faces` on vertices `0..n_vertices` (a face with a larger index goes to the last
     /// bucket, so any input is accepted).
-    pub fn new(faces: &[[u32; 3]], n_vertices: usize) -> FaceBuckets {
+    pub(crate) fn new(faces: &[[u32; 3]], n_vertices: usize) -> FaceBuckets {
         let n = n_vertices.max(1);
         let mut starts = vec![0u32; n + 1];
         let mut out = vec![[0u32; 3]; faces.len()];

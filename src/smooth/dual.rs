@@ -22,7 +22,11 @@ pub(crate) struct DualGraph {
 
 impl DualGraph {
     /// The dual graph of `surface` at `positions`, with centroids from `frames`.
-    pub fn new(surface: &FlatSurface, positions: &[DVec3], frames: &FaceFrames) -> DualGraph {
+    pub(crate) fn new(
+        surface: &FlatSurface,
+        positions: &[DVec3],
+        frames: &FaceFrames,
+    ) -> DualGraph {
         let mut lengths = Vec::with_capacity(surface.n_faces());
         for (f, t) in surface.triangles.iter().enumerate() {
             let mut l = [0.0; 3];
@@ -44,7 +48,7 @@ impl DualGraph {
     }
 
     /// Number of dual vertices (faces).
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.neighbors.len()
     }
 }
@@ -83,7 +87,7 @@ pub(crate) struct DualBall {
 
 impl DualBall {
     /// A workspace for graphs of up to `n_faces` dual vertices.
-    pub fn new(n_faces: usize) -> DualBall {
+    pub(crate) fn new(n_faces: usize) -> DualBall {
         DualBall {
             dist: vec![(0.0, 0); n_faces],
             generation: 0,
@@ -95,7 +99,7 @@ impl DualBall {
     /// Fills [`DualBall::ball`] with every face at distance `< radius` from `source`, in the
     /// metric of [`edge_weight`] with `rho` and the face normals `normals` (isotropic for
     /// `rho = 0`).
-    pub fn grow(
+    pub(crate) fn grow(
         &mut self,
         graph: &DualGraph,
         normals: &[DVec3],

@@ -81,7 +81,7 @@ pub(crate) struct Fitting<'a> {
 impl<'a> Fitting<'a> {
     /// The energy of `surface` against the target normals `targets` (one per face; a zero
     /// target leaves its face out of the energy).
-    pub fn new(surface: &'a FlatSurface, targets: &'a [DVec3]) -> Fitting<'a> {
+    pub(crate) fn new(surface: &'a FlatSurface, targets: &'a [DVec3]) -> Fitting<'a> {
         let nv = surface.vertex_slots;
         let mut starts = vec![0u32; nv + 1];
         for t in &surface.triangles {
@@ -109,7 +109,7 @@ impl<'a> Fitting<'a> {
     }
 
     /// `E = Σ_T (2A(T) − N_T·m(T))` over faces with a target.
-    pub fn energy(&self, positions: &[DVec3]) -> f64 {
+    pub(crate) fn energy(&self, positions: &[DVec3]) -> f64 {
         fixed_sum(self.surface.n_faces(), |f| self.face_energy(positions, f))
     }
 

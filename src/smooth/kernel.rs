@@ -24,7 +24,7 @@ const TAIL: f64 = 1.0 / (16.0 * std::f64::consts::E * std::f64::consts::E);
 /// The normalisation 1/(√(2π)σ) cancels wherever all weights share one σ (the smoothed
 /// normal and its variance), so the filter uses this directly.
 #[inline]
-pub fn shape(t: f64) -> f64 {
+pub(crate) fn shape(t: f64) -> f64 {
     let t = t.abs();
     if t <= JOIN {
         (-0.5 * t * t).exp()
@@ -60,7 +60,7 @@ pub(crate) struct ShapeTable {
 
 impl ShapeTable {
     /// The table (about 16 kB).
-    pub fn new() -> ShapeTable {
+    pub(crate) fn new() -> ShapeTable {
         let n = SUPPORT as usize * TABLE_DENSITY;
         // One extra sample past the end so interpolation never reads out of bounds.
         let values = (0..=n + 1)

@@ -26,7 +26,7 @@ pub(crate) struct FlatSurface {
 impl FlatSurface {
     /// Flattens `mesh`. Edges with a single face (boundaries, including the ones the builder
     /// cut when repairing non-manifold input) get no neighbour, so nothing crosses them.
-    pub fn new(mesh: &Mesh) -> FlatSurface {
+    pub(crate) fn new(mesh: &Mesh) -> FlatSurface {
         let face_slots = mesh.faces().map(|f| f.slot() + 1).max().unwrap_or(0);
         let mut index = vec![NO_FACE; face_slots];
         for (i, f) in mesh.faces().enumerate() {
@@ -97,13 +97,13 @@ impl FlatSurface {
     }
 
     /// Number of triangles.
-    pub fn n_faces(&self) -> usize {
+    pub(crate) fn n_faces(&self) -> usize {
         self.triangles.len()
     }
 
     /// Mean length of the triangles' edges (interior edges counted twice, which weights
     /// them like the faces they bound); 0 without faces.
-    pub fn mean_edge_length(&self, positions: &[DVec3]) -> f64 {
+    pub(crate) fn mean_edge_length(&self, positions: &[DVec3]) -> f64 {
         let mut sum = 0.0;
         for t in &self.triangles {
             for k in 0..3 {

@@ -59,7 +59,7 @@ pub struct LevelReport {
 
 /// The cascadic schedule `m_l = ⌈m_{l_max}·β^{l_max−l}⌉` for `l = 1..=levels`, each capped
 /// at `cap`.
-pub fn schedule(levels: usize, finest_steps: usize, beta: f64, cap: usize) -> Vec<usize> {
+pub(crate) fn schedule(levels: usize, finest_steps: usize, beta: f64, cap: usize) -> Vec<usize> {
     (1..=levels)
         .map(|l| {
             let m = finest_steps as f64 * beta.powi((levels - l) as i32);

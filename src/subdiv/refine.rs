@@ -667,7 +667,7 @@ pub(crate) struct BisectionLevel {
 
 impl BisectionLevel {
     /// The level of `mesh` (elements numbered by slot order) with `marking`.
-    pub fn from_mesh(mesh: &Mesh, marking: &Marking) -> Result<Self, SubdivError> {
+    pub(crate) fn from_mesh(mesh: &Mesh, marking: &Marking) -> Result<Self, SubdivError> {
         let a = HalfedgeArrays::from_mesh(mesh);
         let nf = a.n_faces();
         if marking.newest.len() != nf {
