@@ -77,11 +77,11 @@
 //! | [`pyramid`] | the detail pyramid, filters, edits and spectra |
 //! | [`relax`] | the relaxation operators that predict one level from the next |
 //! | [`format`](mod@format) | the `.pyr` file |
-//! | [`smooth`] | denoising |
+//! | [`smooth`] | denoising and smoothing |
 //! | [`subdiv`] | subdivision of coarse meshes |
 //! | [`metrics`] | distances and curvature |
 //! | [`numerics`] | the finite elements and solvers that subdivision and smoothing share |
-//! | [`render`], [`plot`] | the previews and charts of the demo |
+//! | [`render`] | the previews of the demo |
 //! | [`progress`] | progress reporting |
 //!
 //! Without default features (`meshpyr = { version = "…", default-features = false }`) the
@@ -97,7 +97,8 @@ pub mod io;
 pub mod mesh;
 pub mod metrics;
 pub mod numerics;
-pub mod plot;
+#[cfg(feature = "cli")]
+pub(crate) mod plot;
 pub mod pm;
 pub mod progress;
 pub mod pyramid;

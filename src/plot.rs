@@ -9,7 +9,7 @@ use crate::render::Image;
 
 /// One data series: a value per category (non-positive values are not drawn on a log axis).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Series {
+pub(crate) struct Series {
     /// Legend text.
     pub name: String,
     /// One value per category.
@@ -21,7 +21,7 @@ pub struct Series {
 /// A bar chart with a logarithmic y axis; categories are drawn left to right, the series of one
 /// category side by side.
 #[derive(Clone, Debug, PartialEq)]
-pub struct BarChart {
+pub(crate) struct BarChart {
     /// Title above the plot.
     pub title: String,
     /// Label under the x axis.
@@ -39,7 +39,7 @@ pub struct BarChart {
 }
 
 /// Colours for successive series.
-pub const PALETTE: [[u8; 3]; 4] = [[52, 101, 164], [204, 0, 0], [78, 154, 6], [245, 121, 0]];
+pub(crate) const PALETTE: [[u8; 3]; 4] = [[52, 101, 164], [204, 0, 0], [78, 154, 6], [245, 121, 0]];
 
 const INK: [u8; 3] = [30, 30, 30];
 const GRID: [u8; 3] = [215, 215, 215];
@@ -48,7 +48,12 @@ const GLYPH_W: i64 = 6 * TEXT_SCALE;
 
 impl BarChart {
     /// A chart with the default size.
-    pub fn new(title: &str, x_label: &str, y_label: &str, categories: Vec<String>) -> BarChart {
+    pub(crate) fn new(
+        title: &str,
+        x_label: &str,
+        y_label: &str,
+        categories: Vec<String>,
+    ) -> BarChart {
         BarChart {
             title: title.into(),
             x_label: x_label.into(),
@@ -61,7 +66,7 @@ impl BarChart {
     }
 
     /// Draws the chart.
-    pub fn draw(&self) -> Image {
+    pub(crate) fn draw(&self) -> Image {
         let (w, h) = (self.width.max(200) as i64, self.height.max(150) as i64);
         let mut img = Image::new(w as usize, h as usize, [255, 255, 255]);
         let (left, right, top, bottom) = (100i64, w - 20, 60i64, h - 70);
@@ -140,13 +145,13 @@ impl BarChart {
 }
 
 /// Width in pixels of `text` at the chart's text scale.
-pub fn text_width(text: &str) -> i64 {
+pub(crate) fn text_width(text: &str) -> i64 {
     text.chars().count() as i64 * GLYPH_W
 }
 
 /// Draws `text` with its top-left corner at `(x, y)`; lower case is drawn as upper case and
 /// characters without a glyph as blanks.
-pub fn draw_text(img: &mut Image, text: &str, x: i64, y: i64, color: [u8; 3]) {
+pub(crate) fn draw_text(img: &mut Image, text: &str, x: i64, y: i64, color: [u8; 3]) {
     for (k, ch) in text.chars().enumerate() {
         let rows = glyph(ch.to_ascii_uppercase());
         let gx = x + k as i64 * GLYPH_W;
@@ -220,7 +225,7 @@ fn glyph(ch: char) -> [u8; 7] {
 }
 
 /// A compact count label: `950`, `1.5K`, `16K`, `1.2M`.
-pub fn compact_count(n: usize) -> String {
+pub(crate) fn compact_count(n: usize) -> String {
     let f = n as f64;
     let (v, unit) = if n >= 1_000_000 {
         (f / 1e6, "M")

@@ -46,7 +46,8 @@ impl Image {
     }
 
     /// The colour at `(x, y)`, or `None` outside the image.
-    pub fn pixel(&self, x: usize, y: usize) -> Option<[u8; 3]> {
+    #[cfg(test)]
+    pub(crate) fn pixel(&self, x: usize, y: usize) -> Option<[u8; 3]> {
         (x < self.width && y < self.height).then(|| {
             let i = 3 * (y * self.width + x);
             [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
@@ -63,7 +64,8 @@ impl Image {
     }
 
     /// Fills the rectangle `[x0, x1) × [y0, y1)` (clipped to the image).
-    pub fn fill_rect(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: [u8; 3]) {
+    #[cfg(feature = "cli")]
+    pub(crate) fn fill_rect(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: [u8; 3]) {
         let (xa, xb) = (x0.max(0), x1.min(self.width as i64));
         let (ya, yb) = (y0.max(0), y1.min(self.height as i64));
         for y in ya..yb {
@@ -74,7 +76,7 @@ impl Image {
     }
 
     /// Copies `other` into this image with its top-left corner at `(x, y)` (clipped).
-    pub fn blit(&mut self, other: &Image, x: i64, y: i64) {
+    pub(crate) fn blit(&mut self, other: &Image, x: i64, y: i64) {
         for oy in 0..other.height {
             for ox in 0..other.width {
                 let i = 3 * (oy * other.width + ox);

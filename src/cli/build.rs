@@ -12,20 +12,20 @@ use std::time::Instant;
 
 /// Arguments of `meshpyr build`.
 #[derive(clap::Args, Debug)]
-pub struct BuildArgs {
+pub(crate) struct BuildArgs {
     /// Input mesh (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
-    pub input: PathBuf,
+    pub(crate) input: PathBuf,
     /// Output `.pyr` file.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Relaxation operator the pyramid is analysed with (recorded in the file; `filter`,
     /// `spectrum` and `edit` use it).
     #[arg(long, value_enum, default_value_t = RelaxKind::SecondDifference)]
-    pub relax: RelaxKind,
+    pub(crate) relax: RelaxKind,
 }
 
 /// Runs `meshpyr build`.
-pub fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
     let relaxation = args.relax.spec();
     let input = read_input_mesh(&args.input)?;
     let start = Instant::now();

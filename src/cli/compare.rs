@@ -19,14 +19,14 @@ use std::path::{Path, PathBuf};
                   REFERENCE's bounding-box diagonal; e_n_rel equals e_n. Both meshes are \
                   repaired and consistently oriented by the builder first (see `meshpyr info`)."
 )]
-pub struct CompareArgs {
+pub(crate) struct CompareArgs {
     /// The processed mesh M' (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
-    pub result: PathBuf,
+    pub(crate) result: PathBuf,
     /// The reference mesh M (same formats).
-    pub reference: PathBuf,
+    pub(crate) reference: PathBuf,
     /// Print one JSON object instead of text.
     #[arg(long)]
-    pub json: bool,
+    pub(crate) json: bool,
 }
 
 fn load(path: &Path) -> anyhow::Result<Mesh> {
@@ -37,7 +37,7 @@ fn load(path: &Path) -> anyhow::Result<Mesh> {
 }
 
 /// Runs `meshpyr compare`.
-pub fn run(args: CompareArgs, _global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: CompareArgs, _global: &Global) -> anyhow::Result<()> {
     let result = load(&args.result)?;
     let reference = load(&args.reference)?;
     let c: Comparison = compare(&result, &reference).with_context(|| {

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 /// PLY encodings selectable on the command line.
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub enum PlyEncodingArg {
+pub(crate) enum PlyEncodingArg {
     /// Text.
     Ascii,
     /// Binary little endian (the default).
@@ -17,21 +17,21 @@ pub enum PlyEncodingArg {
 
 /// Arguments of `meshpyr convert`.
 #[derive(clap::Args, Debug)]
-pub struct ConvertArgs {
+pub(crate) struct ConvertArgs {
     /// Input mesh (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
-    pub input: PathBuf,
+    pub(crate) input: PathBuf,
     /// Output mesh; the format follows the extension.
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Encoding of PLY output.
     #[arg(long, value_enum, default_value = "binary-le")]
-    pub ply_encoding: PlyEncodingArg,
+    pub(crate) ply_encoding: PlyEncodingArg,
     /// Write STL as text instead of binary.
     #[arg(long)]
-    pub stl_ascii: bool,
+    pub(crate) stl_ascii: bool,
 }
 
 /// Runs `meshpyr convert`.
-pub fn run(args: ConvertArgs, global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: ConvertArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
     let mesh = super::input::read_input_mesh(&args.input)?;
     let opts = WriteOptions {

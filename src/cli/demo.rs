@@ -12,18 +12,18 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// The bundled default scan (Stanford bunny, 37.7k vertices; see `tests/data/README.md`).
-pub const BUNDLED_SCAN: &[u8] = include_bytes!("../../tests/data/bunny.ply");
+pub(crate) const BUNDLED_SCAN: &[u8] = include_bytes!("../../tests/data/bunny.ply");
 
 /// Arguments of `meshpyr demo`.
 #[derive(clap::Args, Debug)]
-pub struct DemoArgs {
+pub(crate) struct DemoArgs {
     /// Directory for the outputs (created if missing).
     #[arg(long, default_value = "meshpyr-demo")]
-    pub out: PathBuf,
+    pub(crate) out: PathBuf,
 }
 
 /// Runs `meshpyr demo`.
-pub fn run(args: DemoArgs, global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: DemoArgs, global: &Global) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let poly = io::read_mesh_bytes(BUNDLED_SCAN, MeshFormat::Ply)?;

@@ -15,11 +15,11 @@ use std::path::{Path, PathBuf};
 
 /// One `--move X,Y,Z:DX,DY,DZ`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Move {
+pub(crate) struct Move {
     /// Where to grab.
-    pub at: DVec3,
+    pub(crate) at: DVec3,
     /// How far to move the grabbed point.
-    pub by: DVec3,
+    pub(crate) by: DVec3,
 }
 
 fn parse_vec3(s: &str) -> Option<DVec3> {
@@ -45,33 +45,33 @@ fn parse_move(s: &str) -> Result<Move, String> {
 
 /// Arguments of `meshpyr edit`.
 #[derive(clap::Args, Debug)]
-pub struct EditArgs {
+pub(crate) struct EditArgs {
     /// Input mesh (.obj, .ply, .off, .stl) or .pyr file.
-    pub input: PathBuf,
+    pub(crate) input: PathBuf,
     /// Output mesh: the input's vertices and faces in the same order, new positions. A `.pyr`
     /// output keeps the hierarchy with the edited positions as its new original positions.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
     /// The level (vertex count) whose vertices are moved; coarser levels give broader edits.
     #[arg(long, value_name = "K")]
-    pub level: usize,
+    pub(crate) level: usize,
     /// Grab the level-K surface at X,Y,Z and move it by DX,DY,DZ (repeatable; model units).
     #[arg(long = "move", value_name = "X,Y,Z:DX,DY,DZ", value_parser = parse_move, required = true)]
-    pub moves: Vec<Move>,
+    pub(crate) moves: Vec<Move>,
     /// Radius of influence of each move (model units).
     #[arg(long, value_name = "R")]
-    pub radius: f64,
+    pub(crate) radius: f64,
     /// Filters applied while resynthesising (optional).
     #[command(flatten)]
-    pub filters: FilterOptions,
+    pub(crate) filters: FilterOptions,
     /// Relaxation operator used for the prediction (default second-difference; a .pyr input
     /// uses the one it was built with).
     #[arg(long, value_enum)]
-    pub relax: Option<RelaxKind>,
+    pub(crate) relax: Option<RelaxKind>,
 }
 
 /// Runs `meshpyr edit`.
-pub fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
     let writes_pyr = args
         .output
         .extension()

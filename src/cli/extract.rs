@@ -10,19 +10,19 @@ use std::path::PathBuf;
 
 /// Arguments of `meshpyr extract`.
 #[derive(clap::Args, Debug)]
-pub struct ExtractArgs {
+pub(crate) struct ExtractArgs {
     /// Input `.pyr` file.
-    pub input: PathBuf,
+    pub(crate) input: PathBuf,
     /// Output mesh (.obj, .ply, .off, .stl).
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Level (vertex count) to extract; default the finest (the original mesh).
     #[arg(long, value_name = "N")]
-    pub level: Option<usize>,
+    pub(crate) level: Option<usize>,
 }
 
 /// Runs `meshpyr extract`.
-pub fn run(args: ExtractArgs, global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: ExtractArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
     let name = args.input.display().to_string();
     let bytes = std::fs::read(&args.input).with_context(|| format!("cannot read {name}"))?;

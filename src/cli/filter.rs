@@ -21,28 +21,28 @@ fn parse_gain_band(s: &str) -> Result<GainBand, String> {
 
 /// The filter options shared by `filter` and `edit`.
 #[derive(clap::Args, Debug, Clone, Default)]
-pub struct FilterOptions {
+pub(crate) struct FilterOptions {
     /// Zero the details of every level above N (a vertex count, or a feature size in model
     /// units with a `u` suffix such as 0.01u).
     #[arg(long, value_name = "N")]
-    pub lowpass: Option<LevelSpec>,
+    pub(crate) lowpass: Option<LevelSpec>,
     /// Zero the details of the levels in (A, B] (repeatable).
     #[arg(long, value_name = "A:B", value_parser = parse_band)]
-    pub stopband: Vec<(LevelSpec, LevelSpec)>,
+    pub(crate) stopband: Vec<(LevelSpec, LevelSpec)>,
     /// Multiply the details of the levels in (A, B] by G (repeatable).
     #[arg(long, value_name = "A:B=G", value_parser = parse_gain_band)]
-    pub enhance: Vec<GainBand>,
+    pub(crate) enhance: Vec<GainBand>,
     /// Generic gain band, same as --enhance (repeatable; gains of overlapping bands multiply).
     #[arg(long, value_name = "A:B=G", value_parser = parse_gain_band)]
-    pub gain: Vec<GainBand>,
+    pub(crate) gain: Vec<GainBand>,
     /// Apply the gains to the normal component of the details only (no tangential drift).
     #[arg(long)]
-    pub normal_only: bool,
+    pub(crate) normal_only: bool,
 }
 
 impl FilterOptions {
     /// The filter these options describe.
-    pub fn filter(&self) -> Filter {
+    pub(crate) fn filter(&self) -> Filter {
         let mut f = Filter {
             normal_only: self.normal_only,
             ..Filter::default()
@@ -65,7 +65,11 @@ impl FilterOptions {
 /// a word, and for every band that reaches below the coarsest level (a low-pass to fewer
 /// vertices than the base has), which would otherwise silently do less. `name` is the input,
 /// for the message.
-pub fn resolve_reporting(filter: &Filter, pyramid: &DetailPyramid, name: &str) -> LevelGains {
+pub(crate) fn resolve_reporting(
+    filter: &Filter,
+    pyramid: &DetailPyramid,
+    name: &str,
+) -> LevelGains {
     let gains = filter.resolve(pyramid.surface_area());
     // Splits create the levels (base, finest]; a band (a, b] reaches them when it is not
     // empty and overlaps them.
@@ -108,22 +112,22 @@ pub fn resolve_reporting(filter: &Filter, pyramid: &DetailPyramid, name: &str) -
 
 /// Arguments of `meshpyr filter`.
 #[derive(clap::Args, Debug)]
-pub struct FilterArgs {
+pub(crate) struct FilterArgs {
     /// Input mesh (.obj, .ply, .off, .stl) or .pyr file.
-    pub input: PathBuf,
+    pub(crate) input: PathBuf,
     /// Output mesh: the input's vertices and faces in the same order, new positions.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
     #[command(flatten)]
-    pub filters: FilterOptions,
+    pub(crate) filters: FilterOptions,
     /// Relaxation operator used for the prediction (default second-difference; a .pyr input
     /// uses the one it was built with).
     #[arg(long, value_enum)]
-    pub relax: Option<RelaxKind>,
+    pub(crate) relax: Option<RelaxKind>,
 }
 
 /// Runs `meshpyr filter`.
-pub fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
     let filter = args.filters.filter();
     if filter.bands.is_empty() {

@@ -9,56 +9,56 @@ use std::path::PathBuf;
 
 /// Arguments of `meshpyr info`.
 #[derive(clap::Args, Debug)]
-pub struct InfoArgs {
+pub(crate) struct InfoArgs {
     /// Mesh file (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
-    pub mesh: PathBuf,
+    pub(crate) mesh: PathBuf,
     /// Print one JSON object instead of text.
     #[arg(long)]
-    pub json: bool,
+    pub(crate) json: bool,
 }
 
 /// Everything `info` reports. Counts describe the file as given; topology (loops, components,
 /// χ, genus) is measured on the mesh the builder makes of it, which for a manifold file is the
 /// file itself.
 #[derive(Serialize, Debug)]
-pub struct MeshInfo {
+pub(crate) struct MeshInfo {
     /// Vertices in the file, unreferenced ones included.
-    pub vertices: usize,
+    pub(crate) vertices: usize,
     /// Triangles after fan-triangulating the file's polygons.
-    pub faces: usize,
+    pub(crate) faces: usize,
     /// Polygons as stored in the file.
-    pub polygons: usize,
+    pub(crate) polygons: usize,
     /// Distinct undirected edges of those triangles.
-    pub edges: usize,
+    pub(crate) edges: usize,
     /// Holes.
-    pub boundary_loops: usize,
+    pub(crate) boundary_loops: usize,
     /// Edge-connected components.
-    pub components: usize,
+    pub(crate) components: usize,
     /// V − E + F of the surface (referenced vertices only).
-    pub euler_characteristic: i64,
+    pub(crate) euler_characteristic: i64,
     /// Σ over components of (2 − b − χ)/2; null when the file is not manifold.
-    pub genus: Option<u64>,
+    pub(crate) genus: Option<u64>,
     /// The fewest vertices a surface of this topology can be simplified to
     /// ([`crate::mesh::topology::vertex_floor`], on the repaired mesh).
-    pub floor_vertices: usize,
+    pub(crate) floor_vertices: usize,
     /// For a `.pyr` file: the hierarchy's base level against that floor (null otherwise).
-    pub pm_base: Option<String>,
+    pub(crate) pm_base: Option<String>,
     /// True when no edge has more than two triangles and no vertex is pinched.
-    pub manifold: bool,
+    pub(crate) manifold: bool,
     /// Bounding-box diagonal.
-    pub bbox_diagonal: f64,
+    pub(crate) bbox_diagonal: f64,
     /// Mean edge length.
-    pub mean_edge_length: f64,
+    pub(crate) mean_edge_length: f64,
     /// What the builder changed to make a valid half-edge mesh.
-    pub repairs: BuildReport,
+    pub(crate) repairs: BuildReport,
     /// Per-vertex attribute names, in file order.
-    pub vertex_attributes: Vec<String>,
+    pub(crate) vertex_attributes: Vec<String>,
     /// Per-face attribute names, in file order.
-    pub face_attributes: Vec<String>,
+    pub(crate) face_attributes: Vec<String>,
 }
 
 /// Computes [`MeshInfo`] for a file-level mesh.
-pub fn mesh_info(poly: &PolygonMesh) -> anyhow::Result<MeshInfo> {
+pub(crate) fn mesh_info(poly: &PolygonMesh) -> anyhow::Result<MeshInfo> {
     let built = Mesh::from_polygons(poly)?;
     let topo = built.mesh.topology();
     let manifold = built.report.input_was_manifold();
@@ -109,7 +109,7 @@ fn count_file_edges(poly: &PolygonMesh) -> usize {
 }
 
 /// Runs `meshpyr info`.
-pub fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
     // A .pyr file is decoded once, for its stored input and its hierarchy.
     let (poly, pm_base) = if is_pyr_file(&args.mesh) {
         let data = load_pyr(&args.mesh)?;

@@ -17,7 +17,7 @@ use std::time::Instant;
 /// signature, whatever its name), whose stored input mesh is restored exactly — the file the
 /// user built it from, so `info`, `convert`, `simplify`, `subdivide`, `smooth`, `compare` and
 /// `build` take the file they keep as well.
-pub fn read_input_mesh(path: &Path) -> anyhow::Result<PolygonMesh> {
+pub(crate) fn read_input_mesh(path: &Path) -> anyhow::Result<PolygonMesh> {
     if is_pyr_file(path) {
         return Ok(load_pyr(path)?.input);
     }
@@ -25,7 +25,7 @@ pub fn read_input_mesh(path: &Path) -> anyhow::Result<PolygonMesh> {
 }
 
 /// True when `path` is a `.pyr` file (by its signature; an unreadable file is "not").
-pub fn is_pyr_file(path: &Path) -> bool {
+pub(crate) fn is_pyr_file(path: &Path) -> bool {
     let mut head = [0u8; 8];
     std::fs::File::open(path)
         .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
@@ -33,7 +33,7 @@ pub fn is_pyr_file(path: &Path) -> bool {
 }
 
 /// Reads and decodes a whole `.pyr` file (validated), errors naming the file.
-pub fn load_pyr(path: &Path) -> anyhow::Result<format::PyrData> {
+pub(crate) fn load_pyr(path: &Path) -> anyhow::Result<format::PyrData> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
     format::decode(&bytes).with_context(|| format!("cannot load {}", path.display()))
 }
@@ -42,7 +42,7 @@ pub fn load_pyr(path: &Path) -> anyhow::Result<format::PyrData> {
 /// returns it with the relaxation it was analysed with. `relax` defaults to the
 /// second-difference operator. A `.pyr` file (detected by its signature) is loaded instead and
 /// analysed with the relaxation recorded in it; asking for another one is an error.
-pub fn load_pyramid(
+pub(crate) fn load_pyramid(
     path: &Path,
     relax: Option<RelaxKind>,
     global: &Global,
@@ -93,7 +93,7 @@ fn load_pyr_scan(path: &Path, global: &Global) -> anyhow::Result<(Pyramid, Relax
 }
 
 /// Builds the pyramid of an already-read mesh; `name` is used in messages.
-pub fn build_pyramid(
+pub(crate) fn build_pyramid(
     input: PolygonMesh,
     relaxation: RelaxationSpec,
     name: &str,
@@ -123,7 +123,7 @@ pub fn build_pyramid(
 
 /// The `.pyr` file of `input` with its hierarchy `pm` (built with the default options, as
 /// every command builds it) and the relaxation the pyramid is analysed with.
-pub fn encode_pyr(
+pub(crate) fn encode_pyr(
     input: &PolygonMesh,
     pm: &ProgressiveMesh,
     relaxation: RelaxationSpec,

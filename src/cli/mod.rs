@@ -30,15 +30,15 @@ use std::io::IsTerminal;
 
 /// Options every subcommand understands.
 #[derive(clap::Args, Debug, Clone)]
-pub struct Global {
+pub(crate) struct Global {
     /// Print nothing but errors and requested output; no progress bars.
     #[arg(long, short, global = true)]
-    pub quiet: bool,
+    pub(crate) quiet: bool,
 }
 
 impl Global {
     /// A progress bar on stderr that stays hidden when stderr is not a terminal or `--quiet`.
-    pub fn progress(&self, message: &str) -> ProgressBar {
+    pub(crate) fn progress(&self, message: &str) -> ProgressBar {
         let pb = ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr());
         if self.quiet || !std::io::stderr().is_terminal() {
             pb.set_draw_target(ProgressDrawTarget::hidden());
@@ -54,7 +54,7 @@ impl Global {
 
     /// Prints a status line on stderr unless `--quiet`. Status is best effort: a closed
     /// stderr must not fail (or panic) a command whose real output is a file.
-    pub fn say(&self, line: impl std::fmt::Display) {
+    pub(crate) fn say(&self, line: impl std::fmt::Display) {
         if !self.quiet {
             use std::io::Write;
             let _ = writeln!(std::io::stderr(), "{line}");
@@ -80,13 +80,13 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
 
 /// Fails before any work when `path` has no mesh format we can write (the extension decides),
 /// so a typo in `-o` does not cost a whole run.
-pub fn check_mesh_output(path: &std::path::Path) -> anyhow::Result<()> {
+pub(crate) fn check_mesh_output(path: &std::path::Path) -> anyhow::Result<()> {
     crate::io::MeshFormat::from_path(path)?;
     Ok(())
 }
 
 /// Adapts an indicatif bar to the library's [`crate::progress::Progress`].
-pub struct BarProgress<'a>(pub &'a ProgressBar);
+pub(crate) struct BarProgress<'a>(pub &'a ProgressBar);
 
 impl crate::progress::Progress for BarProgress<'_> {
     fn update(&self, fraction: f64) {
@@ -98,7 +98,7 @@ impl crate::progress::Progress for BarProgress<'_> {
 /// meshpyr — multiresolution processing of triangle meshes and 3D scans.
 #[derive(Parser, Debug)]
 #[command(name = "meshpyr", version, about, long_about = None)]
-pub struct Cli {
+pub(crate) struct Cli {
     #[command(flatten)]
     global: Global,
     #[command(subcommand)]

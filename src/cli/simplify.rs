@@ -10,42 +10,42 @@ use std::path::PathBuf;
 /// Arguments of `meshpyr simplify`.
 #[derive(clap::Args, Debug)]
 #[command(group(clap::ArgGroup::new("target").required(true).args(["faces", "ratio", "error"])))]
-pub struct SimplifyArgs {
+pub(crate) struct SimplifyArgs {
     /// Input mesh (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
-    pub input: PathBuf,
+    pub(crate) input: PathBuf,
     /// Output mesh; the format follows the extension.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Keep at most this many triangles.
     #[arg(long)]
-    pub faces: Option<usize>,
+    pub(crate) faces: Option<usize>,
     /// Keep at most this fraction of the triangles, in (0, 1].
     #[arg(long)]
-    pub ratio: Option<f64>,
+    pub(crate) ratio: Option<f64>,
     /// Collapse while the quadric error (RMS distance) stays below this fraction of the
     /// bounding-box diagonal.
     #[arg(long)]
-    pub error: Option<f64>,
+    pub(crate) error: Option<f64>,
     /// Largest rotation of a face normal one collapse may cause, in degrees.
     #[arg(long, default_value_t = PmOptions::default().max_normal_angle_degrees)]
-    pub max_angle: f64,
+    pub(crate) max_angle: f64,
     /// Smallest triangle quality (4√3·area / Σ edge², 1 = equilateral) a collapse may leave
     /// around the vertex it removes, unless it was already worse there (0 turns the rule off).
     #[arg(long, default_value_t = PmOptions::default().min_quality)]
-    pub min_quality: f64,
+    pub(crate) min_quality: f64,
     /// Before simplifying, drop the connected pieces whose bounding-box diagonal is below this
     /// fraction of the whole mesh's (floating debris of reconstructions; the largest piece
     /// always stays). Reported; off unless given. `--ratio` still refers to the file's
     /// triangles.
     #[arg(long, value_name = "FRACTION")]
-    pub prune: Option<f64>,
+    pub(crate) prune: Option<f64>,
     /// Weight of the boundary-preserving planes (0 lets boundaries drift).
     #[arg(long, default_value_t = PmOptions::default().boundary_weight)]
-    pub boundary_weight: f64,
+    pub(crate) boundary_weight: f64,
 }
 
 /// Runs `meshpyr simplify`.
-pub fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
     let target = match (args.faces, args.ratio, args.error) {
         (Some(f), _, _) => SimplifyTarget::Faces(f),

@@ -16,7 +16,7 @@ use std::time::Instant;
 
 /// Smoothing method. Each variant maps to one library function in [`run_method`].
 #[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum MethodArg {
+pub(crate) enum MethodArg {
     /// Ohtake–Belyaev–Seidel adaptive Gaussian filter of the face normals + vertex fitting.
     #[default]
     Adaptive,
@@ -30,7 +30,7 @@ pub enum MethodArg {
 
 /// Edge weights of Taubin smoothing.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum WeightsArg {
+pub(crate) enum WeightsArg {
     /// Equal weights.
     Uniform,
     /// Inverse edge length.
@@ -41,7 +41,7 @@ pub enum WeightsArg {
 
 /// Boundary rule of the baselines.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BoundaryArg {
+pub(crate) enum BoundaryArg {
     /// Boundary vertices do not move.
     Fixed,
     /// Boundary vertices move (Taubin: along the boundary curve; MCF: natural boundary).
@@ -50,7 +50,7 @@ pub enum BoundaryArg {
 
 /// Variance estimate of the scale selection.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub enum VarianceArg {
+pub(crate) enum VarianceArg {
     /// Weighted variance of the normals (as reconstructed from the paper).
     Biased,
     /// With the reliability-weights correction (default; see the library docs).
@@ -69,65 +69,65 @@ pub enum VarianceArg {
                   0.5..5.0 and rho). Measure the result against a clean mesh with `meshpyr \
                   compare`."
 )]
-pub struct SmoothArgs {
+pub(crate) struct SmoothArgs {
     /// Input mesh (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
-    pub input: PathBuf,
+    pub(crate) input: PathBuf,
     /// Output mesh; the format follows the extension.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Smoothing method.
     #[arg(long, value_enum, default_value_t = MethodArg::Adaptive)]
-    pub method: MethodArg,
+    pub(crate) method: MethodArg,
     /// adaptive/anisotropic: ε of the scale selection (× L²); larger smooths more.
     #[arg(long)]
-    pub epsilon: Option<f64>,
+    pub(crate) epsilon: Option<f64>,
     /// adaptive/anisotropic: smallest filter scale σ (× L).
     #[arg(long)]
-    pub sigma_min: Option<f64>,
+    pub(crate) sigma_min: Option<f64>,
     /// adaptive/anisotropic: largest filter scale σ (× L); the work per face grows with its
     /// square.
     #[arg(long)]
-    pub sigma_max: Option<f64>,
+    pub(crate) sigma_max: Option<f64>,
     /// adaptive/anisotropic: number of scales between --sigma-min and --sigma-max (1 to 64).
     #[arg(long)]
-    pub scales: Option<usize>,
+    pub(crate) scales: Option<usize>,
     /// adaptive/anisotropic: anisotropy ρ (0 = isotropic); how much normal differences
     /// lengthen distances.
     #[arg(long)]
-    pub rho: Option<f64>,
+    pub(crate) rho: Option<f64>,
     /// adaptive/anisotropic: variance estimate of the scale selection.
     #[arg(long, value_enum)]
-    pub variance: Option<VarianceArg>,
+    pub(crate) variance: Option<VarianceArg>,
     /// adaptive/anisotropic: most conjugate-gradient iterations of the vertex fitting.
     #[arg(long)]
-    pub fit_iterations: Option<usize>,
+    pub(crate) fit_iterations: Option<usize>,
     /// adaptive/anisotropic: largest move of a vertex per fitting step (× L).
     #[arg(long)]
-    pub step_cap: Option<f64>,
+    pub(crate) step_cap: Option<f64>,
     /// taubin/mcf: iterations (default: 10 for taubin, 1 for mcf).
     #[arg(long)]
-    pub iterations: Option<usize>,
+    pub(crate) iterations: Option<usize>,
     /// taubin: edge weights.
     #[arg(long, value_enum, default_value = "cotan")]
-    pub weights: WeightsArg,
+    pub(crate) weights: WeightsArg,
     /// taubin: shrinking factor λ, in (0, 1].
     #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
-    pub lambda: f64,
+    pub(crate) lambda: f64,
     /// taubin: inflating factor μ, in [-1, 0] (0: plain Laplacian smoothing).
     #[arg(long, default_value_t = -0.53, allow_hyphen_values = true)]
-    pub mu: f64,
+    pub(crate) mu: f64,
     /// mcf: time step in units of the squared mean edge length L² of the input.
     #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
-    pub time_step: f64,
+    pub(crate) time_step: f64,
     /// taubin/mcf: what boundary vertices do.
     #[arg(long, value_enum, default_value = "fixed")]
-    pub boundary: BoundaryArg,
+    pub(crate) boundary: BoundaryArg,
 }
 
 impl SmoothArgs {
     /// The Ohtake options these arguments describe (`adaptive` presets unless the method is
     /// `anisotropic`).
-    pub fn denoise_options(&self) -> DenoiseOptions {
+    pub(crate) fn denoise_options(&self) -> DenoiseOptions {
         let mut o = match self.method {
             MethodArg::Anisotropic => DenoiseOptions::anisotropic(),
             _ => DenoiseOptions::adaptive(),
@@ -150,7 +150,7 @@ impl SmoothArgs {
 
 /// Runs the chosen method on `mesh`; new positions in vertex slot order, and a line saying
 /// what was done.
-pub fn run_method(
+pub(crate) fn run_method(
     mesh: &Mesh,
     args: &SmoothArgs,
     progress: &dyn Progress,
@@ -203,7 +203,7 @@ pub fn run_method(
 }
 
 /// Runs `meshpyr smooth`.
-pub fn run(args: SmoothArgs, global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: SmoothArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
     if matches!(args.method, MethodArg::Adaptive | MethodArg::Anisotropic) {
         args.denoise_options().validate()?;

@@ -8,23 +8,23 @@ use std::path::PathBuf;
 
 /// Arguments of `meshpyr spectrum`.
 #[derive(clap::Args, Debug)]
-pub struct SpectrumArgs {
+pub(crate) struct SpectrumArgs {
     /// Input mesh (.obj, .ply, .off, .stl) or .pyr file.
-    pub input: PathBuf,
+    pub(crate) input: PathBuf,
     /// Output chart (PNG).
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Also write the table as CSV.
     #[arg(long, value_name = "FILE")]
-    pub csv: Option<PathBuf>,
+    pub(crate) csv: Option<PathBuf>,
     /// Relaxation operator used for the prediction (default second-difference; a .pyr input
     /// uses the one it was built with).
     #[arg(long, value_enum)]
-    pub relax: Option<RelaxKind>,
+    pub(crate) relax: Option<RelaxKind>,
 }
 
 /// Runs `meshpyr spectrum`.
-pub fn run(args: SpectrumArgs, global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: SpectrumArgs, global: &Global) -> anyhow::Result<()> {
     let (scan, _) = load_pyramid(&args.input, args.relax, global)?;
     let spectrum = scan.pyramid.spectrum();
     let png = spectrum.chart("input", &[]).encode_png()?;

@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 /// Subdivision rule.
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub enum SchemeArg {
+pub(crate) enum SchemeArg {
     /// Implicit mean-curvature motion with cascadic multigrid (Diewald–Morigi–Rumpf).
     Mcm,
     /// Loop's scheme (quadrisection only).
@@ -18,7 +18,7 @@ pub enum SchemeArg {
 
 /// Refinement rule.
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub enum RefineArg {
+pub(crate) enum RefineArg {
     /// 1-to-4 split at edge midpoints (4× faces per level).
     Quad,
     /// Conforming newest-vertex bisection (2× faces per level).
@@ -27,7 +27,7 @@ pub enum RefineArg {
 
 /// Linear solver of each MCM level.
 #[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub enum SolverArg {
+pub(crate) enum SolverArg {
     /// `exact` while the output has at most 250k vertices (where the cascadic approximation
     /// visibly oscillates on coarse inputs and the exact solve costs little), `cg` above.
     Auto,
@@ -49,42 +49,42 @@ const AUTO_EXACT_MAX_VERTICES: f64 = 250_000.0;
                   vertices after. Vertex and face attributes of the input are not carried over. \
                   Dirty input is repaired by the builder first (see `meshpyr info`)."
 )]
-pub struct SubdivideArgs {
+pub(crate) struct SubdivideArgs {
     /// Input mesh (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
-    pub input: PathBuf,
+    pub(crate) input: PathBuf,
     /// Output mesh; the format follows the extension.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(crate) output: PathBuf,
     /// Refinement levels.
     #[arg(long, default_value_t = 3)]
-    pub levels: usize,
+    pub(crate) levels: usize,
     /// Position rule.
     #[arg(long, value_enum, default_value = "mcm")]
-    pub scheme: SchemeArg,
+    pub(crate) scheme: SchemeArg,
     /// Refinement rule.
     #[arg(long, value_enum, default_value = "quad")]
-    pub refine: RefineArg,
+    pub(crate) refine: RefineArg,
     /// Solver for MCM levels (`exact` gives the true fixed point; `cg`/`jacobi` are the
     /// faster cascadic approximations, linear in the output size).
     #[arg(long, value_enum, default_value = "auto")]
-    pub solver: SolverArg,
+    pub(crate) solver: SolverArg,
     /// Filter-width constant c (σ = c · mean edge length of the input). Larger values
     /// smooth and shrink more; coarse meshes collapse above about 0.4.
     #[arg(long, default_value_t = 0.25)]
-    pub width: f64,
+    pub(crate) width: f64,
     /// Let the filter width follow the local edge length (for meshes with very uneven edges).
     #[arg(long)]
-    pub local_width: bool,
+    pub(crate) local_width: bool,
     /// Cascadic steps on the finest level (m_lmax).
     #[arg(long, default_value_t = 2)]
-    pub finest_steps: usize,
+    pub(crate) finest_steps: usize,
     /// Growth factor of the cascadic schedule (default: 2√2 for CG, 4 for Jacobi; quad).
     #[arg(long)]
-    pub beta: Option<f64>,
+    pub(crate) beta: Option<f64>,
 }
 
 /// Runs `meshpyr subdivide`.
-pub fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
     let input = super::input::read_input_mesh(&args.input)?;
     let built = Mesh::from_polygons(&input)

@@ -20,7 +20,7 @@ use super::FormatError;
 use super::varint::ByteReader;
 
 /// File signature.
-pub const MAGIC: [u8; 8] = [0x89, b'P', b'Y', b'R', 0x0d, 0x0a, 0x1a, 0x0a];
+pub(crate) const MAGIC: [u8; 8] = [0x89, b'P', b'Y', b'R', 0x0d, 0x0a, 0x1a, 0x0a];
 /// Upper bound on the number of sections a reader accepts (bounds the table allocation).
 pub const MAX_SECTIONS: u32 = 64;
 const HEADER_LEN: usize = 24;
@@ -112,7 +112,7 @@ impl<'a> Container<'a> {
 
     /// Like [`parse`](Self::parse) but without checking the header checksum (for tools that
     /// repair checksums, such as the fuzz harness).
-    pub fn parse_unchecked(bytes: &'a [u8]) -> Result<Container<'a>, FormatError> {
+    pub(crate) fn parse_unchecked(bytes: &'a [u8]) -> Result<Container<'a>, FormatError> {
         Self::parse_inner(bytes, false)
     }
 
@@ -173,7 +173,7 @@ impl<'a> Container<'a> {
     }
 
     /// Total size of the file the table describes (larger than the bytes held if truncated).
-    pub fn described_len(&self) -> u64 {
+    pub(crate) fn described_len(&self) -> u64 {
         self.sections
             .iter()
             .map(|s| s.offset + s.length)
@@ -234,7 +234,7 @@ impl<'a> Container<'a> {
 }
 
 /// A tag as printable text.
-pub fn tag_name(tag: [u8; 4]) -> String {
+pub(crate) fn tag_name(tag: [u8; 4]) -> String {
     tag.iter()
         .map(|&b| if b.is_ascii_graphic() { b as char } else { '?' })
         .collect()

@@ -2,14 +2,14 @@
 //! versioned, checksummed binary container (specified in `formats/pyr.md`).
 
 pub mod container;
-pub mod pyr;
+pub(crate) mod pyr;
 pub mod varint;
 
-pub use pyr::{
-    BuildInfo, LevelMesh, MAJOR, MINOR, OLDEST_MAJOR, PyrData, SizeReport, decode, encode, is_pyr,
-    read_level, with_positions,
-};
+pub use pyr::{BuildInfo, MAJOR, MINOR, OLDEST_MAJOR, decode, encode, read_level};
+pub use pyr::{LevelMesh, PyrData, SizeReport};
 pub(crate) use pyr::{fix_checksums, fuzz_read_pyr};
+#[cfg(feature = "cli")]
+pub(crate) use pyr::{is_pyr, with_positions};
 
 /// What can go wrong reading a `.pyr` file. Every variant says where.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

@@ -16,7 +16,9 @@
 use super::FormatError;
 use super::container::{Container, REQUIRED, Section, write_container};
 use super::varint::ByteReader;
-use crate::mesh::{Built, Mesh, PolygonMesh, ScalarType, SourceMap};
+#[cfg(feature = "cli")]
+use crate::mesh::ScalarType;
+use crate::mesh::{Built, Mesh, PolygonMesh, SourceMap};
 use crate::pm::{PmOptions, PmParts, ProgressiveMesh};
 use crate::progress::Progress;
 use crate::pyramid::{DetailPyramid, Pyramid, PyramidError, PyramidOptions};
@@ -26,6 +28,7 @@ use serde::{Deserialize, Serialize};
 
 mod attributes;
 mod decode_ahead;
+#[cfg(feature = "cli")]
 mod edit;
 mod fuzz;
 mod hierarchy;
@@ -34,7 +37,8 @@ mod meta;
 mod positions;
 mod split_block;
 
-pub use edit::with_positions;
+#[cfg(feature = "cli")]
+pub(crate) use edit::with_positions;
 pub(crate) use fuzz::{fix_checksums, fuzz_read_pyr};
 pub use hierarchy::read_level;
 
@@ -58,7 +62,7 @@ pub const OLDEST_MAJOR: u16 = 1;
 /// are skipped).
 pub const MINOR: u16 = 0;
 /// Vertex splits per block of the `SPLT` section.
-pub const SPLITS_PER_BLOCK: u32 = 4096;
+pub(crate) const SPLITS_PER_BLOCK: u32 = 4096;
 
 const META: [u8; 4] = *b"META";
 const BASE: [u8; 4] = *b"BASE";
@@ -178,7 +182,8 @@ pub struct LevelMesh {
 
 impl LevelMesh {
     /// As a polygon mesh (positions typed f32 when the file stored f32).
-    pub fn to_polygon_mesh(&self) -> PolygonMesh {
+    #[cfg(feature = "cli")]
+    pub(crate) fn to_polygon_mesh(&self) -> PolygonMesh {
         let mut m = PolygonMesh::from_triangles(self.positions.clone(), &self.triangles);
         m.position_type = Some(if self.f32_positions {
             ScalarType::F32
@@ -356,6 +361,7 @@ fn check_complete(p: &Progressive, file_len: usize) -> Result<(), FormatError> {
 }
 
 /// True when `bytes` start with the `.pyr` signature.
-pub fn is_pyr(bytes: &[u8]) -> bool {
+#[cfg(feature = "cli")]
+pub(crate) fn is_pyr(bytes: &[u8]) -> bool {
     bytes.starts_with(&super::container::MAGIC)
 }

@@ -17,13 +17,13 @@ pub fn put_uvarint(out: &mut Vec<u8>, mut v: u64) {
 
 /// Maps signed to unsigned so that small magnitudes get small codes: 0, −1, 1, −2, … → 0, 1, 2, 3, …
 #[inline]
-pub fn zigzag(v: i64) -> u64 {
+pub(crate) fn zigzag(v: i64) -> u64 {
     ((v << 1) ^ (v >> 63)) as u64
 }
 
 /// Inverse of [`zigzag`].
 #[inline]
-pub fn unzigzag(v: u64) -> i64 {
+pub(crate) fn unzigzag(v: u64) -> i64 {
     ((v >> 1) as i64) ^ -((v & 1) as i64)
 }
 
@@ -85,7 +85,7 @@ impl<'a> ByteReader<'a> {
     }
 
     /// A fixed-size array.
-    pub fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N], FormatError> {
+    pub(crate) fn array<const N: usize>(&mut self, what: &str) -> Result<[u8; N], FormatError> {
         let s = self.take(N, what)?;
         let mut a = [0u8; N];
         a.copy_from_slice(s);

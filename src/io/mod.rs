@@ -10,16 +10,16 @@
 //! the place (line for text formats, byte offset for binary ones), see [`IoError`].
 //!
 //! Format notes (what survives and what does not):
-//! - **PLY** ([`ply`]): everything (positions in their stored type, all scalar vertex/face
+//! - **PLY** (`ply`): everything (positions in their stored type, all scalar vertex/face
 //!   properties, extra elements, comments; `obj_info` lines are kept as comments). List
 //!   properties on `vertex`, and list properties other than the indices on `face`, have no
 //!   place in [`PolygonMesh`] and are rejected with an error.
-//! - **OBJ** ([`obj`]): positions, `w`, vertex colours, and texture coordinates/normals when they
+//! - **OBJ** (`obj`): positions, `w`, vertex colours, and texture coordinates/normals when they
 //!   are consistent per vertex. `o`/`g`/`s`/`usemtl`/`mtllib`, `l`/`p` and other statements are
 //!   skipped; `#` lines before the first statement become [`PolygonMesh::comments`].
-//! - **OFF** ([`off`]): positions, `C`/`N`/`ST` vertex data, per-face colours when every face has
+//! - **OFF** (`off`): positions, `C`/`N`/`ST` vertex data, per-face colours when every face has
 //!   one.
-//! - **STL** ([`stl`]): triangles, welded by exact f32 bit equality; file normals are dropped
+//! - **STL** (`stl`): triangles, welded by exact f32 bit equality; file normals are dropped
 //!   (the writer recomputes them and fan-triangulates polygons).
 //!
 //! Precision: `position_type` says how positions are stored. PLY records it; for OBJ/OFF text a
@@ -35,10 +35,10 @@ use std::path::{Path, PathBuf};
 use crate::mesh::PolygonMesh;
 
 mod atomic;
-pub mod obj;
-pub mod off;
-pub mod ply;
-pub mod stl;
+pub(crate) mod obj;
+pub(crate) mod off;
+pub(crate) mod ply;
+pub(crate) mod stl;
 mod text;
 
 pub use atomic::write_atomic;
@@ -210,7 +210,7 @@ pub enum IoError {
 
 impl IoError {
     /// Attaches `path` to errors that do not name a file yet.
-    pub fn with_path(self, p: &Path) -> IoError {
+    pub(crate) fn with_path(self, p: &Path) -> IoError {
         match self {
             IoError::Parse {
                 path: None,
@@ -280,7 +280,7 @@ pub(crate) fn err_invalid(format: MeshFormat, reason: impl Into<String>) -> IoEr
 }
 
 /// True when the path ends in `.gz` (case-insensitive): the file is gzip-compressed.
-pub fn is_gzip(path: &Path) -> bool {
+pub(crate) fn is_gzip(path: &Path) -> bool {
     path.extension()
         .and_then(|e| e.to_str())
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"))

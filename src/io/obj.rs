@@ -183,7 +183,7 @@ fn per_vertex<const N: usize>(
 }
 
 /// Reads an OBJ file.
-pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
+pub(crate) fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     let mut reader = ObjReader::new();
     for (line, l) in logical_lines(bytes) {
         reader.read_line(line, &l)?;
@@ -436,7 +436,7 @@ fn push_attr(out: &mut String, d: &AttributeData, i: usize) {
 }
 
 /// Writes an OBJ file.
-pub fn write(mesh: &PolygonMesh) -> Result<Vec<u8>, IoError> {
+pub(crate) fn write(mesh: &PolygonMesh) -> Result<Vec<u8>, IoError> {
     let pf = PositionFormat::new(mesh)
         .map_err(|i| err_invalid(MeshFormat::Obj, format!("vertex {i} does not fit in float")))?;
     let w = float_col(mesh, "w");

@@ -67,7 +67,7 @@ fn floats<const N: usize>(toks: &[&[u8]], line: u64, what: &str) -> Result<[f32;
 }
 
 /// Reads an OFF file.
-pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
+pub(crate) fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     let mut mesh = PolygonMesh::new();
     let mut lines = OffLines {
         lines: Lines::new(bytes, 1),
@@ -505,7 +505,7 @@ fn colour_cols(attrs: &[Attribute]) -> Option<Vec<&AttributeData>> {
 }
 
 /// Writes an OFF file (`[ST][C][N]OFF` as the attributes require).
-pub fn write(mesh: &PolygonMesh) -> Result<Vec<u8>, IoError> {
+pub(crate) fn write(mesh: &PolygonMesh) -> Result<Vec<u8>, IoError> {
     let pf = PositionFormat::new(mesh)
         .map_err(|i| err_invalid(MeshFormat::Off, format!("vertex {i} does not fit in float")))?;
     let normals = cols(&mesh.vertex_attributes, &["nx", "ny", "nz"], false);

@@ -65,7 +65,7 @@ impl Welder {
 }
 
 /// Reads an STL file (binary or ASCII, detected from the content).
-pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
+pub(crate) fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     let declared = (bytes.len() >= 84)
         .then(|| u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64);
     let exact = declared.is_some_and(|n| 84 + 50 * n == bytes.len() as u64);
@@ -261,7 +261,7 @@ fn triangles(mesh: &PolygonMesh) -> impl Iterator<Item = (usize, [u32; 3])> + '_
 }
 
 /// Writes an STL file (binary or ASCII).
-pub fn write(mesh: &PolygonMesh, binary: bool) -> Result<Vec<u8>, IoError> {
+pub(crate) fn write(mesh: &PolygonMesh, binary: bool) -> Result<Vec<u8>, IoError> {
     let pos: Vec<Vec3> = mesh.positions.iter().map(|p: &DVec3| p.as_vec3()).collect();
     if let Some(i) = pos.iter().position(|p| !p.is_finite()) {
         return Err(err_invalid(

@@ -92,7 +92,11 @@ pub struct SourceMap {
 impl SourceMap {
     /// Maps per-mesh-vertex values back onto the input's vertices. A vertex that was split
     /// gets the mean of its copies; vertices no face refers to get `fallback[i]`.
-    pub fn to_input_positions(&self, mesh_values: &[DVec3], fallback: &[DVec3]) -> Vec<DVec3> {
+    pub(crate) fn to_input_positions(
+        &self,
+        mesh_values: &[DVec3],
+        fallback: &[DVec3],
+    ) -> Vec<DVec3> {
         let mut out = fallback.to_vec();
         let mut sum = vec![DVec3::ZERO; self.input_vertices];
         let mut count = vec![0u32; self.input_vertices];
@@ -178,7 +182,7 @@ impl Mesh {
 /// half-edges follow in the order of their interior twins. Flat consumers (the decimator behind
 /// `meshpyr simplify`) use it directly and skip the records.
 #[derive(Clone, Debug)]
-pub struct CornerTable {
+pub(crate) struct CornerTable {
     /// Mesh vertex of every corner.
     pub corner_vertex: Vec<u32>,
     /// The twin half-edge of every half-edge, `u32::MAX` on a boundary.
@@ -187,7 +191,7 @@ pub struct CornerTable {
 
 /// A [`CornerTable`] with the repair report and the map back onto the input.
 #[derive(Clone, Debug)]
-pub struct Repaired {
+pub(crate) struct Repaired {
     /// The repaired triangles.
     pub corners: CornerTable,
     /// What the builder changed.
@@ -199,7 +203,7 @@ pub struct Repaired {
 impl CornerTable {
     /// Runs the builder's repairs (see the module docs) without making half-edge records.
     /// Fails like [`Mesh::from_polygons`].
-    pub fn from_polygons(input: &PolygonMesh) -> Result<Repaired, BuildError> {
+    pub(crate) fn from_polygons(input: &PolygonMesh) -> Result<Repaired, BuildError> {
         let mut report = BuildReport::default();
         let nv = input.positions.len();
         if let Some(vertex) = input.positions.iter().position(|p| !p.is_finite()) {
@@ -247,7 +251,7 @@ impl CornerTable {
     }
 
     /// Number of triangles.
-    pub fn n_triangles(&self) -> usize {
+    pub(crate) fn n_triangles(&self) -> usize {
         self.corner_vertex.len() / 3
     }
 }

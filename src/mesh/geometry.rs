@@ -22,7 +22,8 @@ impl BoundingBox {
     }
 
     /// The smallest box holding this one and `p`.
-    pub fn including(self, p: DVec3) -> BoundingBox {
+    #[cfg(feature = "cli")]
+    pub(crate) fn including(self, p: DVec3) -> BoundingBox {
         BoundingBox {
             min: self.min.min(p),
             max: self.max.max(p),
@@ -46,7 +47,7 @@ impl BoundingBox {
 /// space mostly get near codes, so sorting by code lays out nearby items near in memory.
 /// The cube is that of the finite points; others get code 0. `None` when there are no finite
 /// points or their extent is zero (no order helps then).
-pub fn morton_codes(points: &[DVec3]) -> Option<Vec<u64>> {
+pub(crate) fn morton_codes(points: &[DVec3]) -> Option<Vec<u64>> {
     let b = BoundingBox::of(points.iter().copied().filter(|p| p.is_finite()))?;
     let extent = (b.max - b.min).max_element();
     if !(extent > 0.0 && extent.is_finite()) {
@@ -81,7 +82,7 @@ fn spread3(x: u64) -> u64 {
 /// Area of the triangle `(a, b, c)`: half the length of `(b − a) × (c − a)`. Every area in the
 /// crate goes through here, so a mesh's area is the same bits whichever module sums it.
 #[inline]
-pub fn triangle_area(a: DVec3, b: DVec3, c: DVec3) -> f64 {
+pub(crate) fn triangle_area(a: DVec3, b: DVec3, c: DVec3) -> f64 {
     0.5 * (b - a).cross(c - a).length()
 }
 
@@ -111,7 +112,7 @@ impl Mesh {
 
     /// Unnormalised face normal: twice the area times the unit normal.
     #[inline]
-    pub fn face_area_normal(&self, f: FaceId) -> DVec3 {
+    pub(crate) fn face_area_normal(&self, f: FaceId) -> DVec3 {
         let [a, b, c] = self.face_positions(f);
         (b - a).cross(c - a)
     }
@@ -124,16 +125,9 @@ impl Mesh {
 
     /// Face area.
     #[inline]
-    pub fn face_area(&self, f: FaceId) -> f64 {
+    pub(crate) fn face_area(&self, f: FaceId) -> f64 {
         let [a, b, c] = self.face_positions(f);
         triangle_area(a, b, c)
-    }
-
-    /// Face centroid.
-    #[inline]
-    pub fn face_centroid(&self, f: FaceId) -> DVec3 {
-        let [a, b, c] = self.face_positions(f);
-        (a + b + c) / 3.0
     }
 
     /// Area-weighted vertex normal (zero for an isolated vertex or a flat-degenerate fan).
@@ -147,13 +141,13 @@ impl Mesh {
 
     /// Vector from the origin of `h` to its head.
     #[inline]
-    pub fn edge_vector(&self, h: HalfedgeId) -> DVec3 {
+    pub(crate) fn edge_vector(&self, h: HalfedgeId) -> DVec3 {
         self.position(self.to_vertex(h)) - self.position(self.from_vertex(h))
     }
 
     /// Length of the edge of `h`.
     #[inline]
-    pub fn edge_length(&self, h: HalfedgeId) -> f64 {
+    pub(crate) fn edge_length(&self, h: HalfedgeId) -> f64 {
         self.edge_vector(h).length()
     }
 
@@ -166,7 +160,7 @@ impl Mesh {
     }
 
     /// Cotangent of the angle opposite `h` in its face (0 on a boundary half-edge).
-    pub fn opposite_cotangent(&self, h: HalfedgeId) -> f64 {
+    pub(crate) fn opposite_cotangent(&self, h: HalfedgeId) -> f64 {
         if self.is_boundary_halfedge(h) {
             return 0.0;
         }
@@ -177,7 +171,7 @@ impl Mesh {
     }
 
     /// The cotangent weight of an edge, `(cot α + cot β) / 2` over its two opposite angles.
-    pub fn cotangent_weight(&self, h: HalfedgeId) -> f64 {
+    pub(crate) fn cotangent_weight(&self, h: HalfedgeId) -> f64 {
         0.5 * (self.opposite_cotangent(h) + self.opposite_cotangent(self.twin(h)))
     }
 }

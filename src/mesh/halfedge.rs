@@ -42,7 +42,7 @@ slot_index!(FaceId);
 
 /// Per-vertex record.
 #[derive(Clone, Debug)]
-pub struct VertexRecord {
+pub(crate) struct VertexRecord {
     /// An out-going half-edge (a boundary one when the vertex is on a boundary); `None` for an
     /// isolated vertex.
     pub halfedge: Option<HalfedgeId>,
@@ -52,7 +52,7 @@ pub struct VertexRecord {
 
 /// Per-half-edge record.
 #[derive(Clone, Debug)]
-pub struct HalfedgeRecord {
+pub(crate) struct HalfedgeRecord {
     /// The vertex this half-edge points to.
     pub to: VertexId,
     /// Next half-edge around the face (or boundary loop).
@@ -81,7 +81,7 @@ impl HalfedgeRecord {
 
 /// Per-face record.
 #[derive(Clone, Debug)]
-pub struct FaceRecord {
+pub(crate) struct FaceRecord {
     /// One of the face's three half-edges.
     pub halfedge: HalfedgeId,
 }
@@ -111,12 +111,12 @@ impl Mesh {
     }
 
     /// Number of half-edges (twice the number of edges).
-    pub fn n_halfedges(&self) -> usize {
+    pub(crate) fn n_halfedges(&self) -> usize {
         self.halfedges.len()
     }
 
     /// Number of edges.
-    pub fn n_edges(&self) -> usize {
+    pub(crate) fn n_edges(&self) -> usize {
         self.halfedges.len() / 2
     }
 
@@ -149,17 +149,13 @@ impl Mesh {
     }
 
     /// True if the handle refers to a live vertex.
-    pub fn contains_vertex(&self, v: VertexId) -> bool {
+    pub(crate) fn contains_vertex(&self, v: VertexId) -> bool {
         self.vertices.contains_key(v)
     }
 
-    /// True if the handle refers to a live face.
-    pub fn contains_face(&self, f: FaceId) -> bool {
-        self.faces.contains_key(f)
-    }
-
     /// True if the handle refers to a live half-edge.
-    pub fn contains_halfedge(&self, h: HalfedgeId) -> bool {
+    #[cfg(test)]
+    pub(crate) fn contains_halfedge(&self, h: HalfedgeId) -> bool {
         self.halfedges.contains_key(h)
     }
 
@@ -173,20 +169,6 @@ impl Mesh {
     #[inline]
     pub fn set_position(&mut self, v: VertexId, p: DVec3) {
         self.vertices[v].position = p;
-    }
-
-    /// Adds an isolated vertex.
-    pub fn add_vertex(&mut self, p: DVec3) -> VertexId {
-        self.vertices.insert(VertexRecord {
-            halfedge: None,
-            position: p,
-        })
-    }
-
-    /// An out-going half-edge of `v` (a boundary one if `v` is on a boundary).
-    #[inline]
-    pub fn vertex_halfedge(&self, v: VertexId) -> Option<HalfedgeId> {
-        self.vertices[v].halfedge
     }
 
     /// The vertex `h` points to.
@@ -209,7 +191,7 @@ impl Mesh {
 
     /// Previous half-edge around the face or boundary loop.
     #[inline]
-    pub fn prev(&self, h: HalfedgeId) -> HalfedgeId {
+    pub(crate) fn prev(&self, h: HalfedgeId) -> HalfedgeId {
         self.halfedges[h].prev
     }
 
@@ -227,19 +209,19 @@ impl Mesh {
 
     /// One half-edge of face `f`.
     #[inline]
-    pub fn face_halfedge(&self, f: FaceId) -> HalfedgeId {
+    pub(crate) fn face_halfedge(&self, f: FaceId) -> HalfedgeId {
         self.faces[f].halfedge
     }
 
     /// True if `h` has no face (it runs along a hole).
     #[inline]
-    pub fn is_boundary_halfedge(&self, h: HalfedgeId) -> bool {
+    pub(crate) fn is_boundary_halfedge(&self, h: HalfedgeId) -> bool {
         self.halfedges[h].face.is_none()
     }
 
     /// True if either side of the edge of `h` is a boundary.
     #[inline]
-    pub fn is_boundary_edge(&self, h: HalfedgeId) -> bool {
+    pub(crate) fn is_boundary_edge(&self, h: HalfedgeId) -> bool {
         self.is_boundary_halfedge(h) || self.is_boundary_halfedge(self.twin(h))
     }
 
@@ -268,7 +250,7 @@ impl Mesh {
 
     /// The three half-edges of `f`, starting at its stored half-edge.
     #[inline]
-    pub fn face_halfedges(&self, f: FaceId) -> [HalfedgeId; 3] {
+    pub(crate) fn face_halfedges(&self, f: FaceId) -> [HalfedgeId; 3] {
         let h = self.faces[f].halfedge;
         let r = &self.halfedges[h];
         [h, r.next, r.prev]
@@ -283,7 +265,7 @@ impl Mesh {
     /// Circulates the out-going half-edges of `v` (counter-clockwise; a boundary vertex starts
     /// at its boundary half-edge). Empty for an isolated vertex.
     #[inline]
-    pub fn outgoing(&self, v: VertexId) -> Outgoing<'_> {
+    pub(crate) fn outgoing(&self, v: VertexId) -> Outgoing<'_> {
         let start = self.vertices[v].halfedge;
         Outgoing {
             mesh: self,
@@ -298,7 +280,7 @@ impl Mesh {
     }
 
     /// The faces around `v` in circulation order.
-    pub fn vertex_faces(&self, v: VertexId) -> SmallVec<[FaceId; 8]> {
+    pub(crate) fn vertex_faces(&self, v: VertexId) -> SmallVec<[FaceId; 8]> {
         self.outgoing(v).filter_map(|h| self.face(h)).collect()
     }
 
@@ -308,7 +290,7 @@ impl Mesh {
     }
 
     /// The half-edge from `a` to `b`, if that edge exists.
-    pub fn find_halfedge(&self, a: VertexId, b: VertexId) -> Option<HalfedgeId> {
+    pub(crate) fn find_halfedge(&self, a: VertexId, b: VertexId) -> Option<HalfedgeId> {
         self.outgoing(a).find(|&h| self.to_vertex(h) == b)
     }
 
@@ -335,7 +317,7 @@ impl Mesh {
 }
 
 /// Iterator over the out-going half-edges of a vertex; see [`Mesh::outgoing`].
-pub struct Outgoing<'a> {
+pub(crate) struct Outgoing<'a> {
     mesh: &'a Mesh,
     start: Option<HalfedgeId>,
     current: Option<HalfedgeId>,

@@ -1,22 +1,28 @@
 //! Meshes: the file-level [`PolygonMesh`] and the half-edge triangle [`Mesh`] used for
 //! processing, with the builder that turns one into the other.
 
-pub mod build;
-pub mod geometry;
-pub mod halfedge;
-pub mod polygon;
-pub mod prune;
+pub(crate) mod build;
+pub(crate) mod geometry;
+pub(crate) mod halfedge;
+pub(crate) mod polygon;
+#[cfg(feature = "cli")]
+pub(crate) mod prune;
 pub mod shapes;
-pub mod topology;
+pub(crate) mod topology;
 mod union_find;
-pub mod validate;
+pub(crate) mod validate;
 
-pub use build::{BuildError, BuildReport, Built, CornerTable, Repaired, SourceMap};
-pub use geometry::{BoundingBox, cotangent};
-pub use halfedge::{FaceId, HalfedgeId, Mesh, Outgoing, SlotIndex, VertexId};
+pub use build::BuildReport;
+pub(crate) use build::CornerTable;
+pub use build::{BuildError, Built, SourceMap};
+pub use geometry::BoundingBox;
+pub use geometry::cotangent;
+pub use halfedge::{FaceId, HalfedgeId};
+pub use halfedge::{Mesh, SlotIndex, VertexId};
 pub use polygon::{
     Attribute, AttributeData, ElementProperty, ExtraElement, ListProperty, PolygonMesh, ScalarType,
 };
-pub use prune::{Pruned, prune_small_components};
+#[cfg(feature = "cli")]
+pub(crate) use prune::prune_small_components;
 pub use topology::Topology;
 pub use validate::ValidationError;

@@ -112,7 +112,7 @@ impl AttributeData {
 
     /// A new column holding the values at `rows`, in that order (used to carry attributes
     /// through simplification and compaction).
-    pub fn gather(&self, rows: &[u32]) -> AttributeData {
+    pub(crate) fn gather(&self, rows: &[u32]) -> AttributeData {
         fn g<T: Copy>(v: &[T], rows: &[u32]) -> Vec<T> {
             rows.iter().map(|&r| v[r as usize]).collect()
         }
@@ -140,7 +140,7 @@ pub struct Attribute {
 
 impl Attribute {
     /// The same column with `rows[i]`'s value in row `i` (rows dropped or reordered).
-    pub fn gathered(&self, rows: &[u32]) -> Attribute {
+    pub(crate) fn gathered(&self, rows: &[u32]) -> Attribute {
         Attribute {
             name: self.name.clone(),
             data: self.data.gather(rows),
@@ -235,7 +235,7 @@ impl PolygonMesh {
     /// A mesh taking ownership of positions and triangles (no attributes): the triangle
     /// array becomes the index array without a copy, which matters for the million-face
     /// outputs of subdivision.
-    pub fn from_triangle_vec(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Self {
+    pub(crate) fn from_triangle_vec(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Self {
         let face_starts = (0..=triangles.len()).map(|t| 3 * t as u32).collect();
         PolygonMesh {
             positions,

@@ -23,7 +23,7 @@ pub struct Topology {
     /// non-negative number (which a valid orientable surface never gives).
     pub genus: Option<u64>,
     /// The fewest vertices a triangulation of the same surface can have, summed over
-    /// components ([`vertex_floor`]): how far a simplification can go at most.
+    /// components (`vertex_floor`): how far a simplification can go at most.
     pub floor_vertices: usize,
 }
 
@@ -32,7 +32,7 @@ pub struct Topology {
 /// for a closed surface of genus `g ≥ 1` (7 for a torus), and with holes, at least 3 per
 /// hole (a hole is a cycle of at least 3 edges) and at least the closed surface's bound minus
 /// one per hole (capping every hole with one vertex gives a closed surface).
-pub fn vertex_floor(genus: u64, boundary_loops: u64) -> u64 {
+pub(crate) fn vertex_floor(genus: u64, boundary_loops: u64) -> u64 {
     let closed = if genus == 0 {
         4
     } else {
@@ -50,7 +50,7 @@ pub fn vertex_floor(genus: u64, boundary_loops: u64) -> u64 {
 impl Topology {
     /// The floor and what sets it, for reports: "318 vertices (1 component, 106 holes,
     /// genus 3)".
-    pub fn describe_floor(&self) -> String {
+    pub(crate) fn describe_floor(&self) -> String {
         let count =
             |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
         let genus = self

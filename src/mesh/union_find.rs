@@ -10,14 +10,14 @@ pub(crate) struct UnionFind {
 
 impl UnionFind {
     /// `n` singletons.
-    pub fn new(n: usize) -> UnionFind {
+    pub(super) fn new(n: usize) -> UnionFind {
         UnionFind {
             parent: (0..n as u32).collect(),
         }
     }
 
     /// The representative of `x`'s set.
-    pub fn find(&mut self, mut x: u32) -> u32 {
+    pub(super) fn find(&mut self, mut x: u32) -> u32 {
         let p = &mut self.parent;
         while p[x as usize] != x {
             p[x as usize] = p[p[x as usize] as usize];
@@ -27,7 +27,7 @@ impl UnionFind {
     }
 
     /// Joins the sets of `a` and `b`.
-    pub fn union(&mut self, a: u32, b: u32) {
+    pub(crate) fn union(&mut self, a: u32, b: u32) {
         let (a, b) = (self.find(a), self.find(b));
         if a != b {
             self.parent[a.max(b) as usize] = a.min(b);

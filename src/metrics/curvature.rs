@@ -29,7 +29,7 @@ fn barycentric_area(mesh: &Mesh, v: VertexId) -> f64 {
 }
 
 /// Discrete mean curvature per vertex slot (NaN on boundary, isolated or zero-area vertices).
-pub fn mean_curvature(mesh: &Mesh) -> Vec<f64> {
+pub(crate) fn mean_curvature(mesh: &Mesh) -> Vec<f64> {
     let mut out = vec![f64::NAN; slot_len(mesh)];
     for v in mesh.vertices() {
         if mesh.is_boundary_vertex(v) {
@@ -74,7 +74,7 @@ pub fn gauss_curvature(mesh: &Mesh) -> Vec<f64> {
 }
 
 /// Radius of the sphere with the mesh's total area, the length scale of the statistics.
-pub fn equal_area_radius(mesh: &Mesh) -> f64 {
+pub(crate) fn equal_area_radius(mesh: &Mesh) -> f64 {
     let area: f64 = mesh.faces().map(|f| mesh.face_area(f)).sum();
     (area / (4.0 * std::f64::consts::PI)).sqrt()
 }

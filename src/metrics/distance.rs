@@ -11,11 +11,11 @@
 use glam::DVec3;
 
 /// Triangles per leaf of the hierarchy.
-pub const LEAF_SIZE: usize = 4;
+pub(crate) const LEAF_SIZE: usize = 4;
 
 /// Which feature of the triangle the closest point lies on (Ericson's Voronoi regions).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum Region {
+pub(crate) enum Region {
     /// Corner `a`.
     VertexA,
     /// Corner `b`.
@@ -37,7 +37,7 @@ pub enum Region {
 /// Exact for every triangle, degenerate ones included: a triangle collapsed to a segment or a
 /// point falls into the vertex and edge regions (the face branch is only reached with a
 /// positive denominator), so the result is the closest point of the segment or point.
-pub fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> (DVec3, Region) {
+pub(crate) fn closest_point_on_triangle(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> (DVec3, Region) {
     let ab = b - a;
     let ac = c - a;
     let ap = p - a;
@@ -113,13 +113,14 @@ fn closest_on_edges(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> (DVec3, Region) {
 
 /// Squared distance from `p` to triangle `abc`.
 #[inline]
-pub fn point_triangle_distance_squared(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
+#[cfg(test)]
+pub(crate) fn point_triangle_distance_squared(p: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
     p.distance_squared(closest_point_on_triangle(p, a, b, c).0)
 }
 
 /// The answer of a closest-triangle query.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Closest {
+pub(crate) struct Closest {
     /// Index of the closest triangle in the array the hierarchy was built from.
     pub triangle: usize,
     /// The closest point on the surface.
@@ -152,7 +153,7 @@ impl Node {
 /// A bounding-volume hierarchy over triangles for exact closest-point queries; see the module
 /// docs.
 #[derive(Clone, Debug)]
-pub struct TriangleBvh {
+pub(crate) struct TriangleBvh {
     /// Corners of each triangle, in the order they were given.
     corners: Vec<[DVec3; 3]>,
     /// Triangle indices in leaf order.
@@ -163,7 +164,7 @@ pub struct TriangleBvh {
 impl TriangleBvh {
     /// Builds the hierarchy over `triangles` indexing `positions`. Indices out of range are the
     /// caller's bug (mesh triangles are always in range) and panic.
-    pub fn new(positions: &[DVec3], triangles: &[[u32; 3]]) -> TriangleBvh {
+    pub(crate) fn new(positions: &[DVec3], triangles: &[[u32; 3]]) -> TriangleBvh {
         let corners: Vec<[DVec3; 3]> = triangles
             .iter()
             .map(|t| t.map(|i| positions[i as usize]))
@@ -172,7 +173,7 @@ impl TriangleBvh {
     }
 
     /// Builds the hierarchy over triangles given by their corners.
-    pub fn from_corners(corners: Vec<[DVec3; 3]>) -> TriangleBvh {
+    pub(crate) fn from_corners(corners: Vec<[DVec3; 3]>) -> TriangleBvh {
         let centroids: Vec<DVec3> = corners.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
         let mut order: Vec<u32> = (0..corners.len() as u32).collect();
         let mut nodes = Vec::with_capacity(2 * corners.len() / LEAF_SIZE + 1);
@@ -186,24 +187,9 @@ impl TriangleBvh {
         }
     }
 
-    /// Number of triangles.
-    pub fn len(&self) -> usize {
-        self.corners.len()
-    }
-
-    /// True when there are no triangles.
-    pub fn is_empty(&self) -> bool {
-        self.corners.is_empty()
-    }
-
-    /// Corners of triangle `i`.
-    pub fn triangle(&self, i: usize) -> [DVec3; 3] {
-        self.corners[i]
-    }
-
     /// The closest point to `p` on any triangle (`None` when there are no triangles). Exact;
     /// ties go to the smallest triangle index.
-    pub fn closest(&self, p: DVec3) -> Option<Closest> {
+    pub(crate) fn closest(&self, p: DVec3) -> Option<Closest> {
         if self.nodes.is_empty() {
             return None;
         }
@@ -257,7 +243,7 @@ impl TriangleBvh {
     }
 
     /// Distance from `p` to the surface (infinite when there are no triangles).
-    pub fn distance(&self, p: DVec3) -> f64 {
+    pub(crate) fn distance(&self, p: DVec3) -> f64 {
         self.closest(p)
             .map_or(f64::INFINITY, |c| c.distance_squared.sqrt())
     }

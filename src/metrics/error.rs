@@ -196,7 +196,7 @@ impl Reference {
 
     /// Largest distance from the samples of `surface` (vertices used by a triangle, edge
     /// midpoints, face centroids) to the reference: the one-sided sampled Hausdorff distance.
-    pub fn one_sided_hausdorff(&self, surface: Surface<'_>) -> f64 {
+    pub(crate) fn one_sided_hausdorff(&self, surface: Surface<'_>) -> f64 {
         one_sided(&self.bvh, surface)
     }
 

@@ -1,8 +1,8 @@
 //! Measurements on meshes.
 
 pub mod curvature;
-pub mod distance;
-pub mod error;
+pub(crate) mod distance;
+pub(crate) mod error;
 
-pub use distance::{Closest, TriangleBvh, closest_point_on_triangle};
-pub use error::{CompareError, Comparison, Reference, Surface, compare};
+pub use error::{CompareError, Comparison};
+pub use error::{Reference, Surface, compare};

@@ -16,7 +16,7 @@
 use glam::DVec3;
 
 /// Relative area below which a triangle is skipped (area < ε·ℓ_max²).
-pub const DEGENERATE_AREA: f64 = 1e-12;
+pub(crate) const DEGENERATE_AREA: f64 = 1e-12;
 
 /// Below this many rows the matrix work stays on one thread (rayon's overhead would dominate).
 const PARALLEL_ROWS: usize = 8192;
@@ -48,7 +48,7 @@ impl SymmetricCsr {
 
     /// Row `i` of `A x`, summed in column order.
     #[inline]
-    pub fn row_times<const K: usize>(&self, i: usize, x: &[[f64; K]]) -> [f64; K] {
+    pub(crate) fn row_times<const K: usize>(&self, i: usize, x: &[[f64; K]]) -> [f64; K] {
         let (s, e) = (self.row_start[i] as usize, self.row_start[i + 1] as usize);
         let mut acc = [0.0; K];
         for (&c, &v) in self.col[s..e].iter().zip(&self.val[s..e]) {
@@ -61,7 +61,11 @@ impl SymmetricCsr {
 
     /// `Σ_i ((A x)_i − b_i)²` per column, without storing the residual. Summed per block of
     /// rows, then over the blocks in order, so the bits do not depend on the thread count.
-    pub fn residual_squares<const K: usize>(&self, x: &[[f64; K]], b: &[[f64; K]]) -> [f64; K] {
+    pub(crate) fn residual_squares<const K: usize>(
+        &self,
+        x: &[[f64; K]],
+        b: &[[f64; K]],
+    ) -> [f64; K] {
         let block = |first: usize, b: &[[f64; K]]| {
             let mut rr = [0.0; K];
             for (i, bi) in (first..).zip(b) {
@@ -190,7 +194,7 @@ pub fn cotangent_stiffness(
 
 /// [`lumped_mass`] and [`cotangent_stiffness`] together, the same bits as calling both, from
 /// one pass over the triangles' geometry instead of two.
-pub fn mass_and_stiffness(
+pub(crate) fn mass_and_stiffness(
     triangles: &[[u32; 3]],
     positions: &[DVec3],
     face_coefficient: Option<&[f64]>,
@@ -393,7 +397,7 @@ fn split_rows<'a>(fill: &[u32], keys: &'a mut [u64]) -> Vec<(usize, usize, &'a m
 /// diagonally dominant M-matrix, so `M + αL` is positive definite for any α ≥ 0 even where the
 /// cotangent clamp of needle triangles has made the exact stiffness slightly indefinite.
 /// Returns the number of entries clamped (each edge counts twice).
-pub fn clamp_negative_weights(stiffness: &mut SymmetricCsr) -> usize {
+pub(crate) fn clamp_negative_weights(stiffness: &mut SymmetricCsr) -> usize {
     let mut clamped = 0;
     for i in 0..stiffness.n() {
         let (s, e) = (
@@ -416,7 +420,7 @@ pub fn clamp_negative_weights(stiffness: &mut SymmetricCsr) -> usize {
 /// The system matrix `M + α L` (`alpha = 1` when L already carries the coefficient).
 ///
 /// Rows whose diagonal is not positive (an isolated vertex, or a vertex whose triangles are
-/// all degenerate) become identity rows; [`identity_rows`] lists them so the right-hand side
+/// all degenerate) become identity rows; `identity_rows` lists them so the right-hand side
 /// can pin those vertices to their interpolated initial positions.
 pub fn system_matrix(mass: &[f64], stiffness: SymmetricCsr, alpha: f64) -> SymmetricCsr {
     let mut a = stiffness;
@@ -438,13 +442,13 @@ pub fn system_matrix(mass: &[f64], stiffness: SymmetricCsr, alpha: f64) -> Symme
 /// Rows [`system_matrix`] turned into identity rows: exactly the vertices with zero mass
 /// (their stiffness row and column are zero too, because every triangle around them was
 /// skipped as degenerate, and a non-degenerate P1 stiffness diagonal is positive).
-pub fn identity_rows(mass: &[f64]) -> Vec<bool> {
+pub(crate) fn identity_rows(mass: &[f64]) -> Vec<bool> {
     mass.iter().map(|&m| m.is_nan() || m <= 0.0).collect()
 }
 
 /// The right-hand side `M x` of `(M + αL) x′ = M x`, except on the rows [`system_matrix`]
 /// turns into identity rows, which keep `x` itself.
-pub fn mass_rhs(mass: &[f64], x: &[DVec3]) -> Vec<[f64; 3]> {
+pub(crate) fn mass_rhs(mass: &[f64], x: &[DVec3]) -> Vec<[f64; 3]> {
     x.iter()
         .zip(identity_rows(mass))
         .zip(mass)

@@ -3,8 +3,8 @@
 //! is below the algorithms that use it:
 //! - [`fem`]: linear finite elements on flat arrays — lumped mass, cotangent stiffness, the
 //!   system matrix `M + αL`, in symmetric CSR form;
-//! - [`solvers`]: damped Jacobi, preconditioned conjugate gradients and the exact solve of
+//! - `solvers`: damped Jacobi, preconditioned conjugate gradients and the exact solve of
 //!   those systems.
 
 pub mod fem;
-pub mod solvers;
+pub(crate) mod solvers;

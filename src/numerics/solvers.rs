@@ -7,7 +7,7 @@
 use super::fem::SymmetricCsr;
 
 /// `steps` damped Jacobi sweeps `x ← x − ω D⁻¹ (A x − b)` on `K` columns.
-pub fn jacobi<const K: usize>(
+pub(crate) fn jacobi<const K: usize>(
     a: &SymmetricCsr,
     b: &[[f64; K]],
     x: &mut [[f64; K]],
@@ -29,7 +29,7 @@ pub fn jacobi<const K: usize>(
 /// Jacobi-preconditioned conjugate gradients on `K` independent columns, at most `max_steps`
 /// iterations; a column stops when ‖r‖ ≤ `tolerance`·‖b‖ (or on breakdown). Returns the
 /// number of iterations run.
-pub fn conjugate_gradient<const K: usize>(
+pub(crate) fn conjugate_gradient<const K: usize>(
     a: &SymmetricCsr,
     b: &[[f64; K]],
     x: &mut [[f64; K]],
@@ -131,7 +131,11 @@ fn column_dot<const K: usize>(a: &[[f64; K]], b: &[[f64; K]]) -> [f64; K] {
 }
 
 /// ‖A x − b‖ / ‖b‖, largest over the columns (0 for a zero column of b with zero residual).
-pub fn relative_residual<const K: usize>(a: &SymmetricCsr, b: &[[f64; K]], x: &[[f64; K]]) -> f64 {
+pub(crate) fn relative_residual<const K: usize>(
+    a: &SymmetricCsr,
+    b: &[[f64; K]],
+    x: &[[f64; K]],
+) -> f64 {
     // Without storing A x − b: at a million rows that vector's first touch cost more than
     // the product.
     let rr = a.residual_squares(x, b);
@@ -150,7 +154,7 @@ pub fn relative_residual<const K: usize>(a: &SymmetricCsr, b: &[[f64; K]], x: &[
 /// Solves `A x = b` to `tolerance` (relative residual): sparse Cholesky via faer with the
 /// `solver` feature (polished by CG if its residual misses the tolerance), otherwise
 /// preconditioned CG from the given `x`. Returns the CG steps taken.
-pub fn solve_exact<const K: usize>(
+pub(crate) fn solve_exact<const K: usize>(
     a: &SymmetricCsr,
     b: &[[f64; K]],
     x: &mut [[f64; K]],

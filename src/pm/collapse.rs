@@ -46,7 +46,7 @@ pub enum SplitError {
 }
 
 /// Reads the vertices involved in collapsing `h`.
-pub fn collapse_topology(mesh: &Mesh, h: HalfedgeId) -> CollapseTopology {
+pub(crate) fn collapse_topology(mesh: &Mesh, h: HalfedgeId) -> CollapseTopology {
     let o = mesh.twin(h);
     CollapseTopology {
         from: mesh.from_vertex(h),
@@ -96,24 +96,8 @@ fn min_slot(hs: [HalfedgeId; 3]) -> HalfedgeId {
     m
 }
 
-/// Puts every vertex and face record into canonical form (see the module docs). The builder's
-/// output already is canonical; this is for meshes edited by other operators.
-pub fn canonicalize(mesh: &mut Mesh) {
-    let faces: Vec<FaceId> = mesh.faces().collect();
-    for f in faces {
-        let hs = mesh.face_halfedges(f);
-        mesh.faces[f].halfedge = min_slot(hs);
-    }
-    let verts: Vec<VertexId> = mesh.vertices().collect();
-    for v in verts {
-        if let Some(h) = mesh.vertices[v].halfedge {
-            set_canonical(mesh, v, h);
-        }
-    }
-}
-
 /// Collapses `h = u→v`: removes `u` and the (one or two) faces on `h`'s edge. The caller must
-/// have checked legality ([`is_collapse_topologically_legal`] at least); an illegal collapse
+/// have checked legality (`is_collapse_topologically_legal` at least); an illegal collapse
 /// breaks the half-edge invariants.
 ///
 /// Frees, in this order: half-edges `h1 = v→v_l`, `h2 = v_l→u`, `o1 = u→v_r`, `o2 = v_r→v`,
@@ -556,7 +540,7 @@ impl Marks {
 /// The topological rules of `docs/algorithms.md` §4.2 (link condition, boundary rules, no
 /// collapse of a lone triangle or a tetrahedron, no interior vertex left with valence < 3,
 /// valence cap). Returns the valence the survivor would have, or `None` if illegal.
-pub fn is_collapse_topologically_legal(
+pub(crate) fn is_collapse_topologically_legal(
     mesh: &Mesh,
     h: HalfedgeId,
     max_valence: usize,
@@ -631,7 +615,11 @@ pub fn is_collapse_topologically_legal(
 }
 
 /// The shape rules of [`Legality`] (normals, slivers) on the faces around `h`'s tail.
-pub fn is_collapse_geometrically_legal(mesh: &Mesh, h: HalfedgeId, legality: &Legality) -> bool {
+pub(crate) fn is_collapse_geometrically_legal(
+    mesh: &Mesh,
+    h: HalfedgeId,
+    legality: &Legality,
+) -> bool {
     let o = mesh.twin(h);
     let u = mesh.to_vertex(o);
     let pu = mesh.position(u);

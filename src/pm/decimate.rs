@@ -115,7 +115,7 @@ pub(crate) struct FlatMesh {
 impl FlatMesh {
     /// The working mesh of the builder's output: vertex `i` at `positions[i]`, half-edge ids
     /// equal to the slots [`Mesh::from_polygons`] would give (`CornerTable` docs).
-    pub fn from_corners(positions: Vec<DVec3>, corners: &CornerTable) -> FlatMesh {
+    pub(crate) fn from_corners(positions: Vec<DVec3>, corners: &CornerTable) -> FlatMesh {
         let nh = corners.corner_vertex.len();
         let nb = corners.mate.iter().filter(|&&m| m == NONE).count();
         let mut twin = Vec::with_capacity(nh + nb);
@@ -132,7 +132,7 @@ impl FlatMesh {
     /// The working mesh of any valid half-edge mesh: triangle `t` is the `t`-th face in slot
     /// order with corners starting at its stored half-edge (as [`Mesh::face_vertices`]), and
     /// boundary half-edges are numbered in slot order.
-    pub fn from_mesh(mesh: &Mesh) -> FlatMesh {
+    pub(super) fn from_mesh(mesh: &Mesh) -> FlatMesh {
         let n_vslots = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
         let n_hslots = mesh.halfedges().map(|h| h.slot() + 1).max().unwrap_or(0);
         let mut positions = vec![DVec3::ZERO; n_vslots];
@@ -229,19 +229,19 @@ impl FlatMesh {
     }
 
     /// Number of live triangles.
-    pub fn n_faces(&self) -> usize {
+    pub(super) fn n_faces(&self) -> usize {
         self.n_faces
     }
 
     /// The vertices that still have faces, in slot order.
-    pub fn survivors(&self) -> Vec<u32> {
+    pub(crate) fn survivors(&self) -> Vec<u32> {
         (0..self.vertices.len() as u32)
             .filter(|&v| self.vertices[v as usize].corner != NONE)
             .collect()
     }
 
     /// The live triangles in triangle order, each starting at its first corner.
-    pub fn triangles(&self) -> Vec<[u32; 3]> {
+    pub(super) fn triangles(&self) -> Vec<[u32; 3]> {
         self.corners
             .chunks_exact(3)
             .filter(|t| t[0].vertex != NONE)
@@ -714,7 +714,7 @@ pub(crate) struct Schedule {
 }
 
 impl Schedule {
-    pub fn new() -> Schedule {
+    pub(super) fn new() -> Schedule {
         Schedule {
             use_goal: true,
             relaxation: Relaxation::None,
@@ -722,13 +722,13 @@ impl Schedule {
     }
 
     /// The rules of this pass.
-    pub fn legality(&self, params: &DecimateParams) -> Legality {
+    pub(super) fn legality(&self, params: &DecimateParams) -> Legality {
         params.legality.relaxed(self.relaxation)
     }
 
     /// How many collapses this pass may make: relaxed passes do a small share of the faces
     /// left, the cheapest first, then hand back to the full rules.
-    pub fn budget(&self, n_faces: usize) -> usize {
+    pub(crate) fn budget(&self, n_faces: usize) -> usize {
         match self.relaxation {
             Relaxation::None => usize::MAX,
             _ => (n_faces / 64).max(1),
@@ -737,7 +737,12 @@ impl Schedule {
 
     /// After a pass: whether decimation is over, i.e. a full pass with every rule relaxed
     /// found no legal collapse.
-    pub fn pass_ended(&mut self, collapsed: bool, error_cut: f64, params: &DecimateParams) -> bool {
+    pub(crate) fn pass_ended(
+        &mut self,
+        collapsed: bool,
+        error_cut: f64,
+        params: &DecimateParams,
+    ) -> bool {
         if collapsed {
             *self = Schedule::new();
             return false;

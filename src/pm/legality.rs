@@ -87,7 +87,7 @@ const UNDEFINED_NORMAL_QUALITY: f64 = 1e-6;
 
 impl Legality {
     /// The rules with the relaxation steps up to `step` applied.
-    pub fn relaxed(&self, step: Relaxation) -> Legality {
+    pub(crate) fn relaxed(&self, step: Relaxation) -> Legality {
         let mut l = *self;
         if step >= Relaxation::Valence {
             l.max_valence = usize::MAX;
@@ -123,7 +123,7 @@ pub enum Refusal {
 
 impl Refusal {
     /// A few words for reports.
-    pub fn describe(self) -> &'static str {
+    pub(crate) fn describe(self) -> &'static str {
         match self {
             Refusal::Boundary => "boundary would pinch",
             Refusal::DanglingFace => "face would dangle",

@@ -4,6 +4,7 @@
 
 use super::{PmError, ProgressiveMesh, VertexSplit};
 use crate::mesh::{Mesh, SlotIndex, VertexId};
+#[cfg(test)]
 use crate::pm::collapse::vertex_split;
 use crate::pm::{FlatReplay, canonical_sorted};
 use glam::DVec3;
@@ -33,6 +34,7 @@ fn invalid(reason: impl Into<String>) -> PmError {
 }
 
 /// Rotates a triangle so that its smallest index comes first (orientation kept).
+#[cfg(test)]
 fn canonical(t: [u32; 3]) -> [u32; 3] {
     let k = (0..3).min_by_key(|&i| t[i]).unwrap_or(0);
     [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
@@ -108,7 +110,8 @@ impl SplitReplay {
     }
 
     /// Applies the next split (which must create vertex `level()`).
-    pub fn apply(&mut self, s: &VertexSplit, position: DVec3) -> Result<(), PmError> {
+    #[cfg(test)]
+    pub(crate) fn apply(&mut self, s: &VertexSplit, position: DVec3) -> Result<(), PmError> {
         let level = self.level();
         if s.vertex as usize != level {
             return Err(invalid(format!(
@@ -136,7 +139,8 @@ impl SplitReplay {
     }
 
     /// The current triangles in PM indices, canonically rotated and sorted.
-    pub fn canonical_faces(&self) -> Vec<[u32; 3]> {
+    #[cfg(test)]
+    pub(crate) fn canonical_faces(&self) -> Vec<[u32; 3]> {
         let mut f: Vec<[u32; 3]> = self
             .mesh
             .faces()
@@ -149,7 +153,7 @@ impl SplitReplay {
 
 impl ProgressiveMesh {
     /// The triangles of the base level in finest-face order (what [`Self::base_mesh`] builds).
-    pub fn base_triangles(&self) -> Vec<[u32; 3]> {
+    pub(crate) fn base_triangles(&self) -> Vec<[u32; 3]> {
         self.level_triangles(self.n_base_vertices())
     }
 

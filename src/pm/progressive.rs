@@ -11,7 +11,8 @@ use glam::DVec3;
 // can fill the private fields.
 #[path = "parts.rs"]
 mod parts;
-pub use parts::{PmParts, SplitReplay};
+pub use parts::PmParts;
+pub use parts::SplitReplay;
 
 /// Options for [`ProgressiveMesh::build`]. The build collapses greedily by quadric error until
 /// a target is met, the error bound is exceeded, or no legal collapse is left.
@@ -85,7 +86,7 @@ pub struct VertexSplit {
 
 impl VertexSplit {
     /// Number of faces the split adds (1 or 2).
-    pub fn n_new_faces(&self) -> usize {
+    pub(crate) fn n_new_faces(&self) -> usize {
         self.left.is_some() as usize + self.right.is_some() as usize
     }
 }
@@ -281,7 +282,7 @@ impl ProgressiveMesh {
     }
 
     /// The finest level with at most `faces` faces (the base level if even that has more).
-    pub fn level_for_faces(&self, faces: usize) -> usize {
+    pub(crate) fn level_for_faces(&self, faces: usize) -> usize {
         let mut count = self.n_base_faces;
         let mut level = self.n_base;
         for s in &self.splits {
@@ -314,7 +315,7 @@ impl ProgressiveMesh {
     }
 
     /// The compacted mesh at level `n`: vertex slot `i` is PM vertex `i`.
-    pub fn level_mesh(&self, n: usize) -> Mesh {
+    pub(crate) fn level_mesh(&self, n: usize) -> Mesh {
         let n = n.clamp(self.n_base, self.n_vertices());
         let tris = self.level_triangles(n);
         mesh_from_clean(&self.positions[..n], &tris)
@@ -429,7 +430,7 @@ impl PmCursor<'_> {
     }
 
     /// Moves to the finest level with at most `faces` faces.
-    pub fn seek_faces(&mut self, faces: usize) {
+    pub(crate) fn seek_faces(&mut self, faces: usize) {
         let level = self.pm.level_for_faces(faces);
         self.seek(level);
     }

@@ -22,11 +22,11 @@ use glam::DVec3;
 /// with a weight of 1e-7, which in its single-precision unit-cube coordinates is already above the
 /// rounding noise of flat regions; in double precision a smaller weight only breaks exact ties, and
 /// this larger one measured better overall (it costs a little on smooth meshes at 1 %).
-pub const POINT_REGULARISATION: f64 = 1e-4;
+pub(crate) const POINT_REGULARISATION: f64 = 1e-4;
 
 /// A symmetric 4×4 quadric: `xᵀAx + 2bᵀx + c`, plus the summed face weight it was built from.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Quadric {
+pub(crate) struct Quadric {
     /// Upper triangle of A: a00, a01, a02, a11, a12, a22.
     pub a: [f64; 6],
     /// The linear part b.
@@ -40,7 +40,7 @@ pub struct Quadric {
 impl Quadric {
     /// The quadric of the plane through `point` with unit normal `n`, scaled by `scale`, counting
     /// `weight` towards the normalisation.
-    pub fn from_plane(n: DVec3, point: DVec3, scale: f64, weight: f64) -> Quadric {
+    pub(crate) fn from_plane(n: DVec3, point: DVec3, scale: f64, weight: f64) -> Quadric {
         let d = -n.dot(point);
         Quadric {
             a: [
@@ -60,7 +60,7 @@ impl Quadric {
     /// The area-weighted plane quadric of the triangle `(pa, pb, pc)` (counting its area towards
     /// the normalisation), or `None` for a zero-area or non-finite triangle, which has no plane.
     #[inline]
-    pub fn of_triangle(pa: DVec3, pb: DVec3, pc: DVec3) -> Option<Quadric> {
+    pub(crate) fn of_triangle(pa: DVec3, pb: DVec3, pc: DVec3) -> Option<Quadric> {
         let nrm = (pb - pa).cross(pc - pa);
         let len = nrm.length();
         if len.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) || !len.is_finite() {
@@ -72,7 +72,7 @@ impl Quadric {
 
     /// The point quadric `scale·|x - p|²`, counting nothing towards the normalisation (a
     /// regulariser, not a face).
-    pub fn from_point(p: DVec3, scale: f64) -> Quadric {
+    pub(crate) fn from_point(p: DVec3, scale: f64) -> Quadric {
         Quadric {
             a: [scale, 0.0, 0.0, scale, 0.0, scale],
             b: [-scale * p.x, -scale * p.y, -scale * p.z],
@@ -83,7 +83,7 @@ impl Quadric {
 
     /// Componentwise sum.
     #[inline]
-    pub fn add(&mut self, o: &Quadric) {
+    pub(crate) fn add(&mut self, o: &Quadric) {
         for k in 0..6 {
             self.a[k] += o.a[k];
         }
@@ -96,7 +96,7 @@ impl Quadric {
 
     /// The sum of two quadrics.
     #[inline]
-    pub fn sum(&self, o: &Quadric) -> Quadric {
+    pub(crate) fn sum(&self, o: &Quadric) -> Quadric {
         let mut q = *self;
         q.add(o);
         q
@@ -104,7 +104,7 @@ impl Quadric {
 
     /// `xᵀAx + 2bᵀx + c`: the weighted sum of squared plane distances (length⁴ with area weights).
     #[inline]
-    pub fn raw(&self, p: DVec3) -> f64 {
+    pub(crate) fn raw(&self, p: DVec3) -> f64 {
         let a = &self.a;
         let (x, y, z) = (p.x, p.y, p.z);
         x * (a[0] * x + 2.0 * (a[1] * y + a[2] * z + self.b[0]))
@@ -116,7 +116,7 @@ impl Quadric {
     /// The normalised error at `p`: [`Quadric::raw`] divided by the face weight (a mean squared
     /// distance, length²). Never negative or NaN for finite input.
     #[inline]
-    pub fn error(&self, p: DVec3) -> f64 {
+    pub(crate) fn error(&self, p: DVec3) -> f64 {
         let r = self.raw(p).max(0.0);
         let e = if self.weight > 0.0 {
             r / self.weight

@@ -373,7 +373,7 @@ impl FlatReplay {
         self.face_he.len()
     }
 
-    /// The PM indices around `v` in [`Mesh::outgoing`] order (counter-clockwise from the
+    /// The PM indices around `v` in `Mesh::outgoing` order (counter-clockwise from the
     /// canonical half-edge; a boundary vertex starts at its boundary out-edge) — the ring the
     /// `.pyr` format indexes wings into.
     pub fn ring(&mut self, v: u32) -> Result<&[u32], PmError> {
@@ -397,7 +397,7 @@ impl FlatReplay {
     }
 
     /// The length of `v`'s ring (its valence), listing the ring for a following
-    /// [`Self::apply_indexed`] at `v`.
+    /// `Self::apply_indexed` at `v`.
     pub fn valence(&mut self, v: u32) -> Result<usize, PmError> {
         self.list(v)
     }
@@ -429,7 +429,7 @@ impl FlatReplay {
     /// fetched). A split touches five to eight rings scattered over the arrays, so replay is
     /// bound by cache misses; hinting them early overlaps the misses of consecutive splits.
     /// Only a hint: a stale or out-of-range `survivor` is harmless.
-    pub fn prefetch(&self, survivor: u32, ahead: usize) {
+    pub(crate) fn prefetch(&self, survivor: u32, ahead: usize) {
         let lines = &self.rings.lines;
         if survivor as usize >= lines.len() {
             return;
@@ -450,7 +450,7 @@ impl FlatReplay {
     /// 16 and 8 places ahead, whose survivors `survivor(j)` gives (`None` past the end). The
     /// encoder, the decoder and the pyramid's recording walk all replay this way.
     #[inline]
-    pub fn prefetch_upcoming(&self, k: usize, survivor: impl Fn(usize) -> Option<u32>) {
+    pub(crate) fn prefetch_upcoming(&self, k: usize, survivor: impl Fn(usize) -> Option<u32>) {
         for ahead in [16, 8] {
             if let Some(s) = survivor(k + ahead) {
                 self.prefetch(s, ahead);
@@ -463,7 +463,7 @@ impl FlatReplay {
     /// off the neighbours' lines, which [`Self::prefetch`] fetched earlier). Stencils on the
     /// rings read exactly these, scattered over the arrays. Only a hint, like
     /// [`Self::prefetch`].
-    pub fn prefetch_neighbourhood<T>(&self, survivor: u32, positions: &[T]) {
+    pub(crate) fn prefetch_neighbourhood<T>(&self, survivor: u32, positions: &[T]) {
         let lines = &self.rings.lines;
         if survivor as usize >= lines.len() {
             return;
@@ -478,13 +478,13 @@ impl FlatReplay {
 
     /// The valence of the vertex [`Self::ring`], [`Self::valence`] or [`Self::wing_indices`]
     /// listed last.
-    pub fn listed_valence(&self) -> usize {
+    pub(crate) fn listed_valence(&self) -> usize {
         self.ring.len
     }
 
     /// Applies `s` (which must create vertex `level()`), finding its wings in the survivor's
     /// ring. Equivalent to [`SplitReplay::apply`](super::SplitReplay::apply).
-    pub fn apply(&mut self, s: &VertexSplit) -> Result<(), PmError> {
+    pub(crate) fn apply(&mut self, s: &VertexSplit) -> Result<(), PmError> {
         let (il, ir) = self.wing_indices(s)?;
         self.apply_indexed(s.vertex, s.survivor, il, ir)?;
         Ok(())
@@ -492,7 +492,7 @@ impl FlatReplay {
 
     /// The positions of `s`'s wings in its survivor's ring (listing the ring), for coding the
     /// split; [`Self::apply_indexed`] with the same indices then applies it.
-    pub fn wing_indices(
+    pub(crate) fn wing_indices(
         &mut self,
         s: &VertexSplit,
     ) -> Result<(Option<usize>, Option<usize>), PmError> {
@@ -524,7 +524,7 @@ impl FlatReplay {
 
     /// Applies the split creating vertex `vertex` (which must be `level()`) at `survivor`, with
     /// wings given as indices into the survivor's ring. Returns the record.
-    pub fn apply_indexed(
+    pub(crate) fn apply_indexed(
         &mut self,
         vertex: u32,
         survivor: u32,
@@ -699,7 +699,7 @@ impl FlatReplay {
 
     /// The current triangles in PM indices, canonically rotated (smallest index first) and
     /// sorted.
-    pub fn canonical_faces(&self) -> Vec<[u32; 3]> {
+    pub(crate) fn canonical_faces(&self) -> Vec<[u32; 3]> {
         canonical_sorted(&self.triangles(), self.level())
     }
 
@@ -711,7 +711,7 @@ impl FlatReplay {
     ///
     /// Large meshes are checked in two halves on two threads (the check is the longest step
     /// of a load left after the replay).
-    pub fn has_faces(&self, expected: &FaceBuckets) -> bool {
+    pub(crate) fn has_faces(&self, expected: &FaceBuckets) -> bool {
         let n = self.rings.len() as u32;
         let seen = if n >= 1 << 14 {
             let mid = n / 2;
@@ -782,7 +782,7 @@ impl FlatReplay {
 /// Triangles canonically rotated (smallest index first) and bucketed by that index: a
 /// counting sort, without ordering the faces within a bucket (about two faces per vertex).
 #[derive(Clone, Debug)]
-pub struct FaceBuckets {
+pub(crate) struct FaceBuckets {
     /// Bucket `k` is `faces[starts[k]..starts[k + 1]]`.
     starts: Vec<u32>,
     faces: Vec<[u32; 3]>,
@@ -791,7 +791,7 @@ pub struct FaceBuckets {
 impl FaceBuckets {
     /// Buckets `faces` on vertices `0..n_vertices` (a face with a larger index goes to the last
     /// bucket, so any input is accepted).
-    pub fn new(faces: &[[u32; 3]], n_vertices: usize) -> FaceBuckets {
+    pub(crate) fn new(faces: &[[u32; 3]], n_vertices: usize) -> FaceBuckets {
         let n = n_vertices.max(1);
         let mut starts = vec![0u32; n + 1];
         let mut out = vec![[0u32; 3]; faces.len()];
@@ -811,7 +811,7 @@ impl FaceBuckets {
     }
 
     /// The faces, canonically rotated, sorted.
-    pub fn into_sorted(mut self) -> Vec<[u32; 3]> {
+    pub(crate) fn into_sorted(mut self) -> Vec<[u32; 3]> {
         for w in self.starts.windows(2) {
             let b = &mut self.faces[w[0] as usize..w[1] as usize];
             if b.len() > 1 {
@@ -831,7 +831,7 @@ fn bucket(t: &[u32; 3], n: usize) -> usize {
 /// `faces` canonically rotated (smallest index first) and sorted, for faces on vertices
 /// `0..n_vertices`: a counting sort by first index, then a sort of each bucket (about two faces
 /// per vertex), which is several times faster than a comparison sort of a million faces.
-pub fn canonical_sorted(faces: &[[u32; 3]], n_vertices: usize) -> Vec<[u32; 3]> {
+pub(crate) fn canonical_sorted(faces: &[[u32; 3]], n_vertices: usize) -> Vec<[u32; 3]> {
     FaceBuckets::new(faces, n_vertices).into_sorted()
 }
 

@@ -23,7 +23,7 @@ pub struct MoveHandle {
 /// 0 outside. It is 1 at the centre, and its value, slope and curvature vanish at `r`, so the
 /// edited region blends into the untouched surface without a visible crease.
 #[inline]
-pub fn falloff(d: f64, r: f64) -> f64 {
+pub(crate) fn falloff(d: f64, r: f64) -> f64 {
     if r.is_nan() || d.is_nan() || r <= 0.0 || d >= r {
         return 0.0;
     }
@@ -70,7 +70,7 @@ impl DetailPyramid {
 
     /// Synthesises level `level`, lets `edit` change its values (the slice holds PM vertices
     /// `0..level`), and resynthesises the finest level with `gains`.
-    pub fn edit_with(
+    pub(crate) fn edit_with(
         &self,
         level: usize,
         gains: &LevelGains,

@@ -29,7 +29,7 @@ use glam::DVec3;
 
 /// An orthonormal frame as rows `(t1, t2, n)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Frame {
+pub(crate) struct Frame {
     /// First tangent.
     pub t1: DVec3,
     /// Second tangent, `n × t1`.
@@ -40,7 +40,7 @@ pub struct Frame {
 
 impl Frame {
     /// The world frame `(x, y, z)`.
-    pub const WORLD: Frame = Frame {
+    pub(crate) const WORLD: Frame = Frame {
         t1: DVec3::X,
         t2: DVec3::Y,
         n: DVec3::Z,
@@ -48,14 +48,14 @@ impl Frame {
 
     /// Coordinates of the world vector `x` in this frame.
     #[inline]
-    pub fn to_local(&self, x: DVec3) -> DVec3 {
+    pub(crate) fn to_local(self, x: DVec3) -> DVec3 {
         DVec3::new(self.t1.dot(x), self.t2.dot(x), self.n.dot(x))
     }
 
     /// The world vector with frame coordinates `d`, tangential part scaled by `tangent_gain`
     /// and normal part by `normal_gain`.
     #[inline]
-    pub fn to_world_scaled(&self, d: DVec3, tangent_gain: f64, normal_gain: f64) -> DVec3 {
+    pub(crate) fn to_world_scaled(self, d: DVec3, tangent_gain: f64, normal_gain: f64) -> DVec3 {
         tangent_gain * (self.t1 * d.x + self.t2 * d.y) + normal_gain * (self.n * d.z)
     }
 }
@@ -69,19 +69,19 @@ const DEGENERATE_TANGENT: f64 = 1e-12;
 /// `|d| · δ / floor`; at 1e-6 that is below 1e-9 of `|d|`. (At 1e-9 the fuzzer found a sliver
 /// fan whose vertex came back 3.6e-6 off.) Fans with spokes shorter than a millionth of the
 /// model, or that flat, get the world frame instead.
-pub const FRAME_LENGTH_FLOOR: f64 = 1e-6;
+pub(crate) const FRAME_LENGTH_FLOOR: f64 = 1e-6;
 
 /// The `min_length` of [`vertex_frame`] for a surface with bounding-box diagonal
 /// `bbox_diagonal`; analysis and synthesis both take it from here, so they build the same
 /// frames.
 #[inline]
-pub fn frame_min_length(bbox_diagonal: f64) -> f64 {
+pub(crate) fn frame_min_length(bbox_diagonal: f64) -> f64 {
     FRAME_LENGTH_FLOOR * bbox_diagonal
 }
 
 /// An integer index into a signal array: the pyramid stores local indices in the narrowest of
 /// `u8`, `u16`, `u32` that fits.
-pub trait LocalIndex: Copy + Send + Sync {
+pub(crate) trait LocalIndex: Copy + Send + Sync {
     /// The index as `usize`.
     fn at(self) -> usize;
 }
@@ -115,7 +115,7 @@ impl LocalIndex for u32 {
 /// The fan's triangles are `(j, fan[k], fan[k+1 mod m])` for every `k`, except `k = 0` when the
 /// fan is open: a boundary vertex's circulation starts at its boundary edge, which has no face.
 #[inline]
-pub fn vertex_frame<I: LocalIndex>(
+pub(crate) fn vertex_frame<I: LocalIndex>(
     g: &[DVec3],
     j: usize,
     fan: &[I],

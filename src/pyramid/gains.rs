@@ -48,7 +48,7 @@ impl From<usize> for LevelSpec {
 
 /// The level whose typical edge length is `size` on a surface of area `area`
 /// (`n = 2A / (√3 h²)`, rounded; `usize::MAX` for a zero size).
-pub fn level_for_feature_size(size: f64, area: f64) -> usize {
+pub(crate) fn level_for_feature_size(size: f64, area: f64) -> usize {
     let n = 2.0 * area / (3f64.sqrt() * size * size);
     if n.is_finite() {
         n.round().max(0.0) as usize
@@ -58,7 +58,7 @@ pub fn level_for_feature_size(size: f64, area: f64) -> usize {
 }
 
 /// The typical edge length at level `n` on a surface of area `area`.
-pub fn feature_size_of_level(n: usize, area: f64) -> f64 {
+pub(crate) fn feature_size_of_level(n: usize, area: f64) -> f64 {
     (2.0 * area / (3f64.sqrt() * n.max(1) as f64)).sqrt()
 }
 
@@ -124,7 +124,8 @@ pub struct GainBand {
 
 impl GainBand {
     /// Parses `A:B` (a band, gain left to the caller) into its two ends.
-    pub fn parse_band(s: &str) -> Result<(LevelSpec, LevelSpec), GainParseError> {
+    #[cfg(feature = "cli")]
+    pub(crate) fn parse_band(s: &str) -> Result<(LevelSpec, LevelSpec), GainParseError> {
         let (a, b) = s
             .split_once(':')
             .ok_or_else(|| parse_error(s, "expected a band A:B such as 1000:15000"))?;
@@ -132,7 +133,8 @@ impl GainBand {
     }
 
     /// Parses `A:B=G`.
-    pub fn parse_with_gain(s: &str) -> Result<GainBand, GainParseError> {
+    #[cfg(feature = "cli")]
+    pub(crate) fn parse_with_gain(s: &str) -> Result<GainBand, GainParseError> {
         let (band, gain) = s
             .split_once('=')
             .ok_or_else(|| parse_error(s, "expected A:B=G such as 1000:15000=2"))?;
@@ -230,7 +232,8 @@ impl Filter {
     }
 
     /// True when no band is set (synthesis reproduces the input).
-    pub fn is_identity(&self) -> bool {
+    #[cfg(test)]
+    pub(crate) fn is_identity(&self) -> bool {
         self.bands.iter().all(|b| b.gain == 1.0)
     }
 
@@ -281,7 +284,7 @@ impl LevelGains {
 
     /// `(tangential, normal)` gains of level `n`.
     #[inline]
-    pub fn split_gain(&self, n: usize) -> (f64, f64) {
+    pub(crate) fn split_gain(&self, n: usize) -> (f64, f64) {
         let g = self.gain(n);
         if self.normal_only { (1.0, g) } else { (g, g) }
     }

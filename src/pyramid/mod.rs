@@ -2,18 +2,18 @@
 //! `docs/algorithms.md` §1c): a space-frequency decomposition of a surface into a coarse base signal
 //! plus, for every vertex split, the details that the relaxation-based prediction misses.
 //!
-//! * [`analysis`]: finest → coarsest, vertex by vertex — presmooth the 1-ring, collapse, predict
+//! * `analysis`: finest → coarsest, vertex by vertex — presmooth the 1-ring, collapse, predict
 //!   the removed vertex and then its 1-ring, store the differences in local frames.
-//! * [`synthesis`]: coarsest → finest — split, predict exactly as in the analysis, add the
+//! * `synthesis`: coarsest → finest — split, predict exactly as in the analysis, add the
 //!   (scaled) details back. With unit gains it reproduces the input to rounding.
-//! * [`frames`]: the local frames the details live in, built from the *predicted* geometry so
+//! * `frames`: the local frames the details live in, built from the *predicted* geometry so
 //!   that synthesis can rebuild them before the details are known.
-//! * [`gains`]: filters as a gain per level (low-pass, stop-band, enhancement, bands in vertex
+//! * `gains`: filters as a gain per level (low-pass, stop-band, enhancement, bands in vertex
 //!   counts or feature sizes).
-//! * [`edit`]: multiresolution editing — move vertices of a coarse level, resynthesise, and the
+//! * `edit`: multiresolution editing — move vertices of a coarse level, resynthesise, and the
 //!   details ride along in their frames.
-//! * [`spectrum`]: detail energy per level band, as a table and a chart.
-//! * [`pipeline`]: file-level glue — polygon mesh in, polygon mesh out in the input's exact
+//! * `spectrum`: detail energy per level band, as a table and a chart.
+//! * `pipeline`: file-level glue — polygon mesh in, polygon mesh out in the input's exact
 //!   vertex and face order.
 //! * `fuzz`: the body of the `pyramid_ops` fuzz target (`meshpyr::fuzzing::fuzz_pyramid`).
 //!
@@ -38,21 +38,23 @@ macro_rules! with_codes {
     };
 }
 
-pub mod analysis;
-pub mod edit;
-pub mod frames;
+pub(crate) mod analysis;
+pub(crate) mod edit;
+pub(crate) mod frames;
 mod fuzz;
-pub mod gains;
-pub mod pipeline;
-pub mod spectrum;
-pub mod synthesis;
+pub(crate) mod gains;
+pub(crate) mod pipeline;
+pub(crate) mod spectrum;
+pub(crate) mod synthesis;
 pub(crate) mod waves;
 
-pub use edit::{MoveHandle, falloff};
+pub use edit::MoveHandle;
 pub(crate) use fuzz::fuzz_pyramid;
-pub use gains::{Filter, GainBand, GainParseError, LevelGains, LevelSpec};
+pub use gains::{Filter, LevelGains, LevelSpec};
+pub use gains::{GainBand, GainParseError};
 pub use pipeline::{PyrFileError, Pyramid, PyramidOptions};
-pub use spectrum::{BandEnergy, Spectrum};
+pub use spectrum::BandEnergy;
+pub use spectrum::Spectrum;
 
 use crate::pm::PmError;
 use glam::DVec3;
@@ -259,7 +261,7 @@ impl DetailPyramid {
 
     /// The level (vertex count) whose details split `k` carries.
     #[inline]
-    pub fn level_of_split(&self, k: usize) -> usize {
+    pub(crate) fn level_of_split(&self, k: usize) -> usize {
         self.n_base + k + 1
     }
 

@@ -170,7 +170,7 @@ impl Pyramid {
 
     /// The `.pyr` file of this pyramid: its hierarchy with the exact input, and the options to
     /// rebuild it (formats/pyr.md), with its size by section.
-    pub fn to_pyr_bytes(&self) -> Result<(Vec<u8>, SizeReport), FormatError> {
+    pub(crate) fn to_pyr_bytes(&self) -> Result<(Vec<u8>, SizeReport), FormatError> {
         let info = BuildInfo {
             pm_options: self.options.pm.clone(),
             relaxation: self.options.relaxation,
@@ -180,12 +180,15 @@ impl Pyramid {
 
     /// Opens a `.pyr` file's bytes: the hierarchy as saved, and the pyramid recomputed
     /// bit-identical to the one that was saved.
-    pub fn from_pyr_bytes(bytes: &[u8], progress: &dyn Progress) -> Result<Self, PyrFileError> {
+    pub(crate) fn from_pyr_bytes(
+        bytes: &[u8],
+        progress: &dyn Progress,
+    ) -> Result<Self, PyrFileError> {
         let data: PyrData = format::decode(bytes)?;
         Ok(data.into_scan(progress)?)
     }
 
-    /// Saves [`Self::to_pyr_bytes`] to `path`, atomically (an existing file is replaced only
+    /// Saves `Self::to_pyr_bytes` to `path`, atomically (an existing file is replaced only
     /// once the new one is complete).
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), PyrFileError> {
         let path = path.as_ref();
@@ -196,7 +199,7 @@ impl Pyramid {
         Ok(())
     }
 
-    /// Opens the `.pyr` file at `path` ([`Self::from_pyr_bytes`]).
+    /// Opens the `.pyr` file at `path` (`Self::from_pyr_bytes`).
     pub fn load(path: impl AsRef<Path>) -> Result<Self, PyrFileError> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|error| IoError::Io {
@@ -208,7 +211,7 @@ impl Pyramid {
 
     /// Maps a signal in PM order onto the input's vertices (split copies averaged, vertices
     /// outside the hierarchy keep their input positions).
-    pub fn to_input_positions(&self, pm_signal: &[DVec3]) -> Vec<DVec3> {
+    pub(crate) fn to_input_positions(&self, pm_signal: &[DVec3]) -> Vec<DVec3> {
         // The PM covers every vertex of the repaired mesh (`pm_to_mesh` is a permutation of its
         // slots), and its original positions are the mesh's; entries `pm_signal` lacks keep them.
         let original = self.pm.original_positions();

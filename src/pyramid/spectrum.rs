@@ -7,8 +7,11 @@
 
 use super::DetailPyramid;
 use super::gains::feature_size_of_level;
+#[cfg(feature = "cli")]
 use crate::plot::{BarChart, PALETTE, Series, compact_count};
+#[cfg(feature = "cli")]
 use crate::render::Image;
+#[cfg(feature = "cli")]
 use std::fmt::Write;
 
 /// The detail energy of one band of levels `(lo, hi]`.
@@ -83,7 +86,8 @@ impl DetailPyramid {
 
 impl Spectrum {
     /// The table as CSV with a header line.
-    pub fn to_csv(&self) -> String {
+    #[cfg(feature = "cli")]
+    pub(crate) fn to_csv(&self) -> String {
         let mut s = String::from(
             "level_from,level_to,levels,details,energy_rel_diag2,rms_rel_diag,feature_size\n",
         );
@@ -99,7 +103,8 @@ impl Spectrum {
 
     /// A bar chart of the energies of this spectrum and of `others` (same bands expected, e.g.
     /// the spectra of filtered versions), each series named.
-    pub fn chart(&self, name: &str, others: &[(&str, &Spectrum)]) -> Image {
+    #[cfg(feature = "cli")]
+    pub(crate) fn chart(&self, name: &str, others: &[(&str, &Spectrum)]) -> Image {
         let categories = self.bands.iter().map(|b| compact_count(b.hi)).collect();
         let mut c = BarChart::new(
             "DETAIL SPECTRUM: ENERGY PER LEVEL OCTAVE",
@@ -125,15 +130,5 @@ impl Spectrum {
             });
         }
         c.draw()
-    }
-
-    /// Energy of the levels in `(lo, hi]`, summed over the bands inside it (bands are counted
-    /// when their range lies within `(lo, hi]`).
-    pub fn energy_within(&self, lo: usize, hi: usize) -> f64 {
-        self.bands
-            .iter()
-            .filter(|b| b.lo >= lo && b.hi <= hi)
-            .map(|b| b.energy)
-            .sum()
     }
 }

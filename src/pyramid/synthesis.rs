@@ -325,7 +325,7 @@ impl DetailPyramid {
     }
 
     /// [`DetailPyramid::synthesize_range`] from `from` to the finest level, checking that `f` fits.
-    pub fn resynthesize_from(
+    pub(crate) fn resynthesize_from(
         &self,
         mut f: Vec<DVec3>,
         from: usize,

@@ -41,7 +41,7 @@ impl Waves {
     /// wave the splits are stored by `key` (ties in split order): a spatial key puts splits
     /// near on the surface near in the wave, so a thread that runs a stretch of each wave keeps
     /// working on the same region and finds its vertices in its own cache.
-    pub fn schedule<'a>(
+    pub(crate) fn schedule<'a>(
         n_splits: usize,
         n_values: usize,
         record: impl Fn(usize) -> (&'a [u32], usize),
@@ -110,29 +110,29 @@ impl Waves {
     }
 
     /// Number of waves.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.starts.len().saturating_sub(1)
     }
 
     /// The slot where split `k` is stored.
     #[inline]
-    pub fn slot_of(&self, k: usize) -> usize {
+    pub(crate) fn slot_of(&self, k: usize) -> usize {
         self.slot_of[k] as usize
     }
 
     /// The split stored at `slot`.
     #[inline]
-    pub fn split_at(&self, slot: usize) -> usize {
+    pub(crate) fn split_at(&self, slot: usize) -> usize {
         self.split_at[slot] as usize
     }
 
     /// The slots of wave `w`.
-    pub fn wave(&self, w: usize) -> Range<usize> {
+    pub(crate) fn wave(&self, w: usize) -> Range<usize> {
         self.starts[w] as usize..self.starts[w + 1] as usize
     }
 
     /// Heap memory in bytes.
-    pub fn memory_bytes(&self) -> usize {
+    pub(crate) fn memory_bytes(&self) -> usize {
         4 * (self.split_at.len() + self.slot_of.len() + self.starts.len())
     }
 }
@@ -151,7 +151,7 @@ pub(crate) struct SharedSignal<'a> {
 
 impl<'a> SharedSignal<'a> {
     /// Shares `values` for as long as the view lives.
-    pub fn new(values: &'a mut [DVec3]) -> Self {
+    pub(crate) fn new(values: &'a mut [DVec3]) -> Self {
         const {
             assert!(std::mem::size_of::<DVec3>() == std::mem::size_of::<[AtomicU64; 3]>());
             // Fails to compile where a u64 atomic needs more alignment than an f64 (i686).
@@ -169,7 +169,7 @@ impl<'a> SharedSignal<'a> {
 
     /// The value of vertex `i`.
     #[inline(always)]
-    pub fn get(&self, i: usize) -> DVec3 {
+    pub(crate) fn get(&self, i: usize) -> DVec3 {
         let c = &self.cells[i];
         DVec3::new(
             f64::from_bits(c[0].load(Relaxed)),
@@ -180,13 +180,13 @@ impl<'a> SharedSignal<'a> {
 
     /// A cache hint for vertex `i`'s value (any `i`: it is never dereferenced).
     #[inline(always)]
-    pub fn prefetch(&self, i: usize) {
+    pub(crate) fn prefetch(&self, i: usize) {
         crate::pm::prefetch::prefetch(self.cells.as_ptr().wrapping_add(i));
     }
 
     /// Sets the value of vertex `i`.
     #[inline(always)]
-    pub fn set(&self, i: usize, v: DVec3) {
+    pub(crate) fn set(&self, i: usize, v: DVec3) {
         let c = &self.cells[i];
         c[0].store(v.x.to_bits(), Relaxed);
         c[1].store(v.y.to_bits(), Relaxed);

@@ -2,14 +2,14 @@
 //! with (`--relax`).
 //!
 //! Three operators, one file each:
-//! - [`second_difference`]: [`SecondDifference`], Guskov's non-uniform second-difference
+//! - `second_difference`: [`SecondDifference`], Guskov's non-uniform second-difference
 //!   operator (the default);
-//! - [`mean_curvature`]: [`MeanCurvatureStep`], one damped Jacobi step of implicit
+//! - `mean_curvature`: [`MeanCurvatureStep`], one damped Jacobi step of implicit
 //!   mean-curvature motion (cotangent weights, lumped mass);
-//! - [`normal_adaptive`]: [`NormalAdaptive`], a 1-ring average whose weights fall off with the
+//! - `normal_adaptive`: [`NormalAdaptive`], a 1-ring average whose weights fall off with the
 //!   vertex-normal difference, so it does not average across creases.
 //!
-//! [`spec`] names them: [`RelaxKind`] is the value of `--relax`, [`RelaxationSpec`] the
+//! `spec` names them: [`RelaxKind`] is the value of `--relax`, [`RelaxationSpec`] the
 //! operator with its parameters as a `.pyr` file records it.
 //!
 //! The contract ([`Relaxation`]): an operator is linear in the signal, its weights coming from
@@ -17,7 +17,7 @@
 //! the level's vertices), never from the signal. So it is its stencils — per vertex,
 //! `(neighbour, weight)` pairs with the relaxed value `Σ w · signal[neighbour]` — which the
 //! pyramid records per level and re-filters with, without the mesh. A set of vertices is
-//! relaxed Jacobi style, every new value computed from the old ones ([`relax_by_stencils`]).
+//! relaxed Jacobi style, every new value computed from the old ones (`relax_by_stencils`).
 //! Values live in flat arrays indexed by [`SlotIndex::slot`](crate::mesh::SlotIndex::slot), so
 //! an operator never hashes.
 
@@ -25,15 +25,16 @@ use crate::mesh::{Mesh, VertexId};
 use crate::pm::FlatReplay;
 use glam::DVec3;
 
-pub mod mean_curvature;
-pub mod normal_adaptive;
-pub mod second_difference;
-pub mod spec;
+pub(crate) mod mean_curvature;
+pub(crate) mod normal_adaptive;
+pub(crate) mod second_difference;
+pub(crate) mod spec;
 
-pub use mean_curvature::MeanCurvatureStep;
+pub use mean_curvature::{MeanCurvatureStep, StepWeights};
 pub use normal_adaptive::NormalAdaptive;
 pub use second_difference::SecondDifference;
-pub use spec::{RelaxKind, RelaxationSpec};
+pub use spec::RelaxKind;
+pub use spec::RelaxationSpec;
 
 /// One relaxation of `vertices`, Jacobi style: `out[i]` gets `Σ w · signal[j]` over the
 /// stencil of `vertices[i]` (in stencil order), or keeps its value where it has none.
@@ -41,7 +42,8 @@ pub use spec::{RelaxKind, RelaxationSpec};
 /// * `geometry[v.slot()]` — the parameter geometry the weights come from;
 /// * `signal[v.slot()]` — the values being smoothed (positions or details);
 /// * `out.len() == vertices.len()`.
-pub fn relax_by_stencils<R: Relaxation + ?Sized>(
+#[cfg(test)]
+pub(crate) fn relax_by_stencils<R: Relaxation + ?Sized>(
     op: &R,
     mesh: &Mesh,
     geometry: &[DVec3],

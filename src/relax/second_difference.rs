@@ -36,15 +36,15 @@ use smallvec::SmallVec;
 
 /// Weights of one vertex: `(neighbour, w)` pairs in a fixed, deterministic order (first
 /// appearance while circulating the vertex counter-clockwise).
-pub type Stencil = SmallVec<[(VertexId, f64); 24]>;
+pub(crate) type Stencil = SmallVec<[(VertexId, f64); 24]>;
 
 /// Largest absolute sum of a stencil's weights that is kept (see the [module docs](self)).
 /// Regular grids give 2, real scans stay below 100 in all their levels (bunny, fandisk,
 /// armadillo: below 10; one stencil of the CAD anchor between 100 and 1000); rounding grows by
 /// about this factor per prediction.
-pub const MAX_WEIGHT_SUM: f64 = 1e3;
+pub(crate) const MAX_WEIGHT_SUM: f64 = 1e3;
 
-/// Guskov's second-difference relaxation; see the [module docs](self).
+/// Guskov's second-difference relaxation; see the docs of the `second_difference` module.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SecondDifference {
     /// An edge whose adjacent triangle has `2·area < degenerate_area_ratio · L²` is treated as a
@@ -70,7 +70,7 @@ impl Default for SecondDifference {
 /// divisions per hinge instead of three and five (the hinges were a fifth of the analysis'
 /// samples in `perf`, about half of them waiting for positions, the rest for the divider).
 #[inline]
-pub fn hinge_coefficients(
+pub(crate) fn hinge_coefficients(
     pj1: DVec3,
     pj2: DVec3,
     pl1: DVec3,
@@ -576,7 +576,8 @@ impl RingFlapCache {
 
 /// `Σ w_j signal[j]` in stencil order.
 #[inline]
-pub fn apply_stencil(stencil: &[(VertexId, f64)], signal: &[DVec3]) -> DVec3 {
+#[cfg(test)]
+pub(crate) fn apply_stencil(stencil: &[(VertexId, f64)], signal: &[DVec3]) -> DVec3 {
     stencil
         .iter()
         .fold(DVec3::ZERO, |acc, &(v, w)| acc + w * signal[v.slot()])

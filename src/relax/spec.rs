@@ -24,7 +24,7 @@ pub enum RelaxKind {
 
 impl RelaxKind {
     /// The operator of this kind with its default parameters.
-    pub fn spec(self) -> RelaxationSpec {
+    pub(crate) fn spec(self) -> RelaxationSpec {
         match self {
             RelaxKind::SecondDifference => SecondDifference::default().into(),
             RelaxKind::Mcm => MeanCurvatureStep::default().into(),
@@ -112,7 +112,7 @@ impl RelaxationSpec {
 
     /// `None` when every option is in its valid range, else what is wrong (a file could hold
     /// anything).
-    pub fn invalid(&self) -> Option<&'static str> {
+    pub(crate) fn invalid(&self) -> Option<&'static str> {
         let ok = match *self {
             RelaxationSpec::SecondDifference {
                 degenerate_area_ratio,

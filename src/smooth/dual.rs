@@ -12,7 +12,7 @@ use glam::DVec3;
 
 /// The dual graph: for each face, its (up to) three neighbours and the dual edge lengths.
 #[derive(Clone, Debug, Default)]
-pub struct DualGraph {
+pub(crate) struct DualGraph {
     /// `neighbors[f][k]`: the face across edge `k` of `f`, or [`NO_FACE`].
     pub neighbors: Vec<[u32; 3]>,
     /// `lengths[f][k]`: `|C_f − M_k| + |M_k − C_g|`, with `M_k` the midpoint of edge `k`
@@ -22,7 +22,11 @@ pub struct DualGraph {
 
 impl DualGraph {
     /// The dual graph of `surface` at `positions`, with centroids from `frames`.
-    pub fn new(surface: &FlatSurface, positions: &[DVec3], frames: &FaceFrames) -> DualGraph {
+    pub(crate) fn new(
+        surface: &FlatSurface,
+        positions: &[DVec3],
+        frames: &FaceFrames,
+    ) -> DualGraph {
         let mut lengths = Vec::with_capacity(surface.n_faces());
         for (f, t) in surface.triangles.iter().enumerate() {
             let mut l = [0.0; 3];
@@ -44,13 +48,8 @@ impl DualGraph {
     }
 
     /// Number of dual vertices (faces).
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.neighbors.len()
-    }
-
-    /// True without faces.
-    pub fn is_empty(&self) -> bool {
-        self.neighbors.is_empty()
     }
 }
 
@@ -64,7 +63,7 @@ impl DualGraph {
 /// `rho = 0` gives the isotropic length. The reading of the garbled source is reconstructed;
 /// this function is the one place that fixes how the three terms combine.
 #[inline]
-pub fn edge_weight(length: f64, rho: f64, n_o: DVec3, n_p: DVec3, n_q: DVec3) -> f64 {
+pub(crate) fn edge_weight(length: f64, rho: f64, n_o: DVec3, n_p: DVec3, n_q: DVec3) -> f64 {
     if rho == 0.0 {
         return length;
     }
@@ -76,7 +75,7 @@ pub fn edge_weight(length: f64, rho: f64, n_o: DVec3, n_p: DVec3, n_q: DVec3) ->
 /// Reusable Dijkstra workspace for one thread: distances stamped with a generation counter so
 /// a new search needs no clearing, a binary min-heap, and the result ball.
 #[derive(Clone, Debug, Default)]
-pub struct DualBall {
+pub(crate) struct DualBall {
     /// Tentative distance and the generation that wrote it, side by side for one cache miss.
     dist: Vec<(f64, u32)>,
     generation: u32,
@@ -88,7 +87,7 @@ pub struct DualBall {
 
 impl DualBall {
     /// A workspace for graphs of up to `n_faces` dual vertices.
-    pub fn new(n_faces: usize) -> DualBall {
+    pub(crate) fn new(n_faces: usize) -> DualBall {
         DualBall {
             dist: vec![(0.0, 0); n_faces],
             generation: 0,
@@ -100,7 +99,7 @@ impl DualBall {
     /// Fills [`DualBall::ball`] with every face at distance `< radius` from `source`, in the
     /// metric of [`edge_weight`] with `rho` and the face normals `normals` (isotropic for
     /// `rho = 0`).
-    pub fn grow(
+    pub(crate) fn grow(
         &mut self,
         graph: &DualGraph,
         normals: &[DVec3],

@@ -22,14 +22,14 @@ use rayon::prelude::*;
 
 /// Consecutive small decreases that end the fitting: a single short step (capped, or cut
 /// back by the flip test) is not convergence.
-pub const STALL_ITERATIONS: usize = 5;
+pub(crate) const STALL_ITERATIONS: usize = 5;
 
 /// Chunk length of the fixed-order parallel sums.
 const CHUNK: usize = 4096;
 
 /// Parameters of the optimiser.
 #[derive(Clone, Debug, PartialEq)]
-pub struct FitOptions {
+pub(crate) struct FitOptions {
     /// Most CG iterations.
     pub max_iterations: usize,
     /// Stop when [`STALL_ITERATIONS`] iterations in a row each lower the energy by less than
@@ -69,7 +69,7 @@ pub struct FitReport {
 }
 
 /// The fitting problem: connectivity, targets and the vertex → corner incidence for gradients.
-pub struct Fitting<'a> {
+pub(crate) struct Fitting<'a> {
     surface: &'a FlatSurface,
     targets: &'a [DVec3],
     /// CSR of corners per vertex slot: `corners[starts[v]..starts[v + 1]]` are `(face, k)`
@@ -81,7 +81,7 @@ pub struct Fitting<'a> {
 impl<'a> Fitting<'a> {
     /// The energy of `surface` against the target normals `targets` (one per face; a zero
     /// target leaves its face out of the energy).
-    pub fn new(surface: &'a FlatSurface, targets: &'a [DVec3]) -> Fitting<'a> {
+    pub(crate) fn new(surface: &'a FlatSurface, targets: &'a [DVec3]) -> Fitting<'a> {
         let nv = surface.vertex_slots;
         let mut starts = vec![0u32; nv + 1];
         for t in &surface.triangles {
@@ -109,7 +109,7 @@ impl<'a> Fitting<'a> {
     }
 
     /// `E = Σ_T (2A(T) − N_T·m(T))` over faces with a target.
-    pub fn energy(&self, positions: &[DVec3]) -> f64 {
+    pub(crate) fn energy(&self, positions: &[DVec3]) -> f64 {
         fixed_sum(self.surface.n_faces(), |f| self.face_energy(positions, f))
     }
 
@@ -124,7 +124,7 @@ impl<'a> Fitting<'a> {
     }
 
     /// The gradient of [`Fitting::energy`] into `out` (indexed by vertex slot).
-    pub fn gradient(&self, positions: &[DVec3], out: &mut [DVec3]) {
+    pub(crate) fn gradient(&self, positions: &[DVec3], out: &mut [DVec3]) {
         let tris = &self.surface.triangles;
         out.par_iter_mut()
             .with_min_len(1024)
@@ -150,7 +150,7 @@ impl<'a> Fitting<'a> {
 
     /// Minimises the energy starting from `positions`, which receive the result. Vertices in
     /// no face have zero gradient and stay put. `progress` goes 0 → 1.
-    pub fn minimise(
+    pub(crate) fn minimise(
         &self,
         positions: &mut [DVec3],
         options: &FitOptions,

@@ -10,7 +10,7 @@
 //! its first two derivatives at 4σ, so the kernel is C² with support [−4σ, 4σ].
 
 /// Support radius of the kernel in units of σ: `K_σ(x) = 0` for `|x| ≥ 4σ`.
-pub const SUPPORT: f64 = 4.0;
+pub(crate) const SUPPORT: f64 = 4.0;
 
 /// Where the Gaussian hands over to the quartic tail, in units of σ.
 const JOIN: f64 = 2.0;
@@ -24,7 +24,7 @@ const TAIL: f64 = 1.0 / (16.0 * std::f64::consts::E * std::f64::consts::E);
 /// The normalisation 1/(√(2π)σ) cancels wherever all weights share one σ (the smoothed
 /// normal and its variance), so the filter uses this directly.
 #[inline]
-pub fn shape(t: f64) -> f64 {
+pub(crate) fn shape(t: f64) -> f64 {
     let t = t.abs();
     if t <= JOIN {
         (-0.5 * t * t).exp()
@@ -39,7 +39,8 @@ pub fn shape(t: f64) -> f64 {
 
 /// The normalised kernel `K_σ(x)`. A non-positive or non-finite `sigma` gives 0.
 #[inline]
-pub fn kernel(x: f64, sigma: f64) -> f64 {
+#[cfg(test)]
+pub(crate) fn kernel(x: f64, sigma: f64) -> f64 {
     if !(sigma > 0.0 && sigma.is_finite()) {
         return 0.0;
     }
@@ -53,13 +54,13 @@ const TABLE_DENSITY: usize = 512;
 /// `exp` per neighbour and scale dominates the sweep otherwise. The interpolation error is
 /// below 1e-6 (h²/8 · max|shape''| with h = 1/512), far under the noise being filtered; the
 /// table is exactly 0 from 4 on, so the support is unchanged.
-pub struct ShapeTable {
+pub(crate) struct ShapeTable {
     values: Vec<f64>,
 }
 
 impl ShapeTable {
     /// The table (about 16 kB).
-    pub fn new() -> ShapeTable {
+    pub(crate) fn new() -> ShapeTable {
         let n = SUPPORT as usize * TABLE_DENSITY;
         // One extra sample past the end so interpolation never reads out of bounds.
         let values = (0..=n + 1)
@@ -70,7 +71,7 @@ impl ShapeTable {
 
     /// `shape(t)` for `t ≥ 0` (interpolated; 0 from the support on).
     #[inline]
-    pub fn eval(&self, t: f64) -> f64 {
+    pub(crate) fn eval(&self, t: f64) -> f64 {
         if t.is_nan() || t >= SUPPORT {
             return 0.0;
         }

@@ -42,7 +42,7 @@ use glam::DVec3;
 /// many large steps the flow pinches thin parts into needle triangles whose cotangents (up to
 /// 1e5) make the system so ill-conditioned that the Cholesky residual stalls around 1e-7
 /// (fandisk after 19 steps of 4 L²), and CG cannot polish it further.
-pub const SOLVE_TOLERANCE: f64 = 1e-7;
+pub(crate) const SOLVE_TOLERANCE: f64 = 1e-7;
 
 /// Parameters of [`implicit_mcf`].
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -4,29 +4,31 @@
 //!
 //! - Ohtake–Belyaev–Seidel feature-preserving smoothing ([`denoise`]): an adaptive (or
 //!   anisotropic) Gaussian filter of the face normals followed by fitting the vertices to them.
-//!   One concept per file: [`kernel`], [`dual`] (geodesic neighbourhoods), [`normal_filter`]
-//!   (scale selection and smoothed normals), [`fitting`] (vertex update), [`surface`] (flat
-//!   arrays), [`ohtake`] (the pipeline).
-//! - Baselines from the paper's comparisons (`docs/algorithms.md` §2, §5): [`taubin`] (λ|μ smoothing
-//!   with uniform, inverse-edge-length or cotangent weights) and [`mcf`] (implicit
+//!   One concept per file: `kernel`, `dual` (geodesic neighbourhoods), `normal_filter`
+//!   (scale selection and smoothed normals), `fitting` (vertex update), `surface` (flat
+//!   arrays), `ohtake` (the pipeline).
+//! - Baselines from the paper's comparisons (`docs/algorithms.md` §2, §5): `taubin` (λ|μ smoothing
+//!   with uniform, inverse-edge-length or cotangent weights) and `mcf` (implicit
 //!   mean-curvature flow, Desbrun et al. 1999).
 //!
-//! Measure results with [`crate::metrics::error`] (E_v, E_n, Hausdorff).
+//! Measure results with [`crate::metrics::compare`] (E_v, E_n, Hausdorff).
 
 use crate::mesh::{Mesh, PolygonMesh};
 
-pub mod dual;
-pub mod fitting;
-pub mod kernel;
-pub mod mcf;
-pub mod normal_filter;
-pub mod ohtake;
-pub mod surface;
-pub mod taubin;
+pub(crate) mod dual;
+pub(crate) mod fitting;
+pub(crate) mod kernel;
+pub(crate) mod mcf;
+pub(crate) mod normal_filter;
+pub(crate) mod ohtake;
+pub(crate) mod surface;
+pub(crate) mod taubin;
 #[cfg(test)]
 mod testutil;
 
+pub use fitting::FitReport;
 pub use mcf::{McfOptions, implicit_mcf};
+pub use normal_filter::Variance;
 pub use ohtake::{DenoiseOptions, Denoised, denoise};
 pub use taubin::{TaubinOptions, Weights, taubin_smoothing};
 

@@ -17,11 +17,11 @@ use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Most scales a grid may have (the sweep keeps its accumulators on the stack).
-pub const MAX_SCALES: usize = 64;
+pub(crate) const MAX_SCALES: usize = 64;
 
 /// Scale selection parameters in absolute units (lengths, length²).
 #[derive(Clone, Debug, PartialEq)]
-pub struct ScaleGrid {
+pub(crate) struct ScaleGrid {
     /// The candidate σ, ascending, positive; at most [`MAX_SCALES`].
     pub sigmas: Vec<f64>,
     /// ε of rule (5), in length² (the penalty ε/σ² is dimensionless like the variance).
@@ -32,7 +32,7 @@ pub struct ScaleGrid {
     pub variance: Variance,
 }
 
-/// The variance estimate of rule (5); see [`local_variance`].
+/// The variance estimate of rule (5); see `local_variance`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Variance {
     /// The weighted variance `Σ w ‖m − n‖² / Σ w` as reconstructed from the paper.
@@ -48,7 +48,7 @@ pub enum Variance {
 
 /// The filtered normal field.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct FilteredNormals {
+pub(crate) struct FilteredNormals {
     /// m(T), unit length; zero for a face whose neighbourhood carries no weight at any scale
     /// (an isolated degenerate triangle), which the fitting then leaves out.
     pub normals: Vec<DVec3>,
@@ -65,7 +65,7 @@ pub struct FilteredNormals {
 /// the mean is undefined, or for the unbiased estimate when a single face carries all the
 /// weight (no spread can be estimated).
 #[inline]
-pub fn local_variance(
+pub(crate) fn local_variance(
     kind: Variance,
     weight_sum: f64,
     weight_sq_sum: f64,
@@ -91,7 +91,7 @@ pub fn local_variance(
 ///
 /// Runs in parallel over faces; every face's result depends only on the inputs, so the output
 /// is identical for any number of threads. `progress` goes 0 → 1.
-pub fn filter_normals(
+pub(crate) fn filter_normals(
     graph: &DualGraph,
     normals: &[DVec3],
     areas: &[f64],

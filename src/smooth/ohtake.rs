@@ -79,7 +79,7 @@ impl DenoiseOptions {
     }
 
     /// The σ grid in units of L.
-    pub fn sigmas(&self) -> Vec<f64> {
+    pub(crate) fn sigmas(&self) -> Vec<f64> {
         if self.scales <= 1 {
             return vec![self.sigma_max];
         }

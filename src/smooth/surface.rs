@@ -9,11 +9,11 @@ use crate::mesh::{Mesh, SlotIndex};
 use glam::DVec3;
 
 /// "No neighbour" in [`FlatSurface::adjacency`].
-pub const NO_FACE: u32 = u32::MAX;
+pub(crate) const NO_FACE: u32 = u32::MAX;
 
 /// Connectivity of a triangle mesh as flat arrays.
 #[derive(Clone, Debug, Default)]
-pub struct FlatSurface {
+pub(crate) struct FlatSurface {
     /// Vertex slots of each triangle, counter-clockwise.
     pub triangles: Vec<[u32; 3]>,
     /// `adjacency[f][k]`: the face across edge `k` (from corner `k` to corner `k+1`) of `f`,
@@ -26,7 +26,7 @@ pub struct FlatSurface {
 impl FlatSurface {
     /// Flattens `mesh`. Edges with a single face (boundaries, including the ones the builder
     /// cut when repairing non-manifold input) get no neighbour, so nothing crosses them.
-    pub fn new(mesh: &Mesh) -> FlatSurface {
+    pub(crate) fn new(mesh: &Mesh) -> FlatSurface {
         let face_slots = mesh.faces().map(|f| f.slot() + 1).max().unwrap_or(0);
         let mut index = vec![NO_FACE; face_slots];
         for (i, f) in mesh.faces().enumerate() {
@@ -53,7 +53,7 @@ impl FlatSurface {
     /// Renumbers the faces along a Morton (Z-order) curve of their centroids at `positions`,
     /// so faces near on the surface are near in memory: the Dijkstra balls then stay in cache.
     /// Ties (equal codes) keep the previous order, so the result is deterministic.
-    pub fn reorder_spatially(&mut self, positions: &[DVec3]) {
+    pub(crate) fn reorder_spatially(&mut self, positions: &[DVec3]) {
         let n = self.n_faces();
         if n < 2 {
             return;
@@ -97,13 +97,13 @@ impl FlatSurface {
     }
 
     /// Number of triangles.
-    pub fn n_faces(&self) -> usize {
+    pub(crate) fn n_faces(&self) -> usize {
         self.triangles.len()
     }
 
     /// Mean length of the triangles' edges (interior edges counted twice, which weights
     /// them like the faces they bound); 0 without faces.
-    pub fn mean_edge_length(&self, positions: &[DVec3]) -> f64 {
+    pub(crate) fn mean_edge_length(&self, positions: &[DVec3]) -> f64 {
         let mut sum = 0.0;
         for t in &self.triangles {
             for k in 0..3 {
@@ -119,13 +119,13 @@ impl FlatSurface {
 
     /// Unnormalised normal `(P1 − P0) × (P2 − P0)` of face `f` (twice the area, along n).
     #[inline]
-    pub fn area_vector(&self, positions: &[DVec3], f: usize) -> DVec3 {
+    pub(crate) fn area_vector(&self, positions: &[DVec3], f: usize) -> DVec3 {
         let [a, b, c] = self.triangles[f].map(|v| positions[v as usize]);
         (b - a).cross(c - a)
     }
 
     /// Per-face unit normals, areas and centroids at `positions`; see [`FaceFrames`].
-    pub fn face_frames(&self, positions: &[DVec3]) -> FaceFrames {
+    pub(crate) fn face_frames(&self, positions: &[DVec3]) -> FaceFrames {
         let n = self.n_faces();
         let mut frames = FaceFrames {
             normals: Vec::with_capacity(n),
@@ -147,7 +147,7 @@ impl FlatSurface {
 /// representable (zero area, or so small that normalising would overflow) gets the zero
 /// normal and zero area: it then carries no weight anywhere and never produces a NaN.
 #[inline]
-pub fn unit_normal(area_vector: DVec3) -> (DVec3, f64) {
+pub(crate) fn unit_normal(area_vector: DVec3) -> (DVec3, f64) {
     let len = area_vector.length();
     if len > f64::MIN_POSITIVE && len.is_finite() {
         (area_vector / len, 0.5 * len)
@@ -158,7 +158,7 @@ pub fn unit_normal(area_vector: DVec3) -> (DVec3, f64) {
 
 /// Per-face geometry, indexed like [`FlatSurface::triangles`].
 #[derive(Clone, Debug, Default)]
-pub struct FaceFrames {
+pub(crate) struct FaceFrames {
     /// Unit normals (zero for a degenerate face).
     pub normals: Vec<DVec3>,
     /// Areas (zero for a degenerate face).

@@ -36,7 +36,7 @@ pub fn noisy(mesh: &Mesh, amplitude: f64, seed: u64) -> Mesh {
 }
 
 /// Mean and standard deviation of the distance to the origin.
-pub fn radial_stats(x: &[DVec3]) -> (f64, f64) {
+pub(crate) fn radial_stats(x: &[DVec3]) -> (f64, f64) {
     let n = x.len() as f64;
     let mean = x.iter().map(|p| p.length()).sum::<f64>() / n;
     let var = x.iter().map(|p| (p.length() - mean).powi(2)).sum::<f64>() / n;

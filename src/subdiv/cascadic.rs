@@ -59,7 +59,7 @@ pub struct LevelReport {
 
 /// The cascadic schedule `m_l = ⌈m_{l_max}·β^{l_max−l}⌉` for `l = 1..=levels`, each capped
 /// at `cap`.
-pub fn schedule(levels: usize, finest_steps: usize, beta: f64, cap: usize) -> Vec<usize> {
+pub(crate) fn schedule(levels: usize, finest_steps: usize, beta: f64, cap: usize) -> Vec<usize> {
     (1..=levels)
         .map(|l| {
             let m = finest_steps as f64 * beta.powi((levels - l) as i32);
@@ -74,7 +74,7 @@ pub fn schedule(levels: usize, finest_steps: usize, beta: f64, cap: usize) -> Ve
 }
 
 /// Mean length of the edges at each vertex (0 for an isolated vertex), indexed by slot.
-pub fn vertex_grid_size(mesh: &Mesh) -> Vec<f64> {
+pub(crate) fn vertex_grid_size(mesh: &Mesh) -> Vec<f64> {
     let mut h = vec![0.0; mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0)];
     for v in mesh.vertices() {
         let (s, n) = mesh

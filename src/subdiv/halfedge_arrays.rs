@@ -46,7 +46,7 @@ pub(crate) struct HalfedgeArrays {
 impl HalfedgeArrays {
     /// The connectivity of `mesh`, elements numbered by their rank in slot order (which is the
     /// slot itself for a dense mesh, as [`super::compact`] makes).
-    pub fn from_mesh(mesh: &Mesh) -> Self {
+    pub(crate) fn from_mesh(mesh: &Mesh) -> Self {
         let rank = |slots: &mut dyn Iterator<Item = usize>| {
             let slots: Vec<usize> = slots.collect();
             let mut rank = vec![NONE; slots.iter().max().map_or(0, |m| m + 1)];
@@ -82,7 +82,7 @@ impl HalfedgeArrays {
 
     /// The slotmap mesh with this connectivity and `positions` (one per vertex); element `i`
     /// here is slot `i` there.
-    pub fn to_mesh(&self, positions: &[DVec3]) -> Mesh {
+    pub(crate) fn to_mesh(&self, positions: &[DVec3]) -> Mesh {
         use crate::mesh::halfedge::{FaceRecord, HalfedgeRecord, VertexRecord};
         debug_assert_eq!(positions.len(), self.n_vertices());
         let mut mesh = Mesh::new();
@@ -128,36 +128,36 @@ impl HalfedgeArrays {
     }
 
     /// Number of vertices (isolated ones included).
-    pub fn n_vertices(&self) -> usize {
+    pub(crate) fn n_vertices(&self) -> usize {
         self.vertex_halfedge.len()
     }
 
     /// Number of triangles.
-    pub fn n_faces(&self) -> usize {
+    pub(crate) fn n_faces(&self) -> usize {
         self.face_halfedge.len()
     }
 
     /// The half-edge `h`.
     #[inline]
-    pub fn get(&self, h: u32) -> Halfedge {
+    pub(crate) fn get(&self, h: u32) -> Halfedge {
         self.halfedges[h as usize]
     }
 
     /// The vertex `h` leaves.
     #[inline]
-    pub fn from(&self, h: u32) -> u32 {
+    pub(crate) fn from(&self, h: u32) -> u32 {
         self.get(self.get(h).twin).to
     }
 
     /// True if `h` has no face.
     #[inline]
-    pub fn is_boundary(&self, h: u32) -> bool {
+    pub(crate) fn is_boundary(&self, h: u32) -> bool {
         self.get(h).face == NONE
     }
 
     /// The three half-edges of face `t`, from its stored one (as [`Mesh::face_halfedges`]).
     #[inline]
-    pub fn face_halfedges(&self, t: usize) -> [u32; 3] {
+    pub(crate) fn face_halfedges(&self, t: usize) -> [u32; 3] {
         let h = self.face_halfedge[t];
         let e = self.get(h);
         [h, e.next, e.prev]
@@ -165,7 +165,7 @@ impl HalfedgeArrays {
 
     /// The three vertices of face `t` (as [`Mesh::face_vertices`]).
     #[inline]
-    pub fn face_vertices(&self, t: usize) -> [u32; 3] {
+    pub(crate) fn face_vertices(&self, t: usize) -> [u32; 3] {
         let h = self.face_halfedge[t];
         let e = self.get(h);
         [self.get(e.prev).to, e.to, self.get(e.next).to]
@@ -173,7 +173,7 @@ impl HalfedgeArrays {
 
     /// Every half-edge's corner: `3t + k` for the `k`-th of face `t`'s
     /// [`Self::face_halfedges`], [`NONE`] for a boundary half-edge.
-    pub fn corners(&self) -> Vec<u32> {
+    pub(crate) fn corners(&self) -> Vec<u32> {
         let mut corner = vec![NONE; self.halfedges.len()];
         for t in 0..self.n_faces() {
             for (k, h) in self.face_halfedges(t).into_iter().enumerate() {
@@ -185,7 +185,7 @@ impl HalfedgeArrays {
 
     /// One half-edge per edge, the one smaller than its twin, in index order (as
     /// [`Mesh::edges`]).
-    pub fn edges(&self) -> impl Iterator<Item = u32> + '_ {
+    pub(crate) fn edges(&self) -> impl Iterator<Item = u32> + '_ {
         self.halfedges
             .iter()
             .enumerate()
@@ -194,7 +194,7 @@ impl HalfedgeArrays {
     }
 
     /// The out-going half-edges of vertex `v`, in [`Mesh::outgoing`]'s order.
-    pub fn outgoing(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
+    pub(crate) fn outgoing(&self, v: u32) -> impl Iterator<Item = u32> + '_ {
         let start = self.vertex_halfedge[v as usize];
         let mut current = (start != NONE).then_some(start);
         std::iter::from_fn(move || {

@@ -16,7 +16,7 @@ use crate::progress::Progress;
 use glam::DVec3;
 
 /// Loop's weight β for an interior vertex of valence `n`.
-pub fn loop_beta(n: usize) -> f64 {
+pub(crate) fn loop_beta(n: usize) -> f64 {
     let n = n as f64;
     let c = 0.375 + 0.25 * (2.0 * std::f64::consts::PI / n).cos();
     (0.625 - c * c) / n

@@ -5,8 +5,8 @@
 //! - [`refine`]: 1-to-4 quadrisection and conforming newest-vertex bisection, each giving a new
 //!   [`Mesh`] plus the [`Prolongation`] (which coarse vertices every new vertex interpolates);
 //!   the level loops run quadrisection on flat half-edge arrays (`halfedge_arrays`) instead;
-//! - [`loop_scheme`]: Loop's scheme with the usual boundary rules;
-//! - [`cascadic`]: the level loop `(M + αL) x_k = M · I x_0` with damped Jacobi, CG or exact
+//! - `loop_scheme`: Loop's scheme with the usual boundary rules;
+//! - `cascadic`: the level loop `(M + αL) x_k = M · I x_0` with damped Jacobi, CG or exact
 //!   solves, the cascadic schedule and the local filter-width expansion; the lumped mass,
 //!   cotangent stiffness (on the prolonged surface) and solvers are [`crate::numerics`].
 //!
@@ -16,14 +16,16 @@
 //! The output is a *new* mesh: the coarse vertices come first (same order as the input's
 //! vertex slots), new vertices follow. No attributes are carried over.
 
-pub mod cascadic;
+pub(crate) mod cascadic;
 mod halfedge_arrays;
-pub mod loop_scheme;
+pub(crate) mod loop_scheme;
 pub mod refine;
 
-pub use cascadic::{LevelReport, subdivide_mcm};
+pub use cascadic::LevelReport;
+pub use cascadic::subdivide_mcm;
 pub use loop_scheme::{loop_step, subdivide_loop};
-pub use refine::{Marking, Prolongation, Refined};
+pub use refine::Prolongation;
+pub use refine::{Marking, Refined};
 
 use crate::mesh::{Mesh, PolygonMesh};
 use crate::progress::Progress;
@@ -85,7 +87,7 @@ pub struct SubdivOptions {
     /// Smoothing steps on the finest level, `m_{l_max}` (default 2).
     pub finest_steps: usize,
     /// Growth factor `β` of the cascadic schedule `m_l = ⌈m_{l_max}·β^{l_max−l}⌉`; `None`
-    /// picks [`default_beta`] (2√2 for CG with quadrisection).
+    /// picks `default_beta` (2√2 for CG with quadrisection).
     pub beta: Option<f64>,
     /// Upper bound on `m_l` for any level, so that huge `levels` cannot ask for an absurd
     /// number of coarse-level steps (default 10 000).
@@ -134,7 +136,7 @@ impl Default for SubdivOptions {
 /// | Jacobi | 4 | 2 |
 ///
 /// The exact solver has no schedule; it returns the CG value.
-pub fn default_beta(solver: Solver, refinement: Refinement) -> f64 {
+pub(crate) fn default_beta(solver: Solver, refinement: Refinement) -> f64 {
     match (solver, refinement) {
         (Solver::Jacobi, Refinement::Quadrisection) => 4.0,
         (Solver::Jacobi, Refinement::Bisection) => 2.0,
@@ -273,7 +275,7 @@ impl SubdivOptions {
     }
 
     /// Faces per input face after all levels (4^levels or 2^levels), saturating.
-    pub fn face_factor(&self) -> usize {
+    pub(crate) fn face_factor(&self) -> usize {
         let per_level: usize = match self.refinement {
             Refinement::Quadrisection => 4,
             Refinement::Bisection => 2,

@@ -24,17 +24,19 @@ pub struct Prolongation {
 
 impl Prolongation {
     /// The two coarse parents of every fine vertex (equal for a copy).
-    pub fn parents(&self) -> &[[u32; 2]] {
+    #[cfg(test)]
+    pub(crate) fn parents(&self) -> &[[u32; 2]] {
         &self.parents
     }
 
     /// Number of fine vertices.
-    pub fn n_fine(&self) -> usize {
+    #[cfg(test)]
+    pub(crate) fn n_fine(&self) -> usize {
         self.parents.len()
     }
 
     /// Interpolates coarse values onto the fine vertices.
-    pub fn apply<T>(&self, coarse: &[T]) -> Vec<T>
+    pub(crate) fn apply<T>(&self, coarse: &[T]) -> Vec<T>
     where
         T: Copy + Add<Output = T> + Mul<f64, Output = T>,
     {
@@ -68,13 +70,6 @@ pub struct Refined {
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Marking {
     newest: Vec<u8>,
-}
-
-impl Marking {
-    /// Local index of the newest vertex of each face.
-    pub fn newest(&self) -> &[u8] {
-        &self.newest
-    }
 }
 
 /// Connectivity of a quadrisection, shared by [`quadrisect`] and Loop's scheme: fine vertex
@@ -421,7 +416,7 @@ pub(crate) fn quadrisection_parts(
 /// always have one (Petersen: the dual graph is cubic and bridgeless); an open mesh without
 /// one gives [`SubdivError::NoCompatibleMarking`]. Once compatible, newest-vertex bisection
 /// keeps the marking compatible on every later level.
-pub fn initial_marking(mesh: &Mesh) -> Result<Marking, SubdivError> {
+pub(crate) fn initial_marking(mesh: &Mesh) -> Result<Marking, SubdivError> {
     let faces: Vec<_> = mesh.faces().collect();
     let nf = faces.len();
     let mut face_index = vec![NONE; slot_bound(faces.iter().map(|f| f.slot()))];
@@ -672,7 +667,7 @@ pub(crate) struct BisectionLevel {
 
 impl BisectionLevel {
     /// The level of `mesh` (elements numbered by slot order) with `marking`.
-    pub fn from_mesh(mesh: &Mesh, marking: &Marking) -> Result<Self, SubdivError> {
+    pub(crate) fn from_mesh(mesh: &Mesh, marking: &Marking) -> Result<Self, SubdivError> {
         let a = HalfedgeArrays::from_mesh(mesh);
         let nf = a.n_faces();
         if marking.newest.len() != nf {

@@ -10,7 +10,7 @@ use super::internal;
 /// The same hierarchy with new original positions (for saving an edit): `positions` are the
 /// new positions of the input's vertices; split copies follow their source vertex. When the
 /// input stores f32 positions they are rounded to f32 first, as writing a mesh file would.
-pub fn with_positions(
+pub(crate) fn with_positions(
     input: &PolygonMesh,
     source: &SourceMap,
     pm: &ProgressiveMesh,

@@ -48,7 +48,7 @@ mod write_body;
 mod write_header;
 
 /// Reads a PLY file (any encoding).
-pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
+pub(crate) fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     let header = parse_header(bytes)?;
     let nv = vertex_count(&header)?;
     let mut body = BodyReader::new(bytes, &header, nv);
@@ -62,7 +62,7 @@ pub fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
 }
 
 /// Writes a PLY file.
-pub fn write(mesh: &PolygonMesh, encoding: PlyEncoding) -> Result<Vec<u8>, IoError> {
+pub(crate) fn write(mesh: &PolygonMesh, encoding: PlyEncoding) -> Result<Vec<u8>, IoError> {
     validate(mesh)?;
     let layout = Layout::of(mesh)?;
     let header = header_text(mesh, encoding, &layout);
