@@ -7,6 +7,17 @@ use super::write_header::Layout;
 use crate::io::text;
 use crate::mesh::{AttributeData, ElementProperty, ListProperty, PolygonMesh, ScalarType};
 
+/// Appends the bytes of the number `$v` to `$out`, big endian when `$big`.
+macro_rules! put_endian {
+    ($out:expr, $big:expr, $v:expr) => {
+        if $big {
+            $out.extend_from_slice(&$v.to_be_bytes())
+        } else {
+            $out.extend_from_slice(&$v.to_le_bytes())
+        }
+    };
+}
+
 /// Appends the ASCII body of `mesh` to its header `s`.
 pub(super) fn ascii_body(mut s: String, mesh: &PolygonMesh, layout: &Layout) -> String {
     push_ascii_vertices(&mut s, mesh, layout);
@@ -165,11 +176,7 @@ fn put_list_bin(out: &mut Vec<u8>, l: &ListProperty, r: usize, big: bool) {
 fn put_bin(out: &mut Vec<u8>, col: &AttributeData, i: usize, big: bool) {
     macro_rules! put {
         ($v:expr) => {
-            if big {
-                out.extend_from_slice(&$v.to_be_bytes())
-            } else {
-                out.extend_from_slice(&$v.to_le_bytes())
-            }
+            put_endian!(out, big, $v)
         };
     }
     match col {
@@ -199,11 +206,7 @@ fn put_txt(out: &mut String, col: &AttributeData, i: usize) {
 fn put_num_bin(out: &mut Vec<u8>, x: f64, t: ScalarType, big: bool) {
     macro_rules! put {
         ($v:expr) => {
-            if big {
-                out.extend_from_slice(&$v.to_be_bytes())
-            } else {
-                out.extend_from_slice(&$v.to_le_bytes())
-            }
+            put_endian!(out, big, $v)
         };
     }
     match t {
