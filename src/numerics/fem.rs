@@ -245,16 +245,45 @@ pub(crate) fn stiffness_from_weights(
     n: usize,
     tri_weights: &[[f64; 4]],
 ) -> SymmetricCsr {
-    use rayon::prelude::*;
-    use std::sync::atomic::{AtomicU64, Ordering};
-    // Every directed entry is the key `col << 32 | 3t + j`: its column and the corner whose
-    // weight it takes, so sorting a row orders it by column and, within a column, by
-    // triangle — the order the terms are summed in.
     let chunk = triangles
         .len()
         .div_ceil(rayon::current_num_threads().max(1))
         .max(PARALLEL_ROWS);
-    let mut cursors: Vec<Vec<u32>> = triangles
+    let mut cursors = count_chunk_rows(triangles, n, chunk);
+    let fill = place_chunk_cursors(&mut cursors, n);
+    let mut keys = scatter_edge_keys(triangles, chunk, cursors, fill[n]);
+    let row_len = sort_rows(&fill, &mut keys);
+    let row_start = prefix_row_starts(&row_len);
+    drop(row_len);
+    let (col, val) = sum_rows(&keys, &fill, &row_start, tri_weights);
+    SymmetricCsr {
+        row_start,
+        col,
+        val,
+    }
+}
+
+// Every directed entry is the key `col << 32 | 3t + j`: its column and the corner whose
+// weight it takes, so sorting a row orders it by column and, within a column, by
+// triangle — the order the terms are summed in.
+
+/// The column of an edge key.
+#[inline]
+fn key_column(key: u64) -> u32 {
+    (key >> 32) as u32
+}
+
+/// The weight of the corner an edge key takes its term from.
+#[inline]
+fn key_weight(tri_weights: &[[f64; 4]], key: u64) -> f64 {
+    let corner = (key & 0xffff_ffff) as usize;
+    tri_weights[corner / 3][corner % 3]
+}
+
+/// Per chunk of `chunk` triangles, how many directed entries each row receives from it.
+fn count_chunk_rows(triangles: &[[u32; 3]], n: usize, chunk: usize) -> Vec<Vec<u32>> {
+    use rayon::prelude::*;
+    triangles
         .par_chunks(chunk)
         .map(|ch| {
             let mut h = vec![0u32; n];
@@ -265,19 +294,37 @@ pub(crate) fn stiffness_from_weights(
             }
             h
         })
-        .collect();
+        .collect()
+}
+
+/// Turns the chunks' counts into the slot each chunk writes its next entry of a row to
+/// (rows in order, chunks in order within a row), and returns every row's first slot, with
+/// the total at `[n]`.
+fn place_chunk_cursors(cursors: &mut [Vec<u32>], n: usize) -> Vec<u32> {
     let mut fill = vec![0u32; n + 1];
     let mut at = 0u32;
     for i in 0..n {
         fill[i] = at;
-        for h in &mut cursors {
+        for h in cursors.iter_mut() {
             let count = h[i];
             h[i] = at;
             at += count;
         }
     }
     fill[n] = at;
-    let keys: Vec<AtomicU64> = (0..at as usize)
+    fill
+}
+
+/// Writes both directed keys of every triangle edge at the chunks' cursors.
+fn scatter_edge_keys(
+    triangles: &[[u32; 3]],
+    chunk: usize,
+    mut cursors: Vec<Vec<u32>>,
+    total: u32,
+) -> Vec<u64> {
+    use rayon::prelude::*;
+    use std::sync::atomic::{AtomicU64, Ordering};
+    let keys: Vec<AtomicU64> = (0..total as usize)
         .into_par_iter()
         .with_min_len(PARALLEL_ROWS)
         .map(|_| AtomicU64::new(0))
@@ -303,38 +350,76 @@ pub(crate) fn stiffness_from_weights(
             }
         });
     drop(cursors);
-    let mut keys: Vec<u64> = keys.into_iter().map(AtomicU64::into_inner).collect();
-    let weight = |key: u64| {
-        let corner = (key & 0xffff_ffff) as usize;
-        tri_weights[corner / 3][corner % 3]
-    };
-    let column = |key: u64| (key >> 32) as u32;
-    // Sort every row and count its distinct columns, whole rows per task.
-    let fill_ref = &fill;
-    let row_len: Vec<u32> = split_rows(&fill, &mut keys)
+    keys.into_iter().map(AtomicU64::into_inner).collect()
+}
+
+/// Sorts every row's keys and returns its length in the matrix (the diagonal and one entry
+/// per distinct column), whole rows per task.
+fn sort_rows(fill: &[u32], keys: &mut [u64]) -> Vec<u32> {
+    use rayon::prelude::*;
+    split_rows(fill, keys)
         .into_par_iter()
         .flat_map_iter(|(first, last, piece)| {
-            let fill = fill_ref;
             let base = fill[first] as usize;
             (first..last).map(move |i| {
                 let row = &mut piece[fill[i] as usize - base..fill[i + 1] as usize - base];
                 row.sort_unstable();
-                1 + row.chunk_by(|a, b| column(*a) == column(*b)).count() as u32
+                1 + row
+                    .chunk_by(|a, b| key_column(*a) == key_column(*b))
+                    .count() as u32
             })
         })
-        .collect();
-    let mut row_start = Vec::with_capacity(n + 1);
+        .collect()
+}
+
+/// The CSR row starts from the row lengths.
+fn prefix_row_starts(row_len: &[u32]) -> Vec<u32> {
+    let mut row_start = Vec::with_capacity(row_len.len() + 1);
     row_start.push(0u32);
     let mut at = 0u32;
-    for &l in &row_len {
+    for &l in row_len {
         at += l;
         row_start.push(at);
     }
-    drop(row_len);
+    row_start
+}
+
+/// The matrix's columns and values: per row the diagonal, then each column's terms summed
+/// in triangle order, in chunks of `ROW_CHUNK` rows.
+fn sum_rows(
+    keys: &[u64],
+    fill: &[u32],
+    row_start: &[u32],
+    tri_weights: &[[f64; 4]],
+) -> (Vec<u32>, Vec<f64>) {
+    use rayon::prelude::*;
+    let n = row_start.len() - 1;
+    let at = row_start[n];
     let mut col = vec![0u32; at as usize];
     let mut val = vec![0.0f64; at as usize];
+    split_csr_rows(row_start, &mut col, &mut val)
+        .into_par_iter()
+        .with_min_len(PARALLEL_ROWS / ROW_CHUNK)
+        .for_each(|(first, last, col, val)| {
+            let mut at = 0;
+            for i in first..last {
+                let row = &keys[fill[i] as usize..fill[i + 1] as usize];
+                at += sum_row(i, row, tri_weights, &mut col[at..], &mut val[at..]);
+            }
+        });
+    (col, val)
+}
+
+/// Splits `col` and `val` at row boundaries (`row_start`) into pieces of `ROW_CHUNK` rows,
+/// as `(first row, end row, col, val)`.
+fn split_csr_rows<'a>(
+    row_start: &[u32],
+    col: &'a mut [u32],
+    val: &'a mut [f64],
+) -> Vec<(usize, usize, &'a mut [u32], &'a mut [f64])> {
+    let n = row_start.len() - 1;
     let mut pieces = Vec::with_capacity(n / ROW_CHUNK + 1);
-    let (mut col_rest, mut val_rest) = (&mut col[..], &mut val[..]);
+    let (mut col_rest, mut val_rest) = (col, val);
     for first in (0..n).step_by(ROW_CHUNK) {
         let last = (first + ROW_CHUNK).min(n);
         let len = (row_start[last] - row_start[first]) as usize;
@@ -344,36 +429,34 @@ pub(crate) fn stiffness_from_weights(
         (col_rest, val_rest) = (cr, vr);
     }
     pieces
-        .into_par_iter()
-        .with_min_len(PARALLEL_ROWS / ROW_CHUNK)
-        .for_each(|(first, last, col, val)| {
-            let mut at = 0;
-            for i in first..last {
-                let row = &keys[fill[i] as usize..fill[i + 1] as usize];
-                let diag_at = at;
-                col[at] = i as u32;
-                at += 1;
-                let mut diag = 0.0;
-                // An interior edge appears twice (once per triangle), summed in triangle
-                // order.
-                for run in row.chunk_by(|a, b| column(*a) == column(*b)) {
-                    let mut w = weight(run[0]);
-                    for &e in &run[1..] {
-                        w += weight(e);
-                    }
-                    col[at] = column(run[0]);
-                    val[at] = -w;
-                    at += 1;
-                    diag += w;
-                }
-                val[diag_at] = diag;
-            }
-        });
-    SymmetricCsr {
-        row_start,
-        col,
-        val,
+}
+
+/// Writes row `i` from its sorted keys at the start of `col` and `val`; returns how many
+/// entries it wrote.
+#[inline]
+fn sum_row(
+    i: usize,
+    row: &[u64],
+    tri_weights: &[[f64; 4]],
+    col: &mut [u32],
+    val: &mut [f64],
+) -> usize {
+    col[0] = i as u32;
+    let mut at = 1;
+    let mut diag = 0.0;
+    // An interior edge appears twice (once per triangle), summed in triangle order.
+    for run in row.chunk_by(|a, b| key_column(*a) == key_column(*b)) {
+        let mut w = key_weight(tri_weights, run[0]);
+        for &e in &run[1..] {
+            w += key_weight(tri_weights, e);
+        }
+        col[at] = key_column(run[0]);
+        val[at] = -w;
+        at += 1;
+        diag += w;
     }
+    val[0] = diag;
+    at
 }
 
 /// Splits `keys` at row boundaries (`fill`) into pieces of about `ROW_CHUNK` rows, as
