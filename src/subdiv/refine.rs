@@ -227,48 +227,94 @@ pub(crate) fn quadrisection_stiffness(
     if tri_weights.len() != 4 * mesh.n_faces() {
         return None;
     }
-    // Face index t and position k (h = u_k → u_{k+1}) of every face half-edge, as 3t + k.
-    let corner = mesh.corners();
-    let w = |tri: usize, j: usize| tri_weights[tri][j];
-    let nv = topo.n_coarse;
-    let n = nv + topo.edges.len();
+    let rings = FineRings {
+        mesh,
+        topo,
+        corner: mesh.corners(),
+        tri_weights,
+    };
+    let n = topo.n_coarse + topo.edges.len();
+    let parallel = n >= 2 * STIFFNESS_CHUNK;
+    let row_start = rings.row_starts(n, parallel)?;
+    let (col, val) = rings.fill_rows(&row_start, parallel)?;
+    Some(crate::numerics::fem::SymmetricCsr {
+        row_start,
+        col,
+        val,
+    })
+}
+
+/// Rows per parallel task of [`quadrisection_stiffness`].
+const STIFFNESS_CHUNK: usize = 4096;
+
+/// The fine stiffness rows of a quadrisection, read off the coarse mesh.
+struct FineRings<'a> {
+    mesh: &'a HalfedgeArrays,
+    topo: &'a QuadTopology,
+    /// Face index t and position k (h = u_k → u_{k+1}) of every face half-edge, as 3t + k.
+    corner: Vec<u32>,
+    tri_weights: &'a [[f64; 4]],
+}
+
+impl FineRings<'_> {
+    #[inline]
+    fn w(&self, tri: usize, j: usize) -> f64 {
+        self.tri_weights[tri][j]
+    }
+
     // The fine edge from coarse vertex u_k (or u_{k+1}) to the midpoint of side s = h_k of
     // face t: corner triangle 4t+k, edge (0,1), and corner triangle 4t+k+1, edge (2,0).
     // `None` for a boundary half-edge (no face, no term).
-    let at_origin = |c: u32| {
+
+    #[inline]
+    fn at_origin(&self, c: u32) -> Option<f64> {
         let (t, k) = (c as usize / 3, c as usize % 3);
-        (c != NONE).then(|| w(4 * t + k, 0))
-    };
-    let at_head = |c: u32| {
+        (c != NONE).then(|| self.w(4 * t + k, 0))
+    }
+
+    #[inline]
+    fn at_head(&self, c: u32) -> Option<f64> {
         let (t, k) = (c as usize / 3, c as usize % 3);
-        (c != NONE).then(|| w(4 * t + (k + 1) % 3, 2))
-    };
-    let sum = |p: Option<f64>, q: Option<f64>| match (p, q) {
-        (Some(p), Some(q)) => p + q,
-        (Some(p), None) | (None, Some(p)) => p,
-        (None, None) => 0.0,
-    };
-    // Row i's off-diagonal terms, unsorted.
-    let ring_of = |i: usize, ring: &mut Vec<(u32, f64)>| {
+        (c != NONE).then(|| self.w(4 * t + (k + 1) % 3, 2))
+    }
+
+    /// Row i's off-diagonal terms, unsorted.
+    #[inline]
+    fn ring_of(&self, i: usize, ring: &mut Vec<(u32, f64)>) {
         ring.clear();
-        if i < nv {
-            // A coarse vertex: one fine edge to the midpoint of each coarse edge around it;
-            // it is the origin of each out-going h and the head of its twin.
-            for h in mesh.outgoing(i as u32) {
-                let (own, twin) = (corner[h as usize], corner[mesh.get(h).twin as usize]);
-                ring.push((topo.mid[h as usize], sum(at_origin(own), at_head(twin))));
-            }
-            return;
+        if i < self.topo.n_coarse {
+            self.coarse_ring(i, ring);
+        } else {
+            self.midpoint_ring(i, ring);
         }
-        // A midpoint: the edge's two ends, and the two other midpoints of each adjacent face.
-        let h = topo.edges[i - nv];
+    }
+
+    /// A coarse vertex: one fine edge to the midpoint of each coarse edge around it; it is
+    /// the origin of each out-going h and the head of its twin.
+    #[inline]
+    fn coarse_ring(&self, i: usize, ring: &mut Vec<(u32, f64)>) {
+        let (mesh, corner) = (self.mesh, &self.corner);
+        for h in mesh.outgoing(i as u32) {
+            let (own, twin) = (corner[h as usize], corner[mesh.get(h).twin as usize]);
+            ring.push((
+                self.topo.mid[h as usize],
+                sum_terms(self.at_origin(own), self.at_head(twin)),
+            ));
+        }
+    }
+
+    /// A midpoint: the edge's two ends, and the two other midpoints of each adjacent face.
+    #[inline]
+    fn midpoint_ring(&self, i: usize, ring: &mut Vec<(u32, f64)>) {
+        let (mesh, topo, corner) = (self.mesh, self.topo, &self.corner);
+        let h = topo.edges[i - topo.n_coarse];
         let e = mesh.get(h);
         let g = e.twin;
         let (own, twin) = (corner[h as usize], corner[g as usize]);
         // a is the origin of h and the head of g; b the reverse.
         let (a, b) = (mesh.get(g).to, e.to);
-        ring.push((a, sum(at_origin(own), at_head(twin))));
-        ring.push((b, sum(at_head(own), at_origin(twin))));
+        ring.push((a, sum_terms(self.at_origin(own), self.at_head(twin))));
+        ring.push((b, sum_terms(self.at_head(own), self.at_origin(twin))));
         for (side, c) in [(h, own), (g, twin)] {
             if c == NONE {
                 continue;
@@ -277,50 +323,88 @@ pub(crate) fn quadrisection_stiffness(
             // Next side m_{k+1,k+2}: corner triangle at u_{k+1}, edge (1,2), and the centre,
             // edge k. Previous side m_{k+2,k}: corner triangle at u_k, edge (1,2), centre
             // edge k+2.
-            let next = w(4 * t + (k + 1) % 3, 1) + w(4 * t + 3, k);
-            let prev = w(4 * t + k, 1) + w(4 * t + 3, (k + 2) % 3);
+            let next = self.w(4 * t + (k + 1) % 3, 1) + self.w(4 * t + 3, k);
+            let prev = self.w(4 * t + k, 1) + self.w(4 * t + 3, (k + 2) % 3);
             let s = mesh.get(side);
             ring.push((topo.mid[s.next as usize], next));
             ring.push((topo.mid[s.prev as usize], prev));
         }
-    };
+    }
+
     // A row's length is known before its entries: a coarse vertex has one neighbour per
     // out-going half-edge, a midpoint its two ends and two midpoints per adjacent face. So
     // the rows go straight into the final arrays, with no per-chunk pieces to copy (at a
     // million rows those copies were a sixth of the page faults of a whole subdivision).
-    let row_len = |i: usize| -> u32 {
-        if i < nv {
+
+    #[inline]
+    fn row_len(&self, i: usize) -> u32 {
+        let (mesh, topo) = (self.mesh, self.topo);
+        if i < topo.n_coarse {
             1 + mesh.outgoing(i as u32).count() as u32
         } else {
-            let e = mesh.get(topo.edges[i - nv]);
+            let e = mesh.get(topo.edges[i - topo.n_coarse]);
             let faces = u32::from(e.face != NONE) + u32::from(!mesh.is_boundary(e.twin));
             3 + 2 * faces
         }
-    };
-    const CHUNK: usize = 4096;
-    let parallel = n >= 2 * CHUNK;
-    use rayon::prelude::*;
-    let lens: Vec<u32> = if parallel {
-        (0..n).into_par_iter().map(row_len).collect()
-    } else {
-        (0..n).map(row_len).collect()
-    };
-    let mut row_start = Vec::with_capacity(n + 1);
-    row_start.push(0u32);
-    let mut at = 0u32;
-    for l in lens {
-        at = at.checked_add(l)?;
-        row_start.push(at);
     }
-    let mut col = vec![0u32; at as usize];
-    let mut val = vec![0.0f64; at as usize];
-    // Rows `rows` into `col`/`val`, which start at the first row's entries; `None` on a
-    // repeated column.
-    let fill = |rows: std::ops::Range<usize>, col: &mut [u32], val: &mut [f64]| {
+
+    /// The CSR row starts of the `n` rows; `None` if the entries overflow `u32`.
+    fn row_starts(&self, n: usize, parallel: bool) -> Option<Vec<u32>> {
+        use rayon::prelude::*;
+        let lens: Vec<u32> = if parallel {
+            (0..n).into_par_iter().map(|i| self.row_len(i)).collect()
+        } else {
+            (0..n).map(|i| self.row_len(i)).collect()
+        };
+        let mut row_start = Vec::with_capacity(n + 1);
+        row_start.push(0u32);
+        let mut at = 0u32;
+        for l in lens {
+            at = at.checked_add(l)?;
+            row_start.push(at);
+        }
+        Some(row_start)
+    }
+
+    /// The matrix's columns and values, in chunks of rows when `parallel`; `None` on a
+    /// repeated column.
+    fn fill_rows(&self, row_start: &[u32], parallel: bool) -> Option<(Vec<u32>, Vec<f64>)> {
+        use rayon::prelude::*;
+        let n = row_start.len() - 1;
+        let mut col = vec![0u32; row_start[n] as usize];
+        let mut val = vec![0.0f64; row_start[n] as usize];
+        if parallel {
+            let mut chunks = Vec::with_capacity(n.div_ceil(STIFFNESS_CHUNK));
+            let (mut col_rest, mut val_rest) = (&mut col[..], &mut val[..]);
+            for first in (0..n).step_by(STIFFNESS_CHUNK) {
+                let rows = first..(first + STIFFNESS_CHUNK).min(n);
+                let len = (row_start[rows.end] - row_start[rows.start]) as usize;
+                let (c, c_rest) = std::mem::take(&mut col_rest).split_at_mut(len);
+                let (v, v_rest) = std::mem::take(&mut val_rest).split_at_mut(len);
+                (col_rest, val_rest) = (c_rest, v_rest);
+                chunks.push((rows, c, v));
+            }
+            chunks
+                .into_par_iter()
+                .try_for_each(|(rows, c, v)| self.fill_chunk(rows, c, v))?;
+        } else {
+            self.fill_chunk(0..n, &mut col, &mut val)?;
+        }
+        Some((col, val))
+    }
+
+    /// Rows `rows` into `col`/`val`, which start at the first row's entries; `None` on a
+    /// repeated column.
+    fn fill_chunk(
+        &self,
+        rows: std::ops::Range<usize>,
+        col: &mut [u32],
+        val: &mut [f64],
+    ) -> Option<()> {
         let mut ring: Vec<(u32, f64)> = Vec::with_capacity(16);
         let mut at = 0;
         for i in rows {
-            ring_of(i, &mut ring);
+            self.ring_of(i, &mut ring);
             ring.sort_unstable_by_key(|e| e.0);
             if ring.windows(2).any(|p| p[0].0 == p[1].0) {
                 return None;
@@ -335,29 +419,17 @@ pub(crate) fn quadrisection_stiffness(
         }
         debug_assert_eq!(at, col.len());
         Some(())
-    };
-    if parallel {
-        let mut chunks = Vec::with_capacity(n.div_ceil(CHUNK));
-        let (mut col_rest, mut val_rest) = (&mut col[..], &mut val[..]);
-        for first in (0..n).step_by(CHUNK) {
-            let rows = first..(first + CHUNK).min(n);
-            let len = (row_start[rows.end] - row_start[rows.start]) as usize;
-            let (c, c_rest) = std::mem::take(&mut col_rest).split_at_mut(len);
-            let (v, v_rest) = std::mem::take(&mut val_rest).split_at_mut(len);
-            (col_rest, val_rest) = (c_rest, v_rest);
-            chunks.push((rows, c, v));
-        }
-        chunks
-            .into_par_iter()
-            .try_for_each(|(rows, c, v)| fill(rows, c, v))?;
-    } else {
-        fill(0..n, &mut col, &mut val)?;
     }
-    Some(crate::numerics::fem::SymmetricCsr {
-        row_start,
-        col,
-        val,
-    })
+}
+
+/// The two terms of a fine edge, either of which is absent on the boundary.
+#[inline]
+fn sum_terms(p: Option<f64>, q: Option<f64>) -> f64 {
+    match (p, q) {
+        (Some(p), Some(q)) => p + q,
+        (Some(p), None) | (None, Some(p)) => p,
+        (None, None) => 0.0,
+    }
 }
 
 fn slot_bound(slots: impl Iterator<Item = usize>) -> usize {
