@@ -5,9 +5,10 @@ use super::info::mesh_info;
 use super::input::build_pyramid;
 use crate::io::{self, MeshFormat};
 use crate::mesh::PolygonMesh;
-use crate::pyramid::{DetailPyramid, Filter};
+use crate::pyramid::{DetailPyramid, Filter, Pyramid};
 use crate::relax::SecondDifference;
 use anyhow::Context;
+use glam::DVec3;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -50,11 +51,19 @@ pub(crate) fn run(args: DemoArgs, global: &Global) -> anyhow::Result<()> {
 /// level 1000, stop-band 1000–15000, enhancement ×2 on 1000–15000) on `input`, with the
 /// spectrum of each result and previews, written into `dir` with file names starting `stem`.
 fn demo_filters(input: PolygonMesh, stem: &str, dir: &Path, global: &Global) -> anyhow::Result<()> {
-    use crate::render::{RenderOptions, Triangles, render_panels};
-
     let relaxation = SecondDifference::default();
     let scan = build_pyramid(input, relaxation.into(), stem, global)?;
-    // The hierarchy, saved: `filter`, `spectrum` and `edit` take it instead of the mesh.
+    save_hierarchy(&scan, stem, dir, global)?;
+    let signals = write_filtered_meshes(&scan, stem, dir, global)?;
+    write_spectra(&scan, &relaxation, &signals, stem, dir, global)?;
+    write_previews(&scan, &signals, stem, dir, global)
+}
+
+/// A named vertex signal: the input's positions or a filter's result.
+type Signal = (&'static str, Vec<DVec3>);
+
+/// Saves the hierarchy: `filter`, `spectrum` and `edit` take it instead of the mesh.
+fn save_hierarchy(scan: &Pyramid, stem: &str, dir: &Path, global: &Global) -> anyhow::Result<()> {
     let (bytes, sizes) = scan.to_pyr_bytes()?;
     let pyr_path = dir.join(format!("{stem}.pyr"));
     io::write_atomic(&pyr_path, &bytes)?;
@@ -63,6 +72,17 @@ fn demo_filters(input: PolygonMesh, stem: &str, dir: &Path, global: &Global) -> 
         pyr_path.display(),
         sizes.total as f64 / scan.input.n_vertices().max(1) as f64
     ));
+    Ok(())
+}
+
+/// Runs the paper's experiments and writes each result; returns the input's signal followed by
+/// the results'.
+fn write_filtered_meshes(
+    scan: &Pyramid,
+    stem: &str,
+    dir: &Path,
+    global: &Global,
+) -> anyhow::Result<Vec<Signal>> {
     let pyr = &scan.pyramid;
     let experiments = Filter::paper_experiments();
     let mut signals = vec![("input", pyr.synthesize(&Filter::default().resolve(1.0)))];
@@ -78,12 +98,23 @@ fn demo_filters(input: PolygonMesh, stem: &str, dir: &Path, global: &Global) -> 
         ));
         signals.push((name, out));
     }
+    Ok(signals)
+}
 
-    // Spectra: the input's, and each result re-analysed on the same hierarchy.
-    let mut spectra = vec![pyr.spectrum()];
+/// Writes the spectra, as a chart and a table: the input's, and each result re-analysed on the
+/// same hierarchy.
+fn write_spectra(
+    scan: &Pyramid,
+    relaxation: &SecondDifference,
+    signals: &[Signal],
+    stem: &str,
+    dir: &Path,
+    global: &Global,
+) -> anyhow::Result<()> {
+    let mut spectra = vec![scan.pyramid.spectrum()];
     for (_, s) in &signals[1..] {
         let p =
-            DetailPyramid::analyze_signal(&scan.pm, &relaxation, s, &crate::progress::NoProgress)?;
+            DetailPyramid::analyze_signal(&scan.pm, relaxation, s, &crate::progress::NoProgress)?;
         spectra.push(p.spectrum());
     }
     let others: Vec<(&str, &crate::pyramid::Spectrum)> = signals[1..]
@@ -113,8 +144,19 @@ fn demo_filters(input: PolygonMesh, stem: &str, dir: &Path, global: &Global) -> 
         path.display(),
         csv_path.display()
     ));
+    Ok(())
+}
 
-    // Previews with one shared camera.
+/// Writes the previews with one shared camera: all side by side, then each on its own.
+fn write_previews(
+    scan: &Pyramid,
+    signals: &[Signal],
+    stem: &str,
+    dir: &Path,
+    global: &Global,
+) -> anyhow::Result<()> {
+    use crate::render::{RenderOptions, Triangles, render_panels};
+
     let faces = scan.pm.finest_faces();
     let options = RenderOptions {
         width: 400,

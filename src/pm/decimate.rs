@@ -762,123 +762,204 @@ impl Schedule {
     }
 }
 
+/// The rules of one pass (shared with the reference decimator): the cost cut, the legality
+/// tests and how many collapses it may make.
+#[derive(Clone, Copy)]
+pub(super) struct Pass {
+    pub error_cut: f64,
+    pub legality: Legality,
+    pub budget: usize,
+}
+
+/// What the passes accumulate: the quadrics, the survivors locked in the current pass and the
+/// collapses made so far.
+struct Decimation {
+    quadric: Vec<Quadric>,
+    locked: Vec<u32>,
+    collapses: Vec<Collapse>,
+}
+
 /// Decimates `mesh`; returns the collapses in order, the final mesh and why it stopped.
 pub(crate) fn decimate(
     mut mesh: FlatMesh,
     params: &DecimateParams,
     progress: &dyn Progress,
 ) -> (Vec<Collapse>, FlatMesh, Outcome) {
-    let mut quadric = initial_quadrics(&mesh, params.boundary_weight);
-    let mut locked_list: Vec<u32> = Vec::new();
+    let mut state = Decimation {
+        quadric: initial_quadrics(&mesh, params.boundary_weight),
+        locked: Vec::new(),
+        collapses: Vec::new(),
+    };
     let mut cands: Vec<Candidate> = Vec::new();
-    let mut collapses: Vec<Collapse> = Vec::new();
     let mut relaxed = [0usize; 3];
-
     let start_faces = mesh.n_faces;
     let work = start_faces.saturating_sub(params.target_faces).max(1);
-    let done =
-        |m: &FlatMesh| m.n_faces <= params.target_faces || m.n_vertices <= params.target_vertices;
     let mut schedule = Schedule::new();
     let mut stop = Stop::Target;
-    // The live triangles, in order: dead ones are dropped after every pass, so a pass reads
-    // only what is left.
-    let mut live: Vec<u32> = (0..mesh.corners.len() as u32 / 3)
-        .filter(|&t| mesh.corners[3 * t as usize].vertex != NONE)
-        .collect();
-    while !done(&mesh) {
-        live.retain(|&t| mesh.corners[3 * t as usize].vertex != NONE);
-        collect_candidates(&mesh, &live, &quadric, params.max_error_sq, &mut cands);
+    let mut live = live_triangles(&mesh);
+    while !is_done(&mesh, params) {
+        drop_dead_triangles(&mesh, &mut live);
+        collect_candidates(
+            &mesh,
+            &live,
+            &state.quadric,
+            params.max_error_sq,
+            &mut cands,
+        );
         if cands.is_empty() {
             stop = if params.max_error_sq.is_finite() {
                 Stop::ErrorBound
             } else {
-                Stop::NoLegalCollapse(mesh.refusals(&quadric, params))
+                Stop::NoLegalCollapse(mesh.refusals(&state.quadric, params))
             };
             break;
         }
-        // Each collapse removes about two faces; aim for this pass's share of the target and
-        // allow 1.5× the cost of the candidate that would meet it (many get locked). Only the
-        // candidates under the cut are ever visited, so only they are sorted.
-        let faces_left = mesh.n_faces - params.target_faces.min(mesh.n_faces);
-        let goal = (faces_left / 2).max(1);
-        let error_cut = if schedule.use_goal && goal < cands.len() {
-            let (_, nth, _) = cands.select_nth_unstable_by(goal, by_cost);
-            1.5 * nth.cost
-        } else {
-            f64::INFINITY
-        }
-        .min(params.max_error_sq);
-        if error_cut < f64::INFINITY {
-            cands.retain(|c| c.cost <= error_cut);
-        }
-        if cands.len() >= PAR_MIN {
-            cands.par_sort_unstable_by(by_cost);
-        } else {
-            cands.sort_unstable_by(by_cost);
-        }
-        let legality = schedule.legality(params);
-        let mut budget = schedule.budget(mesh.n_faces);
-        let before = collapses.len();
-        for (i, c) in cands.iter().enumerate() {
-            if done(&mesh) || budget == 0 {
-                break;
-            }
-            // Candidates come in cost order, i.e. at random places in memory, and each one's
-            // records are a chain of dependent loads: fetch the next ones' in two steps (their
-            // triangle 16 ahead, then what it points to 8 ahead) while this one is tested.
-            if let Some(far) = cands.get(i + 16) {
-                prefetch(mesh.corners.as_ptr().wrapping_add(far.h as usize));
-            }
-            if let Some(near) = cands.get(i + 8) {
-                mesh.prefetch_edge(&quadric, near.h);
-            }
-            let h0 = c.h;
-            if !mesh.is_live(h0) {
-                continue;
-            }
-            let o0 = mesh.twin(h0);
-            let (a, b) = (mesh.tail_vertex(h0), mesh.head_vertex(h0));
-            if mesh.is_locked(a) || mesh.is_locked(b) {
-                continue;
-            }
-            let (h, cost, valence) = if let Ok(val) = mesh.legal(h0, &legality) {
-                (h0, c.cost, val)
-            } else if c.alt_cost <= error_cut
-                && let Ok(val) = mesh.legal(o0, &legality)
-            {
-                (o0, c.alt_cost, val)
-            } else {
-                continue;
-            };
-            let [u, v, left, right] = mesh.collapse(h, valence);
-            let qu = quadric[u as usize];
-            quadric[v as usize].add(&qu);
-            mesh.set_locked(v, true);
-            locked_list.push(v);
-            collapses.push(Collapse {
-                from: u,
-                to: v,
-                left,
-                right,
-                error_sq: cost,
-            });
-            budget -= 1;
-        }
-        for &v in &locked_list {
-            mesh.set_locked(v, false);
-        }
-        locked_list.clear();
+        let error_cut = cut_at_goal(&mut cands, mesh.n_faces, &schedule, params);
+        rank_candidates(&mut cands);
+        let pass = Pass {
+            error_cut,
+            legality: schedule.legality(params),
+            budget: schedule.budget(mesh.n_faces),
+        };
+        let made = perform_collapses(&mut mesh, &mut state, &cands, &pass, params);
+        unlock_survivors(&mut mesh, &mut state.locked);
         if schedule.relaxation != Relaxation::None {
-            relaxed[schedule.relaxation as usize - 1] += collapses.len() - before;
+            relaxed[schedule.relaxation as usize - 1] += made;
         }
         progress.update((start_faces - mesh.n_faces) as f64 / work as f64);
-        if schedule.pass_ended(collapses.len() > before, error_cut, params) {
-            stop = Stop::NoLegalCollapse(mesh.refusals(&quadric, params));
+        if schedule.pass_ended(made > 0, error_cut, params) {
+            stop = Stop::NoLegalCollapse(mesh.refusals(&state.quadric, params));
             break;
         }
     }
     progress.update(1.0);
-    (collapses, mesh, Outcome { stop, relaxed })
+    (state.collapses, mesh, Outcome { stop, relaxed })
+}
+
+/// Whether the face or vertex target is met.
+#[inline]
+fn is_done(mesh: &FlatMesh, params: &DecimateParams) -> bool {
+    mesh.n_faces <= params.target_faces || mesh.n_vertices <= params.target_vertices
+}
+
+/// The live triangles, in order: dead ones are dropped after every pass, so a pass reads only
+/// what is left.
+fn live_triangles(mesh: &FlatMesh) -> Vec<u32> {
+    (0..mesh.corners.len() as u32 / 3)
+        .filter(|&t| mesh.corners[3 * t as usize].vertex != NONE)
+        .collect()
+}
+
+/// Drops the triangles the last pass removed from `live`.
+#[inline]
+fn drop_dead_triangles(mesh: &FlatMesh, live: &mut Vec<u32>) {
+    live.retain(|&t| mesh.corners[3 * t as usize].vertex != NONE);
+}
+
+/// Keeps the candidates under this pass's cost cut and returns the cut. Each collapse removes
+/// about two faces; aim for this pass's share of the target and allow 1.5× the cost of the
+/// candidate that would meet it (many get locked). Only the candidates under the cut are ever
+/// visited, so only they are kept for the sort.
+#[inline]
+fn cut_at_goal(
+    cands: &mut Vec<Candidate>,
+    n_faces: usize,
+    schedule: &Schedule,
+    params: &DecimateParams,
+) -> f64 {
+    let faces_left = n_faces - params.target_faces.min(n_faces);
+    let goal = (faces_left / 2).max(1);
+    let error_cut = if schedule.use_goal && goal < cands.len() {
+        let (_, nth, _) = cands.select_nth_unstable_by(goal, by_cost);
+        1.5 * nth.cost
+    } else {
+        f64::INFINITY
+    }
+    .min(params.max_error_sq);
+    if error_cut < f64::INFINITY {
+        cands.retain(|c| c.cost <= error_cut);
+    }
+    error_cut
+}
+
+/// Sorts the candidates by `(cost, slot)`, in parallel when there are many.
+#[inline]
+fn rank_candidates(cands: &mut [Candidate]) {
+    if cands.len() >= PAR_MIN {
+        cands.par_sort_unstable_by(by_cost);
+    } else {
+        cands.sort_unstable_by(by_cost);
+    }
+}
+
+/// Collapses the ranked candidates in order, each in its cheaper legal direction, skipping
+/// edges at a survivor of this pass (locked); returns how many it collapsed.
+#[inline]
+fn perform_collapses(
+    mesh: &mut FlatMesh,
+    state: &mut Decimation,
+    cands: &[Candidate],
+    pass: &Pass,
+    params: &DecimateParams,
+) -> usize {
+    let mut budget = pass.budget;
+    let before = state.collapses.len();
+    let quadric: &mut [Quadric] = &mut state.quadric;
+    for (i, c) in cands.iter().enumerate() {
+        if is_done(mesh, params) || budget == 0 {
+            break;
+        }
+        // Candidates come in cost order, i.e. at random places in memory, and each one's
+        // records are a chain of dependent loads: fetch the next ones' in two steps (their
+        // triangle 16 ahead, then what it points to 8 ahead) while this one is tested.
+        if let Some(far) = cands.get(i + 16) {
+            prefetch(mesh.corners.as_ptr().wrapping_add(far.h as usize));
+        }
+        if let Some(near) = cands.get(i + 8) {
+            mesh.prefetch_edge(quadric, near.h);
+        }
+        let h0 = c.h;
+        if !mesh.is_live(h0) {
+            continue;
+        }
+        let o0 = mesh.twin(h0);
+        let (a, b) = (mesh.tail_vertex(h0), mesh.head_vertex(h0));
+        if mesh.is_locked(a) || mesh.is_locked(b) {
+            continue;
+        }
+        let (h, cost, valence) = if let Ok(val) = mesh.legal(h0, &pass.legality) {
+            (h0, c.cost, val)
+        } else if c.alt_cost <= pass.error_cut
+            && let Ok(val) = mesh.legal(o0, &pass.legality)
+        {
+            (o0, c.alt_cost, val)
+        } else {
+            continue;
+        };
+        let [u, v, left, right] = mesh.collapse(h, valence);
+        let qu = quadric[u as usize];
+        quadric[v as usize].add(&qu);
+        mesh.set_locked(v, true);
+        state.locked.push(v);
+        state.collapses.push(Collapse {
+            from: u,
+            to: v,
+            left,
+            right,
+            error_sq: cost,
+        });
+        budget -= 1;
+    }
+    state.collapses.len() - before
+}
+
+/// Unlocks this pass's survivors for the next pass.
+#[inline]
+fn unlock_survivors(mesh: &mut FlatMesh, locked: &mut Vec<u32>) {
+    for &v in locked.iter() {
+        mesh.set_locked(v, false);
+    }
+    locked.clear();
 }
 
 /// Every live edge once, by the corner that represents it, into `cands` (in no particular
