@@ -292,3 +292,44 @@ fn demo_writes_filtered_versions_spectrum_and_previews() {
         assert!(csv.lines().any(|l| l.starts_with(series)), "{series}");
     }
 }
+
+/// Scan coordinates are often negative: `--move` takes them as written, without `--move=`.
+#[test]
+fn edit_accepts_negative_coordinates_in_a_move() {
+    let input = data("teapot.ply");
+    let out = scratch("teapot-negative-move.ply");
+    let o = out.to_str().unwrap();
+    ok(&meshpyr(&[
+        "-q",
+        "edit",
+        &input,
+        "-o",
+        o,
+        "--level",
+        "200",
+        "--move",
+        "-0.5,-0.5,-0.5:0,-0.1,0",
+        "--radius",
+        "1",
+    ]));
+    let (a, b) = (io::read_mesh(&input).unwrap(), io::read_mesh(&out).unwrap());
+    assert_eq!(a.face_indices, b.face_indices);
+    assert_ne!(a.positions, b.positions);
+}
+
+/// `--lowpass` needs a level of at least one vertex; zero and negative numbers get an error
+/// that says why, not clap's advice to write `-- -1`.
+#[test]
+fn lowpass_rejects_zero_and_negative_levels() {
+    let input = data("teapot.ply");
+    let out = scratch("never-lowpass.ply");
+    let o = out.to_str().unwrap();
+    for (level, why) in [("0", "must be at least 1"), ("-1", "not a negative number")] {
+        let r = meshpyr(&["filter", &input, "-o", o, "--lowpass", level]);
+        assert!(!r.status.success());
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(err.starts_with("error: ") && err.contains(why), "{err}");
+        assert!(!err.contains("-- -1"), "{err}");
+    }
+    assert!(!out.exists());
+}

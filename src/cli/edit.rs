@@ -56,7 +56,13 @@ pub(crate) struct EditArgs {
     #[arg(long, value_name = "K")]
     pub(crate) level: usize,
     /// Grab the level-K surface at X,Y,Z and move it by DX,DY,DZ (repeatable; model units).
-    #[arg(long = "move", value_name = "X,Y,Z:DX,DY,DZ", value_parser = parse_move, required = true)]
+    #[arg(
+        long = "move",
+        value_name = "X,Y,Z:DX,DY,DZ",
+        value_parser = parse_move,
+        required = true,
+        allow_hyphen_values = true
+    )]
     pub(crate) moves: Vec<Move>,
     /// Radius of influence of each move (model units).
     #[arg(long, value_name = "R")]

@@ -15,6 +15,22 @@ fn parse_band(s: &str) -> Result<(LevelSpec, LevelSpec), String> {
     GainBand::parse_band(s).map_err(|e| e.to_string())
 }
 
+/// A `--lowpass` level: like any level, but at least one vertex, and never negative (clap would
+/// otherwise read `-1` as an unknown option and suggest a `--` that does not help).
+fn parse_lowpass(s: &str) -> Result<LevelSpec, String> {
+    if s.trim_start().starts_with('-') {
+        return Err(format!(
+            "`{s}`: a level is a vertex count of at least 1 or a positive feature size, not a negative number"
+        ));
+    }
+    match s.parse::<LevelSpec>().map_err(|e| e.to_string())? {
+        LevelSpec::Vertices(0) => Err(format!(
+            "`{s}`: a low-pass keeps the levels up to N vertices, so N must be at least 1"
+        )),
+        level => Ok(level),
+    }
+}
+
 fn parse_gain_band(s: &str) -> Result<GainBand, String> {
     GainBand::parse_with_gain(s).map_err(|e| e.to_string())
 }
@@ -24,7 +40,7 @@ fn parse_gain_band(s: &str) -> Result<GainBand, String> {
 pub(crate) struct FilterOptions {
     /// Zero the details of every level above N (a vertex count, or a feature size in model
     /// units with a `u` suffix such as 0.01u).
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = parse_lowpass, allow_hyphen_values = true)]
     pub(crate) lowpass: Option<LevelSpec>,
     /// Zero the details of the levels in (A, B] (repeatable).
     #[arg(long, value_name = "A:B", value_parser = parse_band)]
