@@ -9,7 +9,8 @@
 //! Run with `cargo bench --bench pyr`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
-use meshpyr::format::{self, BuildInfo};
+use meshpyr::PyramidOptions;
+use meshpyr::format;
 use meshpyr::mesh::{Mesh, PolygonMesh};
 use meshpyr::pm::ProgressiveMesh;
 use meshpyr::progress::NoProgress;
@@ -30,9 +31,9 @@ fn inputs() -> Vec<(String, PolygonMesh)> {
 
 fn bench(c: &mut Criterion) {
     for (name, input) in inputs() {
-        let info = BuildInfo::default();
+        let info = PyramidOptions::default();
         let built = Mesh::from_polygons(&input).unwrap();
-        let pm = ProgressiveMesh::build(&built.mesh, &info.pm_options, &NoProgress).unwrap();
+        let pm = ProgressiveMesh::build(&built.mesh, &info.pm, &NoProgress).unwrap();
         let (bytes, sizes) = format::encode(&input, &pm, &info).unwrap();
         let n = input.n_vertices() as f64;
         eprintln!(
@@ -60,7 +61,7 @@ fn bench(c: &mut Criterion) {
         });
         let data = format::decode(&bytes).unwrap();
         g.bench_function("reanalysis", |b| {
-            b.iter(|| data.clone().into_scan(&NoProgress).unwrap())
+            b.iter(|| data.clone().into_pyramid(&NoProgress).unwrap())
         });
         g.finish();
     }

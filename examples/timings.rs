@@ -8,7 +8,8 @@
 //!
 //! `cargo run --release --example timings -- [MESH] [N]` (default: the bundled bunny, N = 10).
 
-use meshpyr::format::{self, BuildInfo};
+use meshpyr::PyramidOptions;
+use meshpyr::format;
 use meshpyr::mesh::Mesh;
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
@@ -39,7 +40,7 @@ fn main() -> anyhow::Result<()> {
     let runs: usize = args.next().map_or(Ok(10), |s| s.parse())?;
     let mesh_file = meshpyr::io::read_mesh(&input)?;
     let mesh = Mesh::from_polygons(&mesh_file)?.mesh;
-    let info = BuildInfo::default();
+    let info = PyramidOptions::default();
     let relax = SecondDifference::default();
     let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &NoProgress)?;
     let pyramid = DetailPyramid::analyze(&pm, &relax, &NoProgress)?;

@@ -54,6 +54,9 @@
 //! // Save the hierarchy with the exact input, and open it again.
 //! pyramid.save(dir.join("bunny.pyr"))?;
 //! let again = Pyramid::load(dir.join("bunny.pyr"))?;
+//! // The same as bytes, to ship a pyramid between processes.
+//! let (bytes, _sizes) = pyramid.to_pyr_bytes()?;
+//! let shipped = Pyramid::from_pyr_bytes(&bytes, &meshpyr::NoProgress)?;
 //! // Denoise, keeping creases (Ohtake, Belyaev and Seidel 2002).
 //! let denoised = meshpyr::denoise_mesh(&scan, &Default::default())?;
 //! // Subdivide twice by cascadic mean-curvature motion (Diewald, Morigi and Rumpf 2001).
@@ -61,6 +64,7 @@
 //! # assert!(coarse.mesh.n_faces() < scan.n_faces() && fine.n_faces() > coarse.mesh.n_faces());
 //! # assert_eq!((sharp.n_vertices(), edited.n_vertices(), denoised.n_vertices()), (scan.n_vertices(), scan.n_vertices(), scan.n_vertices()));
 //! # assert!(!spectrum.bands.is_empty() && again.levels() == pyramid.levels());
+//! # assert_eq!(shipped.filter(&Filter::new()).positions, again.filter(&Filter::new()).positions);
 //! # Ok(()) }
 //! ```
 //!

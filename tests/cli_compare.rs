@@ -38,7 +38,7 @@ fn json_has_every_key_and_consistent_values() {
     // Noise of 0.2 L along the normal: E_v is the RMS displacement (README: 0.00408).
     let e_v = get("e_v");
     assert!((e_v - 0.00408).abs() < 2e-4, "{e_v}");
-    // Brute-force values of the Python reference implementation (E_v, E_n of algorithms.md §5
+    // Brute-force values of the Python reference implementation (E_v, E_n of docs/algorithms.md §5
     // with Ericson's point-triangle distance over all triangles) on the same files.
     assert!((e_v - 0.004103968731742834).abs() < 1e-12, "{e_v}");
     assert!((get("e_n") - 0.39413491163288983).abs() < 1e-10, "{v}");

@@ -3,7 +3,8 @@
 mod common;
 
 use common::{data, on_threads, position_bits, rich_mesh};
-use meshpyr::format::{self, BuildInfo, FormatError};
+use meshpyr::PyramidOptions;
+use meshpyr::format::{self, FormatError};
 use meshpyr::fuzzing;
 use meshpyr::io;
 use meshpyr::mesh::{Mesh, PolygonMesh};
@@ -14,8 +15,8 @@ use std::path::PathBuf;
 
 fn build(input: &PolygonMesh) -> (ProgressiveMesh, Vec<u8>) {
     let built = Mesh::from_polygons(input).unwrap();
-    let info = BuildInfo::default();
-    let pm = ProgressiveMesh::build(&built.mesh, &info.pm_options, &NoProgress).unwrap();
+    let info = PyramidOptions::default();
+    let pm = ProgressiveMesh::build(&built.mesh, &info.pm, &NoProgress).unwrap();
     let (bytes, sizes) = format::encode(input, &pm, &info).unwrap();
     assert_eq!(sizes.total, bytes.len());
     (pm, bytes)
@@ -107,10 +108,10 @@ fn f64_positions_are_kept_exactly() {
 fn loaded_pyramid_has_identical_details_and_synthesis() {
     let input = io::read_mesh(data("joint.ply")).unwrap();
     let scan = Pyramid::build_with(input.clone(), &Default::default(), &NoProgress).unwrap();
-    let (bytes, _) = format::encode(&scan.input, &scan.pm, &BuildInfo::default()).unwrap();
+    let (bytes, _) = format::encode(&scan.input, &scan.pm, &PyramidOptions::default()).unwrap();
     let loaded = format::decode(&bytes)
         .unwrap()
-        .into_scan(&NoProgress)
+        .into_pyramid(&NoProgress)
         .unwrap();
     let (a, b) = (&scan.pyramid, &loaded.pyramid);
     assert_eq!(a.n_splits(), b.n_splits());
@@ -368,7 +369,7 @@ fn split_errors_round_trip_for_any_bits() {
         errors: errors.clone(),
     };
     let odd_pm = ProgressiveMesh::from_parts(parts).unwrap();
-    let (bytes, _) = format::encode(&input, &odd_pm, &BuildInfo::default()).unwrap();
+    let (bytes, _) = format::encode(&input, &odd_pm, &PyramidOptions::default()).unwrap();
     let d = format::decode(&bytes).unwrap();
     assert_eq!(error_bits(d.pm.split_errors()), error_bits(&errors));
 }

@@ -1,10 +1,12 @@
 //! `meshpyr build IN -o OUT.pyr [--relax …]`: build the progressive mesh and save it with the
 //! exact input as a `.pyr` file (details are recomputed on load; see `formats/pyr.md`).
 
-use super::input::{encode_pyr, read_input_mesh};
+use super::input::read_input_mesh;
 use super::{BarProgress, Global};
+use crate::format;
 use crate::io;
-use crate::pm::{PmOptions, ProgressiveMesh};
+use crate::pm::ProgressiveMesh;
+use crate::pyramid::PyramidOptions;
 use crate::relax::RelaxKind;
 use anyhow::Context;
 use std::path::PathBuf;
@@ -26,23 +28,27 @@ pub(crate) struct BuildArgs {
 
 /// Runs `meshpyr build`.
 pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
-    let relaxation = args.relax.spec();
+    let options = PyramidOptions {
+        relaxation: args.relax.spec(),
+        ..PyramidOptions::default()
+    };
     let input = read_input_mesh(&args.input)?;
     let start = Instant::now();
     let built = crate::mesh::Mesh::from_polygons(&input)
         .with_context(|| format!("cannot build the mesh of {}", args.input.display()))?;
     let bar = global.progress("build");
-    let pm = ProgressiveMesh::build(&built.mesh, &PmOptions::default(), &BarProgress(&bar))
-        .with_context(|| {
+    let pm = ProgressiveMesh::build(&built.mesh, &options.pm, &BarProgress(&bar)).with_context(
+        || {
             format!(
                 "cannot build the progressive mesh of {}",
                 args.input.display()
             )
-        })?;
+        },
+    )?;
     bar.finish_and_clear();
     let built_s = start.elapsed().as_secs_f64();
     let start = Instant::now();
-    let (bytes, sizes) = encode_pyr(&input, &pm, relaxation)
+    let (bytes, sizes) = format::encode(&input, &pm, &options)
         .with_context(|| format!("cannot encode {}", args.input.display()))?;
     let encode_s = start.elapsed().as_secs_f64();
     io::write_atomic(&args.output, &bytes)?;

@@ -4,11 +4,11 @@
 
 use super::Global;
 use super::filter::{FilterOptions, resolve_reporting};
-use super::input::{encode_pyr, load_pyramid};
+use super::input::load_pyramid;
 use crate::format;
 use crate::io;
 use crate::pyramid::{MoveHandle, Pyramid};
-use crate::relax::{RelaxKind, RelaxationSpec};
+use crate::relax::RelaxKind;
 use anyhow::Context;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -88,7 +88,7 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
     if !(args.radius > 0.0 && args.radius.is_finite()) {
         anyhow::bail!("--radius must be a positive number, got {}", args.radius);
     }
-    let (scan, spec) = load_pyramid(&args.input, args.relax, global)?;
+    let scan = load_pyramid(&args.input, args.relax, global)?;
     let p = &scan.pyramid;
     if args.level < p.n_base_vertices() || args.level > p.n_vertices() {
         anyhow::bail!(
@@ -111,7 +111,7 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
     let out = p.edit(args.level, &handles, &gains)?;
     if writes_pyr {
         let positions = scan.to_input_positions(&out);
-        save_edited(&scan, positions, spec, &args.output)?;
+        save_edited(&scan, positions, &args.output)?;
     } else {
         io::write_mesh(&args.output, &scan.output_mesh(&out))?;
     }
@@ -119,16 +119,12 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Saves `scan` with new input positions as a `.pyr` file (same hierarchy, new originals).
-fn save_edited(
-    scan: &Pyramid,
-    input_positions: Vec<DVec3>,
-    relaxation: RelaxationSpec,
-    path: &Path,
-) -> anyhow::Result<()> {
+/// Saves `scan` with new input positions as a `.pyr` file (same hierarchy and options, new
+/// originals).
+fn save_edited(scan: &Pyramid, input_positions: Vec<DVec3>, path: &Path) -> anyhow::Result<()> {
     let (input, pm) = format::with_positions(&scan.input, &scan.source, &scan.pm, input_positions)
         .context("cannot save the edit")?;
-    let (bytes, _) = encode_pyr(&input, &pm, relaxation).context("cannot save the edit")?;
+    let (bytes, _) = format::encode(&input, &pm, &scan.options).context("cannot save the edit")?;
     io::write_atomic(path, &bytes)?;
     Ok(())
 }

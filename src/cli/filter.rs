@@ -151,7 +151,7 @@ pub(crate) fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
             "no filter given: use --lowpass N, --stopband A:B, --enhance A:B=G or --gain A:B=G"
         );
     }
-    let (scan, _) = load_pyramid(&args.input, args.relax, global)?;
+    let scan = load_pyramid(&args.input, args.relax, global)?;
     let start = Instant::now();
     let gains = resolve_reporting(&filter, &scan.pyramid, &args.input.display().to_string());
     let out = scan.pyramid.synthesize(&gains);

@@ -1,12 +1,10 @@
 //! The input of the commands: a mesh file or a `.pyr` file (recognised by its signature,
-//! whatever its name), read as a mesh or turned into a detail pyramid, and the `.pyr` file a
-//! hierarchy is saved as.
+//! whatever its name), read as a mesh or turned into a detail pyramid.
 
 use super::{BarProgress, Global};
-use crate::format::{self, BuildInfo, FormatError, SizeReport};
+use crate::format;
 use crate::io;
 use crate::mesh::PolygonMesh;
-use crate::pm::{PmOptions, ProgressiveMesh};
 use crate::pyramid::{Pyramid, PyramidOptions};
 use crate::relax::{RelaxKind, RelaxationSpec};
 use anyhow::Context;
@@ -38,18 +36,19 @@ pub(crate) fn load_pyr(path: &Path) -> anyhow::Result<format::PyrData> {
     format::decode(&bytes).with_context(|| format!("cannot load {}", path.display()))
 }
 
-/// Reads `path` and builds its progressive mesh and pyramid, reporting progress and timing;
-/// returns it with the relaxation it was analysed with. `relax` defaults to the
+/// Reads `path` and builds its progressive mesh and pyramid, reporting progress and timing
+/// (the pyramid's options say which relaxation it was analysed with). `relax` defaults to the
 /// second-difference operator. A `.pyr` file (detected by its signature) is loaded instead and
 /// analysed with the relaxation recorded in it; asking for another one is an error.
 pub(crate) fn load_pyramid(
     path: &Path,
     relax: Option<RelaxKind>,
     global: &Global,
-) -> anyhow::Result<(Pyramid, RelaxationSpec)> {
+) -> anyhow::Result<Pyramid> {
     let wanted = relax.map(RelaxKind::spec);
     if is_pyr_file(path) {
-        let (scan, spec) = load_pyr_scan(path, global)?;
+        let scan = load_pyr_scan(path, global)?;
+        let spec = scan.options.relaxation;
         if let Some(w) = wanted
             && w != spec
         {
@@ -60,23 +59,25 @@ pub(crate) fn load_pyramid(
                 w.name()
             );
         }
-        return Ok((scan, spec));
+        return Ok(scan);
     }
-    let spec = wanted.unwrap_or_default();
     let input = io::read_mesh(path)?;
-    let scan = build_pyramid(input, spec, &path.display().to_string(), global)?;
-    Ok((scan, spec))
+    build_pyramid(
+        input,
+        wanted.unwrap_or_default(),
+        &path.display().to_string(),
+        global,
+    )
 }
 
 /// Loads a `.pyr` file and recomputes its pyramid (the relaxation recorded in the file).
-fn load_pyr_scan(path: &Path, global: &Global) -> anyhow::Result<(Pyramid, RelaxationSpec)> {
+fn load_pyr_scan(path: &Path, global: &Global) -> anyhow::Result<Pyramid> {
     let start = Instant::now();
     let data = load_pyr(path)?;
-    let spec = data.info.relaxation;
     let loaded = start.elapsed().as_secs_f64();
     let bar = global.progress("analysis");
     let scan = data
-        .into_scan(&BarProgress(&bar))
+        .into_pyramid(&BarProgress(&bar))
         .with_context(|| format!("cannot analyse {}", path.display()))?;
     bar.finish_and_clear();
     let p = &scan.pyramid;
@@ -89,7 +90,7 @@ fn load_pyr_scan(path: &Path, global: &Global) -> anyhow::Result<(Pyramid, Relax
         loaded,
         start.elapsed().as_secs_f64() - loaded
     ));
-    Ok((scan, spec))
+    Ok(scan)
 }
 
 /// Builds the pyramid of an already-read mesh; `name` is used in messages.
@@ -119,20 +120,6 @@ pub(crate) fn build_pyramid(
         start.elapsed().as_secs_f64()
     ));
     Ok(scan)
-}
-
-/// The `.pyr` file of `input` with its hierarchy `pm` (built with the default options, as
-/// every command builds it) and the relaxation the pyramid is analysed with.
-pub(crate) fn encode_pyr(
-    input: &PolygonMesh,
-    pm: &ProgressiveMesh,
-    relaxation: RelaxationSpec,
-) -> Result<(Vec<u8>, SizeReport), FormatError> {
-    let info = BuildInfo {
-        pm_options: PmOptions::default(),
-        relaxation,
-    };
-    format::encode(input, pm, &info)
 }
 
 #[cfg(test)]

@@ -25,7 +25,7 @@ pub(crate) struct SpectrumArgs {
 
 /// Runs `meshpyr spectrum`.
 pub(crate) fn run(args: SpectrumArgs, global: &Global) -> anyhow::Result<()> {
-    let (scan, _) = load_pyramid(&args.input, args.relax, global)?;
+    let scan = load_pyramid(&args.input, args.relax, global)?;
     let spectrum = scan.pyramid.spectrum();
     let png = spectrum.chart("input", &[]).encode_png()?;
     io::write_atomic(&args.output, &png)?;

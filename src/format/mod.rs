@@ -5,8 +5,8 @@ pub mod container;
 pub(crate) mod pyr;
 pub mod varint;
 
-pub use pyr::{BuildInfo, MAJOR, MINOR, OLDEST_MAJOR, decode, encode, read_level};
 pub use pyr::{LevelMesh, PyrData, SizeReport};
+pub use pyr::{MAJOR, MINOR, OLDEST_MAJOR, decode, encode, read_level};
 pub(crate) use pyr::{fix_checksums, fuzz_read_pyr};
 #[cfg(feature = "cli")]
 pub(crate) use pyr::{is_pyr, with_positions};

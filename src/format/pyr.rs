@@ -4,7 +4,7 @@
 //!
 //! Details of the detail pyramid are *not* stored: the analysis is a deterministic function of
 //! the hierarchy, the original positions and the relaxation operator, so a loader recomputes
-//! them bit for bit ([`PyrData::into_scan`]).
+//! them bit for bit ([`PyrData::into_pyramid`]).
 //!
 //! This module holds the types a file decodes to (the relaxation is `relax::RelaxationSpec`),
 //! and [`encode`] and [`decode`], which assemble a file from its sections; each concern has a child module: the
@@ -19,7 +19,7 @@ use super::varint::ByteReader;
 #[cfg(feature = "cli")]
 use crate::mesh::ScalarType;
 use crate::mesh::{Built, Mesh, PolygonMesh, SourceMap};
-use crate::pm::{PmOptions, PmParts, ProgressiveMesh};
+use crate::pm::{PmParts, ProgressiveMesh};
 use crate::progress::Progress;
 use crate::pyramid::{DetailPyramid, Pyramid, PyramidError, PyramidOptions};
 use crate::relax::RelaxationSpec;
@@ -73,15 +73,6 @@ const POLY: [u8; 4] = *b"POLY";
 const ATTR: [u8; 4] = *b"ATTR";
 const KNOWN: [[u8; 4]; 7] = [META, BASE, SPLT, ISOL, ORDR, POLY, ATTR];
 
-/// The build options recorded in the header.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct BuildInfo {
-    /// How the progressive mesh was built.
-    pub pm_options: PmOptions,
-    /// The relaxation operator of the pyramid.
-    pub relaxation: RelaxationSpec,
-}
-
 /// The `META` section (bincode 2 standard configuration). Fixed-size fields only: nothing in
 /// it allocates while decoding, so a damaged length cannot make bincode allocate.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -112,18 +103,18 @@ pub struct PyrData {
     pub input: PolygonMesh,
     /// The repaired half-edge mesh of `input` when loading needed it (an input the builder
     /// repairs); `None` for a clean triangle mesh, whose half-edge mesh is built only when a
-    /// command needs it ([`Self::into_scan`], [`Self::built`]).
+    /// command needs it ([`Self::into_pyramid`], [`Self::built`]).
     built: Option<Built>,
     /// The hierarchy.
     pub pm: ProgressiveMesh,
     /// Build options.
-    pub info: BuildInfo,
+    pub info: PyramidOptions,
 }
 
 impl PyrData {
     /// Recomputes the detail pyramid (bit-identical to the one the file was built with) and
     /// returns the whole scan.
-    pub fn into_scan(self, progress: &dyn Progress) -> Result<Pyramid, PyramidError> {
+    pub fn into_pyramid(self, progress: &dyn Progress) -> Result<Pyramid, PyramidError> {
         let op = self.info.relaxation.operator();
         let pyramid = DetailPyramid::analyze(&self.pm, op.as_ref(), progress)?;
         // A file whose input needed no repair was loaded without building the half-edge mesh
@@ -142,10 +133,7 @@ impl PyrData {
             source,
             pm: self.pm,
             pyramid,
-            options: PyramidOptions {
-                pm: self.info.pm_options,
-                relaxation: self.info.relaxation,
-            },
+            options: self.info,
         })
     }
 }
@@ -234,7 +222,7 @@ fn required<'a>(c: &Container<'a>, tag: [u8; 4]) -> Result<ByteReader<'a>, Forma
 pub fn encode(
     input: &PolygonMesh,
     pm: &ProgressiveMesh,
-    info: &BuildInfo,
+    info: &PyramidOptions,
 ) -> Result<(Vec<u8>, SizeReport), FormatError> {
     check_pm_belongs(input, pm)?;
     let f32 = pm.original_positions().iter().all(|&p| exactly_f32(p));

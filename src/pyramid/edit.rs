@@ -70,7 +70,7 @@ impl DetailPyramid {
 
     /// Synthesises level `level`, lets `edit` change its values (the slice holds PM vertices
     /// `0..level`), and resynthesises the finest level with `gains`.
-    pub(crate) fn edit_with(
+    pub fn edit_with(
         &self,
         level: usize,
         gains: &LevelGains,

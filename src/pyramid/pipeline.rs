@@ -4,7 +4,7 @@
 //! lines up after filtering.
 
 use super::{DetailPyramid, MoveHandle, PyramidError, Spectrum};
-use crate::format::{self, BuildInfo, FormatError, PyrData, SizeReport};
+use crate::format::{self, FormatError, PyrData, SizeReport};
 use crate::io::IoError;
 use crate::mesh::{Mesh, PolygonMesh, SourceMap};
 use crate::pm::{PmOptions, ProgressiveMesh};
@@ -15,8 +15,8 @@ use glam::DVec3;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
 
-/// How a [`Pyramid`] is built: what a `.pyr` file records, so that loading it rebuilds the
-/// very same pyramid.
+/// How a [`Pyramid`] is built: what a `.pyr` file records in its header, so that loading it
+/// rebuilds the very same pyramid.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PyramidOptions {
     /// How the progressive mesh is built (defaults: collapse as far as legal).
@@ -63,7 +63,7 @@ pub enum PyrFileError {
     },
     /// The pyramid could not be rebuilt from the file's hierarchy.
     #[error("{}{error}", file_prefix(path))]
-    DetailPyramid {
+    Pyramid {
         /// The file, when there is one.
         path: Option<PathBuf>,
         /// What is wrong.
@@ -84,7 +84,7 @@ impl PyrFileError {
                 path: Some(file.to_path_buf()),
                 error,
             },
-            PyrFileError::DetailPyramid { error, .. } => PyrFileError::DetailPyramid {
+            PyrFileError::Pyramid { error, .. } => PyrFileError::Pyramid {
                 path: Some(file.to_path_buf()),
                 error,
             },
@@ -101,7 +101,7 @@ impl From<FormatError> for PyrFileError {
 
 impl From<PyramidError> for PyrFileError {
     fn from(error: PyramidError) -> Self {
-        PyrFileError::DetailPyramid { path: None, error }
+        PyrFileError::Pyramid { path: None, error }
     }
 }
 
@@ -170,25 +170,18 @@ impl Pyramid {
 
     /// The `.pyr` file of this pyramid: its hierarchy with the exact input, and the options to
     /// rebuild it (formats/pyr.md), with its size by section.
-    pub(crate) fn to_pyr_bytes(&self) -> Result<(Vec<u8>, SizeReport), FormatError> {
-        let info = BuildInfo {
-            pm_options: self.options.pm.clone(),
-            relaxation: self.options.relaxation,
-        };
-        format::encode(&self.input, &self.pm, &info)
+    pub fn to_pyr_bytes(&self) -> Result<(Vec<u8>, SizeReport), FormatError> {
+        format::encode(&self.input, &self.pm, &self.options)
     }
 
     /// Opens a `.pyr` file's bytes: the hierarchy as saved, and the pyramid recomputed
     /// bit-identical to the one that was saved.
-    pub(crate) fn from_pyr_bytes(
-        bytes: &[u8],
-        progress: &dyn Progress,
-    ) -> Result<Self, PyrFileError> {
+    pub fn from_pyr_bytes(bytes: &[u8], progress: &dyn Progress) -> Result<Self, PyrFileError> {
         let data: PyrData = format::decode(bytes)?;
-        Ok(data.into_scan(progress)?)
+        Ok(data.into_pyramid(progress)?)
     }
 
-    /// Saves `Self::to_pyr_bytes` to `path`, atomically (an existing file is replaced only
+    /// Saves [`Self::to_pyr_bytes`] to `path`, atomically (an existing file is replaced only
     /// once the new one is complete).
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), PyrFileError> {
         let path = path.as_ref();
@@ -199,7 +192,7 @@ impl Pyramid {
         Ok(())
     }
 
-    /// Opens the `.pyr` file at `path` (`Self::from_pyr_bytes`).
+    /// Opens the `.pyr` file at `path` ([`Self::from_pyr_bytes`]).
     pub fn load(path: impl AsRef<Path>) -> Result<Self, PyrFileError> {
         let path = path.as_ref();
         let bytes = std::fs::read(path).map_err(|error| IoError::Io {

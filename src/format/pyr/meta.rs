@@ -6,11 +6,11 @@ use crate::format::FormatError;
 use crate::format::container::Container;
 use crate::mesh::PolygonMesh;
 use crate::pm::{PmOptions, ProgressiveMesh};
+use crate::pyramid::PyramidOptions;
 use glam::DVec3;
 
 use super::{
-    BuildInfo, KNOWN, MAJOR, META, MINOR, Meta, OLDEST_MAJOR, SPLITS_PER_BLOCK, corrupt, internal,
-    required,
+    KNOWN, MAJOR, META, MINOR, Meta, OLDEST_MAJOR, SPLITS_PER_BLOCK, corrupt, internal, required,
 };
 
 /// Largest `META` section a reader decodes.
@@ -23,11 +23,11 @@ const MAX_META: usize = 4096;
 pub(super) fn describe(
     input: &PolygonMesh,
     pm: &ProgressiveMesh,
-    info: &BuildInfo,
+    info: &PyramidOptions,
     f32: bool,
 ) -> Meta {
     let (lo, hi) = bounding_box(pm.original_positions());
-    let o = &info.pm_options;
+    let o = &info.pm;
     Meta {
         n_input_vertices: input.positions.len() as u64,
         n_input_faces: input.n_faces() as u64,
@@ -124,9 +124,9 @@ pub(super) fn read_meta(c: &Container<'_>) -> Result<Meta, FormatError> {
 }
 
 /// The build options `meta` records.
-pub(super) fn build_info(meta: &Meta) -> BuildInfo {
-    BuildInfo {
-        pm_options: PmOptions {
+pub(super) fn build_info(meta: &Meta) -> PyramidOptions {
+    PyramidOptions {
+        pm: PmOptions {
             target_vertices: meta.target_vertices as usize,
             target_faces: meta.target_faces as usize,
             max_error: meta.max_error,
