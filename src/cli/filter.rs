@@ -15,14 +15,10 @@ fn parse_band(s: &str) -> Result<(LevelSpec, LevelSpec), String> {
     GainBand::parse_band(s).map_err(|e| e.to_string())
 }
 
-/// A `--lowpass` level: like any level, but at least one vertex, and never negative (clap would
-/// otherwise read `-1` as an unknown option and suggest a `--` that does not help).
+/// A `--lowpass` level: like any level, but at least one vertex (a band may start at 0, a
+/// low-pass may not). The option takes hyphen values so that `-1` reaches the level parser,
+/// which says why it is wrong, instead of clap's advice to write `-- -1`.
 fn parse_lowpass(s: &str) -> Result<LevelSpec, String> {
-    if s.trim_start().starts_with('-') {
-        return Err(format!(
-            "`{s}`: a level is a vertex count of at least 1 or a positive feature size, not a negative number"
-        ));
-    }
     match s.parse::<LevelSpec>().map_err(|e| e.to_string())? {
         LevelSpec::Vertices(0) => Err(format!(
             "`{s}`: a low-pass keeps the levels up to N vertices, so N must be at least 1"

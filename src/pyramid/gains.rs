@@ -84,6 +84,12 @@ impl FromStr for LevelSpec {
 
     fn from_str(s: &str) -> Result<Self, Self::Err> {
         let t = s.trim();
+        if t.starts_with('-') {
+            return Err(parse_error(
+                s,
+                "a level is a vertex count or a positive feature size, not a negative number",
+            ));
+        }
         if let Some(size) = t.strip_suffix('u') {
             let h: f64 = size.trim().parse().map_err(|_| {
                 parse_error(s, "expected a feature size in model units such as 0.02u")
