@@ -58,7 +58,7 @@
 //! let (bytes, _sizes) = pyramid.to_pyr_bytes()?;
 //! let shipped = Pyramid::from_pyr_bytes(&bytes, &meshpyr::NoProgress)?;
 //! // Denoise, keeping creases (Ohtake, Belyaev and Seidel 2002).
-//! let denoised = meshpyr::denoise_mesh(&scan, &Default::default())?;
+//! let denoised = meshpyr::smooth_mesh(&scan, &meshpyr::SmoothMethod::default(), &meshpyr::NoProgress)?.mesh;
 //! // Subdivide twice by cascadic mean-curvature motion (Diewald, Morigi and Rumpf 2001).
 //! let fine = meshpyr::subdivide_mesh(&coarse.mesh, &meshpyr::SubdivOptions { levels: 2, ..Default::default() })?;
 //! # assert!(coarse.mesh.n_faces() < scan.n_faces() && fine.n_faces() > coarse.mesh.n_faces());
@@ -117,5 +117,5 @@ pub use pm::{ProgressiveMesh, Simplified, SimplifyTarget, simplify};
 pub use progress::NoProgress;
 pub use pyramid::{Filter, MoveHandle, PyrFileError, Pyramid, PyramidOptions, Spectrum};
 pub use relax::RelaxationSpec;
-pub use smooth::{DenoiseOptions, denoise_mesh};
+pub use smooth::{DenoiseOptions, SmoothMethod, Smoothed, smooth_mesh};
 pub use subdiv::{SubdivOptions, subdivide_mesh};

@@ -174,3 +174,65 @@ fn bad_input_exits_nonzero_with_one_line() {
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).starts_with("error: "));
 }
+
+#[test]
+fn an_option_of_another_method_is_refused_before_any_work() {
+    for (args, option, method) in [
+        (
+            vec!["--method", "taubin", "--epsilon", "3"],
+            "--epsilon",
+            "taubin",
+        ),
+        (vec!["--rho", "2", "--method", "mcf"], "--rho", "mcf"),
+        (vec!["--lambda", "0.4"], "--lambda", "adaptive"),
+        (
+            vec!["--method", "mcf", "--weights", "uniform"],
+            "--weights",
+            "mcf",
+        ),
+        (
+            vec!["--method", "anisotropic", "--iterations", "3"],
+            "--iterations",
+            "anisotropic",
+        ),
+        (
+            vec!["--method", "taubin", "--time-step", "2"],
+            "--time-step",
+            "taubin",
+        ),
+    ] {
+        let out = tmp("refused.ply");
+        let o = smooth(&data("cone20.ply"), &out, &args);
+        assert!(!o.status.success(), "{args:?}");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            err.contains(&format!("{option} does not apply to --method {method}")),
+            "{err}"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(!out.exists());
+    }
+}
+
+#[test]
+fn options_of_the_chosen_method_are_accepted() {
+    for args in [
+        vec![
+            "--method",
+            "taubin",
+            "--iterations",
+            "3",
+            "--boundary",
+            "smooth",
+        ],
+        vec!["--method", "mcf", "--iterations", "2", "--time-step", "0.5"],
+        vec!["--method", "anisotropic", "--epsilon", "0.5", "--rho", "3"],
+    ] {
+        let o = smooth(&data("cone20.ply"), &tmp("accepted.ply"), &args);
+        assert!(
+            o.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+    }
+}

@@ -3,18 +3,15 @@
 
 use super::{BarProgress, Global};
 use crate::io;
-use crate::mesh::{Mesh, PolygonMesh};
-use crate::progress::Progress;
-use crate::smooth::normal_filter::Variance;
 use crate::smooth::{
-    Boundary, DenoiseOptions, McfOptions, TaubinOptions, Weights, implicit_mcf, taubin_smoothing,
+    Boundary, DenoiseOptions, McfOptions, SmoothMethod, TaubinOptions, Variance, Weights,
+    smooth_mesh,
 };
 use anyhow::Context;
-use glam::DVec3;
 use std::path::PathBuf;
 use std::time::Instant;
 
-/// Smoothing method. Each variant maps to one library function in [`run_method`].
+/// Smoothing method. Each variant maps to one [`SmoothMethod`].
 #[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) enum MethodArg {
     /// Ohtake–Belyaev–Seidel adaptive Gaussian filter of the face normals + vertex fitting.
@@ -107,27 +104,106 @@ pub(crate) struct SmoothArgs {
     /// taubin/mcf: iterations (default: 10 for taubin, 1 for mcf).
     #[arg(long)]
     pub(crate) iterations: Option<usize>,
-    /// taubin: edge weights.
-    #[arg(long, value_enum, default_value = "cotan")]
-    pub(crate) weights: WeightsArg,
-    /// taubin: shrinking factor λ, in (0, 1].
-    #[arg(long, default_value_t = 0.5, allow_hyphen_values = true)]
-    pub(crate) lambda: f64,
-    /// taubin: inflating factor μ, in [-1, 0] (0: plain Laplacian smoothing).
-    #[arg(long, default_value_t = -0.53, allow_hyphen_values = true)]
-    pub(crate) mu: f64,
-    /// mcf: time step in units of the squared mean edge length L² of the input.
-    #[arg(long, default_value_t = 1.0, allow_hyphen_values = true)]
-    pub(crate) time_step: f64,
-    /// taubin/mcf: what boundary vertices do.
-    #[arg(long, value_enum, default_value = "fixed")]
-    pub(crate) boundary: BoundaryArg,
+    /// taubin: edge weights [default: cotan].
+    #[arg(long, value_enum)]
+    pub(crate) weights: Option<WeightsArg>,
+    /// taubin: shrinking factor λ, in (0, 1] [default: 0.5].
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) lambda: Option<f64>,
+    /// taubin: inflating factor μ, in [-1, 0] (0: plain Laplacian smoothing) [default: -0.53].
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) mu: Option<f64>,
+    /// mcf: time step in units of the squared mean edge length L² of the input [default: 1].
+    #[arg(long, allow_hyphen_values = true)]
+    pub(crate) time_step: Option<f64>,
+    /// taubin/mcf: what boundary vertices do [default: fixed].
+    #[arg(long, value_enum)]
+    pub(crate) boundary: Option<BoundaryArg>,
 }
 
 impl SmoothArgs {
+    /// The method and options these arguments describe; an option of another method is an
+    /// error rather than silently ignored.
+    pub(crate) fn method(&self) -> anyhow::Result<SmoothMethod> {
+        self.reject_options_of_other_methods()?;
+        let boundary = match self.boundary {
+            Some(BoundaryArg::Smooth) => Boundary::Smooth,
+            Some(BoundaryArg::Fixed) | None => Boundary::Fixed,
+        };
+        Ok(match self.method {
+            MethodArg::Adaptive | MethodArg::Anisotropic => {
+                SmoothMethod::Ohtake(self.denoise_options())
+            }
+            MethodArg::Taubin => {
+                let d = TaubinOptions::default();
+                SmoothMethod::Taubin(TaubinOptions {
+                    iterations: self.iterations.unwrap_or(d.iterations),
+                    lambda: self.lambda.unwrap_or(d.lambda),
+                    mu: self.mu.unwrap_or(d.mu),
+                    weights: match self.weights {
+                        Some(WeightsArg::Uniform) => Weights::Uniform,
+                        Some(WeightsArg::InverseEdge) => Weights::InverseEdgeLength,
+                        Some(WeightsArg::Cotan) => Weights::Cotangent,
+                        None => d.weights,
+                    },
+                    boundary,
+                })
+            }
+            MethodArg::Mcf => {
+                let d = McfOptions::default();
+                SmoothMethod::Mcf(McfOptions {
+                    iterations: self.iterations.unwrap_or(d.iterations),
+                    time_step: self.time_step.unwrap_or(d.time_step),
+                    boundary,
+                })
+            }
+        })
+    }
+
+    /// Every option given on the command line, with the methods it applies to.
+    fn given_options(&self) -> Vec<(&'static str, &'static [MethodArg])> {
+        use MethodArg::{Adaptive, Anisotropic, Mcf, Taubin};
+        const OHTAKE: &[MethodArg] = &[Adaptive, Anisotropic];
+        let given = [
+            ("--epsilon", self.epsilon.is_some(), OHTAKE),
+            ("--sigma-min", self.sigma_min.is_some(), OHTAKE),
+            ("--sigma-max", self.sigma_max.is_some(), OHTAKE),
+            ("--scales", self.scales.is_some(), OHTAKE),
+            ("--rho", self.rho.is_some(), OHTAKE),
+            ("--variance", self.variance.is_some(), OHTAKE),
+            ("--fit-iterations", self.fit_iterations.is_some(), OHTAKE),
+            ("--step-cap", self.step_cap.is_some(), OHTAKE),
+            ("--iterations", self.iterations.is_some(), &[Taubin, Mcf]),
+            ("--weights", self.weights.is_some(), &[Taubin]),
+            ("--lambda", self.lambda.is_some(), &[Taubin]),
+            ("--mu", self.mu.is_some(), &[Taubin]),
+            ("--time-step", self.time_step.is_some(), &[Mcf]),
+            ("--boundary", self.boundary.is_some(), &[Taubin, Mcf]),
+        ];
+        given
+            .into_iter()
+            .filter(|(_, set, _)| *set)
+            .map(|(name, _, methods)| (name, methods))
+            .collect()
+    }
+
+    fn reject_options_of_other_methods(&self) -> anyhow::Result<()> {
+        for (name, methods) in self.given_options() {
+            if !methods.contains(&self.method) {
+                let names: Vec<String> = methods.iter().map(method_name).collect();
+                anyhow::bail!(
+                    "{name} does not apply to --method {} (it is an option of {})",
+                    method_name(&self.method),
+                    names.join(" and ")
+                );
+            }
+        }
+        Ok(())
+    }
+
     /// The Ohtake options these arguments describe (`adaptive` presets unless the method is
     /// `anisotropic`).
-    pub(crate) fn denoise_options(&self) -> DenoiseOptions {
+    fn denoise_options(&self) -> DenoiseOptions {
         let mut o = match self.method {
             MethodArg::Anisotropic => DenoiseOptions::anisotropic(),
             _ => DenoiseOptions::adaptive(),
@@ -148,98 +224,43 @@ impl SmoothArgs {
     }
 }
 
-/// Runs the chosen method on `mesh`; new positions in vertex slot order, and a line saying
-/// what was done.
-pub(crate) fn run_method(
-    mesh: &Mesh,
-    args: &SmoothArgs,
-    progress: &dyn Progress,
-) -> anyhow::Result<(Vec<DVec3>, String)> {
-    let boundary = match args.boundary {
-        BoundaryArg::Fixed => Boundary::Fixed,
-        BoundaryArg::Smooth => Boundary::Smooth,
-    };
-    Ok(match args.method {
-        MethodArg::Adaptive | MethodArg::Anisotropic => {
-            let options = args.denoise_options();
-            let r = crate::smooth::denoise(mesh, &options, progress)?;
-            let what = format!(
-                "mean edge {:.4e}; σ_opt histogram {:?}; fitting {} iterations, energy {:.4e} → {:.4e}",
-                r.mean_edge,
-                r.scale_histogram,
-                r.fit.iterations,
-                r.fit.initial_energy,
-                r.fit.final_energy
-            );
-            (r.positions, what)
-        }
-        MethodArg::Taubin => {
-            let o = TaubinOptions {
-                iterations: args
-                    .iterations
-                    .unwrap_or(TaubinOptions::default().iterations),
-                lambda: args.lambda,
-                mu: args.mu,
-                weights: match args.weights {
-                    WeightsArg::Uniform => Weights::Uniform,
-                    WeightsArg::InverseEdge => Weights::InverseEdgeLength,
-                    WeightsArg::Cotan => Weights::Cotangent,
-                },
-                boundary,
-            };
-            let what = format!("{} iterations", o.iterations);
-            (taubin_smoothing(mesh, &o, progress)?, what)
-        }
-        MethodArg::Mcf => {
-            let o = McfOptions {
-                iterations: args.iterations.unwrap_or(McfOptions::default().iterations),
-                time_step: args.time_step,
-                boundary,
-            };
-            let what = format!("{} iterations", o.iterations);
-            (implicit_mcf(mesh, &o, progress)?, what)
-        }
-    })
+fn method_name(method: &MethodArg) -> String {
+    use clap::ValueEnum;
+    method
+        .to_possible_value()
+        .map_or_else(String::new, |v| v.get_name().to_string())
 }
 
 /// Runs `meshpyr smooth`.
 pub(crate) fn run(args: SmoothArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
-    if matches!(args.method, MethodArg::Adaptive | MethodArg::Anisotropic) {
-        args.denoise_options().validate()?;
-    }
+    let method = args.method()?;
+    method.validate()?;
     let input = super::input::read_input_mesh(&args.input)?;
-    let built = Mesh::from_polygons(&input)
-        .with_context(|| format!("building a mesh from {}", args.input.display()))?;
-    if built.report.repaired_anything() {
-        global.say(format_args!(
-            "repaired the input for smoothing: {:?}",
-            built.report
-        ));
-    }
     let start = Instant::now();
     let bar = global.progress("smooth");
-    let (positions, what) = run_method(&built.mesh, &args, &BarProgress(&bar))
+    let smoothed = smooth_mesh(&input, &method, &BarProgress(&bar))
         .with_context(|| format!("smoothing {}", args.input.display()))?;
     bar.finish_and_clear();
+    if smoothed.repair.repaired_anything() {
+        global.say(format_args!(
+            "repaired the input for smoothing: {:?}",
+            smoothed.repair
+        ));
+    }
     global.say(format_args!(
-        "{:?}: {} faces in {:.2} s; {what}",
+        "{:?}: {} faces in {:.2} s; {}",
         args.method,
-        built.mesh.n_faces(),
-        start.elapsed().as_secs_f64()
+        input.n_faces(),
+        start.elapsed().as_secs_f64(),
+        smoothed.summary
     ));
-    let output = PolygonMesh {
-        positions: built
-            .source
-            .to_input_positions(&positions, &input.positions),
-        ..input
-    };
-    io::write_mesh(&args.output, &output)?;
+    io::write_mesh(&args.output, &smoothed.mesh)?;
     global.say(format_args!(
         "wrote {} ({} vertices, {} faces)",
         args.output.display(),
-        output.n_vertices(),
-        output.n_faces()
+        smoothed.mesh.n_vertices(),
+        smoothed.mesh.n_faces()
     ));
     Ok(())
 }

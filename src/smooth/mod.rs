@@ -1,5 +1,6 @@
-//! Mesh smoothing (denoising) of noisy scans, keeping the connectivity: every smoother is a
-//! plain function over a [`Mesh`] that returns new positions indexed like
+//! Mesh smoothing (denoising) of noisy scans, keeping the connectivity. [`smooth_mesh`] runs any
+//! [`SmoothMethod`] on a mesh as read from a file; below it, every smoother is a
+//! plain function over a [`Mesh`](crate::mesh::Mesh) that returns new positions indexed like
 //! [`Mesh::positions`](crate::mesh::Mesh::positions) (vertex slot order).
 //!
 //! - Ohtake–Belyaev–Seidel feature-preserving smoothing ([`denoise`]): an adaptive (or
@@ -13,12 +14,11 @@
 //!
 //! Measure results with [`crate::metrics::compare`] (E_v, E_n, Hausdorff).
 
-use crate::mesh::{Mesh, PolygonMesh};
-
 pub(crate) mod dual;
 pub(crate) mod fitting;
 pub(crate) mod kernel;
 pub(crate) mod mcf;
+pub(crate) mod method;
 pub(crate) mod normal_filter;
 pub(crate) mod ohtake;
 pub(crate) mod surface;
@@ -28,6 +28,7 @@ mod testutil;
 
 pub use fitting::FitReport;
 pub use mcf::{McfOptions, implicit_mcf};
+pub use method::{SmoothMethod, Smoothed, smooth_mesh, smooth_positions};
 pub use normal_filter::Variance;
 pub use ohtake::{DenoiseOptions, Denoised, denoise};
 pub use taubin::{TaubinOptions, Weights, taubin_smoothing};
@@ -65,22 +66,4 @@ pub enum SmoothError {
         /// What the solver reported.
         reason: String,
     },
-}
-
-/// [`denoise`] on a mesh as read from a file (repaired first, as every command does): the
-/// input with new positions, its vertices, faces and attributes unchanged. Vertices the repair
-/// dropped keep their positions. Progress is not reported; call [`denoise`] for that and for
-/// the statistics.
-pub fn denoise_mesh(
-    input: &PolygonMesh,
-    options: &DenoiseOptions,
-) -> Result<PolygonMesh, SmoothError> {
-    let built = Mesh::from_polygons(input)?;
-    let result = denoise(&built.mesh, options, &crate::progress::NoProgress)?;
-    Ok(PolygonMesh {
-        positions: built
-            .source
-            .to_input_positions(&result.positions, &input.positions),
-        ..input.clone()
-    })
 }

@@ -1,0 +1,121 @@
+//! One door to every smoother: [`SmoothMethod`] names a method with its options, and
+//! [`smooth_mesh`] runs it on a mesh as read from a file, so the command line, the Python
+//! package and the viewer choose a method the same way and get the same bits.
+
+use super::{
+    DenoiseOptions, McfOptions, SmoothError, TaubinOptions, denoise, implicit_mcf, taubin_smoothing,
+};
+use crate::mesh::{BuildReport, Mesh, PolygonMesh};
+use crate::progress::Progress;
+use glam::DVec3;
+
+/// A smoothing method with its options.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SmoothMethod {
+    /// Ohtake–Belyaev–Seidel feature-preserving denoising ([`super::denoise`]): adaptive when
+    /// `rho` is 0, anisotropic otherwise (see [`DenoiseOptions::adaptive`] and
+    /// [`DenoiseOptions::anisotropic`]).
+    Ohtake(DenoiseOptions),
+    /// Taubin λ|μ smoothing ([`super::taubin_smoothing`]).
+    Taubin(TaubinOptions),
+    /// Implicit mean-curvature flow ([`super::implicit_mcf`]).
+    Mcf(McfOptions),
+}
+
+impl Default for SmoothMethod {
+    /// The method `meshpyr smooth` runs when no method is named.
+    fn default() -> Self {
+        SmoothMethod::Ohtake(DenoiseOptions::adaptive())
+    }
+}
+
+impl SmoothMethod {
+    /// The method's name as the command line spells it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            SmoothMethod::Ohtake(o) if o.rho > 0.0 => "anisotropic",
+            SmoothMethod::Ohtake(_) => "adaptive",
+            SmoothMethod::Taubin(_) => "taubin",
+            SmoothMethod::Mcf(_) => "mcf",
+        }
+    }
+
+    /// Checks the options' ranges, so a caller can refuse bad options before reading a file.
+    pub fn validate(&self) -> Result<(), SmoothError> {
+        match self {
+            SmoothMethod::Ohtake(o) => o.validate(),
+            SmoothMethod::Taubin(o) => o.validate(),
+            SmoothMethod::Mcf(o) => o.validate(),
+        }
+    }
+}
+
+/// What [`smooth_mesh`] returns.
+#[derive(Clone, Debug)]
+pub struct Smoothed {
+    /// The input with new positions: its vertices (count and order), faces and attributes
+    /// unchanged. Vertices in no face keep their positions.
+    pub mesh: PolygonMesh,
+    /// What the builder repaired before smoothing (a vertex it split gets the mean of its
+    /// copies in [`Smoothed::mesh`]).
+    pub repair: BuildReport,
+    /// One line saying what the method did (scales chosen, iterations, energies).
+    pub summary: String,
+}
+
+/// Smooths a mesh as read from a file: repairs it for processing as every command does, runs
+/// `method`, and maps the new positions back onto the input's vertices. `progress` goes 0 → 1.
+pub fn smooth_mesh(
+    input: &PolygonMesh,
+    method: &SmoothMethod,
+    progress: &dyn Progress,
+) -> Result<Smoothed, SmoothError> {
+    method.validate()?;
+    let built = Mesh::from_polygons(input)?;
+    let (positions, summary) = smooth_positions(&built.mesh, method, progress)?;
+    Ok(Smoothed {
+        mesh: PolygonMesh {
+            positions: built
+                .source
+                .to_input_positions(&positions, &input.positions),
+            ..input.clone()
+        },
+        repair: built.report,
+        summary,
+    })
+}
+
+/// Runs `method` on a half-edge mesh: new positions in vertex slot order, and a line saying
+/// what was done.
+pub fn smooth_positions(
+    mesh: &Mesh,
+    method: &SmoothMethod,
+    progress: &dyn Progress,
+) -> Result<(Vec<DVec3>, String), SmoothError> {
+    Ok(match method {
+        SmoothMethod::Ohtake(options) => {
+            let r = denoise(mesh, options, progress)?;
+            let summary = format!(
+                "mean edge {:.4e}; σ_opt histogram {:?}; fitting {}, energy {:.4e} → {:.4e}",
+                r.mean_edge,
+                r.scale_histogram,
+                iterations(r.fit.iterations),
+                r.fit.initial_energy,
+                r.fit.final_energy
+            );
+            (r.positions, summary)
+        }
+        SmoothMethod::Taubin(options) => (
+            taubin_smoothing(mesh, options, progress)?,
+            iterations(options.iterations),
+        ),
+        SmoothMethod::Mcf(options) => (
+            implicit_mcf(mesh, options, progress)?,
+            iterations(options.iterations),
+        ),
+    })
+}
+
+fn iterations(n: usize) -> String {
+    format!("{n} iteration{}", if n == 1 { "" } else { "s" })
+}
