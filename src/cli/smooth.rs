@@ -14,8 +14,11 @@ use std::time::Instant;
 /// Smoothing method. Each variant maps to one [`SmoothMethod`].
 #[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) enum MethodArg {
-    /// Ohtake–Belyaev–Seidel adaptive Gaussian filter of the face normals + vertex fitting.
+    /// The recommended automatic method: the adaptive filter at the local scale of each
+    /// face, fitted by local vertex updates, two passes (options as for adaptive).
     #[default]
+    Auto,
+    /// Ohtake–Belyaev–Seidel adaptive Gaussian filter of the face normals + vertex fitting.
     Adaptive,
     /// The same on anisotropic neighbourhoods that do not reach across sharp edges.
     Anisotropic,
@@ -45,6 +48,15 @@ pub(crate) enum BoundaryArg {
     Smooth,
 }
 
+/// Unit of the filter scales.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum ScaleArg {
+    /// The mean edge length of the whole mesh.
+    Global,
+    /// Each face's own edge length (averaged with its neighbours').
+    Local,
+}
+
 /// Variance estimate of the scale selection.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) enum VarianceArg {
@@ -60,10 +72,12 @@ pub(crate) enum VarianceArg {
     after_help = "The output has the input's vertices in the same order (unreferenced \
                   ones unchanged), its faces and its attributes; only positions change. Dirty \
                   input is repaired by the builder for processing (see `meshpyr info`); a vertex \
-                  it had to split gets the mean of its copies. adaptive/anisotropic lengths are \
-                  in units of the mean edge length L of the input, epsilon in L²; unset options \
-                  take the method's defaults (adaptive: sigma 0.2..2.0, anisotropic: sigma \
-                  0.5..5.0 and rho). Measure the result against a clean mesh with `meshpyr \
+                  it had to split gets the mean of its copies. auto/adaptive/anisotropic lengths \
+                  are in units of the mean edge length L of the input (auto: of each face's \
+                  local edge length), epsilon in L²; unset options take the method's defaults \
+                  (auto: adaptive with --scale local --vertex-updates 5 --passes 2; adaptive: \
+                  sigma 0.2..2.0; anisotropic: sigma 0.5..5.0 and rho). Options of another \
+                  method are refused. Measure the result against a clean mesh with `meshpyr \
                   compare`."
 )]
 pub(crate) struct SmoothArgs {
@@ -73,32 +87,43 @@ pub(crate) struct SmoothArgs {
     #[arg(short, long)]
     pub(crate) output: PathBuf,
     /// Smoothing method.
-    #[arg(long, value_enum, default_value_t = MethodArg::Adaptive)]
+    #[arg(long, value_enum, default_value_t = MethodArg::Auto)]
     pub(crate) method: MethodArg,
-    /// adaptive/anisotropic: ε of the scale selection (× L²); larger smooths more.
+    /// auto/adaptive/anisotropic: ε of the scale selection (× L²); larger smooths more.
     #[arg(long)]
     pub(crate) epsilon: Option<f64>,
-    /// adaptive/anisotropic: smallest filter scale σ (× L).
+    /// auto/adaptive/anisotropic: smallest filter scale σ (× L).
     #[arg(long)]
     pub(crate) sigma_min: Option<f64>,
-    /// adaptive/anisotropic: largest filter scale σ (× L); the work per face grows with its
+    /// auto/adaptive/anisotropic: largest filter scale σ (× L); the work per face grows with its
     /// square.
     #[arg(long)]
     pub(crate) sigma_max: Option<f64>,
-    /// adaptive/anisotropic: number of scales between --sigma-min and --sigma-max (1 to 64).
+    /// auto/adaptive/anisotropic: number of scales between --sigma-min and --sigma-max (1 to 64).
     #[arg(long)]
     pub(crate) scales: Option<usize>,
-    /// adaptive/anisotropic: anisotropy ρ (0 = isotropic); how much normal differences
+    /// auto/adaptive/anisotropic: anisotropy ρ (0 = isotropic); how much normal differences
     /// lengthen distances.
     #[arg(long)]
     pub(crate) rho: Option<f64>,
-    /// adaptive/anisotropic: variance estimate of the scale selection.
+    /// auto/adaptive/anisotropic: variance estimate of the scale selection.
     #[arg(long, value_enum)]
     pub(crate) variance: Option<VarianceArg>,
-    /// adaptive/anisotropic: most conjugate-gradient iterations of the vertex fitting.
+    /// auto/adaptive/anisotropic: what σ is measured in: the mean edge length L everywhere
+    /// (`global`) or each face's local edge length (`local`, for non-uniform sampling).
+    #[arg(long, value_enum)]
+    pub(crate) scale: Option<ScaleArg>,
+    /// auto/adaptive/anisotropic: fit the vertices with this many rounds of the local vertex
+    /// update (Sun et al. 2007) instead of minimising the global energy.
+    #[arg(long)]
+    pub(crate) vertex_updates: Option<usize>,
+    /// auto/adaptive/anisotropic: passes of filter-then-fit [default: 2 for auto, else 1].
+    #[arg(long)]
+    pub(crate) passes: Option<usize>,
+    /// auto/adaptive/anisotropic: most conjugate-gradient iterations of the vertex fitting.
     #[arg(long)]
     pub(crate) fit_iterations: Option<usize>,
-    /// adaptive/anisotropic: largest move of a vertex per fitting step (× L).
+    /// auto/adaptive/anisotropic: largest move of a vertex per fitting step (× L).
     #[arg(long)]
     pub(crate) step_cap: Option<f64>,
     /// taubin/mcf: iterations (default: 10 for taubin, 1 for mcf).
@@ -131,7 +156,8 @@ impl SmoothArgs {
             Some(BoundaryArg::Fixed) | None => Boundary::Fixed,
         };
         Ok(match self.method {
-            MethodArg::Adaptive | MethodArg::Anisotropic => {
+            MethodArg::Auto if self.given_options().is_empty() => SmoothMethod::Auto,
+            MethodArg::Auto | MethodArg::Adaptive | MethodArg::Anisotropic => {
                 SmoothMethod::Ohtake(self.denoise_options())
             }
             MethodArg::Taubin => {
@@ -162,8 +188,8 @@ impl SmoothArgs {
 
     /// Every option given on the command line, with the methods it applies to.
     fn given_options(&self) -> Vec<(&'static str, &'static [MethodArg])> {
-        use MethodArg::{Adaptive, Anisotropic, Mcf, Taubin};
-        const OHTAKE: &[MethodArg] = &[Adaptive, Anisotropic];
+        use MethodArg::{Adaptive, Anisotropic, Auto, Mcf, Taubin};
+        const OHTAKE: &[MethodArg] = &[Auto, Adaptive, Anisotropic];
         let given = [
             ("--epsilon", self.epsilon.is_some(), OHTAKE),
             ("--sigma-min", self.sigma_min.is_some(), OHTAKE),
@@ -172,6 +198,9 @@ impl SmoothArgs {
             ("--rho", self.rho.is_some(), OHTAKE),
             ("--variance", self.variance.is_some(), OHTAKE),
             ("--fit-iterations", self.fit_iterations.is_some(), OHTAKE),
+            ("--scale", self.scale.is_some(), OHTAKE),
+            ("--vertex-updates", self.vertex_updates.is_some(), OHTAKE),
+            ("--passes", self.passes.is_some(), OHTAKE),
             ("--step-cap", self.step_cap.is_some(), OHTAKE),
             ("--iterations", self.iterations.is_some(), &[Taubin, Mcf]),
             ("--weights", self.weights.is_some(), &[Taubin]),
@@ -206,6 +235,7 @@ impl SmoothArgs {
     fn denoise_options(&self) -> DenoiseOptions {
         let mut o = match self.method {
             MethodArg::Anisotropic => DenoiseOptions::anisotropic(),
+            MethodArg::Auto => DenoiseOptions::automatic(),
             _ => DenoiseOptions::adaptive(),
         };
         o.epsilon = self.epsilon.unwrap_or(o.epsilon);
@@ -220,6 +250,9 @@ impl SmoothArgs {
         };
         o.max_iterations = self.fit_iterations.unwrap_or(o.max_iterations);
         o.step_cap = self.step_cap.unwrap_or(o.step_cap);
+        o.passes = self.passes.unwrap_or(o.passes);
+        o.vertex_updates = self.vertex_updates.unwrap_or(o.vertex_updates);
+        o.local_scale = self.scale.map_or(o.local_scale, |s| s == ScaleArg::Local);
         o
     }
 }

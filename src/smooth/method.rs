@@ -12,6 +12,10 @@ use glam::DVec3;
 /// A smoothing method with its options.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SmoothMethod {
+    /// The recommended method, which `meshpyr smooth` runs when no method is named: today
+    /// [`DenoiseOptions::automatic`]. It may change between versions as better methods
+    /// arrive; name the method and its options to pin the result.
+    Auto,
     /// Ohtake–Belyaev–Seidel feature-preserving denoising ([`super::denoise`]): adaptive when
     /// `rho` is 0, anisotropic otherwise (see [`DenoiseOptions::adaptive`] and
     /// [`DenoiseOptions::anisotropic`]).
@@ -25,7 +29,7 @@ pub enum SmoothMethod {
 impl Default for SmoothMethod {
     /// The method `meshpyr smooth` runs when no method is named.
     fn default() -> Self {
-        SmoothMethod::Ohtake(DenoiseOptions::adaptive())
+        SmoothMethod::Auto
     }
 }
 
@@ -33,6 +37,7 @@ impl SmoothMethod {
     /// The method's name as the command line spells it.
     pub fn name(&self) -> &'static str {
         match self {
+            SmoothMethod::Auto => "auto",
             SmoothMethod::Ohtake(o) if o.rho > 0.0 => "anisotropic",
             SmoothMethod::Ohtake(_) => "adaptive",
             SmoothMethod::Taubin(_) => "taubin",
@@ -43,6 +48,7 @@ impl SmoothMethod {
     /// Checks the options' ranges, so a caller can refuse bad options before reading a file.
     pub fn validate(&self) -> Result<(), SmoothError> {
         match self {
+            SmoothMethod::Auto => Ok(()),
             SmoothMethod::Ohtake(o) => o.validate(),
             SmoothMethod::Taubin(o) => o.validate(),
             SmoothMethod::Mcf(o) => o.validate(),
@@ -93,6 +99,10 @@ pub fn smooth_positions(
     progress: &dyn Progress,
 ) -> Result<(Vec<DVec3>, String), SmoothError> {
     Ok(match method {
+        SmoothMethod::Auto => {
+            let automatic = SmoothMethod::Ohtake(DenoiseOptions::automatic());
+            return smooth_positions(mesh, &automatic, progress);
+        }
         SmoothMethod::Ohtake(options) => {
             let r = denoise(mesh, options, progress)?;
             let summary = format!(

@@ -30,6 +30,10 @@ pub(crate) struct ScaleGrid {
     pub rho: f64,
     /// Which variance estimate the selection rule uses.
     pub variance: Variance,
+    /// Per face, the factor its σ values are multiplied by (its local edge length over the
+    /// mean), or empty for one scale everywhere. ε/σ² is dimensionless, so the penalty does
+    /// not change: only the kernels stretch.
+    pub local: Vec<f64>,
 }
 
 /// The variance estimate of rule (5); see `local_variance`.
@@ -115,12 +119,15 @@ pub(crate) fn filter_normals(
             || pool.take(n),
             |ws, f| {
                 let ball = ws.ball.as_mut().expect("workspace present until dropped");
-                ball.grow(graph, normals, grid.rho, f, radius);
+                let local = grid.local.get(f as usize).copied().unwrap_or(1.0);
+                ball.grow(graph, normals, grid.rho, f, radius * local);
+                let inv_local: [f64; MAX_SCALES] =
+                    std::array::from_fn(|s| inv.get(s).map_or(0.0, |i| i / local));
                 let r = select_scale(
                     &ball.ball,
                     normals,
                     areas,
-                    &inv,
+                    &inv_local[..k],
                     &penalty,
                     grid.variance,
                     &table,
@@ -258,6 +265,7 @@ mod tests {
             epsilon: 0.01,
             rho: 0.0,
             variance: Variance::Biased,
+            local: Vec::new(),
         }
     }
 
@@ -340,5 +348,28 @@ mod tests {
         assert_eq!(m.normals[0], DVec3::ZERO);
         assert_eq!(m.scale[0], u8::MAX);
         assert_eq!(m.normals[1], DVec3::Z);
+    }
+
+    #[test]
+    fn local_factors_make_the_scale_choice_follow_the_sampling() {
+        let hash = |x: f64, y: f64| ((x * 12.9898 + y * 78.233).sin() * 43758.5453).fract() - 0.5;
+        let mesh = grid_mesh(16, |x, y| 0.15 * hash(x, y));
+        let (at_unit_size, _) = run(&mesh, &iso_grid());
+        // The same surface an eighth the size (a power of two: exact): with the same absolute
+        // σ the kernels are eight times too wide, with local factors of 1/8 they fit again.
+        let (p, t) = crate::mesh::shapes::grid(16, |i, j| {
+            let (x, y) = (i as f64, j as f64);
+            DVec3::new(x, y, 0.15 * hash(x, y)) * 0.125
+        });
+        let small = Mesh::from_triangles(&p, &t).expect("valid grid").mesh;
+        let faces = small.n_faces();
+        let (global, _) = run(&small, &iso_grid());
+        let local = ScaleGrid {
+            local: vec![0.125; faces],
+            ..iso_grid()
+        };
+        let (local, _) = run(&small, &local);
+        assert_eq!(local, at_unit_size);
+        assert_ne!(global.scale, at_unit_size.scale);
     }
 }

@@ -6,9 +6,14 @@
 //!    ([`super::dual`]), then
 //! 2. moving the vertices so the face normals fit the filtered field ([`super::fitting`]).
 //!
-//! The paper warns that iterating oversmooths, so [`denoise`] runs the pass once. Every
+//! The paper warns that iterating oversmooths, so the paper's presets
+//! ([`DenoiseOptions::adaptive`], [`DenoiseOptions::anisotropic`]) run the pass once. Every
 //! constant the source garbles is a field of [`DenoiseOptions`], in units of the mean edge
 //! length L of the input.
+//!
+//! Scans with uneven sampling need three changes (`docs/algorithms.md` §2.7), which
+//! [`DenoiseOptions::automatic`] switches on: σ in units of each face's local edge length,
+//! the local vertex update instead of the global energy, and a second pass.
 
 use super::SmoothError;
 use super::dual::DualGraph;
@@ -41,6 +46,14 @@ pub struct DenoiseOptions {
     pub tolerance: f64,
     /// Largest move of a vertex in one fitting step (× L).
     pub step_cap: f64,
+    /// Measure σ in units of each face's *local* edge length instead of the mean L, so that
+    /// on a non-uniformly sampled scan small triangles are filtered at their own scale.
+    pub local_scale: bool,
+    /// Fit the vertices with this many rounds of the local vertex update instead of
+    /// minimising the global energy (0: the energy).
+    pub vertex_updates: usize,
+    /// Passes of filter-then-fit, each on the previous one's result (at least 1).
+    pub passes: usize,
 }
 
 impl DenoiseOptions {
@@ -58,6 +71,9 @@ impl DenoiseOptions {
             max_iterations: 200,
             tolerance: 1e-6,
             step_cap: 0.1,
+            local_scale: false,
+            vertex_updates: 0,
+            passes: 1,
         }
     }
 
@@ -74,6 +90,18 @@ impl DenoiseOptions {
             scales: 10,
             epsilon: 1.0,
             rho: 5.0,
+            ..DenoiseOptions::adaptive()
+        }
+    }
+
+    /// The automatic default of `meshpyr smooth`: the adaptive filter with σ in units of the
+    /// local edge length (non-uniform sampling), the local vertex update for the fitting
+    /// (5 rounds) and two passes. See `docs/performance.md` for how it compares.
+    pub fn automatic() -> DenoiseOptions {
+        DenoiseOptions {
+            local_scale: true,
+            vertex_updates: 5,
+            passes: 2,
             ..DenoiseOptions::adaptive()
         }
     }
@@ -117,6 +145,9 @@ impl DenoiseOptions {
         }
         if !finite_pos(self.step_cap) {
             return bad("step_cap must be positive and finite");
+        }
+        if self.passes == 0 {
+            return bad("passes must be at least 1");
         }
         Ok(())
     }
@@ -187,34 +218,11 @@ pub fn denoise(
         return Ok(result);
     }
     surface.reorder_spatially(&result.positions);
-    let frames = surface.face_frames(&result.positions);
-    let graph = DualGraph::new(&surface, &result.positions, &frames);
-    let grid = ScaleGrid {
-        sigmas: options.sigmas().iter().map(|s| s * l).collect(),
-        epsilon: options.epsilon * l * l,
-        rho: options.rho,
-        variance: options.variance,
-    };
-    let filtered: FilteredNormals =
-        filter_normals(&graph, &frames.normals, &frames.areas, &grid, &|x: f64| {
-            progress.update(0.7 * x)
-        });
-    for &s in &filtered.scale {
-        match result.scale_histogram.get_mut(s as usize) {
-            Some(c) => *c += 1,
-            None => result.unfiltered_faces += 1,
-        }
+    let passes = options.passes.max(1);
+    for pass in 0..passes {
+        let share = |x: f64| progress.update((pass as f64 + x) / passes as f64);
+        run_pass(&surface, &mut result, options, l, &share);
     }
-    let fitting = Fitting::new(&surface, &filtered.normals);
-    let fit_options = FitOptions {
-        max_iterations: options.max_iterations,
-        tolerance: options.tolerance,
-        step_cap: options.step_cap * l,
-        ..FitOptions::default()
-    };
-    result.fit = fitting.minimise(&mut result.positions, &fit_options, &|x: f64| {
-        progress.update(0.7 + 0.3 * x)
-    });
     // Back to the input's coordinates; vertices the fitting did not move (those in no face,
     // and empty slots) keep their exact input bits. Nothing changed the positions before the
     // fitting, so a vertex it left alone still holds exactly `q - origin`.
@@ -222,4 +230,54 @@ pub fn denoise(
         *p = if *p == q - origin { q } else { *p + origin };
     }
     Ok(result)
+}
+
+/// One pass: filter the face normals of `result.positions`, then fit the vertices to them.
+fn run_pass(
+    surface: &FlatSurface,
+    result: &mut Denoised,
+    options: &DenoiseOptions,
+    l: f64,
+    progress: &dyn Progress,
+) {
+    let frames = surface.face_frames(&result.positions);
+    let graph = DualGraph::new(surface, &result.positions, &frames);
+    let grid = ScaleGrid {
+        sigmas: options.sigmas().iter().map(|s| s * l).collect(),
+        epsilon: options.epsilon * l * l,
+        rho: options.rho,
+        variance: options.variance,
+        local: if options.local_scale {
+            surface.local_length_factors(&result.positions, l)
+        } else {
+            Vec::new()
+        },
+    };
+    let filtered: FilteredNormals =
+        filter_normals(&graph, &frames.normals, &frames.areas, &grid, &|x: f64| {
+            progress.update(0.7 * x)
+        });
+    result.scale_histogram.fill(0);
+    result.unfiltered_faces = 0;
+    for &s in &filtered.scale {
+        match result.scale_histogram.get_mut(s as usize) {
+            Some(c) => *c += 1,
+            None => result.unfiltered_faces += 1,
+        }
+    }
+    let fitting = Fitting::new(surface, &filtered.normals);
+    if options.vertex_updates > 0 {
+        fitting.project(&mut result.positions, options.vertex_updates);
+    } else {
+        let fit_options = FitOptions {
+            max_iterations: options.max_iterations,
+            tolerance: options.tolerance,
+            step_cap: options.step_cap * l,
+            ..FitOptions::default()
+        };
+        result.fit = fitting.minimise(&mut result.positions, &fit_options, &|x: f64| {
+            progress.update(0.7 + 0.3 * x)
+        });
+    }
+    progress.update(1.0);
 }

@@ -117,6 +117,35 @@ impl FlatSurface {
         }
     }
 
+    /// Per face, its local edge length over `mean`: the mean length of its edges and those
+    /// of the faces across them. Averaging over the neighbours keeps noise from deciding a
+    /// face's scale; a face with no length of its own gets 1.
+    pub(crate) fn local_length_factors(&self, positions: &[DVec3], mean: f64) -> Vec<f64> {
+        let own: Vec<f64> = (0..self.triangles.len())
+            .map(|f| {
+                let [a, b, c] = self.triangles[f].map(|v| positions[v as usize]);
+                ((b - a).length() + (c - b).length() + (a - c).length()) / 3.0
+            })
+            .collect();
+        (0..self.triangles.len())
+            .map(|f| {
+                let (mut sum, mut count) = (own[f], 1.0);
+                for &g in &self.adjacency[f] {
+                    if let Some(&l) = own.get(g as usize) {
+                        sum += l;
+                        count += 1.0;
+                    }
+                }
+                let factor = sum / count / mean;
+                if factor > 0.0 && factor.is_finite() {
+                    factor
+                } else {
+                    1.0
+                }
+            })
+            .collect()
+    }
+
     /// Unnormalised normal `(P1 − P0) × (P2 − P0)` of face `f` (twice the area, along n).
     #[inline]
     pub(crate) fn area_vector(&self, positions: &[DVec3], f: usize) -> DVec3 {
@@ -245,5 +274,42 @@ mod tests {
         let (n, a) = unit_normal(DVec3::new(0.0, 0.0, 1e-100));
         assert_eq!(n, DVec3::Z);
         assert!(a > 0.0);
+    }
+
+    #[test]
+    fn local_length_factors_follow_the_sampling() {
+        // A strip of unit squares, then a strip ten times finer along x, side by side.
+        let mut p = Vec::new();
+        let mut t = Vec::new();
+        let mut quad = |p: &mut Vec<DVec3>, x0: f64, w: f64| {
+            let i = p.len() as u32;
+            p.extend([
+                DVec3::new(x0, 0.0, 0.0),
+                DVec3::new(x0 + w, 0.0, 0.0),
+                DVec3::new(x0 + w, w, 0.0),
+                DVec3::new(x0, w, 0.0),
+            ]);
+            t.extend([[i, i + 1, i + 2], [i, i + 2, i + 3]]);
+        };
+        quad(&mut p, 0.0, 1.0);
+        quad(&mut p, 5.0, 0.1);
+        let built = Mesh::from_triangles(&p, &t).expect("valid mesh");
+        let s = FlatSurface::new(&built.mesh);
+        let pos = built.mesh.positions();
+        let mean = s.mean_edge_length(&pos);
+        let f = s.local_length_factors(&pos, mean);
+        // Each face averages with its one neighbour, which has its size.
+        let coarse = (2.0 + 2f64.sqrt()) / 3.0 / mean;
+        for (face, &factor) in f.iter().enumerate() {
+            let expected = if s.triangles[face][0] < 4 {
+                coarse
+            } else {
+                0.1 * coarse
+            };
+            assert!(
+                (factor - expected).abs() < 1e-12,
+                "{face}: {factor} vs {expected}"
+            );
+        }
     }
 }
