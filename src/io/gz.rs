@@ -131,8 +131,8 @@ pub(crate) struct CommentSqueezer {
     previous_continues: bool,
     /// The current line: a `#` has been seen (and, out of the preamble, the rest is dropped).
     in_comment: bool,
-    /// The current line has a non-blank byte before its first `#`.
-    has_data: bool,
+    /// Non-blank bytes before the current line's first `#` (a final `\` among them).
+    data_bytes: usize,
     /// The current line's last byte other than `\r` (what ends it once `\r`s are stripped).
     last: Option<u8>,
 }
@@ -151,7 +151,7 @@ impl CommentSqueezer {
             data_lines: 0,
             previous_continues: false,
             in_comment: false,
-            has_data: false,
+            data_bytes: 0,
             last: None,
         })
     }
@@ -186,7 +186,7 @@ impl CommentSqueezer {
         }
         let data_end = segment.iter().position(|&b| b == b'#');
         let data = &segment[..data_end.unwrap_or(segment.len())];
-        self.has_data |= data.iter().any(|b| !b.is_ascii_whitespace());
+        self.data_bytes += data.iter().filter(|b| !b.is_ascii_whitespace()).count();
         match data_end {
             Some(hash) => {
                 self.in_comment = true;
@@ -209,7 +209,11 @@ impl CommentSqueezer {
             out.push(b'\\');
         }
         out.push(b'\n');
-        if self.verbatim && self.has_data {
+        // Without a comment, a final `\` is the line's last data byte, and no data: the reader
+        // removes it when it joins the lines.
+        let joins_data = !self.in_comment && continues;
+        let has_data = self.data_bytes > usize::from(joins_data);
+        if self.verbatim && has_data {
             self.verbatim = match self.style {
                 // This line starts a statement, so the reader's preamble is over.
                 CommentStyle::Obj => self.previous_continues,
@@ -221,7 +225,7 @@ impl CommentSqueezer {
         }
         self.previous_continues = continues;
         self.in_comment = false;
-        self.has_data = false;
+        self.data_bytes = 0;
         self.last = None;
     }
 }
@@ -248,11 +252,11 @@ mod tests {
     }
 
     #[test]
-    fn obj_comments_after_the_first_statement_lose_their_text_but_keep_their_lines() {
+    fn obj_comments_after_the_first_statement_line_lose_their_text_but_keep_their_lines() {
         let text = "# kept\n#  kept too \r\nv 0 0 0 # gone\n# gone\nv 1 0 0\n";
         assert_eq!(
             squeezed(text, MeshFormat::Obj),
-            "# kept\n#  kept too \r\nv 0 0 0 #\n#\nv 1 0 0\n"
+            "# kept\n#  kept too \r\nv 0 0 0 # gone\n#\nv 1 0 0\n"
         );
     }
 
@@ -273,6 +277,17 @@ mod tests {
     fn a_continued_preamble_line_stays_in_the_preamble() {
         let text = "# a \\\nv 0 0 0\n# b\nv 1 0 0\n";
         assert_eq!(squeezed(text, MeshFormat::Obj), text);
+    }
+
+    /// A line holding only the continuation `\` joins nothing to the data: the preamble goes on
+    /// (a fuzz find).
+    #[test]
+    fn a_lone_continuation_does_not_end_the_preamble() {
+        let text = "\\\n\r#kept\nv 0 0 0\n# gone\n";
+        assert_eq!(squeezed(text, MeshFormat::Obj), "\\\n\r#kept\nv 0 0 0\n#\n");
+        let bytes = text.as_bytes();
+        let mesh = read_mesh_bytes(bytes, MeshFormat::Obj).unwrap();
+        assert_eq!(mesh.comments, ["kept"]);
     }
 
     #[test]
