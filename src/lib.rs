@@ -110,6 +110,7 @@ pub mod relax;
 pub mod render;
 pub mod smooth;
 pub mod subdiv;
+pub(crate) mod wording;
 
 pub use io::{read_mesh, write_mesh};
 pub use mesh::PolygonMesh;

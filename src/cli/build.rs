@@ -32,6 +32,7 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
         relaxation: args.relax.spec(),
         ..PyramidOptions::default()
     };
+    super::output::check_output_folder(&args.output)?;
     let input = read_input_mesh(&args.input)?;
     let start = Instant::now();
     let built = crate::mesh::Mesh::from_polygons(&input)
@@ -54,14 +55,15 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
     io::write_atomic(&args.output, &bytes)?;
     let n = input.n_vertices().max(1) as f64;
     global.say(format_args!(
-        "wrote {}: {} bytes for {} vertices, levels {}..={} (PM {:.1} s, encode {:.3} s)",
+        "wrote {}: {} bytes for {} vertices, levels {}..={} (PM {:.1} s, encode {:.3} s){}",
         args.output.display(),
         sizes.total,
         input.n_vertices(),
         pm.n_base_vertices(),
         pm.n_vertices(),
         built_s,
-        encode_s
+        encode_s,
+        super::input::extra_vertices_note(input.n_vertices(), pm.n_vertices()),
     ));
     global.say(format_args!(
         "  bytes/vertex: whole file {:.2}, PM connectivity {:.2}, split errors {:.2}, positions {:.2}, input order+polygons+attributes {:.2}",

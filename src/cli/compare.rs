@@ -16,7 +16,8 @@ use std::path::{Path, PathBuf};
                   Hausdorff: symmetric, sampled at the vertices, edge midpoints and face \
                   centroids of each mesh with exact distances to the other surface (a lower \
                   bound of the continuous Hausdorff distance). `_rel` values are divided by \
-                  REFERENCE's bounding-box diagonal; e_n_rel equals e_n. Both meshes are \
+                  REFERENCE's bounding-box diagonal; e_n_rel equals e_n. Distances below 64ε \
+                  times the diagonal (rounding noise) are reported as 0. Both meshes are \
                   repaired and consistently oriented by the builder first (see `meshpyr info`)."
 )]
 pub(crate) struct CompareArgs {
@@ -40,13 +41,15 @@ fn load(path: &Path) -> anyhow::Result<Mesh> {
 pub(crate) fn run(args: CompareArgs, _global: &Global) -> anyhow::Result<()> {
     let result = load(&args.result)?;
     let reference = load(&args.reference)?;
-    let c: Comparison = compare(&result, &reference).with_context(|| {
-        format!(
-            "comparing {} against {}",
-            args.result.display(),
-            args.reference.display()
-        )
-    })?;
+    let c: Comparison = compare(&result, &reference)
+        .with_context(|| {
+            format!(
+                "comparing {} against {}",
+                args.result.display(),
+                args.reference.display()
+            )
+        })?
+        .without_rounding_noise();
     if args.json {
         outln!("{}", serde_json::to_string(&c)?);
         return Ok(());
@@ -62,6 +65,12 @@ pub(crate) fn run(args: CompareArgs, _global: &Global) -> anyhow::Result<()> {
         c.e_v_rel,
         c.e_v_over_l
     );
+    if c.e_v == 0.0 && c.hausdorff > 0.0 {
+        outln!(
+            "             (E_v is 0: every vertex of the result lies on the reference's surface, as \
+             simplification keeps vertices where they were; E_n and Hausdorff measure the change)"
+        );
+    }
     outln!("  E_n        {:.6e}", c.e_n);
     outln!(
         "  Hausdorff  {:.6e}  ({:.4e} of the bbox diagonal; result->reference {:.6e}, \

@@ -2,6 +2,7 @@
 
 use super::Global;
 use crate::io::{self, PlyEncoding, WriteOptions};
+use crate::wording::Count;
 use std::path::PathBuf;
 
 /// PLY encodings selectable on the command line.
@@ -33,7 +34,7 @@ pub(crate) struct ConvertArgs {
 /// Runs `meshpyr convert`.
 pub(crate) fn run(args: ConvertArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
-    let mesh = super::input::read_input_mesh(&args.input)?;
+    let mesh = super::input::read_input_points(&args.input)?;
     let opts = WriteOptions {
         ply_encoding: match args.ply_encoding {
             PlyEncodingArg::Ascii => PlyEncoding::Ascii,
@@ -44,10 +45,10 @@ pub(crate) fn run(args: ConvertArgs, global: &Global) -> anyhow::Result<()> {
     };
     io::write_mesh_with(&args.output, &mesh, &opts)?;
     global.say(format_args!(
-        "wrote {} ({} vertices, {} faces)",
+        "wrote {} ({}, {})",
         args.output.display(),
-        mesh.n_vertices(),
-        mesh.n_faces()
+        Count(mesh.n_vertices(), "vertex", "vertices"),
+        Count(mesh.n_faces(), "face", "faces")
     ));
     Ok(())
 }

@@ -7,7 +7,7 @@ use super::filter::{FilterOptions, resolve_reporting};
 use super::input::load_pyramid;
 use crate::format;
 use crate::io;
-use crate::pyramid::{MoveHandle, Pyramid};
+use crate::pyramid::{HandleReach, MoveHandle, Pyramid};
 use crate::relax::RelaxKind;
 use anyhow::Context;
 use glam::DVec3;
@@ -82,7 +82,9 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
         .output
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("pyr"));
-    if !writes_pyr {
+    if writes_pyr {
+        super::output::check_output_folder(&args.output)?;
+    } else {
         super::check_mesh_output(&args.output)?;
     }
     if !(args.radius > 0.0 && args.radius.is_finite()) {
@@ -108,7 +110,8 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
         })
         .collect();
     let gains = resolve_reporting(&args.filters.filter(), p, &args.input.display().to_string());
-    let out = p.edit(args.level, &handles, &gains)?;
+    let (out, reach) = p.edit_reporting(args.level, &handles, &gains)?;
+    warn_unreached(&args, &reach);
     if writes_pyr {
         let positions = scan.to_input_positions(&out);
         save_edited(&scan, positions, &args.output)?;
@@ -117,6 +120,26 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
     }
     global.say(format_args!("wrote {}", args.output.display()));
     Ok(())
+}
+
+/// A warning on standard error for every move that reaches no vertex of the level (it would
+/// otherwise change nothing without a word, like an empty band).
+fn warn_unreached(args: &EditArgs, reach: &[HandleReach]) {
+    for (m, r) in args.moves.iter().zip(reach) {
+        if r.points == 0 {
+            eprintln!(
+                "warning: {}: the move at {},{},{} reaches no vertex of level {} (the nearest is \
+                 {:.6} away, the radius is {}); it changes nothing",
+                args.input.display(),
+                m.at.x,
+                m.at.y,
+                m.at.z,
+                args.level,
+                r.nearest,
+                args.radius
+            );
+        }
+    }
 }
 
 /// Saves `scan` with new input positions as a `.pyr` file (same hierarchy and options, new

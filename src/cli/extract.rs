@@ -5,6 +5,7 @@
 use super::Global;
 use crate::format;
 use crate::io;
+use crate::wording::Count;
 use anyhow::Context;
 use std::path::PathBuf;
 
@@ -61,10 +62,10 @@ pub(crate) fn run(args: ExtractArgs, global: &Global) -> anyhow::Result<()> {
     }
     io::write_mesh(&args.output, &level.to_polygon_mesh())?;
     global.say(format_args!(
-        "wrote {}: level {} ({} triangles)",
+        "wrote {}: level {} ({})",
         args.output.display(),
         level.level,
-        level.triangles.len()
+        Count(level.triangles.len(), "triangle", "triangles")
     ));
     Ok(())
 }
@@ -81,10 +82,10 @@ fn write_original(
         Ok(data) => {
             io::write_mesh(&args.output, &data.input)?;
             global.say(format_args!(
-                "wrote {}: the original mesh, {} vertices, {} faces",
+                "wrote {}: the original mesh, {}, {}",
                 args.output.display(),
-                data.input.n_vertices(),
-                data.input.n_faces()
+                Count(data.input.n_vertices(), "vertex", "vertices"),
+                Count(data.input.n_faces(), "face", "faces")
             ));
             Ok(None)
         }

@@ -8,6 +8,7 @@ use super::input::load_pyramid;
 use crate::io;
 use crate::pyramid::{DetailPyramid, Filter, GainBand, LevelGains, LevelSpec};
 use crate::relax::RelaxKind;
+use crate::wording::Count;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -153,8 +154,8 @@ pub(crate) fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
     let out = scan.pyramid.synthesize(&gains);
     let mesh = scan.output_mesh(&out);
     global.say(format_args!(
-        "synthesised {} levels in {:.3} s",
-        scan.pyramid.n_splits(),
+        "synthesised {} in {:.3} s",
+        Count(scan.pyramid.n_splits(), "level", "levels"),
         start.elapsed().as_secs_f64()
     ));
     io::write_mesh(&args.output, &mesh)?;

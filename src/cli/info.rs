@@ -3,6 +3,7 @@
 use super::Global;
 use super::input::{is_pyr_file, load_pyr};
 use crate::mesh::{BuildReport, Mesh, PolygonMesh};
+use crate::wording::Count;
 use anyhow::Context;
 use serde::Serialize;
 use std::path::PathBuf;
@@ -118,13 +119,13 @@ pub(crate) fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
     } else {
         (crate::io::read_mesh(&args.mesh)?, None)
     };
+    super::input::require(&args.mesh, poly.check_not_empty())?;
     let mut info = mesh_info(&poly).with_context(|| args.mesh.display().to_string())?;
     info.pm_base = pm_base;
     if args.json {
         outln!("{}", serde_json::to_string(&info)?);
         return Ok(());
     }
-    let r = &info.repairs;
     outln!("{}", args.mesh.display());
     outln!(
         "  vertices {}  faces {} (from {} polygons)  edges {}",
@@ -160,30 +161,82 @@ pub(crate) fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
     if !info.face_attributes.is_empty() {
         outln!("  face attributes: {}", info.face_attributes.join(" "));
     }
+    print_repairs(&info)
+}
+
+/// The repairs the builder makes, and what they mean for the levels of the hierarchy.
+fn print_repairs(info: &MeshInfo) -> anyhow::Result<()> {
+    let r = &info.repairs;
     let repairs = [
-        ("polygons triangulated", r.triangulated_polygons),
         (
+            "polygon triangulated",
+            "polygons triangulated",
+            r.triangulated_polygons,
+        ),
+        (
+            "triangle with a repeated index dropped",
             "triangles with a repeated index dropped",
             r.dropped_repeated_index,
         ),
-        ("zero-area triangles (kept)", r.zero_area_faces),
-        ("non-manifold edges cut", r.non_manifold_edges),
-        ("pinched vertices", r.non_manifold_vertices),
-        ("vertex copies added", r.split_vertices),
-        ("triangles re-oriented", r.flipped_faces),
-        ("edges cut to orient", r.orientation_cuts),
-        ("vertices detached (multi-edges)", r.detached_vertices),
-        ("unreferenced vertices (kept)", r.unreferenced_vertices),
+        (
+            "zero-area triangle (kept)",
+            "zero-area triangles (kept)",
+            r.zero_area_faces,
+        ),
+        (
+            "non-manifold edge cut",
+            "non-manifold edges cut",
+            r.non_manifold_edges,
+        ),
+        (
+            "pinched vertex",
+            "pinched vertices",
+            r.non_manifold_vertices,
+        ),
+        ("vertex copy added", "vertex copies added", r.split_vertices),
+        (
+            "triangle re-oriented",
+            "triangles re-oriented",
+            r.flipped_faces,
+        ),
+        (
+            "edge cut to orient",
+            "edges cut to orient",
+            r.orientation_cuts,
+        ),
+        (
+            "vertex detached (multi-edges)",
+            "vertices detached (multi-edges)",
+            r.detached_vertices,
+        ),
+        (
+            "unreferenced vertex (kept)",
+            "unreferenced vertices (kept)",
+            r.unreferenced_vertices,
+        ),
     ];
     let done: Vec<String> = repairs
         .iter()
-        .filter(|(_, n)| *n > 0)
-        .map(|(what, n)| format!("{n} {what}"))
+        .filter(|(.., n)| *n > 0)
+        .map(|&(one, many, n)| Count(n, one, many).to_string())
         .collect();
     if done.is_empty() {
         outln!("  repairs: none needed");
     } else {
         outln!("  repairs for processing: {}", done.join(", "));
+    }
+    if info.faces == 0 {
+        outln!(
+            "  no faces: a point cloud (info and convert take it; the other commands need a surface)"
+        );
+    }
+    if r.split_vertices > 0 {
+        outln!(
+            "  levels (build, filter, edit) count the repaired mesh's vertices: these {} plus the \
+             {} made where the surface is not manifold",
+            info.vertices,
+            Count(r.split_vertices, "vertex copy", "vertex copies")
+        );
     }
     Ok(())
 }

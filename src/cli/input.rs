@@ -4,9 +4,10 @@
 use super::{BarProgress, Global};
 use crate::format;
 use crate::io;
-use crate::mesh::PolygonMesh;
+use crate::mesh::{MissingSurface, PolygonMesh};
 use crate::pyramid::{Pyramid, PyramidOptions};
 use crate::relax::{RelaxKind, RelaxationSpec};
+use crate::wording::Count;
 use anyhow::Context;
 use std::path::Path;
 use std::time::Instant;
@@ -15,11 +16,34 @@ use std::time::Instant;
 /// signature, whatever its name), whose stored input mesh is restored exactly — the file the
 /// user built it from, so `info`, `convert`, `simplify`, `subdivide`, `smooth`, `compare` and
 /// `build` take the file they keep as well.
+///
+/// Every command that takes this needs a surface: a file with nothing in it, a point cloud or
+/// faces that all repeat a vertex is an error naming the file and what is missing
+/// ([`read_input_points`] takes point clouds too).
 pub(crate) fn read_input_mesh(path: &Path) -> anyhow::Result<PolygonMesh> {
+    let mesh = read_any_input(path)?;
+    require(path, mesh.check_surface())?;
+    Ok(mesh)
+}
+
+/// [`read_input_mesh`] for the commands that take point clouds as well (`convert`): only a
+/// file with nothing in it is an error.
+pub(crate) fn read_input_points(path: &Path) -> anyhow::Result<PolygonMesh> {
+    let mesh = read_any_input(path)?;
+    require(path, mesh.check_not_empty())?;
+    Ok(mesh)
+}
+
+fn read_any_input(path: &Path) -> anyhow::Result<PolygonMesh> {
     if is_pyr_file(path) {
         return Ok(load_pyr(path)?.input);
     }
     Ok(io::read_mesh(path)?)
+}
+
+/// A failed content check as an error naming the file.
+pub(crate) fn require(path: &Path, check: Result<(), MissingSurface>) -> anyhow::Result<()> {
+    check.map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
 
 /// True when `path` is a `.pyr` file (by its signature; an unreadable file is "not").
@@ -62,6 +86,7 @@ pub(crate) fn load_pyramid(
         return Ok(scan);
     }
     let input = io::read_mesh(path)?;
+    require(path, input.check_surface())?;
     build_pyramid(
         input,
         wanted.unwrap_or_default(),
@@ -82,13 +107,14 @@ fn load_pyr_scan(path: &Path, global: &Global) -> anyhow::Result<Pyramid> {
     bar.finish_and_clear();
     let p = &scan.pyramid;
     global.say(format_args!(
-        "{}: {} vertices, levels {}..={} (loaded in {:.2} s, details recomputed in {:.2} s)",
+        "{}: {} vertices, levels {}..={} (loaded in {:.2} s, details recomputed in {:.2} s){}",
         path.display(),
         scan.input.n_vertices(),
         p.n_base_vertices(),
         p.n_vertices(),
         loaded,
-        start.elapsed().as_secs_f64() - loaded
+        start.elapsed().as_secs_f64() - loaded,
+        extra_vertices_note(scan.input.n_vertices(), p.n_vertices()),
     ));
     Ok(scan)
 }
@@ -111,15 +137,29 @@ pub(crate) fn build_pyramid(
     bar.finish_and_clear();
     let p = &scan.pyramid;
     global.say(format_args!(
-        "{name}: {} vertices, levels {}..={}, {} details ({} relaxation) in {:.2} s",
+        "{name}: {} vertices, levels {}..={}, {} details ({} relaxation) in {:.2} s{}",
         scan.input.positions.len(),
         p.n_base_vertices(),
         p.n_vertices(),
         p.n_details(),
         p.relaxation(),
-        start.elapsed().as_secs_f64()
+        start.elapsed().as_secs_f64(),
+        extra_vertices_note(scan.input.n_vertices(), p.n_vertices()),
     ));
     Ok(scan)
+}
+
+/// Levels are vertex counts of the repaired mesh, so they can run past the file's vertex
+/// count: says why when they do (empty otherwise).
+pub(crate) fn extra_vertices_note(file_vertices: usize, finest: usize) -> String {
+    if finest <= file_vertices {
+        return String::new();
+    }
+    format!(
+        "; levels above {file_vertices} count the {} the repair added at non-manifold spots \
+         (see `meshpyr info`)",
+        Count(finest - file_vertices, "vertex copy", "vertex copies")
+    )
 }
 
 #[cfg(test)]

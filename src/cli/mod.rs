@@ -19,6 +19,7 @@ mod extract;
 mod filter;
 mod info;
 mod input;
+mod output;
 mod simplify;
 mod smooth;
 mod spectrum;
@@ -26,6 +27,7 @@ mod subdivide;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+pub(crate) use output::check_mesh_output;
 use std::io::IsTerminal;
 
 /// Options every subcommand understands.
@@ -76,13 +78,6 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
         c.downcast_ref::<std::io::Error>()
             .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
     })
-}
-
-/// Fails before any work when `path` has no mesh format we can write (the extension decides),
-/// so a typo in `-o` does not cost a whole run.
-pub(crate) fn check_mesh_output(path: &std::path::Path) -> anyhow::Result<()> {
-    crate::io::MeshFormat::from_path(path)?;
-    Ok(())
 }
 
 /// Adapts an indicatif bar to the library's [`crate::progress::Progress`].
@@ -153,6 +148,7 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
 
 /// Parses the command line and runs the subcommand; returns the process exit code.
 pub fn main() -> std::process::ExitCode {
+    remove_temporary_files_on_signals();
     let cli = Cli::parse();
     match run(cli.command, &cli.global) {
         Ok(()) => std::process::ExitCode::SUCCESS,
@@ -164,5 +160,24 @@ pub fn main() -> std::process::ExitCode {
             eprintln!("error: {e:#}");
             std::process::ExitCode::FAILURE
         }
+    }
+}
+
+/// Ctrl-C, SIGTERM and SIGHUP end the process with 128 + the signal number, as the default
+/// action would, but first remove the temporary files of the outputs being written (see
+/// [`crate::io::exit_removing_temporary_files`]); without this they stay behind, hidden.
+fn remove_temporary_files_on_signals() {
+    #[cfg(unix)]
+    {
+        use signal_hook::consts::{SIGHUP, SIGINT, SIGTERM};
+        // Without a handler the signals keep their default action: nothing worse than before.
+        let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM, SIGHUP]) else {
+            return;
+        };
+        std::thread::spawn(move || {
+            if let Some(signal) = signals.forever().next() {
+                crate::io::exit_removing_temporary_files(128 + signal);
+            }
+        });
     }
 }

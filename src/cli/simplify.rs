@@ -4,6 +4,7 @@
 use super::{BarProgress, Global};
 use crate::io;
 use crate::pm::{PmOptions, SimplifyTarget, simplify};
+use crate::wording::Count;
 use anyhow::Context;
 use std::path::PathBuf;
 
@@ -69,8 +70,10 @@ pub(crate) fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
         }
         let (kept, pruned) = crate::mesh::prune_small_components(&input, fraction);
         global.say(format_args!(
-            "pruned {} of {} components ({} polygons) smaller than {fraction} of the diagonal",
-            pruned.components, pruned.of_components, pruned.faces
+            "pruned {} of {} ({}) smaller than {fraction} of the diagonal",
+            pruned.components,
+            Count(pruned.of_components, "component", "components"),
+            Count(pruned.faces, "polygon", "polygons")
         ));
         input = kept;
     }
@@ -90,14 +93,15 @@ pub(crate) fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
     }
     let relaxed = match result.relaxed_collapses {
         0 => String::new(),
+        1 => " (1 collapse needed relaxed shape rules)".to_string(),
         n => format!(" ({n} collapses needed relaxed shape rules)"),
     };
     global.say(format_args!(
-        "wrote {}: {} -> {} triangles, {} vertices{relaxed}",
+        "wrote {}: {} -> {}, {}{relaxed}",
         args.output.display(),
         result.input_triangles,
-        result.mesh.n_faces(),
-        result.mesh.n_vertices()
+        Count(result.mesh.n_faces(), "triangle", "triangles"),
+        Count(result.mesh.n_vertices(), "vertex", "vertices")
     ));
     Ok(())
 }

@@ -25,6 +25,10 @@ pub(crate) struct SpectrumArgs {
 
 /// Runs `meshpyr spectrum`.
 pub(crate) fn run(args: SpectrumArgs, global: &Global) -> anyhow::Result<()> {
+    super::output::check_png_output(&args.output)?;
+    if let Some(csv) = &args.csv {
+        super::output::check_output_folder(csv)?;
+    }
     let scan = load_pyramid(&args.input, args.relax, global)?;
     let spectrum = scan.pyramid.spectrum();
     let png = spectrum.chart("input", &[]).encode_png()?;

@@ -4,6 +4,7 @@ use super::{BarProgress, Global};
 use crate::io;
 use crate::mesh::{Mesh, PolygonMesh};
 use crate::subdiv::{self, Refinement, Scheme, Solver, SubdivOptions};
+use crate::wording::Count;
 use anyhow::Context;
 use std::path::PathBuf;
 
@@ -137,23 +138,26 @@ pub(crate) fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
     for l in &result.levels {
         let solve = match options.scheme {
             Scheme::Mcm => format!(
-                ", {} steps, relative residual {:.1e}",
-                l.steps, l.relative_residual
+                ", {}, relative residual {:.1e}",
+                Count(l.steps, "step", "steps"),
+                l.relative_residual
             ),
             Scheme::Loop => String::new(),
         };
         global.say(format_args!(
-            "level {}: {} vertices, {} faces{solve}",
-            l.level, l.vertices, l.faces
+            "level {}: {}, {}{solve}",
+            l.level,
+            Count(l.vertices, "vertex", "vertices"),
+            Count(l.faces, "face", "faces")
         ));
     }
     let output = PolygonMesh::from_triangle_vec(result.positions, result.triangles);
     io::write_mesh(&args.output, &output)?;
     global.say(format_args!(
-        "wrote {} ({} vertices, {} faces)",
+        "wrote {} ({}, {})",
         args.output.display(),
-        output.n_vertices(),
-        output.n_faces()
+        Count(output.n_vertices(), "vertex", "vertices"),
+        Count(output.n_faces(), "face", "faces")
     ));
     Ok(())
 }

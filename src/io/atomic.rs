@@ -1,13 +1,46 @@
 //! Atomic file replacement: temp file in the same directory, fsync, rename.
+//!
+//! The temporary files of the writes under way are registered, so that a process stopped by a
+//! signal can remove them on its way out ([`exit_removing_temporary_files`]) instead of leaving
+//! hidden files beside the outputs.
 
 use std::fs::{self, File, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::IoError;
 
 static COUNTER: AtomicU64 = AtomicU64::new(0);
+
+/// The temporary files of the atomic writes under way. Created and renamed only while holding
+/// the lock, so once [`exit_removing_temporary_files`] holds it no new one can appear.
+static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// Test hook, not an interface: when set to a number of milliseconds, every atomic write
+/// announces its temporary file on standard error and waits that long before renaming it, so
+/// a test can interrupt a write reliably.
+#[doc(hidden)]
+pub const HOLD_WRITE_ENV: &str = "MESHPYR_TEST_HOLD_WRITE_MS";
+
+fn in_flight() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    IN_FLIGHT
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Removes the temporary files of the atomic writes under way and ends the process with
+/// `code`, without letting another write start or finish in between: for a handler of Ctrl-C
+/// or SIGTERM (run on an ordinary thread, as the `cli` feature's handler does). Outputs that
+/// were complete stay; the ones being written are not created.
+pub fn exit_removing_temporary_files(code: i32) -> ! {
+    let files = in_flight();
+    for tmp in files.iter() {
+        let _ = fs::remove_file(tmp);
+    }
+    std::process::exit(code)
+}
 
 /// Writes `bytes` to `path` atomically: the data goes to a uniquely named temporary file in the
 /// same directory, is flushed and synced, and is then renamed over `path`. Readers see either
@@ -42,8 +75,12 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
                 COUNTER.fetch_add(1, Ordering::Relaxed)
             ));
             let tmp = dir.join(name);
+            let mut registry = in_flight();
             match OpenOptions::new().write(true).create_new(true).open(&tmp) {
-                Ok(f) => break (tmp, f),
+                Ok(f) => {
+                    registry.push(tmp.clone());
+                    break (tmp, f);
+                }
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempt < 100 => {
                     attempt += 1;
                 }
@@ -52,18 +89,38 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
             }
         }
     };
-    let result = write_sync(file, bytes)
-        .map_err(io_err(path))
-        .and_then(|()| fs::rename(&tmp, path).map_err(io_err(path)));
-    if let Err(e) = result {
-        let _ = fs::remove_file(&tmp);
-        return Err(e);
-    }
+    let written = write_sync(file, bytes).map_err(io_err(path));
+    hold_for_tests(&tmp);
+    let result = {
+        let mut registry = in_flight();
+        let result = written.and_then(|()| fs::rename(&tmp, path).map_err(io_err(path)));
+        if result.is_err() {
+            let _ = fs::remove_file(&tmp);
+        }
+        registry.retain(|p| *p != tmp);
+        result
+    };
+    result?;
     // Make the rename itself durable (best effort; not supported on every platform).
     if let Ok(d) = File::open(&dir) {
         let _ = d.sync_all();
     }
     Ok(())
+}
+
+/// The [`HOLD_WRITE_ENV`] test hook.
+fn hold_for_tests(tmp: &Path) {
+    if !cfg!(feature = "cli") {
+        return;
+    }
+    let Some(ms) = std::env::var(HOLD_WRITE_ENV)
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    else {
+        return;
+    };
+    eprintln!("holding {}", tmp.display());
+    std::thread::sleep(std::time::Duration::from_millis(ms));
 }
 
 fn write_sync(mut file: File, bytes: &[u8]) -> std::io::Result<()> {

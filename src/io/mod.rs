@@ -35,13 +35,19 @@ use std::path::{Path, PathBuf};
 use crate::mesh::PolygonMesh;
 
 mod atomic;
+mod fuzz;
+mod gz;
 pub(crate) mod obj;
 pub(crate) mod off;
 pub(crate) mod ply;
 pub(crate) mod stl;
 mod text;
 
-pub use atomic::write_atomic;
+#[doc(hidden)]
+pub use atomic::HOLD_WRITE_ENV;
+pub use atomic::{exit_removing_temporary_files, write_atomic};
+pub(crate) use fuzz::fuzz_read;
+pub use gz::{gunzip, gzip};
 
 /// The mesh file formats meshpyr reads and writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -286,60 +292,30 @@ pub(crate) fn is_gzip(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("gz"))
 }
 
-/// Reads a mesh file; the format comes from the extension (`.gz` files are decompressed
-/// first, see [`gunzip`]).
+/// Reads a mesh file; the format comes from the extension. `.gz` files are decompressed as a
+/// stream, dropping the comments the reader would discard, so a small file that inflates to
+/// gigabytes of comment text reads in little memory.
 pub fn read_mesh(path: impl AsRef<Path>) -> Result<PolygonMesh, IoError> {
     let path = path.as_ref();
-    let format = MeshFormat::from_path(path)?;
-    let mut bytes = std::fs::read(path).map_err(|error| IoError::Io {
-        path: path.to_path_buf(),
-        error,
-    })?;
-    if is_gzip(path) {
-        bytes = gunzip(&bytes).map_err(|e| e.with_path(path))?;
-    }
-    read_mesh_bytes(&bytes, format).map_err(|e| e.with_path(path))
-}
-
-/// Decompresses gzip data (several concatenated members too, as `cat a.gz b.gz` makes).
-///
-/// Memory: DEFLATE expands at most about 1032:1, so the output is bounded by the input's size;
-/// the mesh readers then check every header count against the decompressed size. A corrupt
-/// or truncated stream is a parse error (with the offset into the decompressed data reached).
-pub fn gunzip(bytes: &[u8]) -> Result<Vec<u8>, IoError> {
-    use std::io::Read;
-    if !bytes.starts_with(&[0x1f, 0x8b]) {
-        return Err(IoError::Parse {
-            path: None,
-            location: Location::Byte(0),
-            reason: "not a gzip file (the name ends in .gz)".into(),
+    if path.is_dir() {
+        return Err(IoError::Io {
+            path: path.to_path_buf(),
+            error: std::io::Error::new(
+                std::io::ErrorKind::IsADirectory,
+                "is a directory, not a mesh file",
+            ),
         });
     }
-    let mut out = Vec::new();
-    flate2::read::MultiGzDecoder::new(bytes)
-        .read_to_end(&mut out)
-        .map_err(|e| IoError::Parse {
-            path: None,
-            location: Location::None,
-            reason: format!(
-                "gzip data is corrupt or truncated after {} decompressed bytes: {e}",
-                out.len()
-            ),
-        })?;
-    Ok(out)
-}
-
-/// Compresses with gzip (level 6; no file name or time stamp in the header, so the same mesh
-/// always gives the same bytes).
-pub fn gzip(bytes: &[u8]) -> Vec<u8> {
-    use std::io::Write;
-    let mut enc = flate2::write::GzEncoder::new(
-        Vec::with_capacity(bytes.len() / 3),
-        flate2::Compression::default(),
-    );
-    enc.write_all(bytes)
-        .expect("writing into a Vec cannot fail");
-    enc.finish().expect("writing into a Vec cannot fail")
+    let format = MeshFormat::from_path(path)?;
+    let bytes = if is_gzip(path) {
+        gz::read_gz_file(path, format)?
+    } else {
+        std::fs::read(path).map_err(|error| IoError::Io {
+            path: path.to_path_buf(),
+            error,
+        })?
+    };
+    read_mesh_bytes(&bytes, format).map_err(|e| e.with_path(path))
 }
 
 /// Parses a mesh from memory.
@@ -396,115 +372,4 @@ pub fn write_mesh_bytes(
         MeshFormat::Off => off::write(mesh),
         MeshFormat::Stl => stl::write(mesh, opts.stl_binary),
     }
-}
-
-/// Fuzzing and corpus-replay harness: parses `bytes` as `format`; when that succeeds, writes
-/// the mesh (every PLY encoding, both STL flavours), re-reads it and asserts that writing the
-/// re-read mesh gives identical bytes, and that PLY encodings agree with each other.
-///
-/// Panics only on a reader/writer inconsistency (a bug), never because the input is bad.
-pub(crate) fn fuzz_read(format: MeshFormat, bytes: &[u8]) {
-    let Ok(mesh) = read_mesh_bytes(bytes, format) else {
-        return;
-    };
-    if let Err(e) = mesh.check() {
-        panic!("the reader returned a mesh that breaks the invariants: {e}");
-    }
-    let option_sets: Vec<WriteOptions> = match format {
-        MeshFormat::Ply => vec![
-            WriteOptions {
-                ply_encoding: PlyEncoding::BinaryLittleEndian,
-                ..Default::default()
-            },
-            WriteOptions {
-                ply_encoding: PlyEncoding::BinaryBigEndian,
-                ..Default::default()
-            },
-            WriteOptions {
-                ply_encoding: PlyEncoding::Ascii,
-                ..Default::default()
-            },
-        ],
-        MeshFormat::Stl => vec![
-            WriteOptions::default(),
-            WriteOptions {
-                stl_binary: false,
-                ..Default::default()
-            },
-        ],
-        _ => vec![WriteOptions::default()],
-    };
-    let mut canonical: Option<Vec<u8>> = None;
-    for opts in &option_sets {
-        let first = write_mesh_bytes(&mesh, format, opts)
-            .unwrap_or_else(|e| panic!("writing a mesh the reader accepted failed: {e}"));
-        let again = read_mesh_bytes(&first, format)
-            .unwrap_or_else(|e| panic!("re-reading our own output failed ({opts:?}): {e}"));
-        // Geometry survives the trip bit for bit (STL output is welded on reading, and the
-        // STL reader's meshes are already welded).
-        let bits = |m: &PolygonMesh| -> Vec<[u64; 3]> {
-            m.positions
-                .iter()
-                .map(|p| p.to_array().map(f64::to_bits))
-                .collect()
-        };
-        assert!(bits(&again) == bits(&mesh), "positions changed ({opts:?})");
-        assert!(
-            again.face_starts == mesh.face_starts && again.face_indices == mesh.face_indices,
-            "faces changed ({opts:?})"
-        );
-        let second = write_mesh_bytes(&again, format, opts)
-            .unwrap_or_else(|e| panic!("writing the re-read mesh failed: {e}"));
-        assert!(
-            first == second,
-            "write → read → write is not byte-identical ({opts:?})"
-        );
-        if format != MeshFormat::Ply {
-            continue;
-        }
-        // All PLY encodings must decode to the same mesh: compare via the LE encoding, with
-        // NaN payloads made canonical (ASCII writes every NaN as `NaN`).
-        let le =
-            write_mesh_bytes(&canonical_nans(&again), format, &option_sets[0]).expect("re-encode");
-        match &canonical {
-            None => canonical = Some(le),
-            Some(c) => assert!(*c == le, "PLY encodings disagree ({opts:?})"),
-        }
-    }
-}
-
-/// `mesh` with every NaN attribute value replaced by the canonical NaN.
-fn canonical_nans(mesh: &PolygonMesh) -> PolygonMesh {
-    use crate::mesh::{AttributeData, ElementProperty};
-    fn fix(d: &mut AttributeData) {
-        match d {
-            AttributeData::F32(v) => v
-                .iter_mut()
-                .filter(|x| x.is_nan())
-                .for_each(|x| *x = f32::NAN),
-            AttributeData::F64(v) => v
-                .iter_mut()
-                .filter(|x| x.is_nan())
-                .for_each(|x| *x = f64::NAN),
-            _ => {}
-        }
-    }
-    let mut m = mesh.clone();
-    m.vertex_attributes
-        .iter_mut()
-        .for_each(|a| fix(&mut a.data));
-    m.face_attributes.iter_mut().for_each(|a| fix(&mut a.data));
-    for e in &mut m.extra_elements {
-        for p in &mut e.properties {
-            match p {
-                ElementProperty::Scalar(a) => fix(&mut a.data),
-                ElementProperty::List(l) => l
-                    .items
-                    .iter_mut()
-                    .filter(|x| x.is_nan())
-                    .for_each(|x| *x = f64::NAN),
-            }
-        }
-    }
-    m
 }

@@ -8,6 +8,7 @@ pub(crate) mod polygon;
 #[cfg(feature = "cli")]
 pub(crate) mod prune;
 pub mod shapes;
+mod surface;
 pub(crate) mod topology;
 mod union_find;
 pub(crate) mod validate;
@@ -24,5 +25,6 @@ pub use polygon::{
 };
 #[cfg(feature = "cli")]
 pub(crate) use prune::prune_small_components;
+pub use surface::MissingSurface;
 pub use topology::Topology;
 pub use validate::ValidationError;

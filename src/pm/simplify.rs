@@ -22,6 +22,9 @@ pub enum SimplifyTarget {
 /// Why a mesh could not be simplified.
 #[derive(Debug, thiserror::Error)]
 pub enum SimplifyError {
+    /// The input holds no surface (nothing at all, a point cloud, only degenerate faces).
+    #[error(transparent)]
+    NoSurface(#[from] crate::mesh::MissingSurface),
     /// The input cannot be turned into a half-edge mesh.
     #[error(transparent)]
     Build(#[from] BuildError),
@@ -79,6 +82,7 @@ pub fn simplify(
 ) -> Result<Simplified, SimplifyError> {
     // The decimator works on the builder's corner table directly: the half-edge records a
     // `Mesh` would add are never needed for a single cut (see `decimate`'s module docs).
+    input.check_surface()?;
     let repaired = CornerTable::from_polygons(input)?;
     let n_faces = repaired.corners.n_triangles();
     let positions: Vec<DVec3> = repaired

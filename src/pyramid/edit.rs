@@ -19,6 +19,45 @@ pub struct MoveHandle {
     pub radius: f64,
 }
 
+/// What a handle reached when applied: how many points lay inside its radius, and how far the
+/// nearest one was (infinite without points). A handle that reaches nothing changes nothing,
+/// which callers may want to report.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HandleReach {
+    /// Points strictly inside the radius (the ones the handle moves).
+    pub points: usize,
+    /// Distance from the centre to the nearest point.
+    pub nearest: f64,
+}
+
+impl MoveHandle {
+    /// Moves `points` by `handles` (weights from their distances to each handle's centre;
+    /// several handles add up) and says what each handle reached.
+    pub fn apply(handles: &[MoveHandle], points: &mut [DVec3]) -> Vec<HandleReach> {
+        let mut reach = vec![
+            HandleReach {
+                points: 0,
+                nearest: f64::INFINITY,
+            };
+            handles.len()
+        ];
+        for p in points.iter_mut() {
+            let mut moved = DVec3::ZERO;
+            for (h, r) in handles.iter().zip(&mut reach) {
+                let d = (*p - h.center).length();
+                r.nearest = r.nearest.min(d);
+                let w = falloff(d, h.radius);
+                if w > 0.0 {
+                    r.points += 1;
+                }
+                moved += w * h.displacement;
+            }
+            *p += moved;
+        }
+        reach
+    }
+}
+
 /// The weight of a point at distance `d` from a handle of radius `r`: `(1 − (d/r)²)³` inside,
 /// 0 outside. It is 1 at the centre, and its value, slope and curvature vanish at `r`, so the
 /// edited region blends into the untouched surface without a visible crease.
@@ -41,6 +80,17 @@ impl DetailPyramid {
         handles: &[MoveHandle],
         gains: &LevelGains,
     ) -> Result<Vec<DVec3>, PyramidError> {
+        Ok(self.edit_reporting(level, handles, gains)?.0)
+    }
+
+    /// [`DetailPyramid::edit`], also saying what each handle reached on level `level` (a
+    /// handle farther than its radius from every vertex changes nothing).
+    pub fn edit_reporting(
+        &self,
+        level: usize,
+        handles: &[MoveHandle],
+        gains: &LevelGains,
+    ) -> Result<(Vec<DVec3>, Vec<HandleReach>), PyramidError> {
         for h in handles {
             let valid = h.radius > 0.0
                 && h.radius.is_finite()
@@ -52,20 +102,11 @@ impl DetailPyramid {
                 )));
             }
         }
-        self.edit_with(level, gains, |coarse| {
-            let moved: Vec<DVec3> = coarse
-                .iter()
-                .map(|&p| {
-                    handles
-                        .iter()
-                        .map(|h| falloff((p - h.center).length(), h.radius) * h.displacement)
-                        .sum::<DVec3>()
-                })
-                .collect();
-            for (p, m) in coarse.iter_mut().zip(moved) {
-                *p += m;
-            }
-        })
+        let mut reach = Vec::new();
+        let finest = self.edit_with(level, gains, |coarse| {
+            reach = MoveHandle::apply(handles, coarse);
+        })?;
+        Ok((finest, reach))
     }
 
     /// Synthesises level `level`, lets `edit` change its values (the slice holds PM vertices

@@ -135,7 +135,18 @@ impl GainBand {
         let (a, b) = s
             .split_once(':')
             .ok_or_else(|| parse_error(s, "expected a band A:B such as 1000:15000"))?;
-        Ok((a.parse()?, b.parse()?))
+        let (from, to) = (a.parse()?, b.parse()?);
+        // Vertex counts must come coarse to fine; feature sizes may come in either order
+        // (see the module docs), and a mixed band is ordered only once it meets a surface.
+        if let (LevelSpec::Vertices(x), LevelSpec::Vertices(y)) = (from, to)
+            && x > y
+        {
+            return Err(parse_error(
+                s,
+                format!("a band A:B runs from the coarser level to the finer one: write {y}:{x}"),
+            ));
+        }
+        Ok((from, to))
     }
 
     /// Parses `A:B=G`.

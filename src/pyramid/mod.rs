@@ -48,7 +48,7 @@ pub(crate) mod spectrum;
 pub(crate) mod synthesis;
 pub(crate) mod waves;
 
-pub use edit::MoveHandle;
+pub use edit::{HandleReach, MoveHandle};
 pub(crate) use fuzz::fuzz_pyramid;
 pub use gains::{Filter, LevelGains, LevelSpec};
 pub use gains::{GainBand, GainParseError};
@@ -62,6 +62,9 @@ use glam::DVec3;
 /// Why a pyramid could not be built or used.
 #[derive(Debug, thiserror::Error)]
 pub enum PyramidError {
+    /// The input holds no surface (nothing at all, a point cloud, only degenerate faces).
+    #[error(transparent)]
+    NoSurface(#[from] crate::mesh::MissingSurface),
     /// The mesh could not be turned into a half-edge mesh.
     #[error("cannot build the mesh: {0}")]
     Build(#[from] crate::mesh::BuildError),

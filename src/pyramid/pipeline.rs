@@ -119,6 +119,7 @@ impl Pyramid {
         options: &PyramidOptions,
         progress: &dyn Progress,
     ) -> Result<Pyramid, PyramidError> {
+        input.check_surface()?;
         let built = Mesh::from_polygons(&input)?;
         let pm =
             ProgressiveMesh::build(&built.mesh, &options.pm, &|x: f64| progress.update(0.5 * x))?;

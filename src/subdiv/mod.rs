@@ -181,14 +181,17 @@ pub enum SubdivError {
     /// The input has no triangle.
     #[error("the mesh has no triangles to subdivide")]
     NoFaces,
-    /// The output would exceed [`SubdivOptions::max_output_faces`].
+    /// The output would exceed [`SubdivOptions::max_output_faces`] (or the 32-bit index range,
+    /// whichever is smaller).
     #[error(
-        "{levels} levels would make {faces} faces (limit {limit}); use fewer levels or raise the limit"
+        "{levels} levels would make {} faces, above the limit of {limit} ({}): use fewer levels",
+        FaceCount(*faces),
+        limit_source(*limit)
     )]
     TooLarge {
         /// Requested levels.
         levels: usize,
-        /// Faces the output would have (saturating).
+        /// Faces the output would have (saturating: `usize::MAX` stands for more).
         faces: usize,
         /// The limit.
         limit: usize,
@@ -322,6 +325,29 @@ pub fn subdivide_mesh(
         result.positions,
         result.triangles,
     ))
+}
+
+/// A face count for messages; a saturated count reads as "more than" the largest one.
+struct FaceCount(usize);
+
+impl std::fmt::Display for FaceCount {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.0 == usize::MAX {
+            write!(f, "more than {:.1e}", usize::MAX as f64)
+        } else {
+            write!(f, "{}", self.0)
+        }
+    }
+}
+
+/// What sets a face limit, for [`SubdivError::TooLarge`]: the 32-bit indices or the option
+/// (which the command line leaves at its default).
+fn limit_source(limit: usize) -> &'static str {
+    if limit == INDEX_FACE_LIMIT {
+        "32-bit element indices"
+    } else {
+        "SubdivOptions::max_output_faces, about 4 GB of mesh; the command line has no option for it"
+    }
 }
 
 /// Faces beyond which refinement's `u32` element indices could overflow (a quadrisection
