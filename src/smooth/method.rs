@@ -7,6 +7,7 @@ use super::{
 };
 use crate::mesh::{BuildReport, Mesh, PolygonMesh};
 use crate::progress::Progress;
+use crate::wording::Count;
 use glam::DVec3;
 
 /// A smoothing method with its options.
@@ -71,12 +72,14 @@ pub struct Smoothed {
 
 /// Smooths a mesh as read from a file: repairs it for processing as every command does, runs
 /// `method`, and maps the new positions back onto the input's vertices. `progress` goes 0 → 1.
+/// Fails with [`SmoothError::NoSurface`] when the input has no face to smooth.
 pub fn smooth_mesh(
     input: &PolygonMesh,
     method: &SmoothMethod,
     progress: &dyn Progress,
 ) -> Result<Smoothed, SmoothError> {
     method.validate()?;
+    input.check_surface()?;
     let built = Mesh::from_polygons(input)?;
     let (positions, summary) = smooth_positions(&built.mesh, method, progress)?;
     Ok(Smoothed {
@@ -127,5 +130,33 @@ pub fn smooth_positions(
 }
 
 fn iterations(n: usize) -> String {
-    format!("{n} iteration{}", if n == 1 { "" } else { "s" })
+    Count(n, "iteration", "iterations").to_string()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::progress::NoProgress;
+
+    #[test]
+    fn a_point_cloud_is_refused_as_no_surface() {
+        let cloud = PolygonMesh::from_triangles(vec![DVec3::ZERO, DVec3::X, DVec3::Y], &[]);
+        let r = smooth_mesh(&cloud, &SmoothMethod::Auto, &NoProgress);
+        assert!(matches!(r, Err(SmoothError::NoSurface(_))), "{r:?}");
+    }
+
+    #[test]
+    fn auto_is_the_automatic_preset_and_keeps_the_layout() {
+        let (p, t) = crate::mesh::shapes::icosphere(2);
+        let wobble = |i: usize| 1.0 + 0.05 * ((i * 7919) as f64).sin();
+        let p: Vec<DVec3> = p.iter().enumerate().map(|(i, &x)| x * wobble(i)).collect();
+        let input = PolygonMesh::from_triangles(p, &t);
+        let auto = smooth_mesh(&input, &SmoothMethod::Auto, &NoProgress).expect("smooths");
+        let preset = SmoothMethod::Ohtake(DenoiseOptions::automatic());
+        let explicit = smooth_mesh(&input, &preset, &NoProgress).expect("smooths");
+        assert_eq!(auto.mesh, explicit.mesh);
+        assert_eq!(auto.mesh.face_indices, input.face_indices);
+        assert_ne!(auto.mesh.positions, input.positions);
+        assert_eq!(SmoothMethod::default().name(), "auto");
+    }
 }

@@ -49,6 +49,9 @@ pub enum Boundary {
 /// Why smoothing could not run.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SmoothError {
+    /// The input holds no surface (nothing at all, a point cloud, only degenerate faces).
+    #[error(transparent)]
+    NoSurface(#[from] crate::mesh::MissingSurface),
     /// The input cannot be turned into a half-edge mesh.
     #[error(transparent)]
     Build(#[from] crate::mesh::BuildError),
