@@ -115,7 +115,9 @@ pub use io::{read_mesh, write_mesh};
 pub use mesh::PolygonMesh;
 pub use pm::{ProgressiveMesh, Simplified, SimplifyTarget, simplify};
 pub use progress::NoProgress;
-pub use pyramid::{Filter, MoveHandle, PyrFileError, Pyramid, PyramidOptions, Spectrum};
+pub use pyramid::{
+    Filter, LevelMove, MoveHandle, PyrFileError, Pyramid, PyramidOptions, Spectrum, SynthesisCache,
+};
 pub use relax::RelaxationSpec;
 pub use smooth::{DenoiseOptions, denoise_mesh};
 pub use subdiv::{SubdivOptions, subdivide_mesh};
