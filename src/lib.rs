@@ -87,6 +87,7 @@
 //! | [`numerics`] | the finite elements and solvers that subdivision and smoothing share |
 //! | [`render`] | the previews of the demo |
 //! | [`progress`] | progress reporting |
+//! | `view` | the browser editor's server (feature `view`) |
 //!
 //! Without default features (`meshpyr = { version = "…", default-features = false }`) the
 //! crate is the library alone, without the command line's dependencies.
@@ -110,6 +111,8 @@ pub mod relax;
 pub mod render;
 pub mod smooth;
 pub mod subdiv;
+#[cfg(feature = "view")]
+pub mod view;
 
 pub use io::{read_mesh, write_mesh};
 pub use mesh::PolygonMesh;
