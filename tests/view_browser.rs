@@ -463,16 +463,17 @@ fn equalizer_latency_on_a_large_scan() {
         .as_u64()
         .unwrap() as usize;
     let mut all = Vec::new();
-    println!("octave  gain  end-to-end ms  synthesis ms");
+    println!("octave  gain  end-to-end ms  synthesis ms  received ms  normals+upload ms  draw ms");
     for band in (0..n).rev() {
         for gain in [1.5, 1.0] {
             driver.slide(&format!("#bands input[data-band='{band}']"), gain);
             let last = driver.script("return window.meshpyr.latencies.at(-1);");
-            let (ms, synth) = (
-                last["ms"].as_f64().unwrap(),
-                last["synthesisMs"].as_f64().unwrap(),
+            let [ms, synth, received, upload, draw] =
+                ["ms", "synthesisMs", "receivedMs", "uploadMs", "drawMs"]
+                    .map(|k| last[k].as_f64().unwrap());
+            println!(
+                "{band:>6}  {gain:>4}  {ms:>13.1}  {synth:>12.1}  {received:>11.1}  {upload:>17.1}  {draw:>7.1}"
             );
-            println!("{band:>6}  {gain:>4}  {ms:>13.1}  {synth:>12.1}");
             all.push(ms);
         }
     }

@@ -274,13 +274,19 @@ function requestResult() {
   api('/api/' + kind, { method: 'POST', body: stateBody(), headers: { 'Content-Type': 'application/json' } })
     .then(async (response) => {
       const positions = new Float32Array(await response.arrayBuffer());
+      const received = performance.now();
       M.positions = positions;
       finest.setPositions(positions);
+      const uploaded = performance.now();
       showFinest();
       draw();
       gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4)); // wait until drawn
-      const ms = performance.now() - since;
-      M.latencies.push({ ms, synthesisMs: Number(response.headers.get('X-Meshpyr-Synthesis-Ms')), kind });
+      const drawn = performance.now();
+      const ms = drawn - since;
+      M.latencies.push({
+        ms, kind, synthesisMs: Number(response.headers.get('X-Meshpyr-Synthesis-Ms')),
+        receivedMs: received - since, uploadMs: uploaded - received, drawMs: drawn - uploaded,
+      });
       M.updates += 1;
       setStatus(`${kind}: ${ms.toFixed(0)} ms (synthesis ${response.headers.get('X-Meshpyr-Synthesis-Ms')} ms)`);
       showError(null);
