@@ -2,6 +2,8 @@
 //! editor's API and for WebDriver, which is plain HTTP/JSON), and a server started on a mesh.
 #![allow(dead_code)]
 
+pub mod webdriver;
+
 use meshpyr::Pyramid;
 use meshpyr::view::ViewServer;
 use std::io::{Read, Write};
