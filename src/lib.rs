@@ -87,6 +87,7 @@
 //! | [`numerics`] | the finite elements and solvers that subdivision and smoothing share |
 //! | [`render`] | the previews of the demo |
 //! | [`progress`] | progress reporting |
+//! | `view` | the browser editor's server (feature `view`) |
 //!
 //! Without default features (`meshpyr = { version = "…", default-features = false }`) the
 //! crate is the library alone, without the command line's dependencies.
@@ -110,13 +111,17 @@ pub mod relax;
 pub mod render;
 pub mod smooth;
 pub mod subdiv;
+#[cfg(feature = "view")]
+pub mod view;
 pub(crate) mod wording;
 
 pub use io::{read_mesh, write_mesh};
 pub use mesh::PolygonMesh;
 pub use pm::{ProgressiveMesh, Simplified, SimplifyTarget, simplify};
 pub use progress::NoProgress;
-pub use pyramid::{Filter, MoveHandle, PyrFileError, Pyramid, PyramidOptions, Spectrum};
+pub use pyramid::{
+    Filter, LevelMove, MoveHandle, PyrFileError, Pyramid, PyramidOptions, Spectrum, SynthesisCache,
+};
 pub use relax::RelaxationSpec;
 pub use smooth::{DenoiseOptions, SmoothMethod, Smoothed, smooth_mesh};
 pub use subdiv::{SubdivOptions, subdivide_mesh};

@@ -24,6 +24,7 @@ mod simplify;
 mod smooth;
 mod spectrum;
 mod subdivide;
+mod view;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -127,6 +128,8 @@ enum Command {
     Smooth(smooth::SmoothArgs),
     /// Error of a processed mesh against a reference: E_v, E_n, Hausdorff.
     Compare(compare::CompareArgs),
+    /// Interactive editor in the browser: detail equalizer, level scrubber, drag-to-edit.
+    View(view::ViewArgs),
 }
 
 fn run(command: Command, global: &Global) -> anyhow::Result<()> {
@@ -143,6 +146,7 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
         Command::Extract(a) => extract::run(a, global),
         Command::Smooth(a) => smooth::run(a, global),
         Command::Compare(a) => compare::run(a, global),
+        Command::View(a) => view::run(a, global),
     }
 }
 

@@ -5,11 +5,11 @@ pub mod container;
 pub(crate) mod pyr;
 pub mod varint;
 
+#[cfg(feature = "cli")]
+pub(crate) use pyr::is_pyr;
 pub use pyr::{LevelMesh, PyrData, SizeReport};
 pub use pyr::{MAJOR, MINOR, OLDEST_MAJOR, decode, encode, read_level};
-pub(crate) use pyr::{fix_checksums, fuzz_read_pyr};
-#[cfg(feature = "cli")]
-pub(crate) use pyr::{is_pyr, with_positions};
+pub(crate) use pyr::{fix_checksums, fuzz_read_pyr, with_positions};
 
 /// What can go wrong reading a `.pyr` file. Every variant says where.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

@@ -28,7 +28,6 @@ use serde::{Deserialize, Serialize};
 
 mod attributes;
 mod decode_ahead;
-#[cfg(feature = "cli")]
 mod edit;
 mod fuzz;
 mod hierarchy;
@@ -37,7 +36,6 @@ mod meta;
 mod positions;
 mod split_block;
 
-#[cfg(feature = "cli")]
 pub(crate) use edit::with_positions;
 pub(crate) use fuzz::{fix_checksums, fuzz_read_pyr};
 pub use hierarchy::read_level;

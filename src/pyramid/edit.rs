@@ -70,6 +70,29 @@ pub(crate) fn falloff(d: f64, r: f64) -> f64 {
     t * t * t
 }
 
+/// One move of a sequence of edits ([`DetailPyramid::edit_levels`]): `handle` applied to the
+/// signal of level `level`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LevelMove {
+    /// The level (vertex count) whose vertices move.
+    pub level: usize,
+    /// Where and how far.
+    pub handle: MoveHandle,
+}
+
+fn check_handle(h: &MoveHandle) -> Result<(), PyramidError> {
+    let valid = h.radius > 0.0
+        && h.radius.is_finite()
+        && h.center.is_finite()
+        && h.displacement.is_finite();
+    if !valid {
+        return Err(PyramidError::Invalid(format!(
+            "a move handle needs a finite centre and displacement and a positive radius, got {h:?}"
+        )));
+    }
+    Ok(())
+}
+
 impl DetailPyramid {
     /// Moves the vertices of level `level` with `handles` (weights from their distances to each
     /// handle's centre in the level's own signal; several handles add up), then resynthesises
@@ -91,22 +114,47 @@ impl DetailPyramid {
         handles: &[MoveHandle],
         gains: &LevelGains,
     ) -> Result<(Vec<DVec3>, Vec<HandleReach>), PyramidError> {
-        for h in handles {
-            let valid = h.radius > 0.0
-                && h.radius.is_finite()
-                && h.center.is_finite()
-                && h.displacement.is_finite();
-            if !valid {
-                return Err(PyramidError::Invalid(format!(
-                    "a move handle needs a finite centre and displacement and a positive radius, got {h:?}"
-                )));
-            }
-        }
+        handles.iter().try_for_each(check_handle)?;
         let mut reach = Vec::new();
         let finest = self.edit_with(level, gains, |coarse| {
             reach = MoveHandle::apply(handles, coarse);
         })?;
         Ok((finest, reach))
+    }
+
+    /// A sequence of edits at several levels: synthesis runs coarse to fine and applies each
+    /// move when it reaches the move's level (moves of one level in the order given, each
+    /// seeing the ones before), then goes on to the finest level with `gains`. A single move
+    /// gives exactly [`DetailPyramid::edit`] with its level and handle.
+    pub fn edit_levels(
+        &self,
+        moves: &[LevelMove],
+        gains: &LevelGains,
+    ) -> Result<Vec<DVec3>, PyramidError> {
+        for m in moves {
+            self.check_edit_level(m.level)?;
+            check_handle(&m.handle)?;
+        }
+        let mut order: Vec<&LevelMove> = moves.iter().collect();
+        order.sort_by_key(|m| m.level);
+        let mut f = self.base_signal();
+        let mut reached = self.n_base;
+        for m in order {
+            self.synthesize_range(&mut f, reached, m.level, gains);
+            reached = m.level;
+            MoveHandle::apply(std::slice::from_ref(&m.handle), &mut f[..m.level]);
+        }
+        self.resynthesize_from(f, reached, gains)
+    }
+
+    fn check_edit_level(&self, level: usize) -> Result<(), PyramidError> {
+        if level < self.n_base || level > self.n_finest {
+            return Err(PyramidError::Invalid(format!(
+                "edit level {level} is outside the pyramid's levels {}..={}",
+                self.n_base, self.n_finest
+            )));
+        }
+        Ok(())
     }
 
     /// Synthesises level `level`, lets `edit` change its values (the slice holds PM vertices
@@ -117,12 +165,7 @@ impl DetailPyramid {
         gains: &LevelGains,
         edit: impl FnOnce(&mut [DVec3]),
     ) -> Result<Vec<DVec3>, PyramidError> {
-        if level < self.n_base || level > self.n_finest {
-            return Err(PyramidError::Invalid(format!(
-                "edit level {level} is outside the pyramid's levels {}..={}",
-                self.n_base, self.n_finest
-            )));
-        }
+        self.check_edit_level(level)?;
         let mut f = self.base_signal();
         self.synthesize_range(&mut f, self.n_base, level, gains);
         edit(&mut f[..level]);
@@ -150,5 +193,52 @@ mod tests {
             assert!(w < last);
             last = w;
         }
+    }
+
+    fn small_pyramid() -> DetailPyramid {
+        use crate::pm::{PmOptions, ProgressiveMesh};
+        let (p, t) = crate::mesh::shapes::torus(30, 20, |u, v| {
+            let r = 2.0 + (1.0 + 0.1 * (6.0 * u).sin()) * v.cos();
+            DVec3::new(r * u.cos(), r * u.sin(), v.sin())
+        });
+        let mesh = crate::mesh::Mesh::from_triangles(&p, &t).unwrap().mesh;
+        let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &crate::NoProgress).unwrap();
+        let relax = crate::relax::SecondDifference::default();
+        DetailPyramid::analyze(&pm, &relax, &crate::NoProgress).unwrap()
+    }
+
+    #[test]
+    fn one_level_move_is_the_single_edit_and_moves_apply_coarse_to_fine() {
+        let p = small_pyramid();
+        let (n0, n) = (p.n_base_vertices(), p.n_vertices());
+        let gains = crate::Filter::new().gain(n0, n, 1.5).resolve(1.0);
+        let handle = MoveHandle {
+            center: DVec3::new(3.0, 0.0, 0.0),
+            displacement: DVec3::Z * 0.4,
+            radius: 1.5,
+        };
+        let coarse = LevelMove {
+            level: n0 + (n - n0) / 4,
+            handle,
+        };
+        let single = p.edit(coarse.level, &[handle], &gains).unwrap();
+        assert_eq!(p.edit_levels(&[coarse], &gains).unwrap(), single);
+        assert_ne!(single, p.synthesize(&gains));
+        let fine = LevelMove {
+            level: n0 + (n - n0) / 2,
+            handle: MoveHandle {
+                center: DVec3::new(-3.0, 0.0, 0.0),
+                ..handle
+            },
+        };
+        let both = p.edit_levels(&[fine, coarse], &gains).unwrap();
+        assert_eq!(p.edit_levels(&[coarse, fine], &gains).unwrap(), both);
+        assert_ne!(both, single);
+        assert_eq!(p.edit_levels(&[], &gains).unwrap(), p.synthesize(&gains));
+        let outside = LevelMove {
+            level: n + 1,
+            handle,
+        };
+        assert!(p.edit_levels(&[coarse, outside], &gains).is_err());
     }
 }

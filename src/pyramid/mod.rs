@@ -10,6 +10,8 @@
 //!   that synthesis can rebuild them before the details are known.
 //! * `gains`: filters as a gain per level (low-pass, stop-band, enhancement, bands in vertex
 //!   counts or feature sizes).
+//! * `cached`: re-filtering that resumes from the first level whose gain changed (the
+//!   interactive equalizer of `meshpyr view`).
 //! * `edit`: multiresolution editing — move vertices of a coarse level, resynthesise, and the
 //!   details ride along in their frames.
 //! * `spectrum`: detail energy per level band, as a table and a chart.
@@ -39,6 +41,7 @@ macro_rules! with_codes {
 }
 
 pub(crate) mod analysis;
+mod cached;
 pub(crate) mod edit;
 pub(crate) mod frames;
 mod fuzz;
@@ -48,7 +51,8 @@ pub(crate) mod spectrum;
 pub(crate) mod synthesis;
 pub(crate) mod waves;
 
-pub use edit::{HandleReach, MoveHandle};
+pub use cached::SynthesisCache;
+pub use edit::{HandleReach, LevelMove, MoveHandle};
 pub(crate) use fuzz::fuzz_pyramid;
 pub use gains::{Filter, LevelGains, LevelSpec};
 pub use gains::{GainBand, GainParseError};

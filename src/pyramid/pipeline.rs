@@ -175,6 +175,16 @@ impl Pyramid {
         format::encode(&self.input, &self.pm, &self.options)
     }
 
+    /// The `.pyr` file of an edit: this hierarchy and options with `positions` (one per input
+    /// vertex, as [`Pyramid::to_input_positions`] gives them) as its new original positions.
+    pub fn to_pyr_bytes_with_positions(
+        &self,
+        positions: Vec<DVec3>,
+    ) -> Result<(Vec<u8>, SizeReport), FormatError> {
+        let (input, pm) = format::with_positions(&self.input, &self.source, &self.pm, positions)?;
+        format::encode(&input, &pm, &self.options)
+    }
+
     /// Opens a `.pyr` file's bytes: the hierarchy as saved, and the pyramid recomputed
     /// bit-identical to the one that was saved.
     pub fn from_pyr_bytes(bytes: &[u8], progress: &dyn Progress) -> Result<Self, PyrFileError> {
@@ -204,8 +214,9 @@ impl Pyramid {
     }
 
     /// Maps a signal in PM order onto the input's vertices (split copies averaged, vertices
-    /// outside the hierarchy keep their input positions).
-    pub(crate) fn to_input_positions(&self, pm_signal: &[DVec3]) -> Vec<DVec3> {
+    /// outside the hierarchy keep their input positions): the positions [`Pyramid::filter`]
+    /// writes, without copying the rest of the mesh.
+    pub fn to_input_positions(&self, pm_signal: &[DVec3]) -> Vec<DVec3> {
         // The PM covers every vertex of the repaired mesh (`pm_to_mesh` is a permutation of its
         // slots), and its original positions are the mesh's; entries `pm_signal` lacks keep them.
         let original = self.pm.original_positions();

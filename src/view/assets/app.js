@@ -1,0 +1,590 @@
+// meshpyr view: the page. Plain WebGL2, no libraries. It keeps the editor's state (gains,
+// normal-only switch, edits) and asks the server for positions; the server holds the pyramid.
+// `window.meshpyr` exposes the state and timings for scripts and the browser test.
+'use strict';
+
+const token = new URLSearchParams(location.search).get('token') || '';
+const $ = (id) => document.getElementById(id);
+
+async function api(path, options = {}) {
+  const headers = Object.assign({ 'X-Meshpyr-Token': token }, options.headers || {});
+  const response = await fetch(path, Object.assign({}, options, { headers }));
+  if (!response.ok) {
+    let message = response.status + ' ' + response.statusText;
+    try { message = (await response.json()).error; } catch (_) { /* not JSON */ }
+    throw new Error(message);
+  }
+  return response;
+}
+
+function showError(e) {
+  $('error').textContent = e ? String(e.message || e) : '';
+}
+
+// ---- small vector helpers -------------------------------------------------------------------
+const sub = (a, b) => [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+const add = (a, b) => [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+const scale = (a, s) => [a[0] * s, a[1] * s, a[2] * s];
+const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+const cross = (a, b) => [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+const normalize = (a) => scale(a, 1 / (Math.hypot(a[0], a[1], a[2]) || 1));
+
+// ---- state ----------------------------------------------------------------------------------
+const M = window.meshpyr = {
+  info: null,
+  gains: [],
+  normalOnly: false,
+  moves: [],          // committed edits: {level, center, displacement, radius}
+  pending: null,      // the edit being dragged
+  positions: null,    // Float32Array of the finest result, input vertex order
+  faces: null,        // Uint32Array of the input's triangles
+  shownLevel: null,   // vertex count of the level on screen, null for the finest
+  updates: 0,         // results received and drawn
+  latencies: [],      // per result: {ms: input to drawn, synthesisMs, kind}
+  ready: false,
+};
+
+// ---- camera ---------------------------------------------------------------------------------
+const camera = { target: [0, 0, 0], distance: 1, yaw: 0.6, pitch: 0.35, fov: 35 * Math.PI / 180 };
+
+function resetView() {
+  const { min, max } = M.info.bbox;
+  camera.target = scale(add(min, max), 0.5);
+  camera.distance = 1.6 * M.info.diagonal;
+  camera.yaw = 0.6;
+  camera.pitch = 0.35;
+  requestDraw();
+}
+
+function cameraBasis() {
+  const cp = Math.cos(camera.pitch);
+  const back = [Math.sin(camera.yaw) * cp, Math.sin(camera.pitch), Math.cos(camera.yaw) * cp];
+  const eye = add(camera.target, scale(back, camera.distance));
+  const forward = scale(back, -1);
+  const right = normalize(cross(forward, [0, 1, 0]));
+  const up = cross(right, forward);
+  return { eye, forward, right, up };
+}
+
+function matrices(aspect) {
+  const { eye, forward, right, up } = cameraBasis();
+  const view = [
+    right[0], up[0], -forward[0], 0,
+    right[1], up[1], -forward[1], 0,
+    right[2], up[2], -forward[2], 0,
+    -dot(right, eye), -dot(up, eye), dot(forward, eye), 1,
+  ];
+  const near = camera.distance * 0.01;
+  const far = camera.distance * 4 + 4 * M.info.diagonal;
+  const f = 1 / Math.tan(camera.fov / 2);
+  const proj = [f / aspect, 0, 0, 0, 0, f, 0, 0, 0, 0, (far + near) / (near - far), -1,
+    0, 0, 2 * far * near / (near - far), 0];
+  return { view, proj };
+}
+
+// The ray through canvas pixel (x, y) in CSS pixels.
+function rayAt(x, y) {
+  const canvas = $('canvas');
+  const { eye, forward, right, up } = cameraBasis();
+  const t = Math.tan(camera.fov / 2);
+  const aspect = canvas.clientWidth / canvas.clientHeight;
+  const nx = (2 * x / canvas.clientWidth - 1) * t * aspect;
+  const ny = (1 - 2 * y / canvas.clientHeight) * t;
+  return { origin: eye, dir: normalize(add(forward, add(scale(right, nx), scale(up, ny)))) };
+}
+
+// ---- WebGL ----------------------------------------------------------------------------------
+const gl = $('canvas').getContext('webgl2', { antialias: true, preserveDrawingBuffer: true });
+
+const VERTEX = `#version 300 es
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec3 normal;
+uniform mat4 view, proj;
+out vec3 vPos; out vec3 vNormal;
+void main() {
+  vec4 p = view * vec4(position, 1.0);
+  vPos = p.xyz; vNormal = mat3(view) * normal;
+  gl_Position = proj * p;
+}`;
+const SHADE = `#version 300 es
+precision highp float;
+in vec3 vPos; in vec3 vNormal;
+uniform bool flatShading;
+out vec4 color;
+void main() {
+  vec3 n = flatShading ? normalize(cross(dFdx(vPos), dFdy(vPos))) : normalize(vNormal);
+  vec3 v = normalize(-vPos);
+  if (dot(n, v) < 0.0) n = -n;
+  vec3 key = normalize(vec3(0.4, 0.7, 0.6));
+  float d = max(dot(n, key), 0.0) * 0.75 + max(dot(n, v), 0.0) * 0.25;
+  float s = pow(max(dot(n, normalize(key + v)), 0.0), 40.0) * 0.25;
+  vec3 base = vec3(0.80, 0.76, 0.70);
+  color = vec4(base * (0.18 + 0.82 * d) + s, 1.0);
+}`;
+const LINE = `#version 300 es
+precision highp float;
+in vec3 vPos; in vec3 vNormal;
+out vec4 color;
+void main() { color = vec4(0.12, 0.14, 0.18, 1.0); }`;
+
+function compile(vertex, fragment) {
+  const program = gl.createProgram();
+  for (const [type, source] of [[gl.VERTEX_SHADER, vertex], [gl.FRAGMENT_SHADER, fragment]]) {
+    const shader = gl.createShader(type);
+    gl.shaderSource(shader, source);
+    gl.compileShader(shader);
+    if (!gl.getShaderParameter(shader, gl.COMPILE_STATUS)) throw new Error(gl.getShaderInfoLog(shader));
+    gl.attachShader(program, shader);
+  }
+  gl.linkProgram(program);
+  if (!gl.getProgramParameter(program, gl.LINK_STATUS)) throw new Error(gl.getProgramInfoLog(program));
+  return program;
+}
+
+// One drawable mesh: positions and normals on the GPU, triangles, and edges built on demand.
+class GpuMesh {
+  constructor() {
+    this.vao = gl.createVertexArray();
+    this.position = gl.createBuffer();
+    this.normal = gl.createBuffer();
+    this.triangles = gl.createBuffer();
+    this.edges = null;
+    this.nTriangleIndices = 0;
+    this.nEdgeIndices = 0;
+    this.vertexCount = 0;
+    this.indices = null;
+    gl.bindVertexArray(this.vao);
+    for (const [loc, buf] of [[0, this.position], [1, this.normal]]) {
+      gl.bindBuffer(gl.ARRAY_BUFFER, buf);
+      gl.enableVertexAttribArray(loc);
+      gl.vertexAttribPointer(loc, 3, gl.FLOAT, false, 0, 0);
+    }
+    gl.bindVertexArray(null);
+  }
+
+  setTriangles(indices) {
+    this.indices = indices;
+    gl.bindVertexArray(this.vao);
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.triangles);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, indices, gl.STATIC_DRAW);
+    gl.bindVertexArray(null);
+    this.nTriangleIndices = indices.length;
+    this.edges = null;
+  }
+
+  // Geometry goes to the GPU only here, when it changed: orbiting redraws what is there.
+  setPositions(positions) {
+    const normals = vertexNormals(positions, this.indices);
+    const grow = positions.length !== this.vertexCount * 3;
+    for (const [buf, data] of [[this.position, positions], [this.normal, normals]]) {
+      gl.bindBuffer(gl.ARRAY_BUFFER, buf);
+      if (grow) gl.bufferData(gl.ARRAY_BUFFER, data, gl.DYNAMIC_DRAW);
+      else gl.bufferSubData(gl.ARRAY_BUFFER, 0, data);
+    }
+    this.vertexCount = positions.length / 3;
+  }
+
+  edgeBuffer() {
+    if (!this.edges) {
+      const t = this.indices;
+      const lines = new Uint32Array(2 * t.length);
+      for (let i = 0; i < t.length; i += 3) {
+        lines.set([t[i], t[i + 1], t[i + 1], t[i + 2], t[i + 2], t[i]], 2 * i);
+      }
+      this.edges = gl.createBuffer();
+      gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.edges);
+      gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, lines, gl.STATIC_DRAW);
+      this.nEdgeIndices = lines.length;
+    }
+    return this.edges;
+  }
+}
+
+function vertexNormals(p, t) {
+  const n = new Float32Array(p.length);
+  for (let i = 0; i < t.length; i += 3) {
+    const a = 3 * t[i], b = 3 * t[i + 1], c = 3 * t[i + 2];
+    const ux = p[b] - p[a], uy = p[b + 1] - p[a + 1], uz = p[b + 2] - p[a + 2];
+    const vx = p[c] - p[a], vy = p[c + 1] - p[a + 1], vz = p[c + 2] - p[a + 2];
+    const x = uy * vz - uz * vy, y = uz * vx - ux * vz, z = ux * vy - uy * vx;
+    for (const k of [a, b, c]) { n[k] += x; n[k + 1] += y; n[k + 2] += z; }
+  }
+  return n;
+}
+
+let shadeProgram, lineProgram, finest, level, drawQueued = false;
+
+function requestDraw() {
+  if (!drawQueued) { drawQueued = true; requestAnimationFrame(draw); }
+}
+
+function draw() {
+  drawQueued = false;
+  const canvas = $('canvas');
+  const dpr = window.devicePixelRatio || 1;
+  const w = Math.max(1, Math.round(canvas.clientWidth * dpr));
+  const h = Math.max(1, Math.round(canvas.clientHeight * dpr));
+  if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }
+  gl.viewport(0, 0, w, h);
+  gl.clearColor(0.07, 0.08, 0.1, 1);
+  gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
+  const mesh = M.shownLevel === null ? finest : level;
+  if (!M.info || !mesh.vertexCount) return;
+  const { view, proj } = matrices(w / h);
+  gl.enable(gl.DEPTH_TEST);
+  gl.enable(gl.POLYGON_OFFSET_FILL);
+  gl.polygonOffset(1, 1);
+  gl.useProgram(shadeProgram);
+  gl.uniformMatrix4fv(gl.getUniformLocation(shadeProgram, 'view'), false, view);
+  gl.uniformMatrix4fv(gl.getUniformLocation(shadeProgram, 'proj'), false, proj);
+  gl.uniform1i(gl.getUniformLocation(shadeProgram, 'flatShading'), $('smooth').checked ? 0 : 1);
+  gl.bindVertexArray(mesh.vao);
+  gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, mesh.triangles);
+  gl.drawElements(gl.TRIANGLES, mesh.nTriangleIndices, gl.UNSIGNED_INT, 0);
+  if ($('wireframe').checked) {
+    gl.useProgram(lineProgram);
+    gl.uniformMatrix4fv(gl.getUniformLocation(lineProgram, 'view'), false, view);
+    gl.uniformMatrix4fv(gl.getUniformLocation(lineProgram, 'proj'), false, proj);
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, mesh.edgeBuffer());
+    gl.drawElements(gl.LINES, mesh.nEdgeIndices, gl.UNSIGNED_INT, 0);
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, mesh.triangles);
+  }
+  gl.bindVertexArray(null);
+}
+
+// ---- results from the server ------------------------------------------------------------------
+const request = { busy: false, dirty: false, since: null };
+
+function stateBody() {
+  const moves = M.pending ? M.moves.concat([M.pending]) : M.moves;
+  return JSON.stringify({ gains: M.gains, normal_only: M.normalOnly, moves });
+}
+
+// Asks for the result of the current state; while one request runs, later changes wait and
+// go out together, so the view never falls behind the sliders.
+function requestResult() {
+  if (request.since === null) request.since = performance.now();
+  if (request.busy) { request.dirty = true; return; }
+  request.busy = true;
+  request.dirty = false;
+  const since = request.since;
+  request.since = null;
+  const editing = M.moves.length > 0 || M.pending !== null;
+  const kind = editing ? 'edit' : 'filter';
+  api('/api/' + kind, { method: 'POST', body: stateBody(), headers: { 'Content-Type': 'application/json' } })
+    .then(async (response) => {
+      const positions = new Float32Array(await response.arrayBuffer());
+      const received = performance.now();
+      M.positions = positions;
+      finest.setPositions(positions);
+      const uploaded = performance.now();
+      showFinest();
+      draw();
+      gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4)); // wait until drawn
+      const drawn = performance.now();
+      const ms = drawn - since;
+      M.latencies.push({
+        ms, kind, synthesisMs: Number(response.headers.get('X-Meshpyr-Synthesis-Ms')),
+        receivedMs: received - since, uploadMs: uploaded - received, drawMs: drawn - uploaded,
+      });
+      M.updates += 1;
+      setStatus(`${kind}: ${ms.toFixed(0)} ms (synthesis ${response.headers.get('X-Meshpyr-Synthesis-Ms')} ms)`);
+      showError(null);
+    })
+    .catch(showError)
+    .finally(() => {
+      request.busy = false;
+      if (request.dirty) requestResult();
+    });
+}
+
+function setStatus(text) {
+  const shown = M.shownLevel === null ? M.info.vertices : M.shownLevel;
+  $('status').textContent = `${shown.toLocaleString()} vertices · ${text}`;
+}
+
+// ---- equalizer ------------------------------------------------------------------------------
+function formatSize(x) {
+  return x >= 100 ? x.toFixed(0) : x.toPrecision(2);
+}
+
+function buildEqualizer() {
+  const bands = $('bands');
+  const octaves = M.info.octaves;
+  const maxEnergy = Math.max(...octaves.map((o) => o.energy), 1e-300);
+  octaves.forEach((o, i) => {
+    const row = document.createElement('div');
+    row.className = 'band';
+    row.title = `levels ${o.from + 1}–${o.to}: details of features about ${o.feature_size.toPrecision(3)} units`;
+    row.innerHTML = `<span class="size">${formatSize(o.feature_size)} u</span>
+      <input type="range" min="0" max="${M.info.max_gain}" step="0.05" value="1" data-band="${i}">
+      <span class="gain">1.00</span><span class="energy"></span>`;
+    row.querySelector('.energy').style.width = `${100 * Math.sqrt(o.energy / maxEnergy)}%`;
+    row.querySelector('input').addEventListener('input', (e) => {
+      M.gains[i] = Number(e.target.value);
+      row.querySelector('.gain').textContent = M.gains[i].toFixed(2);
+      requestResult();
+    });
+    bands.appendChild(row);
+  });
+}
+
+function setGains(gains) {
+  M.gains = gains.slice();
+  document.querySelectorAll('#bands .band').forEach((row, i) => {
+    row.querySelector('input').value = gains[i];
+    row.querySelector('.gain').textContent = gains[i].toFixed(2);
+  });
+  requestResult();
+}
+
+// The paper's three experiments, scaled to this mesh: low-pass above n/50 vertices, and the
+// stop-band and ×2 enhancement of the levels from n/50 to 0.3·n.
+function preset(name) {
+  const n = M.info.levels.max;
+  const a = n / 50, b = 0.3 * n;
+  const inBand = (o) => o.from >= a && o.to <= b;
+  const gains = M.info.octaves.map((o) => {
+    if (name === 'lowpass') return o.to <= a ? 1 : 0;
+    if (name === 'stopband') return inBand(o) ? 0 : 1;
+    if (name === 'enhance') return inBand(o) ? 2 : 1;
+    return 1;
+  });
+  setGains(gains);
+}
+
+// ---- level scrubber -------------------------------------------------------------------------
+// Sliders run on a log scale of vertex counts: each octave gets the same travel.
+function levelOf(slider) {
+  const { min, max } = M.info.levels;
+  const t = Number(slider.value) / Number(slider.max);
+  return Math.round(Math.exp(Math.log(min) + t * (Math.log(max) - Math.log(min))));
+}
+
+const scrub = { busy: false, again: false };
+
+// True when no answer is awaited (scripts and the browser test wait for it).
+M.idle = () => !request.busy && !request.dirty && !scrub.busy && !scrub.again;
+
+function showLevel() {
+  const n = levelOf($('level'));
+  $('level-label').textContent = n >= M.info.levels.max
+    ? `finest: ${M.info.vertices.toLocaleString()} vertices (the result)`
+    : `${n.toLocaleString()} of ${M.info.levels.max.toLocaleString()} vertices (progressive mesh)`;
+  if (n >= M.info.levels.max) { showFinest(); requestDraw(); return; }
+  if (scrub.busy) { scrub.again = true; return; }
+  scrub.busy = true;
+  api('/api/level?n=' + n)
+    .then((r) => r.arrayBuffer())
+    .then((bytes) => {
+      const [nv, nt] = new Uint32Array(bytes, 0, 2);
+      level.setTriangles(new Uint32Array(bytes, 8 + 12 * nv, 3 * nt).slice());
+      level.setPositions(new Float32Array(bytes, 8, 3 * nv).slice());
+      M.shownLevel = nv;
+      setStatus(`level ${nv}`);
+      requestDraw();
+      showError(null);
+    })
+    .catch(showError)
+    .finally(() => { scrub.busy = false; if (scrub.again) { scrub.again = false; showLevel(); } });
+}
+
+function showFinest() {
+  if (M.shownLevel !== null) {
+    M.shownLevel = null;
+    $('level').value = $('level').max;
+    $('level-label').textContent = `finest: ${M.info.vertices.toLocaleString()} vertices (the result)`;
+  }
+}
+
+// ---- drag to edit ---------------------------------------------------------------------------
+function pick(ray) {
+  const p = M.positions, t = M.faces;
+  let best = Infinity;
+  const o = ray.origin, d = ray.dir;
+  for (let i = 0; i < t.length; i += 3) {
+    const a = 3 * t[i], b = 3 * t[i + 1], c = 3 * t[i + 2];
+    const e1 = [p[b] - p[a], p[b + 1] - p[a + 1], p[b + 2] - p[a + 2]];
+    const e2 = [p[c] - p[a], p[c + 1] - p[a + 1], p[c + 2] - p[a + 2]];
+    const q = cross(d, e2);
+    const det = dot(e1, q);
+    if (Math.abs(det) < 1e-20) continue;
+    const s = [o[0] - p[a], o[1] - p[a + 1], o[2] - p[a + 2]];
+    const u = dot(s, q) / det;
+    if (u < 0 || u > 1) continue;
+    const r = cross(s, e1);
+    const v = dot(d, r) / det;
+    if (v < 0 || u + v > 1) continue;
+    const dist = dot(e2, r) / det;
+    if (dist > 0 && dist < best) best = dist;
+  }
+  return best < Infinity ? add(o, scale(d, best)) : null;
+}
+
+function editLevel() { return levelOf($('edit-level')); }
+// The chosen radius, but never under two edge lengths of the edited level: a smaller one
+// would catch no vertex of a coarse level, and the drag would do nothing.
+function editRadius() {
+  const edge = Math.sqrt(2 * M.info.area / (Math.sqrt(3) * editLevel()));
+  return Math.max(Number($('radius').value) / 200 * M.info.diagonal, 2 * edge);
+}
+
+function updateEditLabels() {
+  $('edit-level-label').textContent =
+    `moves level ${editLevel().toLocaleString()}: coarser levels give broader edits`;
+  $('radius-label').textContent = `radius ${editRadius().toPrecision(3)} units`;
+  $('edit-count').textContent = M.moves.length ? `${M.moves.length} edit(s)` : '';
+  $('undo').disabled = M.moves.length === 0;
+}
+
+// Starts a drag edit at canvas pixel (x, y); returns the drag or null when the ray misses.
+function beginEdit(x, y) {
+  showFinest();
+  const center = pick(rayAt(x, y));
+  if (!center) return null;
+  const { forward } = cameraBasis();
+  return { center, normal: forward };
+}
+
+function dragEdit(drag, x, y) {
+  const ray = rayAt(x, y);
+  const denom = dot(ray.dir, drag.normal);
+  if (Math.abs(denom) < 1e-9) return;
+  const t = dot(sub(drag.center, ray.origin), drag.normal) / denom;
+  const displacement = sub(add(ray.origin, scale(ray.dir, t)), drag.center);
+  M.pending = { level: editLevel(), center: drag.center, displacement, radius: editRadius() };
+  requestResult();
+}
+
+function endEdit() {
+  if (M.pending) {
+    M.moves.push(M.pending);
+    M.pending = null;
+    updateEditLabels();
+    requestResult();
+  }
+}
+
+function undo() {
+  if (M.moves.length) {
+    M.moves.pop();
+    updateEditLabels();
+    requestResult();
+  }
+}
+
+// ---- mouse ------------------------------------------------------------------------------------
+function installMouse() {
+  const canvas = $('canvas');
+  let drag = null;
+  canvas.addEventListener('contextmenu', (e) => e.preventDefault());
+  canvas.addEventListener('pointerdown', (e) => {
+    canvas.setPointerCapture(e.pointerId);
+    const r = canvas.getBoundingClientRect();
+    const x = e.clientX - r.left, y = e.clientY - r.top;
+    if ($('edit-mode').checked && e.button === 0 && !e.shiftKey) {
+      const edit = beginEdit(x, y);
+      drag = edit ? { mode: 'edit', edit } : null;
+    } else {
+      drag = { mode: e.button === 2 || e.shiftKey ? 'pan' : 'orbit', x: e.clientX, y: e.clientY };
+    }
+  });
+  canvas.addEventListener('pointermove', (e) => {
+    if (!drag) return;
+    if (drag.mode === 'edit') {
+      const r = canvas.getBoundingClientRect();
+      dragEdit(drag.edit, e.clientX - r.left, e.clientY - r.top);
+      return;
+    }
+    const dx = e.clientX - drag.x, dy = e.clientY - drag.y;
+    drag.x = e.clientX; drag.y = e.clientY;
+    if (drag.mode === 'orbit') {
+      camera.yaw -= dx * 0.008;
+      camera.pitch = Math.max(-1.55, Math.min(1.55, camera.pitch + dy * 0.008));
+    } else {
+      const { right, up } = cameraBasis();
+      const k = 2 * camera.distance * Math.tan(camera.fov / 2) / canvas.clientHeight;
+      camera.target = add(camera.target, add(scale(right, -dx * k), scale(up, dy * k)));
+    }
+    requestDraw();
+  });
+  const release = () => {
+    if (drag && drag.mode === 'edit') endEdit();
+    drag = null;
+  };
+  canvas.addEventListener('pointerup', release);
+  canvas.addEventListener('pointercancel', release);
+  canvas.addEventListener('wheel', (e) => {
+    e.preventDefault();
+    camera.distance *= Math.exp(e.deltaY * 0.001);
+    requestDraw();
+  }, { passive: false });
+}
+
+// ---- export -----------------------------------------------------------------------------------
+M.exportBytes = async function (format) {
+  const r = await api('/api/export?format=' + format, {
+    method: 'POST', body: stateBody(), headers: { 'Content-Type': 'application/json' },
+  });
+  const name = (r.headers.get('Content-Disposition') || '').match(/filename="([^"]+)"/);
+  return { bytes: new Uint8Array(await r.arrayBuffer()), name: name ? name[1] : 'mesh.' + format };
+};
+
+async function download(format) {
+  try {
+    const { bytes, name } = await M.exportBytes(format);
+    const url = URL.createObjectURL(new Blob([bytes]));
+    const a = document.createElement('a');
+    a.href = url;
+    a.download = name;
+    a.click();
+    setTimeout(() => URL.revokeObjectURL(url), 10000);
+  } catch (e) {
+    showError(e);
+  }
+}
+
+// ---- start ------------------------------------------------------------------------------------
+function installControls() {
+  for (const id of ['smooth', 'wireframe']) $(id).addEventListener('change', requestDraw);
+  $('reset-view').addEventListener('click', resetView);
+  $('normal-only').addEventListener('change', (e) => { M.normalOnly = e.target.checked; requestResult(); });
+  document.querySelectorAll('[data-preset]').forEach((b) =>
+    b.addEventListener('click', () => preset(b.dataset.preset)));
+  $('level').addEventListener('input', showLevel);
+  for (const id of ['edit-level', 'radius']) $(id).addEventListener('input', updateEditLabels);
+  $('edit-mode').addEventListener('change', (e) => $('canvas').classList.toggle('editing', e.target.checked));
+  $('undo').addEventListener('click', undo);
+  document.addEventListener('keydown', (e) => {
+    if ((e.ctrlKey || e.metaKey) && e.key === 'z') { e.preventDefault(); undo(); }
+  });
+  document.querySelectorAll('[data-export]').forEach((b) =>
+    b.addEventListener('click', () => download(b.dataset.export)));
+  window.addEventListener('resize', requestDraw);
+  installMouse();
+}
+
+async function start() {
+  if (!gl) throw new Error('this browser has no WebGL2');
+  shadeProgram = compile(VERTEX, SHADE);
+  lineProgram = compile(VERTEX, LINE);
+  finest = new GpuMesh();
+  level = new GpuMesh();
+  M.info = await (await api('/api/info')).json();
+  const i = M.info;
+  document.title = `${i.name} · meshpyr view`;
+  $('meta').textContent = `${i.name}: ${i.vertices.toLocaleString()} vertices, ` +
+    `${i.triangles.toLocaleString()} triangles, levels ${i.levels.min}–${i.levels.max}`;
+  M.gains = i.octaves.map(() => 1);
+  buildEqualizer();
+  installControls();
+  updateEditLabels();
+  M.faces = new Uint32Array(await (await api('/api/faces')).arrayBuffer());
+  finest.setTriangles(M.faces);
+  resetView();
+  requestResult();
+  const waitFirst = () => (M.updates > 0 ? (M.ready = true) : setTimeout(waitFirst, 20));
+  waitFirst();
+}
+
+start().catch((e) => { showError(e); $('status').textContent = 'failed to start'; });

@@ -1,0 +1,197 @@
+//! The editor's state on the server: the pyramid, the synthesis cache behind the equalizer, and
+//! the last result a client asked for (what a bare `GET /api/export` exports).
+
+use crate::io::{MeshFormat, WriteOptions};
+use crate::mesh::PolygonMesh;
+use crate::pyramid::{Filter, LevelGains, LevelMove, Pyramid, SynthesisCache};
+use glam::DVec3;
+use serde_json::json;
+
+/// What the page shows: one gain per octave, the normal-only switch, the edits so far.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct EditorState {
+    pub gains: Vec<f64>,
+    pub normal_only: bool,
+    pub moves: Vec<LevelMove>,
+}
+
+pub(crate) struct Session {
+    pub pyramid: Pyramid,
+    pub name: String,
+    /// The octave bands `(lo, hi]`, one slider each.
+    pub octaves: Vec<(usize, usize)>,
+    cache: SynthesisCache,
+    pub last: EditorState,
+}
+
+impl Session {
+    pub fn new(pyramid: Pyramid) -> Session {
+        let octaves = pyramid.pyramid.levels_of_octaves();
+        let cache = SynthesisCache::octaves(&pyramid.pyramid);
+        let last = EditorState {
+            gains: vec![1.0; octaves.len()],
+            ..Default::default()
+        };
+        Session {
+            pyramid,
+            name: "mesh".into(),
+            octaves,
+            cache,
+            last,
+        }
+    }
+
+    /// The filter the equalizer's gains stand for (bands at gain 1 left out).
+    pub fn filter_of(&self, state: &EditorState) -> Filter {
+        let mut filter = Filter::new();
+        for (&(lo, hi), &g) in self.octaves.iter().zip(&state.gains) {
+            if g != 1.0 {
+                filter = filter.gain(lo, hi, g);
+            }
+        }
+        filter.normal_only = state.normal_only;
+        filter
+    }
+
+    fn gains_of(&self, state: &EditorState) -> LevelGains {
+        self.filter_of(state)
+            .resolve(self.pyramid.pyramid.surface_area())
+    }
+
+    /// The input's positions for `state` (what `meshpyr filter`/`edit` would write), and
+    /// remembers `state` as the last result.
+    pub fn positions(&mut self, state: EditorState) -> Result<Vec<DVec3>, String> {
+        let gains = self.gains_of(&state);
+        let p = &self.pyramid.pyramid;
+        let input_positions = if state.moves.is_empty() {
+            let signal = self.cache.synthesize(p, &gains);
+            self.pyramid.to_input_positions(signal)
+        } else {
+            let signal = p
+                .edit_levels(&state.moves, &gains)
+                .map_err(|e| e.to_string())?;
+            self.pyramid.to_input_positions(&signal)
+        };
+        self.last = state;
+        Ok(input_positions)
+    }
+
+    /// `/api/info`: counts, levels, octaves with feature sizes and energies, bounds.
+    pub fn info(&self) -> serde_json::Value {
+        let spectrum = self.pyramid.spectrum();
+        let octaves: Vec<_> = spectrum
+            .bands
+            .iter()
+            .map(|b| json!({"from": b.lo, "to": b.hi, "feature_size": b.feature_size, "energy": b.energy}))
+            .collect();
+        let input = &self.pyramid.input;
+        let (lo, hi) = input.positions.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
+        let levels = self.pyramid.levels();
+        json!({
+            "name": self.name,
+            "vertices": input.n_vertices(),
+            "triangles": input.n_triangles(),
+            "levels": {"min": levels.start(), "max": levels.end()},
+            "octaves": octaves,
+            "bbox": {"min": lo.to_array(), "max": hi.to_array()},
+            "diagonal": self.pyramid.pyramid.bbox_diagonal(),
+            "area": self.pyramid.pyramid.surface_area(),
+            "max_gain": super::limits::MAX_GAIN,
+            "max_moves": super::limits::MAX_MOVES,
+        })
+    }
+
+    /// `/api/faces`: the input's polygons as fan triangles, u32 triples.
+    pub fn faces(&self) -> Vec<u8> {
+        let input = &self.pyramid.input;
+        let mut out = Vec::with_capacity(12 * input.n_triangles());
+        for f in input.faces() {
+            for k in 1..f.len().saturating_sub(1) {
+                for i in [f[0], f[k], f[k + 1]] {
+                    out.extend_from_slice(&i.to_le_bytes());
+                }
+            }
+        }
+        out
+    }
+
+    /// `/api/level`: vertex and triangle counts (u32), positions (f32 triples, PM order) and
+    /// triangles (u32 triples) of the progressive mesh at `n` vertices.
+    pub fn level(&self, n: usize) -> Vec<u8> {
+        let signal = self.pyramid.pyramid.signal_at_level(n);
+        let triangles = self.pyramid.pm.level_triangles(n);
+        let mut out = Vec::with_capacity(8 + 12 * (n + triangles.len()));
+        out.extend_from_slice(&(n as u32).to_le_bytes());
+        out.extend_from_slice(&(triangles.len() as u32).to_le_bytes());
+        out.extend(f32_bytes(&signal[..n]));
+        for t in triangles {
+            for i in t {
+                out.extend_from_slice(&i.to_le_bytes());
+            }
+        }
+        out
+    }
+
+    /// A download of `state`'s result: `format` is `ply`, `obj` or `pyr`; returns the bytes and
+    /// a file name.
+    pub fn export(
+        &mut self,
+        state: EditorState,
+        format: &str,
+    ) -> Result<(Vec<u8>, String), String> {
+        let positions = self.positions(state)?;
+        let bytes = match format {
+            "pyr" => {
+                self.pyramid
+                    .to_pyr_bytes_with_positions(positions)
+                    .map_err(|e| e.to_string())?
+                    .0
+            }
+            "ply" => self.mesh_bytes(positions, MeshFormat::Ply)?,
+            "obj" => self.mesh_bytes(positions, MeshFormat::Obj)?,
+            other => return Err(format!("unknown export format {other:?} (ply, obj or pyr)")),
+        };
+        Ok((bytes, format!("{}-view.{format}", safe_stem(&self.name))))
+    }
+
+    /// The input with `positions`; when the format cannot carry the input's other data (PLY
+    /// properties in an OBJ, say), the geometry alone.
+    fn mesh_bytes(&self, positions: Vec<DVec3>, format: MeshFormat) -> Result<Vec<u8>, String> {
+        let mut mesh = self.pyramid.input.clone();
+        mesh.positions = positions;
+        let opts = WriteOptions::default();
+        crate::io::write_mesh_bytes(&mesh, format, &opts).or_else(|_| {
+            let mut bare = PolygonMesh::new();
+            bare.positions = mesh.positions;
+            for f in self.pyramid.input.faces() {
+                bare.push_face(f);
+            }
+            crate::io::write_mesh_bytes(&bare, format, &opts).map_err(|e| e.to_string())
+        })
+    }
+}
+
+/// Positions as little-endian f32 triples.
+pub(crate) fn f32_bytes(positions: &[DVec3]) -> impl Iterator<Item = u8> + '_ {
+    positions
+        .iter()
+        .flat_map(|p| p.to_array().map(|x| (x as f32).to_le_bytes()))
+        .flatten()
+}
+
+/// The input's file stem reduced to characters safe in a header and a file name.
+fn safe_stem(name: &str) -> String {
+    let stem = std::path::Path::new(name)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("mesh");
+    let safe: String = stem
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || "-_.".contains(*c))
+        .take(64)
+        .collect();
+    if safe.is_empty() { "mesh".into() } else { safe }
+}
