@@ -85,7 +85,7 @@
 //! | [`subdiv`] | subdivision of coarse meshes |
 //! | [`metrics`] | distances and curvature |
 //! | [`numerics`] | the finite elements and solvers that subdivision and smoothing share |
-//! | [`render`] | the previews of the demo |
+//! | [`render`] | PNG pictures of meshes, coloured by a per-vertex value if asked |
 //! | [`progress`] | progress reporting |
 //!
 //! Without default features (`meshpyr = { version = "…", default-features = false }`) the
@@ -117,5 +117,6 @@ pub use pm::{ProgressiveMesh, Simplified, SimplifyTarget, simplify};
 pub use progress::NoProgress;
 pub use pyramid::{Filter, MoveHandle, PyrFileError, Pyramid, PyramidOptions, Spectrum};
 pub use relax::RelaxationSpec;
+pub use render::{RenderError, RenderOptions, Shading, View, render_mesh, render_meshes};
 pub use smooth::{DenoiseOptions, SmoothMethod, Smoothed, smooth_mesh};
 pub use subdiv::{SubdivOptions, subdivide_mesh};

@@ -1,12 +1,25 @@
-//! Deterministic software previews: an orthographic z-buffer rasteriser with flat Lambert
-//! shading, and a small RGB image type that encodes to PNG.
+//! Deterministic software pictures of meshes: an orthographic z-buffer rasteriser with flat or
+//! smooth Lambert shading, an optional wireframe, colour by a per-vertex value with a colour
+//! bar, captions, and a small RGB image type that encodes to PNG.
 //!
 //! No GPU, no threads, no font or system library: the same triangles and options always give a
 //! byte-identical PNG, which is what the tests and the demo rely on. Several meshes can be drawn
 //! side by side with one shared camera (fitted to the union of their bounding boxes), so the
 //! panels are comparable at a glance.
+//!
+//! [`render_mesh`] and [`render_meshes`] draw [`PolygonMesh`](crate::PolygonMesh)es (what
+//! `meshpyr render` does); [`render_scene`] draws triangle soups with captions and values.
 
-use glam::{DMat3, DVec3};
+mod colormap;
+pub(crate) mod font;
+mod polygon;
+mod raster;
+mod scene;
+
+pub use polygon::{RenderError, render_mesh, render_meshes};
+pub use scene::{Panel, render_scene};
+
+use glam::DVec3;
 
 /// Error while encoding an image.
 #[derive(Debug, thiserror::Error)]
@@ -64,7 +77,6 @@ impl Image {
     }
 
     /// Fills the rectangle `[x0, x1) × [y0, y1)` (clipped to the image).
-    #[cfg(feature = "cli")]
     pub(crate) fn fill_rect(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: [u8; 3]) {
         let (xa, xb) = (x0.max(0), x1.min(self.width as i64));
         let (ya, yb) = (y0.max(0), y1.min(self.height as i64));
@@ -135,6 +147,16 @@ pub struct RenderOptions {
     pub light: DVec3,
     /// Ambient fraction of the surface colour, in `[0, 1]` (default 0.18).
     pub ambient: f64,
+    /// Flat (one normal per triangle, the default) or smooth (interpolated vertex normals).
+    pub shading: Shading,
+    /// Draws the triangle edges over the surface (default off).
+    pub wireframe: bool,
+    /// The per-vertex attribute that colours the surface ([`render_meshes`]), and the colour
+    /// bar's title (default none: the plain surface colour).
+    pub color_by: Option<String>,
+    /// The values mapped to the ends of the colour map, `(min, max)`; values outside are
+    /// clamped (default: the values' own minimum and maximum over all panels).
+    pub range: Option<(f64, f64)>,
 }
 
 impl Default for RenderOptions {
@@ -149,7 +171,82 @@ impl Default for RenderOptions {
             color: [222, 205, 180],
             light: DVec3::new(-0.4, 0.6, 1.0),
             ambient: 0.18,
+            shading: Shading::Flat,
+            wireframe: false,
+            color_by: None,
+            range: None,
         }
+    }
+}
+
+/// How the surface is shaded.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Shading {
+    /// One normal per triangle: facets visible, as the mesh really is.
+    #[default]
+    Flat,
+    /// Vertex normals (area-weighted) interpolated across triangles: the look of the limit
+    /// surface.
+    Smooth,
+}
+
+/// A named viewing direction: which side of the model faces the viewer (y is up).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum View {
+    /// +z towards the viewer.
+    Front,
+    /// −z towards the viewer.
+    Back,
+    /// −x towards the viewer.
+    Left,
+    /// +x towards the viewer.
+    Right,
+    /// +y towards the viewer.
+    Top,
+    /// −y towards the viewer.
+    Bottom,
+    /// From front right above, at equal angles to the three axes.
+    Iso,
+}
+
+impl View {
+    /// All views, in the order of their names in [`View::NAMES`].
+    pub const ALL: [View; 7] = [
+        View::Front,
+        View::Back,
+        View::Left,
+        View::Right,
+        View::Top,
+        View::Bottom,
+        View::Iso,
+    ];
+    /// The names [`View::from_str`](std::str::FromStr) accepts.
+    pub const NAMES: [&'static str; 7] = ["front", "back", "left", "right", "top", "bottom", "iso"];
+
+    /// `(yaw_degrees, pitch_degrees)` for [`RenderOptions`].
+    pub fn angles(self) -> (f64, f64) {
+        match self {
+            View::Front => (0.0, 0.0),
+            View::Back => (180.0, 0.0),
+            View::Left => (90.0, 0.0),
+            View::Right => (-90.0, 0.0),
+            View::Top => (0.0, 90.0),
+            View::Bottom => (0.0, -90.0),
+            // The elevation at which the three axes appear at equal angles: atan(1/√2).
+            View::Iso => (-45.0, (0.5f64).sqrt().atan().to_degrees()),
+        }
+    }
+}
+
+impl std::str::FromStr for View {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<View, String> {
+        View::NAMES
+            .iter()
+            .position(|&n| n == s)
+            .map(|k| View::ALL[k])
+            .ok_or_else(|| format!("unknown view '{s}' (one of {})", View::NAMES.join(", ")))
     }
 }
 
@@ -162,167 +259,23 @@ pub struct Triangles<'a> {
     pub triangles: &'a [[u32; 3]],
 }
 
-/// Orthographic view: a rotation plus a scale and offset that map the model into the panel.
-#[derive(Clone, Copy, Debug)]
-struct Camera {
-    rotation: DMat3,
-    centre: DVec3,
-    scale: f64,
-}
-
-impl Camera {
-    fn fit(meshes: &[Triangles<'_>], options: &RenderOptions) -> Camera {
-        let rotation = DMat3::from_rotation_x(options.pitch_degrees.to_radians())
-            * DMat3::from_rotation_y(options.yaw_degrees.to_radians());
-        let mut lo = DVec3::splat(f64::INFINITY);
-        let mut hi = DVec3::splat(f64::NEG_INFINITY);
-        for m in meshes {
-            for t in m.triangles {
-                for &i in t {
-                    if let Some(&p) = m.positions.get(i as usize)
-                        && p.is_finite()
-                    {
-                        let q = rotation * p;
-                        lo = lo.min(q);
-                        hi = hi.max(q);
-                    }
-                }
-            }
-        }
-        if lo.x.is_nan() || lo.x > hi.x {
-            return Camera {
-                rotation,
-                centre: DVec3::ZERO,
-                scale: 1.0,
-            };
-        }
-        let extent = (hi - lo).max(DVec3::splat(1e-300));
-        let usable = 1.0 - 2.0 * options.margin.clamp(0.0, 0.45);
-        let sx = usable * options.width as f64 / extent.x;
-        let sy = usable * options.height as f64 / extent.y;
-        Camera {
-            rotation,
-            centre: 0.5 * (lo + hi),
-            scale: sx.min(sy),
-        }
-    }
-
-    /// Pixel coordinates (x right, y down) and depth (larger = nearer).
-    #[inline]
-    fn project(&self, p: DVec3, width: usize, height: usize) -> DVec3 {
-        let q = self.rotation * p - self.centre;
-        DVec3::new(
-            0.5 * width as f64 + q.x * self.scale,
-            0.5 * height as f64 - q.y * self.scale,
-            q.z,
-        )
-    }
-}
-
-/// Renders each mesh into its own panel, left to right, with one shared camera.
+/// Renders each mesh into its own panel, left to right, with one shared camera, without
+/// captions or values ([`render_scene`] with bare panels).
 pub fn render_panels(meshes: &[Triangles<'_>], options: &RenderOptions) -> Image {
-    let camera = Camera::fit(meshes, options);
-    let (w, h) = (options.width.max(1), options.height.max(1));
-    let mut out = Image::new(w * meshes.len().max(1), h, options.background);
-    for (k, m) in meshes.iter().enumerate() {
-        let panel = render_with_camera(*m, &camera, options);
-        out.blit(&panel, (k * w) as i64, 0);
-    }
-    out
+    let panels: Vec<Panel<'_>> = meshes
+        .iter()
+        .map(|&mesh| Panel {
+            mesh,
+            label: "",
+            values: None,
+        })
+        .collect();
+    render_scene(&panels, options)
 }
 
 /// Renders one mesh into a panel of `options.width × options.height`.
 pub fn render(mesh: Triangles<'_>, options: &RenderOptions) -> Image {
     render_panels(&[mesh], options)
-}
-
-fn render_with_camera(mesh: Triangles<'_>, camera: &Camera, options: &RenderOptions) -> Image {
-    let (w, h) = (options.width.max(1), options.height.max(1));
-    let mut image = Image::new(w, h, options.background);
-    let mut depth = vec![f64::NEG_INFINITY; w * h];
-    let light = options.light.normalize_or_zero();
-    let ambient = options.ambient.clamp(0.0, 1.0);
-    let n = mesh.positions.len();
-    for t in mesh.triangles {
-        if t.iter().any(|&i| i as usize >= n) {
-            continue;
-        }
-        let world = t.map(|i| mesh.positions[i as usize]);
-        if world.iter().any(|p| !p.is_finite()) {
-            continue;
-        }
-        let normal = (camera.rotation * (world[1] - world[0]).cross(world[2] - world[0]))
-            .normalize_or_zero();
-        // Two-sided lighting: scans have holes, and back faces should not turn black.
-        let lambert = normal.dot(light).abs();
-        let shade = ambient + (1.0 - ambient) * lambert;
-        let color = options
-            .color
-            .map(|c| (c as f64 * shade).round().clamp(0.0, 255.0) as u8);
-        let s = world.map(|p| camera.project(p, w, h));
-        rasterise(&mut image, &mut depth, s, color);
-    }
-    image
-}
-
-/// Fills the pixels whose centres lie inside the screen triangle `s` and are nearer than the
-/// depth buffer.
-fn rasterise(image: &mut Image, depth: &mut [f64], s: [DVec3; 3], color: [u8; 3]) {
-    let area = edge(s[0], s[1], s[2]);
-    if area == 0.0 || !area.is_finite() {
-        return;
-    }
-    let (w, h) = (image.width as f64, image.height as f64);
-    let x0 = s
-        .iter()
-        .map(|p| p.x)
-        .fold(f64::INFINITY, f64::min)
-        .floor()
-        .max(0.0);
-    let x1 = s
-        .iter()
-        .map(|p| p.x)
-        .fold(f64::NEG_INFINITY, f64::max)
-        .ceil()
-        .min(w - 1.0);
-    let y0 = s
-        .iter()
-        .map(|p| p.y)
-        .fold(f64::INFINITY, f64::min)
-        .floor()
-        .max(0.0);
-    let y1 = s
-        .iter()
-        .map(|p| p.y)
-        .fold(f64::NEG_INFINITY, f64::max)
-        .ceil()
-        .min(h - 1.0);
-    if x0 > x1 || y0 > y1 {
-        return;
-    }
-    let inv = 1.0 / area;
-    for y in y0 as usize..=y1 as usize {
-        for x in x0 as usize..=x1 as usize {
-            let p = DVec3::new(x as f64 + 0.5, y as f64 + 0.5, 0.0);
-            let b0 = edge(s[1], s[2], p) * inv;
-            let b1 = edge(s[2], s[0], p) * inv;
-            let b2 = edge(s[0], s[1], p) * inv;
-            if b0 < 0.0 || b1 < 0.0 || b2 < 0.0 {
-                continue;
-            }
-            let z = b0 * s[0].z + b1 * s[1].z + b2 * s[2].z;
-            let i = y * image.width + x;
-            if z > depth[i] {
-                depth[i] = z;
-                image.set(x as i64, y as i64, color);
-            }
-        }
-    }
-}
-
-#[inline]
-fn edge(a: DVec3, b: DVec3, p: DVec3) -> f64 {
-    (b.x - a.x) * (p.y - a.y) - (b.y - a.y) * (p.x - a.x)
 }
 
 #[cfg(test)]
