@@ -3,6 +3,8 @@
 pub mod curvature;
 pub(crate) mod distance;
 pub(crate) mod error;
+mod field;
 
 pub use error::{CompareError, Comparison};
 pub use error::{Reference, Surface, compare};
+pub use field::{FieldPercentiles, vertex_distances};
