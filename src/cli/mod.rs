@@ -19,6 +19,7 @@ mod extract;
 mod filter;
 mod info;
 mod input;
+mod render;
 mod simplify;
 mod smooth;
 mod spectrum;
@@ -132,6 +133,8 @@ enum Command {
     Smooth(smooth::SmoothArgs),
     /// Error of a processed mesh against a reference: E_v, E_n, Hausdorff.
     Compare(compare::CompareArgs),
+    /// Draw meshes side by side as a PNG, optionally coloured by a per-vertex attribute.
+    Render(render::RenderArgs),
 }
 
 fn run(command: Command, global: &Global) -> anyhow::Result<()> {
@@ -148,6 +151,7 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
         Command::Extract(a) => extract::run(a, global),
         Command::Smooth(a) => smooth::run(a, global),
         Command::Compare(a) => compare::run(a, global),
+        Command::Render(a) => render::run(a, global),
     }
 }
 
