@@ -101,14 +101,22 @@ pub(crate) fn run(args: CompareArgs, global: &Global) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// The comparison as JSON, with the field's percentiles under `per_vertex_distance` when
-/// there is a field (so the keys without `--per-vertex` stay as they are).
+/// The comparison as JSON; with a field, its percentiles follow under `per_vertex_distance`
+/// (the other keys keep their order, so output without `--per-vertex` does not change).
 fn comparison_json(c: &Comparison, field: Option<FieldPercentiles>) -> anyhow::Result<String> {
-    let mut value = serde_json::to_value(c)?;
-    if let (Some(f), Some(object)) = (field, value.as_object_mut()) {
-        object.insert("per_vertex_distance".into(), serde_json::to_value(f)?);
+    #[derive(serde::Serialize)]
+    struct WithField<'a> {
+        #[serde(flatten)]
+        comparison: &'a Comparison,
+        per_vertex_distance: FieldPercentiles,
     }
-    Ok(serde_json::to_string(&value)?)
+    Ok(match field {
+        None => serde_json::to_string(c)?,
+        Some(per_vertex_distance) => serde_json::to_string(&WithField {
+            comparison: c,
+            per_vertex_distance,
+        })?,
+    })
 }
 
 /// Fails before any work when `--per-vertex` does not name a PLY file, the one format that
