@@ -37,6 +37,7 @@
 //!
 //! ```
 //! # use meshpyr::{Filter, MoveHandle, Pyramid, SimplifyTarget};
+//! # use meshpyr::mesh::{Attribute, AttributeData};
 //! # use glam::DVec3;
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! # let scan = meshpyr::read_mesh("tests/data/mc/mc_bunny_vox40.ply")?;
@@ -61,9 +62,17 @@
 //! let denoised = meshpyr::smooth_mesh(&scan, &meshpyr::SmoothMethod::default(), &meshpyr::NoProgress)?.mesh;
 //! // Subdivide twice by cascadic mean-curvature motion (Diewald, Morigi and Rumpf 2001).
 //! let fine = meshpyr::subdivide_mesh(&coarse.mesh, &meshpyr::SubdivOptions { levels: 2, ..Default::default() })?;
+//! // How far the enhancement moved each vertex off the scan, and a picture coloured by it.
+//! let reference = meshpyr::metrics::Reference::from_mesh(&meshpyr::mesh::Mesh::from_polygons(&scan)?.mesh)?;
+//! let moved = meshpyr::metrics::vertex_distances(&sharp.positions, &reference);
+//! let mut shown = sharp.clone();
+//! shown.set_vertex_attribute(Attribute { name: "distance".into(), data: AttributeData::F64(moved) })?;
+//! let options = meshpyr::RenderOptions { color_by: Some("distance".into()), ..Default::default() };
+//! let png = meshpyr::render_meshes(&[("scan", &scan), ("enhanced", &shown)], &options)?.encode_png()?;
 //! # assert!(coarse.mesh.n_faces() < scan.n_faces() && fine.n_faces() > coarse.mesh.n_faces());
 //! # assert_eq!((sharp.n_vertices(), edited.n_vertices(), denoised.n_vertices()), (scan.n_vertices(), scan.n_vertices(), scan.n_vertices()));
 //! # assert!(!spectrum.bands.is_empty() && again.levels() == pyramid.levels());
+//! # assert!(png.starts_with(b"\x89PNG"));
 //! # assert_eq!(shipped.filter(&Filter::new()).positions, again.filter(&Filter::new()).positions);
 //! # Ok(()) }
 //! ```
@@ -83,9 +92,9 @@
 //! | [`format`](mod@format) | the `.pyr` file |
 //! | [`smooth`] | denoising and smoothing |
 //! | [`subdiv`] | subdivision of coarse meshes |
-//! | [`metrics`] | distances and curvature |
+//! | [`metrics`] | distances (summaries and per-vertex fields) and curvature |
 //! | [`numerics`] | the finite elements and solvers that subdivision and smoothing share |
-//! | [`render`] | the previews of the demo |
+//! | [`render`] | PNG pictures of meshes, coloured by a per-vertex value if asked |
 //! | [`progress`] | progress reporting |
 //! | `view` | the browser editor's server (feature `view`) |
 //!
@@ -123,5 +132,6 @@ pub use pyramid::{
     Filter, LevelMove, MoveHandle, PyrFileError, Pyramid, PyramidOptions, Spectrum, SynthesisCache,
 };
 pub use relax::RelaxationSpec;
+pub use render::{RenderError, RenderOptions, Shading, View, render_mesh, render_meshes};
 pub use smooth::{DenoiseOptions, SmoothMethod, Smoothed, smooth_mesh};
 pub use subdiv::{SubdivOptions, subdivide_mesh};

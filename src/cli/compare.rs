@@ -3,7 +3,8 @@
 
 use super::Global;
 use crate::mesh::Mesh;
-use crate::metrics::{Comparison, compare};
+use crate::mesh::{Attribute, AttributeData};
+use crate::metrics::{Comparison, FieldPercentiles, Reference, compare, vertex_distances};
 use anyhow::Context;
 use std::path::{Path, PathBuf};
 
@@ -28,6 +29,11 @@ pub(crate) struct CompareArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub(crate) json: bool,
+    /// Also write RESULT to this .ply with a per-vertex float property `distance`: the exact
+    /// unsigned distance from each vertex to REFERENCE's surface, in model units (vertices,
+    /// faces and other attributes as in RESULT). Adds the field's percentiles to the output.
+    #[arg(long, value_name = "OUT.ply")]
+    pub(crate) per_vertex: Option<PathBuf>,
 }
 
 fn load(path: &Path) -> anyhow::Result<Mesh> {
@@ -38,7 +44,10 @@ fn load(path: &Path) -> anyhow::Result<Mesh> {
 }
 
 /// Runs `meshpyr compare`.
-pub(crate) fn run(args: CompareArgs, _global: &Global) -> anyhow::Result<()> {
+pub(crate) fn run(args: CompareArgs, global: &Global) -> anyhow::Result<()> {
+    if let Some(out) = &args.per_vertex {
+        check_ply_output(out)?;
+    }
     let result = load(&args.result)?;
     let reference = load(&args.reference)?;
     let c: Comparison = compare(&result, &reference)
@@ -50,8 +59,12 @@ pub(crate) fn run(args: CompareArgs, _global: &Global) -> anyhow::Result<()> {
             )
         })?
         .without_rounding_noise();
+    let field = match &args.per_vertex {
+        Some(out) => Some(write_per_vertex(&args, &reference, out, global)?),
+        None => None,
+    };
     if args.json {
-        outln!("{}", serde_json::to_string(&c)?);
+        outln!("{}", comparison_json(&c, field)?);
         return Ok(());
     }
     outln!(
@@ -85,5 +98,74 @@ pub(crate) fn run(args: CompareArgs, _global: &Global) -> anyhow::Result<()> {
         c.bbox_diagonal,
         c.mean_edge_length
     );
+    if let Some(f) = field {
+        outln!(
+            "  per vertex p50 {:.6e}, p90 {:.6e}, p99 {:.6e}, max {:.6e}",
+            f.p50,
+            f.p90,
+            f.p99,
+            f.max
+        );
+    }
     Ok(())
+}
+
+/// The comparison as JSON; with a field, its percentiles follow under `per_vertex_distance`
+/// (the other keys keep their order, so output without `--per-vertex` does not change).
+fn comparison_json(c: &Comparison, field: Option<FieldPercentiles>) -> anyhow::Result<String> {
+    #[derive(serde::Serialize)]
+    struct WithField<'a> {
+        #[serde(flatten)]
+        comparison: &'a Comparison,
+        per_vertex_distance: FieldPercentiles,
+    }
+    Ok(match field {
+        None => serde_json::to_string(c)?,
+        Some(per_vertex_distance) => serde_json::to_string(&WithField {
+            comparison: c,
+            per_vertex_distance,
+        })?,
+    })
+}
+
+/// Fails before any work when `--per-vertex` does not name a PLY file, the one format that
+/// keeps a per-vertex property.
+fn check_ply_output(path: &Path) -> anyhow::Result<()> {
+    let format = crate::io::MeshFormat::from_path(path)?;
+    anyhow::ensure!(
+        format == crate::io::MeshFormat::Ply,
+        "--per-vertex {}: the distance field needs a .ply output (the only format with per-vertex properties)",
+        path.display()
+    );
+    Ok(())
+}
+
+/// Writes RESULT as read (its file's vertex order, faces and attributes) with the per-vertex
+/// `distance` to `reference` (replacing an existing `distance` in place); returns the field's
+/// percentiles.
+fn write_per_vertex(
+    args: &CompareArgs,
+    reference: &Mesh,
+    out: &Path,
+    global: &Global,
+) -> anyhow::Result<FieldPercentiles> {
+    let result_path = &args.result;
+    let mut poly = super::input::read_input_mesh(result_path)?;
+    let surface = Reference::from_mesh(reference)
+        .with_context(|| format!("preparing {} as the reference", args.reference.display()))?;
+    let field = vertex_distances(&poly.positions, &surface);
+    let percentiles = FieldPercentiles::of(&field)
+        .with_context(|| format!("{} has no vertices", result_path.display()))?;
+    poly.set_vertex_attribute(Attribute {
+        name: "distance".into(),
+        data: AttributeData::F32(field.iter().map(|&d| d as f32).collect()),
+    })
+    .map_err(anyhow::Error::msg)?;
+    crate::io::write_mesh(out, &poly)?;
+    global.say(format_args!(
+        "wrote {} with the per-vertex distance ({} vertices)",
+        out.display(),
+        poly.n_vertices()
+    ));
+    Ok(percentiles)
 }

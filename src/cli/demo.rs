@@ -155,7 +155,7 @@ fn write_previews(
     dir: &Path,
     global: &Global,
 ) -> anyhow::Result<()> {
-    use crate::render::{RenderOptions, Triangles, render_panels};
+    use crate::render::{Panel, RenderOptions, Triangles, render_panels, render_scene};
 
     let faces = scan.pm.finest_faces();
     let options = RenderOptions {
@@ -170,7 +170,16 @@ fn write_previews(
             triangles: faces,
         })
         .collect();
-    let all = render_panels(&panels, &options);
+    let labelled: Vec<Panel<'_>> = signals
+        .iter()
+        .zip(&panels)
+        .map(|(&(name, _), &mesh)| Panel {
+            mesh,
+            label: name,
+            values: None,
+        })
+        .collect();
+    let all = render_scene(&labelled, &options);
     let path = dir.join(format!("{stem}-preview.png"));
     io::write_atomic(&path, &all.encode_png()?)?;
     global.say(format_args!(

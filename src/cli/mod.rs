@@ -20,6 +20,7 @@ mod filter;
 mod info;
 mod input;
 mod output;
+mod render;
 mod simplify;
 mod smooth;
 mod spectrum;
@@ -130,6 +131,8 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Interactive editor in the browser: detail equalizer, level scrubber, drag-to-edit.
     View(view::ViewArgs),
+    /// Draw meshes side by side as a PNG, optionally coloured by a per-vertex attribute.
+    Render(render::RenderArgs),
 }
 
 fn run(command: Command, global: &Global) -> anyhow::Result<()> {
@@ -147,6 +150,7 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
         Command::Smooth(a) => smooth::run(a, global),
         Command::Compare(a) => compare::run(a, global),
         Command::View(a) => view::run(a, global),
+        Command::Render(a) => render::run(a, global),
     }
 }
 

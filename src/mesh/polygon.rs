@@ -284,6 +284,29 @@ impl PolygonMesh {
         self.vertex_attributes.iter().find(|a| a.name == name)
     }
 
+    /// Adds a per-vertex attribute, or replaces the one with the same name where it stands
+    /// (so the file's property order is kept). Fails, changing nothing, unless it has one
+    /// value per vertex.
+    pub fn set_vertex_attribute(&mut self, attribute: Attribute) -> Result<(), String> {
+        if attribute.data.len() != self.n_vertices() {
+            return Err(format!(
+                "vertex attribute {} has {} rows for {} vertices",
+                attribute.name,
+                attribute.data.len(),
+                self.n_vertices()
+            ));
+        }
+        match self
+            .vertex_attributes
+            .iter_mut()
+            .find(|a| a.name == attribute.name)
+        {
+            Some(existing) => *existing = attribute,
+            None => self.vertex_attributes.push(attribute),
+        }
+        Ok(())
+    }
+
     /// Checks the invariants listed on the type; readers call it before returning.
     pub fn check(&self) -> Result<(), String> {
         let nv = self.positions.len();
@@ -329,6 +352,28 @@ impl PolygonMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn set_vertex_attribute_replaces_in_place_or_appends_and_checks_rows() {
+        let mut m =
+            PolygonMesh::from_triangles(vec![DVec3::ZERO, DVec3::X, DVec3::Y], &[[0, 1, 2]]);
+        let column = |name: &str, v: f64, n: usize| Attribute {
+            name: name.into(),
+            data: AttributeData::F64(vec![v; n]),
+        };
+        m.set_vertex_attribute(column("a", 1.0, 3)).unwrap();
+        m.set_vertex_attribute(column("b", 2.0, 3)).unwrap();
+        m.set_vertex_attribute(column("a", 3.0, 3)).unwrap();
+        let names: Vec<&str> = m
+            .vertex_attributes
+            .iter()
+            .map(|a| a.name.as_str())
+            .collect();
+        assert_eq!(names, ["a", "b"]);
+        assert_eq!(m.vertex_attribute("a").unwrap().data.get_f64(2), 3.0);
+        assert!(m.set_vertex_attribute(column("c", 0.0, 2)).is_err());
+        assert_eq!(m.vertex_attributes.len(), 2);
+    }
 
     #[test]
     fn owned_and_borrowed_triangle_constructors_agree() {
