@@ -39,6 +39,7 @@ macro_rules! with_codes {
 }
 
 pub(crate) mod analysis;
+mod band_check;
 pub(crate) mod edit;
 pub(crate) mod frames;
 mod fuzz;
