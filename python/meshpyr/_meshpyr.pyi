@@ -68,7 +68,7 @@ def smooth(
     f: ArrayLike,
     /,
     *,
-    method: Literal["adaptive", "anisotropic"] = "adaptive",
+    method: Literal["adaptive", "anisotropic", "taubin", "mcf"] = "adaptive",
     epsilon: Optional[float] = None,
     sigma_min: Optional[float] = None,
     sigma_max: Optional[float] = None,
@@ -77,8 +77,15 @@ def smooth(
     variance: Optional[Literal["unbiased", "biased"]] = None,
     fit_iterations: Optional[int] = None,
     step_cap: Optional[float] = None,
+    iterations: Optional[int] = None,
+    weights: Optional[Literal["cotan", "uniform", "inverse-edge"]] = None,
+    lambda_: Optional[float] = None,
+    mu: Optional[float] = None,
+    time_step: Optional[float] = None,
+    boundary: Optional[Literal["fixed", "smooth"]] = None,
 ) -> Vertices:
-    """Denoises (V, F); returns the new positions in the input's vertex order."""
+    """Denoises (V, F) as ``meshpyr smooth``; returns the new positions in the input's vertex
+    order."""
 
 def compare(
     v: ArrayLike, f: ArrayLike, v_ref: ArrayLike, f_ref: ArrayLike, /

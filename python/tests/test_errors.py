@@ -79,6 +79,10 @@ OPTIONS = {
     "level 0 of a progressive mesh": lambda: meshpyr.ProgressiveMesh(TETRA_V, TETRA_F).mesh(0),
     "smooth unknown method": lambda: meshpyr.smooth(TETRA_V, TETRA_F, method="median"),
     "smooth 0 scales": lambda: meshpyr.smooth(TETRA_V, TETRA_F, scales=0),
+    "smooth taubin with an adaptive option": lambda: meshpyr.smooth(TETRA_V, TETRA_F, method="taubin", epsilon=0.1),
+    "smooth adaptive with a taubin option": lambda: meshpyr.smooth(TETRA_V, TETRA_F, lambda_=0.4),
+    "smooth unknown weights": lambda: meshpyr.smooth(TETRA_V, TETRA_F, method="taubin", weights="cot"),
+    "smooth mcf negative time step": lambda: meshpyr.smooth(TETRA_V, TETRA_F, method="mcf", time_step=-1.0),
     "Pyramid unknown relaxation": lambda: meshpyr.Pyramid(TETRA_V, TETRA_F, relax="laplace"),
     "compare against no surface": lambda: meshpyr.compare(TETRA_V, TETRA_F, TETRA_V, TETRA_F[:0]),
 }

@@ -113,13 +113,25 @@ def test_subdivide_matches_the_cli(cli, double_ply, tmp_path):
         assert_same_bits(f2, cli_f)
 
 
-def test_smooth_matches_the_cli(cli, double_ply, tmp_path):
+SMOOTHINGS = [
+    ({"method": "adaptive"}, ["--method", "adaptive"]),
+    ({"method": "anisotropic", "epsilon": 0.05}, ["--method", "anisotropic", "--epsilon", "0.05"]),
+    ({"method": "taubin"}, ["--method", "taubin"]),
+    (
+        {"method": "taubin", "iterations": 4, "lambda_": 0.6, "mu": -0.65, "weights": "uniform", "boundary": "smooth"},
+        ["--method", "taubin", "--iterations", "4", "--lambda", "0.6", "--mu", "-0.65", "--weights", "uniform", "--boundary", "smooth"],
+    ),
+    ({"method": "mcf", "time_step": 0.5}, ["--method", "mcf", "--time-step", "0.5"]),
+]
+
+
+@pytest.mark.parametrize("keywords, flags", SMOOTHINGS, ids=[" ".join(f[1]) for f in SMOOTHINGS])
+def test_smooth_matches_the_cli(cli, double_ply, tmp_path, keywords, flags):
     noisy = meshpyr.read(data("nefertiti.ply"))
     source = double_ply(*noisy)
-    for method in ["adaptive", "anisotropic"]:
-        out = tmp_path / f"{method}.ply"
-        cli("smooth", source, "-o", out, "--method", method)
-        assert_same_bits(meshpyr.smooth(*noisy, method=method), meshpyr.read(out)[0])
+    out = tmp_path / "smooth.ply"
+    cli("smooth", source, "-o", out, *flags)
+    assert_same_bits(meshpyr.smooth(*noisy, **keywords), meshpyr.read(out)[0])
 
 
 def test_info_and_compare_give_the_cli_json(cli, sphere, double_ply, tmp_path):
