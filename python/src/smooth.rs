@@ -9,8 +9,8 @@ use meshpyr::{DenoiseOptions, NoProgress, SmoothMethod};
 use numpy::PyArray2;
 use pyo3::prelude::*;
 
-const METHODS: [&str; 4] = ["adaptive", "anisotropic", "taubin", "mcf"];
-const OHTAKE: &[&str] = &["adaptive", "anisotropic"];
+const METHODS: [&str; 5] = ["auto", "adaptive", "anisotropic", "taubin", "mcf"];
+const OHTAKE: &[&str] = &["auto", "adaptive", "anisotropic"];
 
 /// The keywords of `smooth` as given (`None`: not given).
 struct SmoothArgs<'a> {
@@ -21,6 +21,9 @@ struct SmoothArgs<'a> {
     scales: Option<i64>,
     rho: Option<f64>,
     variance: Option<&'a str>,
+    scale: Option<&'a str>,
+    vertex_updates: Option<i64>,
+    passes: Option<i64>,
     fit_iterations: Option<i64>,
     step_cap: Option<f64>,
     iterations: Option<i64>,
@@ -40,6 +43,8 @@ impl SmoothArgs<'_> {
         }
         self.reject_keywords_of_other_methods()?;
         match self.method {
+            // Named without options, the recommended method as the library defines it.
+            "auto" if self.given().is_empty() => Ok(SmoothMethod::Auto),
             "taubin" => self.taubin(),
             "mcf" => self.mcf(),
             _ => self.ohtake(),
@@ -55,6 +60,9 @@ impl SmoothArgs<'_> {
             ("scales", self.scales.is_some(), OHTAKE),
             ("rho", self.rho.is_some(), OHTAKE),
             ("variance", self.variance.is_some(), OHTAKE),
+            ("scale", self.scale.is_some(), OHTAKE),
+            ("vertex_updates", self.vertex_updates.is_some(), OHTAKE),
+            ("passes", self.passes.is_some(), OHTAKE),
             ("fit_iterations", self.fit_iterations.is_some(), OHTAKE),
             ("step_cap", self.step_cap.is_some(), OHTAKE),
             ("iterations", self.iterations.is_some(), &["taubin", "mcf"]),
@@ -86,6 +94,7 @@ impl SmoothArgs<'_> {
     fn ohtake(&self) -> PyResult<SmoothMethod> {
         let mut o = match self.method {
             "anisotropic" => DenoiseOptions::anisotropic(),
+            "auto" => DenoiseOptions::automatic(),
             _ => DenoiseOptions::adaptive(),
         };
         o.epsilon = self.epsilon.unwrap_or(o.epsilon);
@@ -105,6 +114,18 @@ impl SmoothArgs<'_> {
             o.max_iterations = count("fit_iterations", n)?;
         }
         o.step_cap = self.step_cap.unwrap_or(o.step_cap);
+        if let Some(n) = self.passes {
+            o.passes = count("passes", n)?;
+        }
+        if let Some(n) = self.vertex_updates {
+            o.vertex_updates = count("vertex_updates", n)?;
+        }
+        o.local_scale = match self.scale {
+            None => o.local_scale,
+            Some("global") => false,
+            Some("local") => true,
+            Some(other) => return Err(choice_error("scale", other, &["global", "local"])),
+        };
         Ok(SmoothMethod::Ohtake(o))
     }
 
@@ -157,12 +178,17 @@ impl SmoothArgs<'_> {
 
 /// Denoises ``(V, F)``, as ``meshpyr smooth`` (same methods, options and bits). ``method``:
 ///
-/// - "adaptive" (default): Ohtake, Belyaev and Seidel's feature-preserving smoothing, face
+/// - "auto" (default): the recommended method, today the adaptive filter at each face's local
+///   scale with local vertex updates, two passes; it may change between versions (name a
+///   method and its options to pin the result); it takes the options of "adaptive";
+/// - "adaptive": Ohtake, Belyaev and Seidel's feature-preserving smoothing, face
 ///   normals filtered at a scale chosen per face, then the vertices fitted to them;
 ///   ``epsilon`` (× L², larger smooths more), ``sigma_min``, ``sigma_max`` and ``scales`` (the
 ///   filter scales, × L), ``rho`` (anisotropy, 0 = isotropic), ``variance`` ("unbiased" or
-///   "biased"), ``fit_iterations`` and ``step_cap`` (× L) of the vertex fitting; L is the mean
-///   edge length of the input;
+///   "biased"), ``scale`` ("global": σ in units of the mean edge length L; "local": of each
+///   face's own), ``passes`` of filter-then-fit, ``vertex_updates`` (rounds of local vertex
+///   updates instead of the global fit, 0 for the global fit), ``fit_iterations`` and
+///   ``step_cap`` (× L) of the vertex fitting;
 /// - "anisotropic": the same on neighbourhoods that do not reach across sharp edges;
 /// - "taubin": Taubin's λ|μ smoothing; ``iterations`` (10), ``lambda_`` (0.5), ``mu``
 ///   (-0.53), ``weights`` ("cotan", "uniform" or "inverse-edge"), ``boundary``;
@@ -173,7 +199,7 @@ impl SmoothArgs<'_> {
 /// Returns the new positions, float64 (n, 3), the input's vertices in the same order
 /// (vertices no face uses keep their positions).
 #[pyfunction]
-#[pyo3(signature = (v, f, /, *, method="adaptive", epsilon=None, sigma_min=None, sigma_max=None, scales=None, rho=None, variance=None, fit_iterations=None, step_cap=None, iterations=None, weights=None, lambda_=None, mu=None, time_step=None, boundary=None))]
+#[pyo3(signature = (v, f, /, *, method="auto", epsilon=None, sigma_min=None, sigma_max=None, scales=None, rho=None, variance=None, scale=None, vertex_updates=None, passes=None, fit_iterations=None, step_cap=None, iterations=None, weights=None, lambda_=None, mu=None, time_step=None, boundary=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn smooth<'py>(
     py: Python<'py>,
@@ -186,6 +212,9 @@ pub(crate) fn smooth<'py>(
     scales: Option<i64>,
     rho: Option<f64>,
     variance: Option<&str>,
+    scale: Option<&str>,
+    vertex_updates: Option<i64>,
+    passes: Option<i64>,
     fit_iterations: Option<i64>,
     step_cap: Option<f64>,
     iterations: Option<i64>,
@@ -203,6 +232,9 @@ pub(crate) fn smooth<'py>(
         scales,
         rho,
         variance,
+        scale,
+        vertex_updates,
+        passes,
         fit_iterations,
         step_cap,
         iterations,

@@ -81,6 +81,8 @@ OPTIONS = {
     "smooth 0 scales": lambda: meshpyr.smooth(TETRA_V, TETRA_F, scales=0),
     "smooth taubin with an adaptive option": lambda: meshpyr.smooth(TETRA_V, TETRA_F, method="taubin", epsilon=0.1),
     "smooth adaptive with a taubin option": lambda: meshpyr.smooth(TETRA_V, TETRA_F, lambda_=0.4),
+    "smooth unknown scale": lambda: meshpyr.smooth(TETRA_V, TETRA_F, scale="medium"),
+    "smooth mcf with passes": lambda: meshpyr.smooth(TETRA_V, TETRA_F, method="mcf", passes=2),
     "smooth unknown weights": lambda: meshpyr.smooth(TETRA_V, TETRA_F, method="taubin", weights="cot"),
     "smooth mcf negative time step": lambda: meshpyr.smooth(TETRA_V, TETRA_F, method="mcf", time_step=-1.0),
     "Pyramid unknown relaxation": lambda: meshpyr.Pyramid(TETRA_V, TETRA_F, relax="laplace"),

@@ -114,7 +114,10 @@ def test_subdivide_matches_the_cli(cli, double_ply, tmp_path):
 
 
 SMOOTHINGS = [
+    ({}, []),
+    ({"method": "auto", "passes": 1, "scale": "global"}, ["--method", "auto", "--passes", "1", "--scale", "global"]),
     ({"method": "adaptive"}, ["--method", "adaptive"]),
+    ({"method": "adaptive", "vertex_updates": 3}, ["--method", "adaptive", "--vertex-updates", "3"]),
     ({"method": "anisotropic", "epsilon": 0.05}, ["--method", "anisotropic", "--epsilon", "0.05"]),
     ({"method": "taubin"}, ["--method", "taubin"]),
     (
@@ -125,7 +128,7 @@ SMOOTHINGS = [
 ]
 
 
-@pytest.mark.parametrize("keywords, flags", SMOOTHINGS, ids=[" ".join(f[1]) for f in SMOOTHINGS])
+@pytest.mark.parametrize("keywords, flags", SMOOTHINGS, ids=[" ".join(f[1]) or "default" for f in SMOOTHINGS])
 def test_smooth_matches_the_cli(cli, double_ply, tmp_path, keywords, flags):
     noisy = meshpyr.read(data("nefertiti.ply"))
     source = double_ply(*noisy)
