@@ -5,6 +5,7 @@ use crate::arrays::{self, mesh_arrays, positions_array, triangles_array};
 use crate::errors::{pyr_error, pyramid_error, value_error};
 use crate::filters::FilterArgs;
 use glam::DVec3;
+use meshpyr::pyramid::PyramidError;
 use meshpyr::relax::RelaxKind;
 use meshpyr::{MoveHandle, NoProgress, PyramidOptions};
 use numpy::{PyArray1, PyArray2};
@@ -206,9 +207,27 @@ impl Pyramid {
         }
         .filter()?;
         self.warn_bands(py, &filter)?;
-        let mesh = py
-            .detach(|| self.inner.edit(level, &handles, &filter))
+        let (mesh, reach) = py
+            .detach(|| {
+                let gains = filter.resolve(self.inner.pyramid.surface_area());
+                let (signal, reach) = self.inner.pyramid.edit_reporting(level, &handles, &gains)?;
+                Ok::<_, PyramidError>((self.inner.output_mesh(&signal), reach))
+            })
             .map_err(pyramid_error)?;
+        // A move that reaches no vertex of the level changes nothing: say so, as the CLI does.
+        for (handle, reach) in handles.iter().zip(&reach) {
+            if reach.points == 0 {
+                let c = handle.center;
+                crate::warn(
+                    py,
+                    &format!(
+                        "the move at {},{},{} reaches no vertex of level {level} (the nearest is \
+                         {:.6} away, the radius is {radius}); it changes nothing",
+                        c.x, c.y, c.z, reach.nearest
+                    ),
+                )?;
+            }
+        }
         Ok(positions_array(py, &mesh.positions))
     }
 

@@ -158,3 +158,10 @@ def test_a_lowpass_below_the_base_warns_and_acts_on_the_levels_there_are(sphere_
         coarse = sphere_pyramid.filter(lowpass=1)
     assert any("coarsest level" in str(w.message) for w in caught)
     assert_same_bits(coarse, sphere_pyramid.filter(lowpass=base))
+
+
+def test_a_move_that_reaches_no_vertex_warns_and_changes_nothing(sphere, sphere_pyramid):
+    far_away = (100.0, 100.0, 100.0)
+    with pytest.warns(UserWarning, match="reaches no vertex of level 200"):
+        edited = sphere_pyramid.edit(200, [(far_away, (0.0, 0.0, 1.0))], 1.0)
+    assert np.max(np.abs(edited - sphere[0])) < 1e-9 * np.ptp(sphere[0])
