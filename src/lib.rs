@@ -125,7 +125,7 @@ pub mod view;
 pub(crate) mod wording;
 
 pub use io::{read_mesh, write_mesh};
-pub use mesh::PolygonMesh;
+pub use mesh::{MeshInfo, PolygonMesh};
 pub use pm::{ProgressiveMesh, Simplified, SimplifyTarget, simplify};
 pub use progress::NoProgress;
 pub use pyramid::{

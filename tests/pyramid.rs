@@ -521,3 +521,27 @@ fn syntheses_running_side_by_side_on_the_pool_give_the_bits_of_one_thread() {
     });
     assert!(got == expected);
 }
+
+#[test]
+fn band_warnings_name_bands_that_change_nothing_or_reach_below_the_base() {
+    let (p, t) = bumpy_sphere(2, 0.01);
+    let (_, pyramid) = pyramid_of(&p, &t);
+    let (base, finest) = (pyramid.n_base_vertices(), pyramid.n_vertices());
+    let inside = Filter::new().stopband(base + 1, finest - 1);
+    assert!(pyramid.band_warnings(&inside).is_empty());
+    let unit = Filter::new().gain(finest + 10, finest + 20, 1.0);
+    assert!(pyramid.band_warnings(&unit).is_empty());
+    let above = Filter::new().stopband(finest + 10, finest + 20);
+    // Ends in either order are one band (sizes run the other way round); equal ends are empty.
+    let empty = Filter::new().gain(30, 30, 2.0);
+    let below = Filter::new().lowpass(base - 1);
+    for (filter, says) in [
+        (above, "changes nothing"),
+        (empty, "is empty"),
+        (below, "reaches below the pyramid's coarsest level"),
+    ] {
+        let warnings = pyramid.band_warnings(&filter);
+        assert_eq!(warnings.len(), 1, "{warnings:?}");
+        assert!(warnings[0].contains(says), "{warnings:?}");
+    }
+}

@@ -395,3 +395,20 @@ fn dirty_input_with_isolated_and_degenerate_elements_subdivides() {
         assert_eq!(fine.positions()[4], p[4]);
     }
 }
+
+#[test]
+fn auto_solver_is_exact_up_to_a_quarter_million_output_vertices_and_cascadic_cg_above() {
+    // 3 quadrisection levels multiply the vertices by 64: 3906 -> 249 984, 3907 -> 250 048.
+    assert_eq!(
+        Solver::auto(3906, 3, Refinement::Quadrisection),
+        Solver::Exact
+    );
+    assert_eq!(Solver::auto(3907, 3, Refinement::Quadrisection), Solver::Cg);
+    // Bisection only doubles them per level.
+    assert_eq!(Solver::auto(3907, 3, Refinement::Bisection), Solver::Exact);
+    // Absurd level counts do not overflow the estimate.
+    assert_eq!(
+        Solver::auto(4, usize::MAX, Refinement::Bisection),
+        Solver::Cg
+    );
+}

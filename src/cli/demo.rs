@@ -1,7 +1,6 @@
 //! `meshpyr demo [--out DIR]`: the main job on the bundled scan.
 
 use super::Global;
-use super::info::mesh_info;
 use super::input::build_pyramid;
 use crate::io::{self, MeshFormat};
 use crate::mesh::PolygonMesh;
@@ -28,7 +27,7 @@ pub(crate) fn run(args: DemoArgs, global: &Global) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let poly = io::read_mesh_bytes(BUNDLED_SCAN, MeshFormat::Ply)?;
-    let info = mesh_info(&poly)?;
+    let info = crate::mesh::MeshInfo::of(&poly)?;
     global.say(format_args!(
         "bundled scan: {} vertices, {} faces, genus {}, bbox diagonal {:.4}",
         info.vertices,

@@ -73,54 +73,17 @@ impl FilterOptions {
 }
 
 /// `filter` resolved on `pyramid`, with a warning on standard error for every band that
-/// selects none of the pyramid's levels (an empty band, a stop-band above the finest level, a
-/// feature size finer than the scan's sampling), which would otherwise change nothing without
-/// a word, and for every band that reaches below the coarsest level (a low-pass to fewer
-/// vertices than the base has), which would otherwise silently do less. `name` is the input,
-/// for the message.
+/// changes nothing or less than it says ([`DetailPyramid::band_warnings`]). `name` is the
+/// input, for the message.
 pub(crate) fn resolve_reporting(
     filter: &Filter,
     pyramid: &DetailPyramid,
     name: &str,
 ) -> LevelGains {
-    let gains = filter.resolve(pyramid.surface_area());
-    // Splits create the levels (base, finest]; a band (a, b] reaches them when it is not
-    // empty and overlaps them.
-    let (base, finest) = (pyramid.n_base_vertices(), pyramid.n_vertices());
-    for (band, &(a, b, gain)) in filter.bands.iter().zip(&gains.bands) {
-        if gain == 1.0 {
-            continue;
-        }
-        let (what, selects) = match band.to {
-            Some(to) => (
-                format!("band {}:{to}", band.from),
-                format!("levels {}..={b}", a + 1),
-            ),
-            None => (
-                format!("low-pass {}", band.from),
-                format!("levels above {a}"),
-            ),
-        };
-        if a >= b {
-            eprintln!("warning: {name}: {what} is empty; it changes nothing");
-        } else if a >= finest || b <= base {
-            eprintln!(
-                "warning: {name}: {what} selects {selects}, but the pyramid's levels are \
-                 {}..={finest}; it changes nothing",
-                base + 1
-            );
-        } else if a < base {
-            eprintln!(
-                "warning: {name}: {what} reaches below the pyramid's coarsest level, {base} \
-                 vertices (no legal collapse goes further); levels {}..={base} do not exist, so \
-                 it acts on levels {}..={} only",
-                a + 1,
-                base + 1,
-                b.min(finest)
-            );
-        }
+    for warning in pyramid.band_warnings(filter) {
+        eprintln!("warning: {name}: {warning}");
     }
-    gains
+    filter.resolve(pyramid.surface_area())
 }
 
 /// Arguments of `meshpyr filter`.

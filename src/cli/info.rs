@@ -2,10 +2,9 @@
 
 use super::Global;
 use super::input::{is_pyr_file, load_pyr};
-use crate::mesh::{BuildReport, Mesh, PolygonMesh};
+use crate::mesh::MeshInfo;
 use crate::wording::Count;
 use anyhow::Context;
-use serde::Serialize;
 use std::path::PathBuf;
 
 /// Arguments of `meshpyr info`.
@@ -16,97 +15,6 @@ pub(crate) struct InfoArgs {
     /// Print one JSON object instead of text.
     #[arg(long)]
     pub(crate) json: bool,
-}
-
-/// Everything `info` reports. Counts describe the file as given; topology (loops, components,
-/// χ, genus) is measured on the mesh the builder makes of it, which for a manifold file is the
-/// file itself.
-#[derive(Serialize, Debug)]
-pub(crate) struct MeshInfo {
-    /// Vertices in the file, unreferenced ones included.
-    pub(crate) vertices: usize,
-    /// Triangles after fan-triangulating the file's polygons.
-    pub(crate) faces: usize,
-    /// Polygons as stored in the file.
-    pub(crate) polygons: usize,
-    /// Distinct undirected edges of those triangles.
-    pub(crate) edges: usize,
-    /// Holes.
-    pub(crate) boundary_loops: usize,
-    /// Edge-connected components.
-    pub(crate) components: usize,
-    /// V − E + F of the surface (referenced vertices only).
-    pub(crate) euler_characteristic: i64,
-    /// Σ over components of (2 − b − χ)/2; null when the file is not manifold.
-    pub(crate) genus: Option<u64>,
-    /// The fewest vertices a surface of this topology can be simplified to
-    /// ([`crate::mesh::topology::vertex_floor`], on the repaired mesh).
-    pub(crate) floor_vertices: usize,
-    /// For a `.pyr` file: the hierarchy's base level against that floor (null otherwise).
-    pub(crate) pm_base: Option<String>,
-    /// True when no edge has more than two triangles and no vertex is pinched.
-    pub(crate) manifold: bool,
-    /// Bounding-box diagonal.
-    pub(crate) bbox_diagonal: f64,
-    /// Mean edge length.
-    pub(crate) mean_edge_length: f64,
-    /// What the builder changed to make a valid half-edge mesh.
-    pub(crate) repairs: BuildReport,
-    /// Per-vertex attribute names, in file order.
-    pub(crate) vertex_attributes: Vec<String>,
-    /// Per-face attribute names, in file order.
-    pub(crate) face_attributes: Vec<String>,
-}
-
-/// Computes [`MeshInfo`] for a file-level mesh.
-pub(crate) fn mesh_info(poly: &PolygonMesh) -> anyhow::Result<MeshInfo> {
-    let built = Mesh::from_polygons(poly)?;
-    let topo = built.mesh.topology();
-    let manifold = built.report.input_was_manifold();
-    Ok(MeshInfo {
-        vertices: poly.n_vertices(),
-        faces: poly.n_triangles(),
-        polygons: poly.n_faces(),
-        edges: count_file_edges(poly),
-        boundary_loops: topo.boundary_loops,
-        components: topo.components,
-        euler_characteristic: topo.euler_characteristic,
-        genus: if manifold { topo.genus } else { None },
-        floor_vertices: topo.floor_vertices,
-        pm_base: None,
-        manifold,
-        bbox_diagonal: built.mesh.bbox_diagonal(),
-        mean_edge_length: built.mesh.mean_edge_length(),
-        repairs: built.report,
-        vertex_attributes: poly
-            .vertex_attributes
-            .iter()
-            .map(|a| a.name.clone())
-            .collect(),
-        face_attributes: poly
-            .face_attributes
-            .iter()
-            .map(|a| a.name.clone())
-            .collect(),
-    })
-}
-
-/// Distinct undirected index pairs over the fan triangles (repeated-index pairs skipped).
-fn count_file_edges(poly: &PolygonMesh) -> usize {
-    let mut pairs: Vec<u64> = Vec::with_capacity(poly.n_triangles() * 3);
-    for f in poly.faces() {
-        for k in 1..f.len().saturating_sub(1) {
-            let t = [f[0], f[k], f[k + 1]];
-            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
-                if a != b {
-                    pairs.push(((a.min(b) as u64) << 32) | a.max(b) as u64);
-                }
-            }
-        }
-    }
-    pairs.sort_unstable();
-    pairs.dedup();
-    pairs.len()
 }
 
 /// Runs `meshpyr info`.
@@ -120,7 +28,7 @@ pub(crate) fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
         (crate::io::read_mesh(&args.mesh)?, None)
     };
     super::input::require(&args.mesh, poly.check_not_empty())?;
-    let mut info = mesh_info(&poly).with_context(|| args.mesh.display().to_string())?;
+    let mut info = MeshInfo::of(&poly).with_context(|| args.mesh.display().to_string())?;
     info.pm_base = pm_base;
     if args.json {
         outln!("{}", serde_json::to_string(&info)?);

@@ -40,9 +40,6 @@ pub(crate) enum SolverArg {
     Exact,
 }
 
-/// Largest output for which `--solver auto` picks the exact solve.
-const AUTO_EXACT_MAX_VERTICES: f64 = 250_000.0;
-
 /// Arguments of `meshpyr subdivide`.
 #[derive(clap::Args, Debug)]
 #[command(
@@ -107,20 +104,14 @@ pub(crate) fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
             RefineArg::Bisect => Refinement::Bisection,
         },
         solver: match args.solver {
-            SolverArg::Auto => {
-                // Each quad level multiplies the vertex count by about 4, a bisection level by 2.
-                let growth: f64 = match args.refine {
-                    RefineArg::Quad => 4.0,
-                    RefineArg::Bisect => 2.0,
-                };
-                let output_vertices =
-                    built.mesh.n_vertices() as f64 * growth.powi(args.levels.min(64) as i32);
-                if output_vertices <= AUTO_EXACT_MAX_VERTICES {
-                    Solver::Exact
-                } else {
-                    Solver::Cg
-                }
-            }
+            SolverArg::Auto => Solver::auto(
+                built.mesh.n_vertices(),
+                args.levels,
+                match args.refine {
+                    RefineArg::Quad => Refinement::Quadrisection,
+                    RefineArg::Bisect => Refinement::Bisection,
+                },
+            ),
             SolverArg::Jacobi => Solver::Jacobi,
             SolverArg::Cg => Solver::Cg,
             SolverArg::Exact => Solver::Exact,

@@ -4,6 +4,7 @@
 pub(crate) mod build;
 pub(crate) mod geometry;
 pub(crate) mod halfedge;
+pub(crate) mod info;
 pub(crate) mod polygon;
 #[cfg(feature = "cli")]
 pub(crate) mod prune;
@@ -20,6 +21,7 @@ pub use geometry::BoundingBox;
 pub use geometry::cotangent;
 pub use halfedge::{FaceId, HalfedgeId};
 pub use halfedge::{Mesh, SlotIndex, VertexId};
+pub use info::MeshInfo;
 pub use polygon::{
     Attribute, AttributeData, ElementProperty, ExtraElement, ListProperty, PolygonMesh, ScalarType,
 };

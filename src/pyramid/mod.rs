@@ -41,6 +41,7 @@ macro_rules! with_codes {
 }
 
 pub(crate) mod analysis;
+mod band_check;
 mod cached;
 pub(crate) mod edit;
 pub(crate) mod frames;

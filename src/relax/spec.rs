@@ -23,13 +23,39 @@ pub enum RelaxKind {
 }
 
 impl RelaxKind {
+    /// Every kind, in the order the command line lists them.
+    pub const ALL: [RelaxKind; 3] = [
+        RelaxKind::SecondDifference,
+        RelaxKind::Mcm,
+        RelaxKind::Normal,
+    ];
+
     /// The operator of this kind with its default parameters.
-    pub(crate) fn spec(self) -> RelaxationSpec {
+    pub fn spec(self) -> RelaxationSpec {
         match self {
             RelaxKind::SecondDifference => SecondDifference::default().into(),
             RelaxKind::Mcm => MeanCurvatureStep::default().into(),
             RelaxKind::Normal => NormalAdaptive::default().into(),
         }
+    }
+}
+
+/// A kind by its command-line name (`second-difference`, `mcm`, `normal`), for bindings and
+/// configuration files that name operators as `--relax` does.
+impl std::str::FromStr for RelaxKind {
+    type Err = String;
+
+    fn from_str(name: &str) -> Result<Self, Self::Err> {
+        RelaxKind::ALL
+            .into_iter()
+            .find(|kind| kind.spec().name() == name)
+            .ok_or_else(|| {
+                let names: Vec<&str> = RelaxKind::ALL.iter().map(|k| k.spec().name()).collect();
+                format!(
+                    "unknown relaxation {name:?}: expected one of {}",
+                    names.join(", ")
+                )
+            })
     }
 }
 
@@ -131,6 +157,15 @@ impl RelaxationSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn every_kind_is_found_by_its_operators_name_and_unknown_names_are_listed() {
+        for kind in RelaxKind::ALL {
+            assert_eq!(kind.spec().name().parse::<RelaxKind>(), Ok(kind));
+        }
+        let err = "laplace".parse::<RelaxKind>().unwrap_err();
+        assert!(err.contains("\"laplace\"") && err.contains("second-difference, mcm, normal"));
+    }
 
     #[test]
     fn the_default_is_guskovs_operator_with_its_defaults() {

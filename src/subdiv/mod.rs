@@ -64,6 +64,30 @@ pub enum Solver {
     Exact,
 }
 
+impl Solver {
+    /// Largest output, in vertices, for which [`Solver::auto`] picks the exact solve.
+    pub const AUTO_EXACT_MAX_VERTICES: f64 = 250_000.0;
+
+    /// The solver `meshpyr subdivide --solver auto` uses for a mesh of `input_vertices`
+    /// (after the builder's repairs): [`Solver::Exact`] while the output has at most
+    /// [`Self::AUTO_EXACT_MAX_VERTICES`] vertices, where the cascadic approximation visibly
+    /// oscillates on coarse inputs and the exact solve costs little, [`Solver::Cg`] above.
+    pub fn auto(input_vertices: usize, levels: usize, refinement: Refinement) -> Solver {
+        // Each quadrisection level multiplies the vertex count by about 4, a bisection level
+        // by 2.
+        let growth: f64 = match refinement {
+            Refinement::Quadrisection => 4.0,
+            Refinement::Bisection => 2.0,
+        };
+        let output_vertices = input_vertices as f64 * growth.powi(levels.min(64) as i32);
+        if output_vertices <= Self::AUTO_EXACT_MAX_VERTICES {
+            Solver::Exact
+        } else {
+            Solver::Cg
+        }
+    }
+}
+
 /// Options of [`subdivide`]. Every constant of the method is here, with its default.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SubdivOptions {

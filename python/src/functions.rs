@@ -1,0 +1,272 @@
+//! The free functions over `(V, F)`: files, counts, simplification, subdivision, comparison.
+
+use crate::arrays::{self, index_array, mesh_arrays, positions_array, triangles_array};
+use crate::errors::{input_error, io_error, value_error};
+use meshpyr::MeshInfo;
+use meshpyr::mesh::{Mesh, ScalarType};
+use meshpyr::pm::PmOptions;
+use meshpyr::subdiv::{self, Refinement, Scheme, Solver, SubdivOptions};
+use meshpyr::{NoProgress, PolygonMesh, SimplifyTarget};
+use numpy::{PyArray1, PyArray2};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+
+/// `(V, F)` of a mesh: float64 (n, 3) and int64 (m, 3).
+pub(crate) type MeshPair<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>);
+
+/// `(V2, F2, vertex_map)` of `simplify`.
+pub(crate) type SimplifiedArrays<'py> = (
+    Bound<'py, PyArray2<f64>>,
+    Bound<'py, PyArray2<i64>>,
+    Bound<'py, PyArray1<i64>>,
+);
+
+/// The arrays of a file-level mesh.
+pub(crate) fn mesh_pair<'py>(py: Python<'py>, mesh: &PolygonMesh) -> MeshPair<'py> {
+    let (v, f) = mesh_arrays(mesh);
+    (positions_array(py, &v), triangles_array(py, &f))
+}
+
+/// A serialisable value as a Python dict, through JSON (the same keys and values as the
+/// command line's `--json`).
+pub(crate) fn to_dict<'py>(
+    py: Python<'py>,
+    value: &impl serde::Serialize,
+) -> PyResult<Bound<'py, PyDict>> {
+    let text = serde_json::to_string(value).map_err(input_error)?;
+    let parsed = py.import("json")?.call_method1("loads", (text,))?;
+    Ok(parsed.cast_into::<PyDict>()?)
+}
+
+/// Reads a mesh file (.obj, .ply, .off, .stl, each optionally gzipped as .gz) as ``(V, F)``:
+/// V float64 (n, 3), F int64 (m, 3). Polygons are fan-triangulated from their first corner,
+/// as meshpyr's mesh builder does, so ``(V, F)`` gives the same results as the file itself.
+/// Vertices that no face uses are kept.
+///
+/// Raises OSError (FileNotFoundError, PermissionError, ...) when the file cannot be read,
+/// FormatError when its content is damaged, ValueError for an unknown extension.
+#[pyfunction]
+pub(crate) fn read(py: Python<'_>, path: PathBuf) -> PyResult<MeshPair<'_>> {
+    let mesh = py.detach(|| meshpyr::read_mesh(&path)).map_err(io_error)?;
+    Ok(mesh_pair(py, &mesh))
+}
+
+/// Writes ``(V, F)`` to a mesh file; the extension chooses the format (.obj, .ply, .off, .stl,
+/// optionally followed by .gz). PLY is binary with double positions; OBJ and OFF hold every
+/// float64 exactly; STL holds float32 only. The file is replaced atomically: it appears complete or not at all.
+///
+/// Raises ValueError for bad arrays or an unknown extension, OSError when the file cannot be
+/// written.
+#[pyfunction]
+#[pyo3(signature = (path, v, f, /))]
+pub(crate) fn write(
+    py: Python<'_>,
+    path: PathBuf,
+    v: &Bound<'_, PyAny>,
+    f: &Bound<'_, PyAny>,
+) -> PyResult<()> {
+    let mut mesh = arrays::mesh(v, f)?;
+    // The arrays are float64: PLY stores doubles and text formats print every float64 exactly,
+    // whatever the values (else coordinates that happen to be float32 values would make a
+    // float PLY, and commands reading it would write float32 results).
+    mesh.position_type = Some(ScalarType::F64);
+    py.detach(|| meshpyr::write_mesh(&path, &mesh))
+        .map_err(io_error)
+}
+
+/// Counts, topology and size of ``(V, F)``, as a dict with the keys of ``meshpyr info
+/// --json``: vertices, faces, polygons, edges, boundary_loops, components,
+/// euler_characteristic, genus (None when not manifold), floor_vertices (the fewest vertices
+/// its topology can be simplified to), pm_base (None), manifold, bbox_diagonal,
+/// mean_edge_length, repairs (a dict of what the mesh builder would change to process it),
+/// vertex_attributes and face_attributes (empty lists for arrays).
+#[pyfunction]
+#[pyo3(signature = (v, f, /))]
+pub(crate) fn info<'py>(
+    py: Python<'py>,
+    v: &Bound<'py, PyAny>,
+    f: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let mesh = arrays::mesh(v, f)?;
+    let info = py.detach(|| MeshInfo::of(&mesh)).map_err(input_error)?;
+    to_dict(py, &info)
+}
+
+/// The one target among `faces`, `ratio` and `error`.
+fn simplify_target(
+    faces: Option<usize>,
+    ratio: Option<f64>,
+    error: Option<f64>,
+) -> PyResult<SimplifyTarget> {
+    match (faces, ratio, error) {
+        (Some(n), None, None) => Ok(SimplifyTarget::Faces(n)),
+        (None, Some(r), None) => Ok(SimplifyTarget::Ratio(r)),
+        (None, None, Some(e)) => Ok(SimplifyTarget::Error(e)),
+        _ => Err(value_error(
+            "give exactly one of faces= (a triangle count), ratio= (a fraction in (0, 1]) or \
+             error= (a fraction of the bounding-box diagonal)",
+        )),
+    }
+}
+
+/// Quadric-error simplification by half-edge collapses, as ``meshpyr simplify``; give exactly
+/// one target: ``faces`` (at most this many triangles), ``ratio`` (at most this fraction of
+/// the triangles, in (0, 1]) or ``error`` (collapse while the quadric error, an RMS distance,
+/// stays below this fraction of the bounding-box diagonal).
+///
+/// Returns ``(V2, F2, vertex_map)``: the kept vertices keep their positions, and
+/// ``vertex_map[i]`` is the index in V of vertex i of V2 (so ``V2 == V[vertex_map]``).
+/// When the topology allows no more collapses before the target, the result stops there and
+/// a UserWarning says where and why.
+///
+/// ``max_angle`` is the largest rotation of a face normal one collapse may cause (degrees),
+/// ``min_quality`` the smallest triangle quality (4√3·area / Σ edge², 1 = equilateral) a
+/// collapse may leave, ``boundary_weight`` the weight of the planes that keep boundaries in
+/// place (0 lets them drift).
+#[pyfunction]
+#[pyo3(signature = (v, f, /, *, faces=None, ratio=None, error=None, max_angle=45.0, min_quality=0.05, boundary_weight=100.0))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn simplify<'py>(
+    py: Python<'py>,
+    v: &Bound<'py, PyAny>,
+    f: &Bound<'py, PyAny>,
+    faces: Option<i64>,
+    ratio: Option<f64>,
+    error: Option<f64>,
+    max_angle: f64,
+    min_quality: f64,
+    boundary_weight: f64,
+) -> PyResult<SimplifiedArrays<'py>> {
+    let faces = faces.map(|n| arrays::count("faces", n)).transpose()?;
+    let target = simplify_target(faces, ratio, error)?;
+    let mesh = arrays::mesh(v, f)?;
+    let options = PmOptions {
+        max_normal_angle_degrees: max_angle,
+        min_quality,
+        boundary_weight,
+        ..PmOptions::default()
+    };
+    let result = py
+        .detach(|| meshpyr::simplify(&mesh, target, &options, &NoProgress))
+        .map_err(input_error)?;
+    if let Some(shortfall) = result.shortfall() {
+        crate::warn(py, &shortfall)?;
+    }
+    let (v2, f2) = mesh_pair(py, &result.mesh);
+    Ok((v2, f2, index_array(py, &result.source_rows)))
+}
+
+/// Subdivides a coarse mesh, as ``meshpyr subdivide`` (same options, same bits): ``scheme``
+/// "mcm" (cascadic implicit mean-curvature motion, Diewald, Morigi and Rumpf) or "loop";
+/// ``refine`` "quad" (1-to-4 splits, 4× faces per level) or "bisect" (2× per level);
+/// ``solver`` "auto" (exact up to 250 000 output vertices, cascadic CG above), "exact",
+/// "cg" or "jacobi"; ``width`` the filter-width constant c (σ = c · mean edge length;
+/// larger values smooth and shrink more); ``local_width`` lets the width follow the local edge
+/// length; ``finest_steps`` and ``beta`` set the cascadic schedule.
+///
+/// Returns ``(V2, F2)``: the input's vertices first (same order; repaired copies follow), the
+/// new vertices after.
+#[pyfunction]
+#[pyo3(signature = (v, f, /, *, levels=3, scheme="mcm", refine="quad", solver="auto", width=0.25, local_width=false, finest_steps=2, beta=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn subdivide<'py>(
+    py: Python<'py>,
+    v: &Bound<'py, PyAny>,
+    f: &Bound<'py, PyAny>,
+    levels: i64,
+    scheme: &str,
+    refine: &str,
+    solver: &str,
+    width: f64,
+    local_width: bool,
+    finest_steps: i64,
+    beta: Option<f64>,
+) -> PyResult<MeshPair<'py>> {
+    let levels = arrays::count("levels", levels)?;
+    let finest_steps = arrays::count("finest_steps", finest_steps)?;
+    let scheme = match scheme {
+        "mcm" => Scheme::Mcm,
+        "loop" => Scheme::Loop,
+        other => return Err(choice_error("scheme", other, &["mcm", "loop"])),
+    };
+    let refinement = match refine {
+        "quad" => Refinement::Quadrisection,
+        "bisect" => Refinement::Bisection,
+        other => return Err(choice_error("refine", other, &["quad", "bisect"])),
+    };
+    let solver = match solver {
+        "auto" => None,
+        "exact" => Some(Solver::Exact),
+        "cg" => Some(Solver::Cg),
+        "jacobi" => Some(Solver::Jacobi),
+        other => {
+            return Err(choice_error(
+                "solver",
+                other,
+                &["auto", "exact", "cg", "jacobi"],
+            ));
+        }
+    };
+    let mesh = arrays::mesh(v, f)?;
+    let result = py.detach(|| {
+        let built = Mesh::from_polygons(&mesh).map_err(|e| e.to_string())?;
+        let options = SubdivOptions {
+            levels,
+            scheme,
+            refinement,
+            solver: solver
+                .unwrap_or_else(|| Solver::auto(built.mesh.n_vertices(), levels, refinement)),
+            width,
+            local_width,
+            finest_steps,
+            beta,
+            ..SubdivOptions::default()
+        };
+        subdiv::subdivide(&built.mesh, &options, &NoProgress).map_err(|e| e.to_string())
+    });
+    let result = result.map_err(value_error)?;
+    Ok((
+        positions_array(py, &result.positions),
+        triangles_array(py, &result.triangles),
+    ))
+}
+
+/// A `ValueError` for an option that is not one of `choices`.
+pub(crate) fn choice_error(option: &str, got: &str, choices: &[&str]) -> PyErr {
+    value_error(format!(
+        "{option}={got:?} is not one of {}",
+        choices
+            .iter()
+            .map(|c| format!("{c:?}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ))
+}
+
+/// Error of a processed mesh ``(V, F)`` against a reference ``(Vref, Fref)``, as ``meshpyr
+/// compare --json``: a dict with e_v (area-weighted RMS distance from the result's vertices
+/// to the reference surface), e_n (area-weighted RMS of the normal difference), hausdorff
+/// (symmetric, sampled at vertices, edge midpoints and centroids) and its two one-sided
+/// parts, the same divided by the reference's bounding-box diagonal (``*_rel``), e_v_over_l
+/// (E_v in units of the reference's mean edge length), bbox_diagonal and mean_edge_length.
+///
+/// Raises ValueError when the reference has no triangle with positive area.
+#[pyfunction]
+#[pyo3(signature = (v, f, v_ref, f_ref, /))]
+pub(crate) fn compare<'py>(
+    py: Python<'py>,
+    v: &Bound<'py, PyAny>,
+    f: &Bound<'py, PyAny>,
+    v_ref: &Bound<'py, PyAny>,
+    f_ref: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let result = arrays::mesh(v, f)?;
+    let reference = arrays::mesh(v_ref, f_ref)?;
+    let comparison = py.detach(|| {
+        let result = Mesh::from_polygons(&result).map_err(|e| e.to_string())?;
+        let reference = Mesh::from_polygons(&reference).map_err(|e| e.to_string())?;
+        meshpyr::metrics::compare(&result.mesh, &reference.mesh).map_err(|e| e.to_string())
+    });
+    to_dict(py, &comparison.map_err(value_error)?)
+}
