@@ -1,7 +1,7 @@
 """Type stubs of the extension module; the package ``meshpyr`` re-exports every name."""
 
 from os import PathLike
-from typing import Dict, Iterable, Literal, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterable, Literal, Optional, Sequence, Tuple, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -91,9 +91,11 @@ def smooth(
     order."""
 
 def compare(
-    v: ArrayLike, f: ArrayLike, v_ref: ArrayLike, f_ref: ArrayLike, /
-) -> Dict[str, float]:
-    """E_v, E_n and the sampled Hausdorff distance of (V, F) against (Vref, Fref)."""
+    v: ArrayLike, f: ArrayLike, v_ref: ArrayLike, f_ref: ArrayLike, /, *, per_vertex: bool = False
+) -> Dict[str, Any]:
+    """E_v, E_n and the sampled Hausdorff distance of (V, F) against (Vref, Fref); with
+    per_vertex=True also ``distance`` (each vertex's distance to the reference surface, float64
+    array) and its percentiles ``per_vertex_distance``."""
 
 class ProgressiveMesh:
     """The hierarchy of quadric-error half-edge collapses; level n is the mesh on the first n

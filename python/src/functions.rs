@@ -4,6 +4,7 @@ use crate::arrays::{self, index_array, mesh_arrays, positions_array, triangles_a
 use crate::errors::{input_error, io_error, value_error};
 use meshpyr::MeshInfo;
 use meshpyr::mesh::{Mesh, ScalarType};
+use meshpyr::metrics::{FieldPercentiles, Reference, vertex_distances};
 use meshpyr::pm::PmOptions;
 use meshpyr::subdiv::{self, Refinement, Scheme, Solver, SubdivOptions};
 use meshpyr::{NoProgress, PolygonMesh, SimplifyTarget};
@@ -250,23 +251,47 @@ pub(crate) fn choice_error(option: &str, got: &str, choices: &[&str]) -> PyErr {
 /// (symmetric, sampled at vertices, edge midpoints and centroids) and its two one-sided
 /// parts, the same divided by the reference's bounding-box diagonal (``*_rel``), e_v_over_l
 /// (E_v in units of the reference's mean edge length), bbox_diagonal and mean_edge_length.
+/// Distances below rounding noise of the diagonal read 0, as the CLI prints them.
+///
+/// With ``per_vertex=True`` the dict also holds ``distance``, a float64 array with the exact
+/// distance from each row of V to the reference surface (model units, NaN for a non-finite
+/// row), and ``per_vertex_distance``, its percentiles p50, p90, p99 and max, as ``meshpyr
+/// compare --per-vertex`` writes and prints them.
 ///
 /// Raises ValueError when the reference has no triangle with positive area.
 #[pyfunction]
-#[pyo3(signature = (v, f, v_ref, f_ref, /))]
+#[pyo3(signature = (v, f, v_ref, f_ref, /, *, per_vertex = false))]
 pub(crate) fn compare<'py>(
     py: Python<'py>,
     v: &Bound<'py, PyAny>,
     f: &Bound<'py, PyAny>,
     v_ref: &Bound<'py, PyAny>,
     f_ref: &Bound<'py, PyAny>,
+    per_vertex: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let result = arrays::mesh(v, f)?;
     let reference = arrays::mesh(v_ref, f_ref)?;
-    let comparison = py.detach(|| {
-        let result = Mesh::from_polygons(&result).map_err(|e| e.to_string())?;
+    let measured = py.detach(|| {
+        let result_mesh = Mesh::from_polygons(&result).map_err(|e| e.to_string())?;
         let reference = Mesh::from_polygons(&reference).map_err(|e| e.to_string())?;
-        meshpyr::metrics::compare(&result.mesh, &reference.mesh).map_err(|e| e.to_string())
+        let comparison = meshpyr::metrics::compare(&result_mesh.mesh, &reference.mesh)
+            .map_err(|e| e.to_string())?
+            .without_rounding_noise();
+        let field = if per_vertex {
+            let surface = Reference::from_mesh(&reference.mesh).map_err(|e| e.to_string())?;
+            Some(vertex_distances(&result.positions, &surface))
+        } else {
+            None
+        };
+        Ok::<_, String>((comparison, field))
     });
-    to_dict(py, &comparison.map_err(value_error)?)
+    let (comparison, field) = measured.map_err(value_error)?;
+    let dict = to_dict(py, &comparison)?;
+    if let Some(field) = field {
+        if let Some(percentiles) = FieldPercentiles::of(&field) {
+            dict.set_item("per_vertex_distance", to_dict(py, &percentiles)?)?;
+        }
+        dict.set_item("distance", PyArray1::from_vec(py, field))?;
+    }
+    Ok(dict)
 }

@@ -143,3 +143,18 @@ def test_info_and_compare_give_the_cli_json(cli, sphere, double_ply, tmp_path):
     smooth = sphere[0] + 0.01
     result = double_ply(smooth, sphere[1], name="result.ply")
     assert meshpyr.compare(smooth, sphere[1], *sphere) == json.loads(cli("compare", result, source, "--json"))
+
+
+def test_compare_per_vertex_gives_the_cli_field(cli, sphere, double_ply, tmp_path):
+    source = double_ply(*sphere)
+    moved = sphere[0] * 1.01
+    result = double_ply(moved, sphere[1], name="result.ply")
+    expected = json.loads(cli("compare", result, source, "--json", "--per-vertex", tmp_path / "field.ply"))
+    got = meshpyr.compare(moved, sphere[1], *sphere, per_vertex=True)
+    distance = got.pop("distance")
+    assert got == expected
+    assert distance.dtype == np.float64 and distance.shape == (len(moved),)
+    # Every vertex of a sphere scaled by 1.01 lies outside the original polyhedron.
+    assert np.all(distance > 0)
+    assert distance.max() == expected["per_vertex_distance"]["max"]
+    assert "distance" not in meshpyr.compare(moved, sphere[1], *sphere)
