@@ -3,33 +3,9 @@
 
 mod common;
 
-use common::data;
+use common::{data, error_line, meshpyr, ok, path};
 use meshpyr::mesh::{Attribute, AttributeData};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn meshpyr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshpyr"))
-        .args(args)
-        .output()
-        .unwrap()
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn ok(o: &Output) {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-}
-
-/// The one-line error of a failed run.
-fn error_line(o: &Output) -> String {
-    assert!(!o.status.success(), "expected a failure");
-    let err = String::from_utf8_lossy(&o.stderr).trim().to_string();
-    assert!(!err.contains("panicked"), "{err}");
-    err
-}
 
 /// Writes the field of `result` against `reference` to `out` and returns the JSON output.
 fn per_vertex(result: &Path, reference: &Path, out: &Path) -> serde_json::Value {

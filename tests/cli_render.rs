@@ -3,17 +3,10 @@
 
 mod common;
 
-use common::data;
+use common::{data, error_line, meshpyr, ok, path};
 use meshpyr::mesh::{Attribute, AttributeData};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-fn meshpyr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshpyr"))
-        .args(args)
-        .output()
-        .unwrap()
-}
 
 fn meshpyr_on_threads(args: &[&str], threads: Option<&str>) -> Output {
     let mut c = Command::new(env!("CARGO_BIN_EXE_meshpyr"));
@@ -23,22 +16,6 @@ fn meshpyr_on_threads(args: &[&str], threads: Option<&str>) -> Output {
         None => c.env_remove("RAYON_NUM_THREADS"),
     };
     c.output().unwrap()
-}
-
-fn path(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
-
-fn ok(o: &Output) {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-}
-
-/// The one-line error of a failed run.
-fn error_line(o: &Output) -> String {
-    assert!(!o.status.success(), "expected a failure");
-    let err = String::from_utf8_lossy(&o.stderr).trim().to_string();
-    assert!(!err.contains("panicked"), "{err}");
-    err
 }
 
 fn png_size(file: &Path) -> (u32, u32) {
