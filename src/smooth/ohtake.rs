@@ -267,7 +267,14 @@ fn run_pass(
     }
     let fitting = Fitting::new(surface, &filtered.normals);
     if options.vertex_updates > 0 {
+        let initial_energy = fitting.energy(&result.positions);
         fitting.project(&mut result.positions, options.vertex_updates);
+        result.fit = FitReport {
+            iterations: options.vertex_updates,
+            initial_energy,
+            final_energy: fitting.energy(&result.positions),
+            rejected_flips: 0,
+        };
     } else {
         let fit_options = FitOptions {
             max_iterations: options.max_iterations,
