@@ -2,7 +2,7 @@
 # A fuzz campaign anyone can repeat: every target in fuzz_targets/ for SECONDS each, JOBS at a
 # time, then one line per target with its executions, coverage, corpus and crashes.
 #
-#   fuzz/campaign.sh [SECONDS_PER_TARGET [JOBS]]      (defaults: 600 s, 2 at a time)
+#   fuzz/campaign.sh [SECONDS_PER_TARGET [JOBS [TARGET...]]]   (defaults: 600 s, 2 at a time, all)
 #   SANITIZER=none fuzz/campaign.sh 60                 (no AddressSanitizer: faster, finds less)
 #
 # Needs cargo-fuzz (installed here with `cargo install cargo-fuzz` when missing). The
@@ -18,6 +18,7 @@ set -euo pipefail
 
 seconds=${1:-600}
 parallel=${2:-2}
+shift $(($# < 2 ? $# : 2))
 sanitizer=${SANITIZER:-address}
 here=$(cd "$(dirname "$0")" && pwd)
 cd "$here"
@@ -28,7 +29,11 @@ if ! cargo fuzz --version >/dev/null 2>&1; then
 fi
 export RUSTC_BOOTSTRAP=1
 
-mapfile -t targets < <(cargo fuzz list)
+if (($# > 0)); then
+    targets=("$@")
+else
+    mapfile -t targets < <(cargo fuzz list)
+fi
 echo "building ${#targets[@]} targets (sanitizer: $sanitizer)" >&2
 cargo fuzz build -s "$sanitizer" -O >&2
 triple=$(rustc -vV | sed -n 's/^host: //p')
