@@ -26,7 +26,8 @@
 //!   (its second differences barely involve the vertex, so `Σ_e c_{e,i}²` is tiny against the
 //!   products) predicts values far outside the neighbourhood, and the pyramid's `q + (f − q)`
 //!   then cancels catastrophically — a coarse level of a holed grid had weights summing to
-//!   1e15, and an identity filter moved vertices by 0.8 % of the diagonal.
+//!   1e15, and an identity filter moved vertices by 0.8 % of the diagonal. Weights summing to
+//!   a few hundred do the same more slowly, level after level (`docs/algorithms.md` §1b).
 
 use super::{Relaxation, RingStencils};
 use crate::mesh::{HalfedgeId, Mesh, SlotIndex, VertexId};
@@ -39,10 +40,11 @@ use smallvec::SmallVec;
 pub(crate) type Stencil = SmallVec<[(VertexId, f64); 24]>;
 
 /// Largest absolute sum of a stencil's weights that is kept (see the [module docs](self)).
-/// Regular grids give 2, real scans stay below 100 in all their levels (bunny, fandisk,
-/// armadillo: below 10; one stencil of the CAD anchor between 100 and 1000); rounding grows by
-/// about this factor per prediction.
-pub(crate) const MAX_WEIGHT_SUM: f64 = 1e3;
+/// Regular grids give 2 and most stencils of scans stay below 10; the few above 20 sit at
+/// coarse levels of repaired or marching-cubes meshes, where they put spikes into low-passes
+/// (`docs/algorithms.md` §1b). Rounding, and the presmoothed signal of the analysis, can grow
+/// by about this factor per level.
+pub(crate) const MAX_WEIGHT_SUM: f64 = 20.0;
 
 /// Guskov's second-difference relaxation; see the docs of the `second_difference` module.
 #[derive(Clone, Copy, Debug, PartialEq)]
