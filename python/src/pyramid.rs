@@ -21,8 +21,8 @@ use std::path::PathBuf;
 ///
 /// ``Pyramid(V, F, relax="second-difference")`` builds it; ``relax`` is the operator that
 /// predicts each level from the coarser one: "second-difference" (Guskov's), "mcm" (one step
-/// of implicit mean-curvature motion) or "normal" (a 1-ring average that does not reach
-/// across creases).
+/// of implicit mean-curvature motion) or "normal" (second differences that stop at creases,
+/// so low-passes keep sharp edges).
 ///
 /// Every array it returns holds the input's vertices in the input's order. A Pyramid is
 /// immutable, safe to share between threads, and pickles as its .pyr bytes (so

@@ -113,7 +113,7 @@ impl PyrData {
     /// Recomputes the detail pyramid (bit-identical to the one the file was built with) and
     /// returns the whole scan.
     pub fn into_pyramid(self, progress: &dyn Progress) -> Result<Pyramid, PyramidError> {
-        let op = self.info.relaxation.operator();
+        let op = crate::pyramid::relaxation_for(&self.info.relaxation, &self.pm);
         let pyramid = DetailPyramid::analyze(&self.pm, op.as_ref(), progress)?;
         // A file whose input needed no repair was loaded without building the half-edge mesh
         // (see `clean_triangle_faces`): its mesh is the input itself, vertex for vertex and

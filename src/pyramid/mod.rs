@@ -57,6 +57,7 @@ pub use edit::{HandleReach, LevelMove, MoveHandle};
 pub(crate) use fuzz::fuzz_pyramid;
 pub use gains::{Filter, LevelGains, LevelSpec};
 pub use gains::{GainBand, GainParseError};
+pub(crate) use pipeline::relaxation_for;
 pub use pipeline::{PyrFileError, Pyramid, PyramidOptions};
 pub use spectrum::BandEnergy;
 pub use spectrum::Spectrum;

@@ -10,7 +10,8 @@ use crate::mesh::{Mesh, PolygonMesh, SourceMap};
 use crate::pm::{PmOptions, ProgressiveMesh};
 use crate::progress::{NoProgress, Progress};
 use crate::pyramid::Filter;
-use crate::relax::RelaxationSpec;
+use crate::relax::{NormalAdaptive, Relaxation, RelaxationSpec};
+use crate::smooth::{SmoothMethod, smooth_positions};
 use glam::DVec3;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
@@ -125,7 +126,7 @@ impl Pyramid {
             ProgressiveMesh::build(&built.mesh, &options.pm, &|x: f64| progress.update(0.5 * x))?;
         let source = built.source;
         drop(built.mesh);
-        let relaxation = options.relaxation.operator();
+        let relaxation = relaxation_for(&options.relaxation, &pm);
         let pyramid = DetailPyramid::analyze(&pm, relaxation.as_ref(), &|x: f64| {
             progress.update(0.5 + 0.5 * x)
         })?;
@@ -242,4 +243,44 @@ impl Pyramid {
         let n = pm_signal.len().min(self.pm.original_positions().len());
         (pm_signal[..n].to_vec(), self.pm.finest_faces().to_vec())
     }
+}
+
+/// The operator `spec` names, ready to analyse `pm`: the normal-adaptive operator takes its
+/// normals from the finest level denoised by `smooth --method auto` (Ohtake's filter keeps
+/// creases and removes the noise that would steer it at random; `relax::normal_adaptive`).
+/// Deterministic, so a `.pyr` loader rebuilds the same operator from the stored input.
+pub(crate) fn relaxation_for(spec: &RelaxationSpec, pm: &ProgressiveMesh) -> Box<dyn Relaxation> {
+    match *spec {
+        RelaxationSpec::NormalAdaptive {
+            normal_scale,
+            degenerate_area_ratio,
+        } => {
+            let op = NormalAdaptive {
+                normal_scale,
+                degenerate_area_ratio,
+                ..NormalAdaptive::default()
+            };
+            Box::new(match denoised_guide(pm) {
+                Some(guide) => op.with_guide(guide),
+                None => op,
+            })
+        }
+        _ => spec.operator(),
+    }
+}
+
+/// The PM's vertices (in PM order) at their positions after `smooth --method auto` on the
+/// finest level; vertices without faces keep theirs. `None` when the smoother refuses the
+/// mesh, and the operator then reads the normals of the positions themselves.
+fn denoised_guide(pm: &ProgressiveMesh) -> Option<Vec<DVec3>> {
+    let positions = pm.original_positions();
+    let built = Mesh::from_triangles(positions, pm.finest_faces()).ok()?;
+    let (smoothed, _) = smooth_positions(&built.mesh, &SmoothMethod::Auto, &NoProgress).ok()?;
+    let mut guide = positions.to_vec();
+    for (&source, &p) in built.source.vertex_source.iter().zip(&smoothed) {
+        if let Some(g) = guide.get_mut(source as usize) {
+            *g = p;
+        }
+    }
+    Some(guide)
 }

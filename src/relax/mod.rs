@@ -6,8 +6,12 @@
 //!   operator (the default);
 //! - `mean_curvature`: [`MeanCurvatureStep`], one damped Jacobi step of implicit
 //!   mean-curvature motion (cotangent weights, lumped mass);
-//! - `normal_adaptive`: [`NormalAdaptive`], a 1-ring average whose weights fall off with the
-//!   vertex-normal difference, so it does not average across creases.
+//! - `normal_adaptive`: [`NormalAdaptive`], Guskov's operator with every hinge weighted by the
+//!   agreement of its triangles' normals (taken from an Ohtake-denoised guide), so that
+//!   predictions stop at creases.
+//!
+//! `normal_average` keeps [`NormalAverage`], the 1-ring average that `--relax normal` was in
+//! format 2.0 files, so those files still load as they were written.
 //!
 //! `spec` names them: [`RelaxKind`] is the value of `--relax`, [`RelaxationSpec`] the
 //! operator with its parameters as a `.pyr` file records it.
@@ -27,11 +31,13 @@ use glam::DVec3;
 
 pub(crate) mod mean_curvature;
 pub(crate) mod normal_adaptive;
+pub(crate) mod normal_average;
 pub(crate) mod second_difference;
 pub(crate) mod spec;
 
 pub use mean_curvature::{MeanCurvatureStep, StepWeights};
 pub use normal_adaptive::NormalAdaptive;
+pub use normal_average::NormalAverage;
 pub use second_difference::SecondDifference;
 pub use spec::RelaxKind;
 pub use spec::RelaxationSpec;

@@ -1,111 +1,104 @@
-//! [`NormalAdaptive`]: a 1-ring average whose weights shrink across creases, so the detail
-//! pyramid can predict without rounding sharp features (`--relax normal`).
+//! [`NormalAdaptive`]: Guskov's second-difference operator with every hinge weighted by how well
+//! the normals of its two triangles agree, so that a prediction stops at creases
+//! (`--relax normal`; `docs/algorithms.md` §1d).
 //!
-//! At vertex i with neighbours j, from the parameter geometry only,
+//! Guskov's operator (`second_difference`) predicts `f_i` by minimising `Σ_e (D_e f)²` over the
+//! hinges `e` whose flap contains `i`. Here each hinge counts with a weight
 //!
 //! ```text
-//! w_j = exp(−‖n_i − n_j‖² / (2 s²)) / Σ_k exp(−‖n_i − n_k‖² / (2 s²)),   R(x)_i = Σ_j w_j x_j
+//! ω_e = exp(−(1 − cos θ_e) / s²),      R f_i = argmin Σ_e ω_e (D_e f)²,
+//! w_ij = −Σ_e ω_e c_{e,i} c_{e,j} / Σ_e ω_e c_{e,i}²
 //! ```
 //!
-//! with `n` the angle-weighted vertex normals and `s` the normal scale. The operator is linear in
-//! the signal (weights depend on the geometry alone), so the pyramid can cache it as a stencil.
+//! with `θ_e` the angle between the normals of the hinge's two triangles and `s` the normal
+//! scale (the `1 − cos θ = ‖n₁ − n₂‖² / 2` of Ohtake's normal kernels). Scaling a hinge's four
+//! coefficients by `√ω_e` does exactly that, so the operator is Guskov's code with one factor
+//! per hinge.
 //!
-//! Why vertex normals and not the dihedral angle of each edge: for a vertex *on* a crease, the
-//! edges along the crease are the ones with the largest dihedral angle, so weighting by it
-//! would pull crease vertices off the crease into the flat sides. Comparing vertex normals
-//! keeps crease vertices averaging along the crease (their normals agree) and flat-side
-//! vertices averaging within their side (a crease vertex's normal is halfway between the
-//! sides), which is the bilateral behaviour Ohtake's anisotropic filter has on faces.
+//! Why this keeps creases where a weighted 1-ring average does not:
 //!
-//! Fallbacks: a neighbour without a defined normal (a zero-area fan) gets weight 1; if every
-//! weight underflows, the uniform average is used. An isolated vertex keeps its value.
+//! * every `D_e` still kills constants, so the weights sum to one, and a hinge that lies in a
+//!   plane still annihilates functions linear in that plane;
+//! * at a crease the hinges *across* it (their triangles on two sides) get `ω ≈ 0`, the hinges
+//!   *within* each side keep `ω ≈ 1`. A vertex on a flat side is then predicted from its side
+//!   alone and stays in its plane; a vertex on the crease is predicted from the hinges of both
+//!   sides, whose least-squares solution lies on both planes — on the crease line; a corner
+//!   lies on three planes. Guskov's operator instead bends every crease hinge flat, which
+//!   rounds the crease level after level; an average has no linear precision at all and
+//!   shrinks it.
+//!
+//! The operator stays linear in the signal: the weights come from the parameter geometry and a
+//! **guide** geometry the normals are taken from, never from the signal, so the pyramid's
+//! reconstruction stays exact. On a noisy scan the parameter geometry's own normals are noise
+//! (at the finest levels a hinge's angle is mostly noise), so the pyramid gives the operator the
+//! finest level denoised by Ohtake's normal filtering (`smooth --method auto`, which keeps
+//! creases) as its guide ([`NormalAdaptive::with_guide`]); without a guide the parameter
+//! geometry is used, which suits clean CAD meshes.
+//!
+//! Fallbacks are Guskov's: degenerate hinges are skipped, a vertex without usable hinges or
+//! with weights summing past the bound keeps its value; a hinge whose guide triangles have no
+//! normal counts fully (`ω = 1`).
 
-use crate::mesh::{Mesh, SlotIndex, VertexId};
-use crate::relax::Relaxation;
+use super::second_difference::Steering;
+use super::{Relaxation, RingStencils, SecondDifference};
+use crate::mesh::{Mesh, VertexId};
+use crate::pm::FlatReplay;
 use glam::DVec3;
-use smallvec::SmallVec;
+use std::sync::Arc;
 
-/// Normal-adaptive 1-ring averaging; see the module docs.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// Guskov's operator steered by normals; see the module docs.
+#[derive(Clone, Debug, PartialEq)]
 pub struct NormalAdaptive {
-    /// Normal scale s: the normal difference ‖n_i − n_j‖ at which a neighbour's weight falls to
-    /// e^{−1/2} (default 0.25; a 45° difference, ‖Δn‖ ≈ 0.77, then weighs about 0.01).
+    /// Normal scale `s`: a hinge whose triangles' normals differ by `‖n₁ − n₂‖ = s` counts
+    /// `e^{−1/2}`; default 0.25 (a 20° hinge then counts 0.38, a 45° one 0.01).
     pub normal_scale: f64,
+    /// [`SecondDifference::degenerate_area_ratio`].
+    pub degenerate_area_ratio: f64,
+    /// Positions the normals come from, indexed like the parameter geometry.
+    pub(crate) guide: Option<Arc<[DVec3]>>,
 }
 
 impl Default for NormalAdaptive {
     fn default() -> Self {
-        NormalAdaptive { normal_scale: 0.25 }
-    }
-}
-
-/// Angle-weighted unit normal of `v` from `geometry` (Thürmer–Wüthrich), or zero when its fan
-/// has no area. Angle weights make a crease vertex's normal the exact bisector of the two sides
-/// whatever the triangulation, which area weights do not.
-fn vertex_normal(mesh: &Mesh, geometry: &[DVec3], v: VertexId) -> DVec3 {
-    let p = geometry[v.slot()];
-    let mut sum = DVec3::ZERO;
-    for h in mesh.outgoing(v) {
-        if mesh.is_boundary_halfedge(h) {
-            continue;
+        NormalAdaptive {
+            normal_scale: 0.25,
+            degenerate_area_ratio: SecondDifference::default().degenerate_area_ratio,
+            guide: None,
         }
-        let a = geometry[mesh.to_vertex(h).slot()] - p;
-        let b = geometry[mesh.to_vertex(mesh.next(h)).slot()] - p;
-        let n = a.cross(b);
-        let len = n.length();
-        if len > f64::MIN_POSITIVE && len.is_finite() {
-            sum += a.angle_between(b) * (n / len);
-        }
-    }
-    let len = sum.length();
-    if len > f64::MIN_POSITIVE && len.is_finite() {
-        sum / len
-    } else {
-        DVec3::ZERO
     }
 }
 
 impl NormalAdaptive {
-    /// The normalised weights of the neighbours of `v` (circulation order); empty for an
-    /// isolated vertex. They are positive and sum to 1.
-    pub fn weights(
-        &self,
-        mesh: &Mesh,
-        geometry: &[DVec3],
-        v: VertexId,
-    ) -> SmallVec<[(VertexId, f64); 8]> {
-        let ni = vertex_normal(mesh, geometry, v);
-        let scale = if self.normal_scale > 0.0 && self.normal_scale.is_finite() {
-            self.normal_scale
-        } else {
-            f64::INFINITY // a degenerate scale means no attenuation: uniform weights
-        };
-        let mut out: SmallVec<[(VertexId, f64); 8]> = mesh
-            .outgoing(v)
-            .map(|h| {
-                let j = mesh.to_vertex(h);
-                let nj = vertex_normal(mesh, geometry, j);
-                let w = if ni == DVec3::ZERO || nj == DVec3::ZERO {
-                    1.0
-                } else {
-                    let t = (ni - nj).length() / scale;
-                    (-0.5 * t * t).exp()
-                };
-                (j, w)
-            })
-            .collect();
-        let sum: f64 = out.iter().map(|x| x.1).sum();
-        if sum > 0.0 && sum.is_finite() {
-            for x in out.iter_mut() {
-                x.1 /= sum;
-            }
-        } else {
-            let u = 1.0 / out.len().max(1) as f64;
-            for x in out.iter_mut() {
-                x.1 = u;
-            }
+    /// This operator with its normals taken from `guide` (one position per vertex, indexed
+    /// like the parameter geometry the stencils are asked for) instead of from the parameter
+    /// geometry. The pyramid passes the finest level denoised by Ohtake's filter.
+    pub fn with_guide(mut self, guide: Vec<DVec3>) -> Self {
+        self.guide = Some(guide.into());
+        self
+    }
+
+    /// The guide positions, if any.
+    pub fn guide(&self) -> Option<&[DVec3]> {
+        self.guide.as_deref()
+    }
+
+    fn guskov(&self) -> SecondDifference {
+        SecondDifference {
+            degenerate_area_ratio: self.degenerate_area_ratio,
         }
-        out
+    }
+
+    fn steering(&self) -> Steering<'_> {
+        let s = self.normal_scale;
+        Steering {
+            guide: self.guide(),
+            // A scale that is not a positive number steers nothing (Guskov's weights).
+            half_inverse_scale2: if s > 0.0 && s.is_finite() {
+                0.5 / (s * s)
+            } else {
+                0.0
+            },
+        }
     }
 }
 
@@ -114,8 +107,10 @@ impl Relaxation for NormalAdaptive {
         "normal"
     }
 
-    /// The neighbour weights (no self weight); `false` for an isolated vertex, which keeps its
-    /// value.
+    fn as_ring_stencils(&self) -> Option<&dyn RingStencils> {
+        Some(self)
+    }
+
     fn stencil(
         &self,
         mesh: &Mesh,
@@ -123,15 +118,47 @@ impl Relaxation for NormalAdaptive {
         vertex: VertexId,
         out: &mut Vec<(VertexId, f64)>,
     ) -> bool {
-        out.clear();
-        out.extend(self.weights(mesh, geometry, vertex));
-        !out.is_empty()
+        self.guskov()
+            .vec_stencil(mesh, geometry, vertex, out, Some(&self.steering()))
+    }
+
+    fn stencils(
+        &self,
+        mesh: &Mesh,
+        geometry: &[DVec3],
+        vertices: &[VertexId],
+        out: &mut Vec<(VertexId, f64)>,
+        lens: &mut Vec<usize>,
+    ) {
+        self.guskov()
+            .batch_stencils(mesh, geometry, vertices, out, lens, Some(&self.steering()))
+    }
+}
+
+impl RingStencils for NormalAdaptive {
+    fn ring_stencils(
+        &self,
+        replay: &FlatReplay,
+        geometry: &[DVec3],
+        vertices: &[u32],
+        out: &mut Vec<(u32, f64)>,
+        lens: &mut Vec<usize>,
+    ) {
+        self.guskov().steered_ring_stencils(
+            replay,
+            geometry,
+            vertices,
+            out,
+            lens,
+            Some(&self.steering()),
+        )
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::mesh::SlotIndex;
     use crate::relax::relax_by_stencils;
 
     /// An (n+1)² grid; points with x > `fold` are bent up by 90° about the line x = fold.
@@ -146,95 +173,103 @@ mod tests {
         Mesh::from_triangles(&p, &t).expect("valid grid").mesh
     }
 
-    #[test]
-    fn weights_sum_to_one_and_constants_are_kept() {
-        for m in [grid(6, None), grid(6, Some(3.0))] {
-            let g = m.positions();
-            let op = NormalAdaptive::default();
-            let verts: Vec<VertexId> = m.vertices().collect();
-            for &v in &verts {
-                let w = op.weights(&m, &g, v);
-                let sum: f64 = w.iter().map(|x| x.1).sum();
-                assert!((sum - 1.0).abs() < 1e-14 && w.iter().all(|x| x.1 > 0.0));
-            }
-            let c = vec![DVec3::new(1.5, -2.0, 0.25); g.len()];
-            let mut out = vec![DVec3::ZERO; verts.len()];
-            relax_by_stencils(&op, &m, &g, &c, &verts, &mut out);
-            assert!(out.iter().all(|x| (*x - c[0]).length() < 1e-14));
-            // The relaxation is the stencil exactly.
-            let signal: Vec<DVec3> = g
-                .iter()
-                .map(|q| *q * 1.7 + DVec3::splat(q.x * q.y))
-                .collect();
-            relax_by_stencils(&op, &m, &g, &signal, &verts, &mut out);
-            let mut st = Vec::new();
-            for (i, &v) in verts.iter().enumerate() {
-                assert!(op.stencil(&m, &g, v, &mut st));
-                let x: DVec3 = st.iter().map(|&(j, w)| w * signal[j.slot()]).sum();
-                assert_eq!(x, out[i]);
-            }
-        }
-    }
-
-    #[test]
-    fn a_plane_gets_the_uniform_average() {
-        let m = grid(4, None);
+    /// The relaxed positions `R(p)` of every vertex.
+    fn relaxed_positions(op: &dyn Relaxation, m: &Mesh) -> Vec<DVec3> {
         let g = m.positions();
+        let verts: Vec<VertexId> = m.vertices().collect();
+        let mut out = vec![DVec3::ZERO; verts.len()];
+        relax_by_stencils(op, m, &g, &g, &verts, &mut out);
+        out
+    }
+
+    #[test]
+    fn on_a_plane_it_is_guskovs_operator() {
+        let m = grid(6, None);
+        let g = m.positions();
+        let (mut a, mut b) = (Vec::new(), Vec::new());
         for v in m.vertices() {
-            let w = NormalAdaptive::default().weights(&m, &g, v);
-            let u = 1.0 / w.len() as f64;
-            assert!(w.iter().all(|x| (x.1 - u).abs() < 1e-14));
+            let ok = NormalAdaptive::default().stencil(&m, &g, v, &mut a);
+            assert_eq!(
+                ok,
+                Relaxation::stencil(&SecondDifference::default(), &m, &g, v, &mut b)
+            );
+            assert_eq!(a.len(), b.len());
+            for (x, y) in a.iter().zip(&b) {
+                assert_eq!(x.0, y.0);
+                assert!((x.1 - y.1).abs() <= 1e-12 * y.1.abs().max(1.0));
+            }
         }
     }
 
     #[test]
-    fn cross_crease_weights_are_much_smaller_than_uniform() {
-        // Fold at x = 3: vertices with x = 3 lie on the crease.
+    fn weights_sum_to_one_and_the_batch_equals_single_stencils() {
         let m = grid(6, Some(3.0));
         let g = m.positions();
         let op = NormalAdaptive::default();
-        let on_crease = |q: DVec3| q.x == 3.0;
-        let mut checked = 0;
-        for v in m.vertices() {
-            let p = g[v.slot()];
-            // A flat-side vertex next to the crease (interior in y).
-            if p.x != 2.0 || p.z != 0.0 || p.y < 1.0 || p.y > 5.0 {
-                continue;
+        let verts: Vec<VertexId> = m.vertices().collect();
+        let (mut all, mut lens, mut one) = (Vec::new(), Vec::new(), Vec::new());
+        op.stencils(&m, &g, &verts, &mut all, &mut lens);
+        let mut at = 0;
+        for (&v, &len) in verts.iter().zip(&lens) {
+            let ok = op.stencil(&m, &g, v, &mut one);
+            assert_eq!(ok, len > 0);
+            assert_eq!(&all[at..at + len], &one[..]);
+            at += len;
+            if ok {
+                let sum: f64 = one.iter().map(|x| x.1).sum();
+                assert!((sum - 1.0).abs() < 1e-12, "{sum}");
             }
-            let w = op.weights(&m, &g, v);
-            let uniform = 1.0 / w.len() as f64;
-            for &(j, wj) in &w {
-                if on_crease(g[j.slot()]) {
-                    assert!(wj < 0.05 * uniform, "{wj} vs {uniform}");
-                    checked += 1;
-                }
-            }
-        }
-        assert!(checked > 0);
-        // A crease vertex averages along the crease.
-        for v in m.vertices() {
-            let p = g[v.slot()];
-            if !on_crease(p) || p.y < 1.0 || p.y > 5.0 {
-                continue;
-            }
-            let along: f64 = op
-                .weights(&m, &g, v)
-                .iter()
-                .filter(|x| on_crease(g[x.0.slot()]))
-                .map(|x| x.1)
-                .sum();
-            assert!(along > 0.9, "{along}");
         }
     }
 
     #[test]
-    fn degenerate_geometry_falls_back_to_uniform() {
-        let m = grid(2, None);
-        let g = vec![DVec3::ZERO; m.n_vertices()];
-        for v in m.vertices() {
-            let w = NormalAdaptive::default().weights(&m, &g, v);
-            let u = 1.0 / w.len() as f64;
-            assert!(w.iter().all(|x| x.1 == u));
+    fn crease_vertices_are_predicted_on_the_crease_where_guskov_rounds_it() {
+        let m = grid(8, Some(4.0));
+        let g = m.positions();
+        let steered = relaxed_positions(&NormalAdaptive::default(), &m);
+        let guskov = relaxed_positions(&SecondDifference::default(), &m);
+        // Interior crease vertices: x = 4 on the flat part, y away from the border.
+        let crease: Vec<usize> = m
+            .vertices()
+            .map(|v| v.slot())
+            .filter(|&i| g[i].x == 4.0 && g[i].z == 0.0 && (2.0..=6.0).contains(&g[i].y))
+            .collect();
+        assert!(!crease.is_empty());
+        let off = |r: &[DVec3]| {
+            crease
+                .iter()
+                .map(|&i| r[i].distance(g[i]))
+                .fold(0.0, f64::max)
+        };
+        let (ours, theirs) = (off(&steered), off(&guskov));
+        assert!(
+            theirs > 0.05,
+            "Guskov's operator rounds the crease: {theirs}"
+        );
+        assert!(ours < 0.05 * theirs, "{ours} vs {theirs}");
+    }
+
+    #[test]
+    fn the_guide_decides_where_the_creases_are() {
+        // Parameter geometry flat, guide folded: the stencils are the folded grid's steering
+        // applied to the flat grid's coefficients, so they differ from Guskov's on the plane.
+        let flat = grid(6, None);
+        let folded = grid(6, Some(3.0));
+        let g = flat.positions();
+        let op = NormalAdaptive::default().with_guide(folded.positions());
+        let (mut a, mut b) = (Vec::new(), Vec::new());
+        let differs = flat.vertices().any(|v| {
+            op.stencil(&flat, &g, v, &mut a);
+            Relaxation::stencil(&SecondDifference::default(), &flat, &g, v, &mut b);
+            a.iter().zip(&b).any(|(x, y)| (x.1 - y.1).abs() > 1e-3)
+        });
+        assert!(differs);
+        // A guide equal to the geometry is the same as no guide.
+        let same = NormalAdaptive::default().with_guide(g.clone());
+        for v in flat.vertices() {
+            same.stencil(&flat, &g, v, &mut a);
+            NormalAdaptive::default().stencil(&flat, &g, v, &mut b);
+            assert_eq!(a, b);
         }
     }
 }

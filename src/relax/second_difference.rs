@@ -103,6 +103,53 @@ fn apex_terms(e: DVec3, length: f64, w: DVec3, min_double_area: f64) -> Option<(
     Some((e.dot(w), 2.0 / (length * double_area)))
 }
 
+/// Hinge weights that fade the second differences across creases (the normal-adaptive operator,
+/// `relax::normal_adaptive`): the hinge's coefficients are scaled by `√ω`, so its terms in the
+/// stencil by `ω = exp(−(1 − cos θ) / s²)`, with `θ` the angle between the normals of the
+/// hinge's two triangles in the guide geometry and `s` the normal scale.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Steering<'a> {
+    /// The positions the normals come from, indexed like the parameter geometry; `None`: the
+    /// parameter geometry itself.
+    pub guide: Option<&'a [DVec3]>,
+    /// `1 / (2 s²)`.
+    pub half_inverse_scale2: f64,
+}
+
+impl Steering<'_> {
+    /// `√ω` of the hinge `[j1, j2, l1, l2]` (indices into the geometry); 1 where a triangle
+    /// has no normal or a vertex has no guide position.
+    #[inline]
+    fn hinge_factor(&self, geometry: &[DVec3], v: [usize; 4]) -> f64 {
+        let g = self.guide.unwrap_or(geometry);
+        let (Some(&a), Some(&b), Some(&l1), Some(&l2)) =
+            (g.get(v[0]), g.get(v[1]), g.get(v[2]), g.get(v[3]))
+        else {
+            return 1.0;
+        };
+        let e = b - a;
+        let (n1, n2) = (e.cross(l1 - a), (l2 - a).cross(e));
+        let norms = (n1.length_squared() * n2.length_squared()).sqrt();
+        if !(norms > 0.0 && norms.is_finite()) {
+            return 1.0;
+        }
+        let cos = (n1.dot(n2) / norms).clamp(-1.0, 1.0);
+        (-(1.0 - cos) * self.half_inverse_scale2).exp()
+    }
+}
+
+/// The coefficients `c` of the hinge `v`, scaled by its steering factor when there is one.
+#[inline]
+fn steer(c: [f64; 4], steering: Option<&Steering>, geometry: &[DVec3], v: [usize; 4]) -> [f64; 4] {
+    match steering {
+        None => c,
+        Some(s) => {
+            let f = s.hinge_factor(geometry, v);
+            c.map(|x| x * f)
+        }
+    }
+}
+
 impl SecondDifference {
     /// Coefficients of the interior edge of half-edge `h` as `([j1, j2, l1, l2], [c; 4])` with
     /// `j1 → j2` along `h`, or `None` for boundary and degenerate edges.
@@ -116,10 +163,11 @@ impl SecondDifference {
         mesh: &Mesh,
         geometry: &[DVec3],
         h: HalfedgeId,
+        steering: Option<&Steering>,
     ) -> Option<([VertexId; 4], [f64; 4])> {
         let (canonical, flipped) = canonical_halfedge(mesh, h);
         Some(orient_flap(
-            self.canonical_flap(mesh, geometry, canonical)?,
+            self.canonical_flap(mesh, geometry, canonical, steering)?,
             flipped,
         ))
     }
@@ -131,6 +179,7 @@ impl SecondDifference {
         mesh: &Mesh,
         geometry: &[DVec3],
         h: HalfedgeId,
+        steering: Option<&Steering>,
     ) -> Option<([VertexId; 4], [f64; 4])> {
         let t = mesh.twin(h);
         if mesh.face(h).is_none() || mesh.face(t).is_none() {
@@ -146,6 +195,7 @@ impl SecondDifference {
         }
         let p = |v: VertexId| geometry[v.slot()];
         let c = hinge_coefficients(p(j1), p(j2), p(l1), p(l2), self.degenerate_area_ratio)?;
+        let c = steer(c, steering, geometry, [j1, j2, l1, l2].map(|v| v.slot()));
         Some(([j1, j2, l1, l2], c))
     }
 
@@ -153,7 +203,21 @@ impl SecondDifference {
     /// flap apexes across the link edges), from the parameter geometry `geometry[v.slot()]`.
     /// Returns `false` and leaves `out` empty when `i` has no usable edge (then `R f_i = f_i`).
     pub fn stencil(&self, mesh: &Mesh, geometry: &[DVec3], i: VertexId, out: &mut Stencil) -> bool {
-        self.stencil_with(mesh, i, out, |h| self.edge_flap(mesh, geometry, h))
+        self.steered_stencil(mesh, geometry, i, out, None)
+    }
+
+    /// [`Self::stencil`] with every hinge scaled by `steering` (see [`Steering`]).
+    pub(crate) fn steered_stencil(
+        &self,
+        mesh: &Mesh,
+        geometry: &[DVec3],
+        i: VertexId,
+        out: &mut Stencil,
+        steering: Option<&Steering>,
+    ) -> bool {
+        self.stencil_with(mesh, i, out, |h| {
+            self.edge_flap(mesh, geometry, h, steering)
+        })
     }
 
     /// The stencil of `i` with the flaps of its edges supplied by `flap` (direct or cached).
@@ -282,11 +346,12 @@ impl FlapCache {
         mesh: &Mesh,
         geometry: &[DVec3],
         h: HalfedgeId,
+        steering: Option<&Steering>,
     ) -> Option<([VertexId; 4], [f64; 4])> {
         let (canonical, flipped) = canonical_halfedge(mesh, h);
         let key = canonical.slot() as u32;
         let flap = self.get(key, key.into(), || {
-            op.canonical_flap(mesh, geometry, canonical)
+            op.canonical_flap(mesh, geometry, canonical, steering)
         })?;
         Some(orient_flap(*flap, flipped))
     }
@@ -330,11 +395,7 @@ impl Relaxation for SecondDifference {
         vertex: VertexId,
         out: &mut Vec<(VertexId, f64)>,
     ) -> bool {
-        let mut s = Stencil::new();
-        let ok = SecondDifference::stencil(self, mesh, geometry, vertex, &mut s);
-        out.clear();
-        out.extend_from_slice(&s);
-        ok
+        self.vec_stencil(mesh, geometry, vertex, out, None)
     }
 
     /// Shares each edge's hinge coefficients among the batch's stencils (an edge enters the
@@ -347,16 +408,68 @@ impl Relaxation for SecondDifference {
         out: &mut Vec<(VertexId, f64)>,
         lens: &mut Vec<usize>,
     ) {
+        self.batch_stencils(mesh, geometry, vertices, out, lens, None)
+    }
+}
+
+impl SecondDifference {
+    /// [`Relaxation::stencil`], steered.
+    pub(crate) fn vec_stencil(
+        &self,
+        mesh: &Mesh,
+        geometry: &[DVec3],
+        vertex: VertexId,
+        out: &mut Vec<(VertexId, f64)>,
+        steering: Option<&Steering>,
+    ) -> bool {
+        let mut s = Stencil::new();
+        let ok = self.steered_stencil(mesh, geometry, vertex, &mut s, steering);
+        out.clear();
+        out.extend_from_slice(&s);
+        ok
+    }
+
+    /// [`Relaxation::stencils`], steered.
+    pub(crate) fn batch_stencils(
+        &self,
+        mesh: &Mesh,
+        geometry: &[DVec3],
+        vertices: &[VertexId],
+        out: &mut Vec<(VertexId, f64)>,
+        lens: &mut Vec<usize>,
+        steering: Option<&Steering>,
+    ) {
         let mut cache = FlapCache::new(u32::MAX);
         let mut s = Stencil::new();
         for &v in vertices {
-            if self.stencil_with(mesh, v, &mut s, |h| cache.flap(self, mesh, geometry, h)) {
+            let flap = |h| cache.flap(self, mesh, geometry, h, steering);
+            if self.stencil_with(mesh, v, &mut s, flap) {
                 out.extend_from_slice(&s);
                 lens.push(s.len());
             } else {
                 lens.push(0);
             }
         }
+    }
+
+    /// [`RingStencils::ring_stencils`], steered.
+    pub(crate) fn steered_ring_stencils(
+        &self,
+        replay: &FlatReplay,
+        geometry: &[DVec3],
+        vertices: &[u32],
+        out: &mut Vec<(u32, f64)>,
+        lens: &mut Vec<usize>,
+        steering: Option<&Steering>,
+    ) {
+        RING_FLAPS.with_borrow_mut(|cache| {
+            cache.clear();
+            for &v in vertices {
+                let start = out.len();
+                self.append_ring_stencil(replay, geometry, v, out, cache, steering);
+                lens.push(out.len() - start);
+            }
+        });
     }
 }
 
@@ -371,14 +484,7 @@ impl RingStencils for SecondDifference {
         out: &mut Vec<(u32, f64)>,
         lens: &mut Vec<usize>,
     ) {
-        RING_FLAPS.with_borrow_mut(|cache| {
-            cache.clear();
-            for &v in vertices {
-                let start = out.len();
-                self.append_ring_stencil(replay, geometry, v, out, cache);
-                lens.push(out.len() - start);
-            }
-        });
+        self.steered_ring_stencils(replay, geometry, vertices, out, lens, None)
     }
 }
 
@@ -398,6 +504,7 @@ impl SecondDifference {
         a: u32,
         b: u32,
         ka: Option<usize>,
+        steering: Option<&Steering>,
     ) -> Option<RingFlap> {
         let (ra, boundary_a) = replay.ring_entries(a);
         let (rb, boundary_b) = replay.ring_entries(b);
@@ -428,6 +535,7 @@ impl SecondDifference {
             p(v[3])?,
             self.degenerate_area_ratio,
         )?;
+        let c = steer(c, steering, geometry, v.map(|x| x as usize));
         Some(RingFlap { v, c })
     }
 
@@ -447,6 +555,7 @@ impl SecondDifference {
         i: u32,
         entries: &mut Vec<(u32, f64)>,
         cache: &mut RingFlapCache,
+        steering: Option<&Steering>,
     ) -> bool {
         let start = entries.len();
         let (ring, boundary) = replay.ring_entries(i);
@@ -473,7 +582,7 @@ impl SecondDifference {
             let after = if k + 1 == n { 0 } else { k + 1 };
             let before = if k == 0 { n - 1 } else { k - 1 };
             // (a) the edge i → r: i is j1 of its flap (`f` is seen flipped when x = 1).
-            if let Some((f, x)) = cache.flap(self, replay, geometry, i, r, Some(k)) {
+            if let Some((f, x)) = cache.flap(self, replay, geometry, (i, r, Some(k)), steering) {
                 let ci = f.c[x];
                 den += ci * ci;
                 add!(f.v[1 ^ x], k, ci * f.c[1 ^ x]);
@@ -482,7 +591,8 @@ impl SecondDifference {
             }
             // (b) the link edge r → next opposite i in the face left of i → r: i is its apex l1.
             if !(k == 0 && boundary)
-                && let Some((f, x)) = cache.flap(self, replay, geometry, r, ring[after].nbr, None)
+                && let Some((f, x)) =
+                    cache.flap(self, replay, geometry, (r, ring[after].nbr, None), steering)
                 && f.v[2 ^ x] == i
                 && f.v[3 ^ x] != i
             {
@@ -566,12 +676,13 @@ impl RingFlapCache {
         op: &SecondDifference,
         replay: &FlatReplay,
         geometry: &[DVec3],
-        a: u32,
-        b: u32,
-        ka: Option<usize>,
+        (a, b, ka): (u32, u32, Option<usize>),
+        steering: Option<&Steering>,
     ) -> Option<(&RingFlap, usize)> {
         let key = (a.min(b) as u64) << 32 | a.max(b) as u64;
-        let f = self.get(key, key, || op.ring_flap(replay, geometry, a, b, ka))?;
+        let f = self.get(key, key, || {
+            op.ring_flap(replay, geometry, a, b, ka, steering)
+        })?;
         Some((f, (f.v[0] != a) as usize))
     }
 }

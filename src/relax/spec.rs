@@ -5,7 +5,7 @@
 //! [`RelaxationSpec`] is serialised into the `META` section (`formats/pyr.md`): its variant
 //! order and its field names and order are part of the file format.
 
-use super::{MeanCurvatureStep, NormalAdaptive, Relaxation, SecondDifference};
+use super::{MeanCurvatureStep, NormalAdaptive, NormalAverage, Relaxation, SecondDifference};
 use serde::{Deserialize, Serialize};
 
 /// An operator without its parameters: the values of the command line's `--relax`.
@@ -17,8 +17,8 @@ pub enum RelaxKind {
     SecondDifference,
     /// One Jacobi step of implicit mean-curvature motion (cotangent weights, lumped mass).
     Mcm,
-    /// 1-ring average with weights that fall off with the vertex-normal difference, so the
-    /// prediction does not average across creases.
+    /// Guskov's operator with hinges weighted by the agreement of their normals (from the
+    /// input denoised by Ohtake's filter), so that predictions keep creases.
     Normal,
 }
 
@@ -74,10 +74,19 @@ pub enum RelaxationSpec {
         /// [`MeanCurvatureStep::damping`].
         damping: f64,
     },
-    /// The normal-adaptive 1-ring average ([`NormalAdaptive`]).
+    /// The 1-ring average of format 2.0's `--relax normal` ([`NormalAverage`]); files that
+    /// name it still load with it, `--relax` no longer offers it.
+    NormalAverage {
+        /// [`NormalAverage::normal_scale`].
+        normal_scale: f64,
+    },
+    /// Guskov's operator steered by normals ([`NormalAdaptive`]); the pyramid gives it its
+    /// guide (the finest level denoised by `smooth --method auto`).
     NormalAdaptive {
         /// [`NormalAdaptive::normal_scale`].
         normal_scale: f64,
+        /// [`NormalAdaptive::degenerate_area_ratio`].
+        degenerate_area_ratio: f64,
     },
 }
 
@@ -105,16 +114,27 @@ impl From<MeanCurvatureStep> for RelaxationSpec {
     }
 }
 
-impl From<NormalAdaptive> for RelaxationSpec {
-    fn from(op: NormalAdaptive) -> Self {
-        RelaxationSpec::NormalAdaptive {
+impl From<NormalAverage> for RelaxationSpec {
+    fn from(op: NormalAverage) -> Self {
+        RelaxationSpec::NormalAverage {
             normal_scale: op.normal_scale,
         }
     }
 }
 
+/// The operator's options; its guide is not part of the spec (the pyramid recomputes it).
+impl From<NormalAdaptive> for RelaxationSpec {
+    fn from(op: NormalAdaptive) -> Self {
+        RelaxationSpec::NormalAdaptive {
+            normal_scale: op.normal_scale,
+            degenerate_area_ratio: op.degenerate_area_ratio,
+        }
+    }
+}
+
 impl RelaxationSpec {
-    /// The operator.
+    /// The operator (the normal-adaptive one without a guide: it takes its normals from the
+    /// parameter geometry; [`Pyramid`](crate::Pyramid) gives it a denoised guide).
     pub fn operator(&self) -> Box<dyn Relaxation> {
         match *self {
             RelaxationSpec::SecondDifference {
@@ -125,13 +145,22 @@ impl RelaxationSpec {
             RelaxationSpec::MeanCurvature { width, damping } => {
                 Box::new(MeanCurvatureStep { width, damping })
             }
-            RelaxationSpec::NormalAdaptive { normal_scale } => {
-                Box::new(NormalAdaptive { normal_scale })
+            RelaxationSpec::NormalAverage { normal_scale } => {
+                Box::new(NormalAverage { normal_scale })
             }
+            RelaxationSpec::NormalAdaptive {
+                normal_scale,
+                degenerate_area_ratio,
+            } => Box::new(NormalAdaptive {
+                normal_scale,
+                degenerate_area_ratio,
+                ..NormalAdaptive::default()
+            }),
         }
     }
 
-    /// The operator's command-line name (`second-difference`, `mcm`, `normal`).
+    /// The operator's command-line name (`second-difference`, `mcm`, `normal`; `normal-average`
+    /// for the operator of format 2.0's `--relax normal`).
     pub fn name(&self) -> &'static str {
         self.operator().name()
     }
@@ -146,8 +175,16 @@ impl RelaxationSpec {
             RelaxationSpec::MeanCurvature { width, damping } => {
                 width > 0.0 && width.is_finite() && damping > 0.0 && damping <= 1.0
             }
-            RelaxationSpec::NormalAdaptive { normal_scale } => {
+            RelaxationSpec::NormalAverage { normal_scale } => {
                 normal_scale > 0.0 && normal_scale.is_finite()
+            }
+            RelaxationSpec::NormalAdaptive {
+                normal_scale,
+                degenerate_area_ratio,
+            } => {
+                normal_scale > 0.0
+                    && normal_scale.is_finite()
+                    && (0.0..1.0).contains(&degenerate_area_ratio)
             }
         };
         (!ok).then_some("relaxation options out of range")
