@@ -213,4 +213,27 @@ mod tests {
             }
         );
     }
+
+    #[test]
+    fn files_keep_their_operators_variant_numbers() {
+        // META stores the variant index first: 2.0 files name the 1-ring average with 2, and
+        // the steered operator came after it as 3.
+        let index = |spec: RelaxationSpec| {
+            bincode::serde::encode_to_vec(spec, bincode::config::standard()).expect("encodes")[0]
+        };
+        assert_eq!(index(SecondDifference::default().into()), 0);
+        assert_eq!(index(MeanCurvatureStep::default().into()), 1);
+        assert_eq!(index(NormalAverage::default().into()), 2);
+        assert_eq!(index(RelaxKind::Normal.spec()), 3);
+        assert_eq!(NormalAverage::default().name(), "normal-average");
+        let round_trip = |spec: RelaxationSpec| {
+            let bytes = bincode::serde::encode_to_vec(spec, bincode::config::standard()).unwrap();
+            let (back, _): (RelaxationSpec, usize) =
+                bincode::serde::decode_from_slice(&bytes, bincode::config::standard()).unwrap();
+            back
+        };
+        for kind in RelaxKind::ALL {
+            assert_eq!(round_trip(kind.spec()), kind.spec());
+        }
+    }
 }
