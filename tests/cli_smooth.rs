@@ -200,6 +200,12 @@ fn an_option_of_another_method_is_refused_before_any_work() {
             "--time-step",
             "taubin",
         ),
+        (vec!["--strength", "2"], "--strength", "auto"),
+        (
+            vec!["--method", "pyramid", "--passes", "2"],
+            "--passes",
+            "pyramid",
+        ),
     ] {
         let out = tmp("refused.ply");
         let o = smooth(&data("cone20.ply"), &out, &args);
@@ -227,6 +233,7 @@ fn options_of_the_chosen_method_are_accepted() {
         ],
         vec!["--method", "mcf", "--iterations", "2", "--time-step", "0.5"],
         vec!["--method", "anisotropic", "--epsilon", "0.5", "--rho", "3"],
+        vec!["--method", "pyramid", "--strength", "0.5"],
         vec![
             "--passes",
             "1",
@@ -262,5 +269,37 @@ fn default_smooth_denoises_a_non_uniformly_sampled_scan_at_each_triangles_scale(
     assert!(
         e_auto < 0.5 * e_adaptive,
         "{e_auto} vs adaptive {e_adaptive}"
+    );
+}
+
+#[test]
+fn the_pyramid_method_keeps_the_fandisks_creases_better_than_the_default() {
+    let noisy = data("fandisk_noise_n020.ply");
+    let clean = data("fandisk.ply");
+    let (auto, pyramid) = (tmp("fandisk-auto.ply"), tmp("fandisk-pyramid.ply"));
+    assert!(smooth(&noisy, &auto, &[]).status.success());
+    let o = smooth(&noisy, &pyramid, &["--method", "pyramid"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let (e_auto, e_pyramid) = (e_n(&auto, &clean), e_n(&pyramid, &clean));
+    assert!(
+        e_pyramid < 0.75 * e_auto,
+        "pyramid {e_pyramid} vs default {e_auto}"
+    );
+    let layout = |p: &Path| {
+        let m = meshpyr::io::read_mesh(p).unwrap();
+        (m.n_vertices(), m.face_indices)
+    };
+    assert_eq!(layout(&pyramid), layout(&noisy));
+    // More strength removes more of the finest details; zero removes nothing.
+    let none = tmp("fandisk-pyramid-0.ply");
+    assert!(
+        smooth(&noisy, &none, &["--method", "pyramid", "--strength", "0"])
+            .status
+            .success()
+    );
+    let unchanged = e_n(&none, &clean);
+    assert!(
+        (unchanged - e_n(&noisy, &clean)).abs() < 1e-6,
+        "{unchanged}"
     );
 }

@@ -5,11 +5,18 @@ use crate::arrays::{self, count, positions_array};
 use crate::errors::{input_error, value_error};
 use crate::functions::choice_error;
 use meshpyr::smooth::{Boundary, McfOptions, TaubinOptions, Variance, Weights};
-use meshpyr::{DenoiseOptions, NoProgress, SmoothMethod};
+use meshpyr::{DenoiseOptions, NoProgress, PyramidDenoise, SmoothMethod};
 use numpy::PyArray2;
 use pyo3::prelude::*;
 
-const METHODS: [&str; 5] = ["auto", "adaptive", "anisotropic", "taubin", "mcf"];
+const METHODS: [&str; 6] = [
+    "auto",
+    "adaptive",
+    "anisotropic",
+    "taubin",
+    "mcf",
+    "pyramid",
+];
 const OHTAKE: &[&str] = &["auto", "adaptive", "anisotropic"];
 
 /// The keywords of `smooth` as given (`None`: not given).
@@ -32,6 +39,7 @@ struct SmoothArgs<'a> {
     mu: Option<f64>,
     time_step: Option<f64>,
     boundary: Option<&'a str>,
+    strength: Option<f64>,
 }
 
 impl SmoothArgs<'_> {
@@ -47,6 +55,9 @@ impl SmoothArgs<'_> {
             "auto" if self.given().is_empty() => Ok(SmoothMethod::Auto),
             "taubin" => self.taubin(),
             "mcf" => self.mcf(),
+            "pyramid" => Ok(SmoothMethod::Pyramid(PyramidDenoise {
+                strength: self.strength.unwrap_or(PyramidDenoise::default().strength),
+            })),
             _ => self.ohtake(),
         }
     }
@@ -71,6 +82,7 @@ impl SmoothArgs<'_> {
             ("mu", self.mu.is_some(), &["taubin"]),
             ("time_step", self.time_step.is_some(), &["mcf"]),
             ("boundary", self.boundary.is_some(), &["taubin", "mcf"]),
+            ("strength", self.strength.is_some(), &["pyramid"]),
         ]
         .into_iter()
         .filter(|&(_, set, _)| set)
@@ -193,13 +205,16 @@ impl SmoothArgs<'_> {
 /// - "taubin": Taubin's λ|μ smoothing; ``iterations`` (10), ``lambda_`` (0.5), ``mu``
 ///   (-0.53), ``weights`` ("cotan", "uniform" or "inverse-edge"), ``boundary``;
 /// - "mcf": implicit mean-curvature flow; ``iterations`` (1), ``time_step`` (× L², 1),
-///   ``boundary`` ("fixed" keeps rim vertices in place, "smooth" moves them).
+///   ``boundary`` ("fixed" keeps rim vertices in place, "smooth" moves them);
+/// - "pyramid": the detail pyramid with the crease-keeping "normal" operator, each octave of
+///   levels attenuated by how far its details stand above the noise the pyramid estimates;
+///   ``strength`` (1; more removes more, 0 nothing).
 ///
 /// Unset options take the method's defaults; an option of another method is a ValueError.
 /// Returns the new positions, float64 (n, 3), the input's vertices in the same order
 /// (vertices no face uses keep their positions).
 #[pyfunction]
-#[pyo3(signature = (v, f, /, *, method="auto", epsilon=None, sigma_min=None, sigma_max=None, scales=None, rho=None, variance=None, scale=None, vertex_updates=None, passes=None, fit_iterations=None, step_cap=None, iterations=None, weights=None, lambda_=None, mu=None, time_step=None, boundary=None))]
+#[pyo3(signature = (v, f, /, *, method="auto", epsilon=None, sigma_min=None, sigma_max=None, scales=None, rho=None, variance=None, scale=None, vertex_updates=None, passes=None, fit_iterations=None, step_cap=None, iterations=None, weights=None, lambda_=None, mu=None, time_step=None, boundary=None, strength=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn smooth<'py>(
     py: Python<'py>,
@@ -223,6 +238,7 @@ pub(crate) fn smooth<'py>(
     mu: Option<f64>,
     time_step: Option<f64>,
     boundary: Option<&str>,
+    strength: Option<f64>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
     let method = SmoothArgs {
         method,
@@ -243,6 +259,7 @@ pub(crate) fn smooth<'py>(
         mu,
         time_step,
         boundary,
+        strength,
     }
     .method()?;
     method.validate().map_err(input_error)?;

@@ -85,6 +85,8 @@ OPTIONS = {
     "smooth mcf with passes": lambda: meshpyr.smooth(TETRA_V, TETRA_F, method="mcf", passes=2),
     "smooth unknown weights": lambda: meshpyr.smooth(TETRA_V, TETRA_F, method="taubin", weights="cot"),
     "smooth mcf negative time step": lambda: meshpyr.smooth(TETRA_V, TETRA_F, method="mcf", time_step=-1.0),
+    "smooth pyramid negative strength": lambda: meshpyr.smooth(TETRA_V, TETRA_F, method="pyramid", strength=-1.0),
+    "smooth auto with strength": lambda: meshpyr.smooth(TETRA_V, TETRA_F, strength=2.0),
     "Pyramid unknown relaxation": lambda: meshpyr.Pyramid(TETRA_V, TETRA_F, relax="laplace"),
     "compare against no surface": lambda: meshpyr.compare(TETRA_V, TETRA_F, TETRA_V, TETRA_F[:0]),
 }

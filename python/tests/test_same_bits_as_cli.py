@@ -125,6 +125,7 @@ SMOOTHINGS = [
         ["--method", "taubin", "--iterations", "4", "--lambda", "0.6", "--mu", "-0.65", "--weights", "uniform", "--boundary", "smooth"],
     ),
     ({"method": "mcf", "time_step": 0.5}, ["--method", "mcf", "--time-step", "0.5"]),
+    ({"method": "pyramid", "strength": 1.5}, ["--method", "pyramid", "--strength", "1.5"]),
 ]
 
 

@@ -1,8 +1,9 @@
-//! `meshpyr smooth IN -o OUT [--method adaptive|anisotropic|taubin|mcf] [...]`: denoising that
+//! `meshpyr smooth IN -o OUT [--method adaptive|anisotropic|taubin|mcf|pyramid] [...]`: denoising that
 //! keeps the input's vertices (count and order), faces and attributes; only positions change.
 
 use super::{BarProgress, Global};
 use crate::io;
+use crate::pyramid::PyramidDenoise;
 use crate::smooth::{
     Boundary, DenoiseOptions, McfOptions, SmoothMethod, TaubinOptions, Variance, Weights,
     smooth_mesh,
@@ -26,6 +27,9 @@ pub(crate) enum MethodArg {
     Taubin,
     /// Implicit mean-curvature flow (Desbrun et al. 1999; `--time-step`).
     Mcf,
+    /// Octaves of the detail pyramid attenuated by how far they stand above the noise the
+    /// pyramid estimates, with the crease-keeping normal-adaptive operator (`--strength`).
+    Pyramid,
 }
 
 /// Edge weights of Taubin smoothing.
@@ -144,6 +148,10 @@ pub(crate) struct SmoothArgs {
     /// taubin/mcf: what boundary vertices do [default: fixed].
     #[arg(long, value_enum)]
     pub(crate) boundary: Option<BoundaryArg>,
+    /// pyramid: how much noise to assume, in units of the estimated noise power (octave gain
+    /// 1 − strength / r², r the octave's details over the noise); more removes more [default: 1].
+    #[arg(long)]
+    pub(crate) strength: Option<f64>,
 }
 
 impl SmoothArgs {
@@ -175,6 +183,9 @@ impl SmoothArgs {
                     boundary,
                 })
             }
+            MethodArg::Pyramid => SmoothMethod::Pyramid(PyramidDenoise {
+                strength: self.strength.unwrap_or(PyramidDenoise::default().strength),
+            }),
             MethodArg::Mcf => {
                 let d = McfOptions::default();
                 SmoothMethod::Mcf(McfOptions {
@@ -188,7 +199,7 @@ impl SmoothArgs {
 
     /// Every option given on the command line, with the methods it applies to.
     fn given_options(&self) -> Vec<(&'static str, &'static [MethodArg])> {
-        use MethodArg::{Adaptive, Anisotropic, Auto, Mcf, Taubin};
+        use MethodArg::{Adaptive, Anisotropic, Auto, Mcf, Pyramid, Taubin};
         const OHTAKE: &[MethodArg] = &[Auto, Adaptive, Anisotropic];
         let given = [
             ("--epsilon", self.epsilon.is_some(), OHTAKE),
@@ -208,6 +219,7 @@ impl SmoothArgs {
             ("--mu", self.mu.is_some(), &[Taubin]),
             ("--time-step", self.time_step.is_some(), &[Mcf]),
             ("--boundary", self.boundary.is_some(), &[Taubin, Mcf]),
+            ("--strength", self.strength.is_some(), &[Pyramid]),
         ];
         given
             .into_iter()

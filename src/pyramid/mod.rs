@@ -43,6 +43,7 @@ macro_rules! with_codes {
 pub(crate) mod analysis;
 mod band_check;
 mod cached;
+mod denoise;
 pub(crate) mod edit;
 pub(crate) mod frames;
 mod fuzz;
@@ -53,6 +54,7 @@ pub(crate) mod synthesis;
 pub(crate) mod waves;
 
 pub use cached::SynthesisCache;
+pub use denoise::{PyramidDenoise, PyramidDenoised, pyramid_denoise};
 pub use edit::{HandleReach, LevelMove, MoveHandle};
 pub(crate) use fuzz::fuzz_pyramid;
 pub use gains::{Filter, LevelGains, LevelSpec};

@@ -7,6 +7,7 @@ use super::{
 };
 use crate::mesh::{BuildReport, Mesh, PolygonMesh};
 use crate::progress::Progress;
+use crate::pyramid::{PyramidDenoise, pyramid_denoise};
 use crate::wording::Count;
 use glam::DVec3;
 
@@ -25,6 +26,9 @@ pub enum SmoothMethod {
     Taubin(TaubinOptions),
     /// Implicit mean-curvature flow ([`super::implicit_mcf`]).
     Mcf(McfOptions),
+    /// Per-octave attenuation on the detail pyramid with the normal-adaptive operator, the
+    /// noise level estimated by the pyramid itself ([`crate::pyramid::pyramid_denoise`]).
+    Pyramid(PyramidDenoise),
 }
 
 impl Default for SmoothMethod {
@@ -43,6 +47,7 @@ impl SmoothMethod {
             SmoothMethod::Ohtake(_) => "adaptive",
             SmoothMethod::Taubin(_) => "taubin",
             SmoothMethod::Mcf(_) => "mcf",
+            SmoothMethod::Pyramid(_) => "pyramid",
         }
     }
 
@@ -53,6 +58,7 @@ impl SmoothMethod {
             SmoothMethod::Ohtake(o) => o.validate(),
             SmoothMethod::Taubin(o) => o.validate(),
             SmoothMethod::Mcf(o) => o.validate(),
+            SmoothMethod::Pyramid(o) => o.validate(),
         }
     }
 }
@@ -126,6 +132,16 @@ pub fn smooth_positions(
             implicit_mcf(mesh, options, progress)?,
             iterations(options.iterations),
         ),
+        SmoothMethod::Pyramid(options) => {
+            let r = pyramid_denoise(mesh, options, progress)?;
+            let gains: Vec<String> = r.gains.iter().map(|g| format!("{g:.2}")).collect();
+            let summary = format!(
+                "noise {:.3e} along the normal; octave gains, finest first: {}",
+                r.noise,
+                gains.join(" ")
+            );
+            (r.positions, summary)
+        }
     })
 }
 

@@ -58,6 +58,10 @@ pub enum SmoothError {
     /// A parameter is out of its range.
     #[error("{0}")]
     InvalidParameter(String),
+    /// The progressive mesh or the detail pyramid of [`SmoothMethod::Pyramid`] could not be
+    /// built.
+    #[error("building the detail pyramid: {0}")]
+    Pyramid(String),
     /// A vertex position is NaN or infinite.
     #[error("vertex {0} has a non-finite coordinate")]
     NonFinite(usize),
