@@ -76,6 +76,12 @@ fn filter_returns_the_bits_of_pyramid_filter_for_that_band() {
         let answer = server.api("POST", "/api/filter", body.to_string().as_bytes());
         assert_eq!(answer.status, 200);
         assert!(answer.header("X-Meshpyr-Synthesis-Ms").is_some());
+        let timing = answer
+            .header("Server-Timing")
+            .expect("a Server-Timing header");
+        for part in ["synthesis", "reorder", "encode"] {
+            assert!(timing.contains(&format!("{part};dur=")), "{timing}");
+        }
         let (lo, hi) = bands[band];
         let mut filter = Filter::new().gain(lo, hi, gain);
         filter.normal_only = normal_only;

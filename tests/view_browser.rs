@@ -240,25 +240,55 @@ fn equalizer_latency_on_a_large_scan() {
         .as_u64()
         .unwrap() as usize;
     let mut all = Vec::new();
-    println!("octave  gain  end-to-end ms  synthesis ms  received ms  normals+upload ms  draw ms");
+    let mut by_part = vec![Vec::new(); 7];
+    let parts = [
+        "synthesisMs",
+        "reorderMs",
+        "encodeMs",
+        "transferMs",
+        "normalsMs",
+        "uploadMs",
+        "drawMs",
+    ];
+    println!(
+        "octave  gain  end-to-end  synthesis  reorder  encode  transfer  normals  upload     draw  (ms)"
+    );
     for band in (0..n).rev() {
         for gain in [1.5, 1.0] {
             driver.slide(&format!("#bands input[data-band='{band}']"), gain);
             let last = driver.script("return window.meshpyr.latencies.at(-1);");
-            let [ms, synth, received, upload, draw] =
-                ["ms", "synthesisMs", "receivedMs", "uploadMs", "drawMs"]
-                    .map(|k| last[k].as_f64().unwrap());
+            let ms = last["ms"].as_f64().unwrap();
+            let [synth, reorder, encode, transfer, normals, upload, draw] =
+                parts.map(|k| last[k].as_f64().unwrap());
             println!(
-                "{band:>6}  {gain:>4}  {ms:>13.1}  {synth:>12.1}  {received:>11.1}  {upload:>17.1}  {draw:>7.1}"
+                "{band:>6}  {gain:>4}  {ms:>10.1}  {synth:>9.1}  {reorder:>7.1}  {encode:>6.1}  {transfer:>8.1}  {normals:>7.1}  {upload:>6.1}  {draw:>7.1}"
             );
             all.push(ms);
+            for (values, x) in by_part
+                .iter_mut()
+                .zip([synth, reorder, encode, transfer, normals, upload, draw])
+            {
+                values.push(x);
+            }
         }
     }
-    all.sort_by(f64::total_cmp);
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let medians: Vec<String> = parts
+        .iter()
+        .zip(&mut by_part)
+        .map(|(k, v)| format!("{} {:.1}", k.trim_end_matches("Ms"), median(v)))
+        .collect();
+    println!("medians (ms): {}", medians.join(", "));
+    let renderer = driver.script("return window.meshpyr.renderer;");
+    println!("renderer: {renderer}");
+    let max = all.iter().copied().fold(0.0, f64::max);
     println!(
         "median {:.1} ms, max {:.1} ms over {} slider moves",
-        all[all.len() / 2],
-        all[all.len() - 1],
+        median(&mut all),
+        max,
         all.len()
     );
 }

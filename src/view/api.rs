@@ -2,7 +2,7 @@
 //! the [`Session`]. Every refusal is a 4xx with `{"error": …}`.
 
 use super::reply::Reply;
-use super::session::{EditorState, Session, f32_bytes};
+use super::session::{EditorState, Session, ms_between, push_f32_bytes};
 use crate::pyramid::{LevelMove, MoveHandle};
 use glam::DVec3;
 use serde::Deserialize;
@@ -149,13 +149,26 @@ fn check_move(session: &Session, m: &MoveRequest) -> Result<LevelMove, Reply> {
     })
 }
 
-/// f32 positions of the input's vertices, with the synthesis time in a header.
+/// f32 positions of the input's vertices, with the server's time in headers: in all
+/// (`X-Meshpyr-Synthesis-Ms`, kept for scripts that read it) and by part (`Server-Timing`).
 fn positions(session: &mut Session, state: EditorState) -> Result<Reply, Reply> {
+    let (positions, timing) = session.positions_timed(state).map_err(bad)?;
     let start = Instant::now();
-    let positions = session.positions(state).map_err(bad)?;
-    let ms = start.elapsed().as_secs_f64() * 1e3;
-    Ok(Reply::binary(f32_bytes(&positions).collect())
-        .with_header("X-Meshpyr-Synthesis-Ms", format!("{ms:.1}")))
+    let mut body = Vec::new();
+    push_f32_bytes(&mut body, &positions);
+    let encode = ms_between(start, Instant::now());
+    let (synthesis, reorder) = (timing.synthesis, timing.reorder);
+    Ok(Reply::binary(body)
+        .with_header(
+            "X-Meshpyr-Synthesis-Ms",
+            format!("{:.1}", synthesis + reorder),
+        )
+        .with_header(
+            "Server-Timing",
+            format!(
+                "synthesis;dur={synthesis:.1}, reorder;dur={reorder:.1}, encode;dur={encode:.1}"
+            ),
+        ))
 }
 
 fn level(session: &Session, n: Option<&str>) -> Result<Reply, Reply> {

@@ -6,6 +6,7 @@ use crate::mesh::PolygonMesh;
 use crate::pyramid::{Filter, LevelGains, LevelMove, Pyramid, SynthesisCache};
 use glam::DVec3;
 use serde_json::json;
+use std::time::Instant;
 
 /// What the page shows: one gain per octave, the normal-only switch, the edits so far.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -13,6 +14,15 @@ pub(crate) struct EditorState {
     pub gains: Vec<f64>,
     pub normal_only: bool,
     pub moves: Vec<LevelMove>,
+}
+
+/// Where the time of [`Session::positions_timed`] went, in milliseconds.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Timing {
+    /// Synthesis in PM order (resumed by the cache, or an edit's full synthesis).
+    pub synthesis: f64,
+    /// From PM order to the input's vertices and order.
+    pub reorder: f64,
 }
 
 pub(crate) struct Session {
@@ -61,19 +71,31 @@ impl Session {
     /// The input's positions for `state` (what `meshpyr filter`/`edit` would write), and
     /// remembers `state` as the last result.
     pub fn positions(&mut self, state: EditorState) -> Result<Vec<DVec3>, String> {
+        self.positions_timed(state).map(|(positions, _)| positions)
+    }
+
+    /// [`Session::positions`] and where its time went.
+    pub fn positions_timed(&mut self, state: EditorState) -> Result<(Vec<DVec3>, Timing), String> {
+        let start = Instant::now();
         let gains = self.gains_of(&state);
         let p = &self.pyramid.pyramid;
-        let input_positions = if state.moves.is_empty() {
-            let signal = self.cache.synthesize(p, &gains);
-            self.pyramid.to_input_positions(signal)
+        let edited;
+        let signal = if state.moves.is_empty() {
+            self.cache.synthesize(p, &gains)
         } else {
-            let signal = p
+            edited = p
                 .edit_levels(&state.moves, &gains)
                 .map_err(|e| e.to_string())?;
-            self.pyramid.to_input_positions(&signal)
+            &edited
+        };
+        let synthesized = Instant::now();
+        let input_positions = self.pyramid.to_input_positions(signal);
+        let timing = Timing {
+            synthesis: ms_between(start, synthesized),
+            reorder: ms_between(synthesized, Instant::now()),
         };
         self.last = state;
-        Ok(input_positions)
+        Ok((input_positions, timing))
     }
 
     /// `/api/info`: counts, levels, octaves with feature sizes and energies, bounds.
@@ -126,7 +148,7 @@ impl Session {
         let mut out = Vec::with_capacity(8 + 12 * (n + triangles.len()));
         out.extend_from_slice(&(n as u32).to_le_bytes());
         out.extend_from_slice(&(triangles.len() as u32).to_le_bytes());
-        out.extend(f32_bytes(&signal[..n]));
+        push_f32_bytes(&mut out, &signal[..n]);
         for t in triangles {
             for i in t {
                 out.extend_from_slice(&i.to_le_bytes());
@@ -174,12 +196,19 @@ impl Session {
     }
 }
 
-/// Positions as little-endian f32 triples.
-pub(crate) fn f32_bytes(positions: &[DVec3]) -> impl Iterator<Item = u8> + '_ {
-    positions
-        .iter()
-        .flat_map(|p| p.to_array().map(|x| (x as f32).to_le_bytes()))
-        .flatten()
+/// Appends `positions` to `out` as little-endian f32 triples.
+pub(crate) fn push_f32_bytes(out: &mut Vec<u8>, positions: &[DVec3]) {
+    out.reserve(12 * positions.len());
+    for p in positions {
+        for x in p.to_array() {
+            out.extend_from_slice(&(x as f32).to_le_bytes());
+        }
+    }
+}
+
+/// Milliseconds from `a` to `b`.
+pub(crate) fn ms_between(a: Instant, b: Instant) -> f64 {
+    b.duration_since(a).as_secs_f64() * 1e3
 }
 
 /// The input's file stem reduced to characters safe in a header and a file name.

@@ -40,7 +40,9 @@ const M = window.meshpyr = {
   faces: null,        // Uint32Array of the input's triangles
   shownLevel: null,   // vertex count of the level on screen, null for the finest
   updates: 0,         // results received and drawn
-  latencies: [],      // per result: {ms: input to drawn, synthesisMs, kind}
+  latencies: [],      // per result: {ms: input to drawn, its parts (see requestResult), kind}
+  renderer: null,     // {name, software, cullsBackFaces}: the WebGL renderer, whether it
+                      // rasterises on the CPU, and whether the result is drawn front faces only
   ready: false,
 };
 
@@ -94,7 +96,21 @@ function rayAt(x, y) {
 }
 
 // ---- WebGL ----------------------------------------------------------------------------------
-const gl = $('canvas').getContext('webgl2', { antialias: true, preserveDrawingBuffer: true });
+// A software rasteriser (no GPU, or a blocked one) spends most of a slider move drawing: there
+// the view gives up multisampling and high-DPI pixels, which cost it several times the draw,
+// and the back faces of closed surfaces (see frontWinding).
+function probeRenderer() {
+  const probe = document.createElement('canvas').getContext('webgl2');
+  if (!probe) return { name: '', software: false };
+  const debug = probe.getExtension('WEBGL_debug_renderer_info');
+  const name = String(probe.getParameter(debug ? debug.UNMASKED_RENDERER_WEBGL : probe.RENDERER));
+  const lose = probe.getExtension('WEBGL_lose_context');
+  if (lose) lose.loseContext();
+  return { name, software: /swiftshader|llvmpipe|softpipe|software|basic render/i.test(name) };
+}
+M.renderer = probeRenderer();
+// Each result is drawn and waited for in one task, so the drawing buffer need not be kept.
+const gl = $('canvas').getContext('webgl2', { antialias: !M.renderer.software, preserveDrawingBuffer: false });
 
 const VERTEX = `#version 300 es
 layout(location = 0) in vec3 position;
@@ -142,8 +158,11 @@ function compile(vertex, fragment) {
 }
 
 // One drawable mesh: positions and normals on the GPU, triangles, and edges built on demand.
+// A `cullable` mesh skips its back faces when it is a closed, consistently oriented surface.
 class GpuMesh {
-  constructor() {
+  constructor(cullable) {
+    this.cullable = cullable;
+    this.front = null;
     this.vao = gl.createVertexArray();
     this.position = gl.createBuffer();
     this.normal = gl.createBuffer();
@@ -163,25 +182,35 @@ class GpuMesh {
   }
 
   setTriangles(indices) {
-    this.indices = indices;
+    this.indices = drawOrder(indices);
+    this.normals = null;
+    this.front = undefined;
     gl.bindVertexArray(this.vao);
     gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.triangles);
-    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, indices, gl.STATIC_DRAW);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, this.indices, gl.STATIC_DRAW);
     gl.bindVertexArray(null);
     this.nTriangleIndices = indices.length;
     this.edges = null;
   }
 
   // Geometry goes to the GPU only here, when it changed: orbiting redraws what is there.
+  // Returns when the normals were done (the rest is the upload).
   setPositions(positions) {
-    const normals = vertexNormals(positions, this.indices);
     const grow = positions.length !== this.vertexCount * 3;
-    for (const [buf, data] of [[this.position, positions], [this.normal, normals]]) {
+    if (!this.normals || this.normals.length !== positions.length) this.normals = new Float32Array(positions.length);
+    vertexNormals(positions, this.indices, this.normals);
+    if (this.front === undefined) {
+      this.front = this.cullable ? frontWinding(positions, this.indices) : null;
+      if (this.cullable) M.renderer.cullsBackFaces = this.front !== null;
+    }
+    const normalsDone = performance.now();
+    for (const [buf, data] of [[this.position, positions], [this.normal, this.normals]]) {
       gl.bindBuffer(gl.ARRAY_BUFFER, buf);
       if (grow) gl.bufferData(gl.ARRAY_BUFFER, data, gl.DYNAMIC_DRAW);
       else gl.bufferSubData(gl.ARRAY_BUFFER, 0, data);
     }
     this.vertexCount = positions.length / 3;
+    return normalsDone;
   }
 
   edgeBuffer() {
@@ -200,28 +229,84 @@ class GpuMesh {
   }
 }
 
-function vertexNormals(p, t) {
-  const n = new Float32Array(p.length);
+// Area-weighted vertex normals of positions `p` over triangles `t`, into `n`.
+function vertexNormals(p, t, n) {
+  n.fill(0);
   for (let i = 0; i < t.length; i += 3) {
     const a = 3 * t[i], b = 3 * t[i + 1], c = 3 * t[i + 2];
     const ux = p[b] - p[a], uy = p[b + 1] - p[a + 1], uz = p[b + 2] - p[a + 2];
     const vx = p[c] - p[a], vy = p[c + 1] - p[a + 1], vz = p[c + 2] - p[a + 2];
     const x = uy * vz - uz * vy, y = uz * vx - ux * vz, z = ux * vy - uy * vx;
-    for (const k of [a, b, c]) { n[k] += x; n[k + 1] += y; n[k + 2] += z; }
+    n[a] += x; n[a + 1] += y; n[a + 2] += z;
+    n[b] += x; n[b + 1] += y; n[b + 2] += z;
+    n[c] += x; n[c + 1] += y; n[c + 2] += z;
   }
-  return n;
 }
 
-let shadeProgram, lineProgram, finest, level, drawQueued = false;
+// The winding (gl.CCW or gl.CW) of the faces of triangles `t` at positions `p` that face out,
+// or null unless they form a closed, consistently oriented surface: then every directed edge
+// has exactly one twin running the other way, that is the sorted edge keys equal the sorted
+// reversed keys and none repeats. Seen from outside, such a surface hides its back faces
+// behind its front faces, so a software rasteriser may skip them (half its triangles); where
+// a strong enhancement folds the surface over, the fold then shows what lies behind it.
+function frontWinding(p, t) {
+  const n = p.length / 3;
+  const edges = new Float64Array(t.length), twins = new Float64Array(t.length);
+  let volume = 0;
+  for (let i = 0; i < t.length; i += 3) {
+    for (let k = 0; k < 3; k++) {
+      const a = t[i + k], b = t[i + (k + 1) % 3];
+      edges[i + k] = a * n + b;
+      twins[i + k] = b * n + a;
+    }
+    const a = 3 * t[i], b = 3 * t[i + 1], c = 3 * t[i + 2];
+    volume += p[a] * (p[b + 1] * p[c + 2] - p[b + 2] * p[c + 1])
+      + p[a + 1] * (p[b + 2] * p[c] - p[b] * p[c + 2])
+      + p[a + 2] * (p[b] * p[c + 1] - p[b + 1] * p[c]);
+  }
+  edges.sort();
+  twins.sort();
+  for (let i = 0; i < edges.length; i++) {
+    if (edges[i] !== twins[i] || (i > 0 && edges[i] === edges[i - 1])) return null;
+  }
+  return volume > 0 ? gl.CCW : volume < 0 ? gl.CW : null;
+}
+
+// The triangles `t` in the order the page draws them and sums their normals: by their last
+// vertex (a stable counting sort). Vertex shading caches vertices by index, and files often
+// list triangles in an order (by corner type after a subdivision, say) that revisits
+// far-apart vertices, which also defeats the CPU's caches in the normals; sorted, nearby
+// triangles share recent vertices. Same triangles, so the same picture.
+function drawOrder(t) {
+  const nt = t.length / 3;
+  let nv = 0;
+  const last = new Uint32Array(nt);
+  for (let i = 0; i < nt; i++) {
+    last[i] = Math.max(t[3 * i], t[3 * i + 1], t[3 * i + 2]);
+    if (last[i] >= nv) nv = last[i] + 1;
+  }
+  const start = new Uint32Array(nv + 1);
+  for (let i = 0; i < nt; i++) start[last[i] + 1] += 1;
+  for (let v = 0; v < nv; v++) start[v + 1] += start[v];
+  const out = new Uint32Array(t.length);
+  for (let i = 0; i < nt; i++) {
+    const j = 3 * start[last[i]]++;
+    out[j] = t[3 * i]; out[j + 1] = t[3 * i + 1]; out[j + 2] = t[3 * i + 2];
+  }
+  return out;
+}
+
+let shadeProgram, lineProgram, finest, level, queuedFrame = null;
 
 function requestDraw() {
-  if (!drawQueued) { drawQueued = true; requestAnimationFrame(draw); }
+  if (queuedFrame === null) queuedFrame = requestAnimationFrame(draw);
 }
 
+// Draws now; a frame already queued would draw the same again, so it is dropped.
 function draw() {
-  drawQueued = false;
+  if (queuedFrame !== null) { cancelAnimationFrame(queuedFrame); queuedFrame = null; }
   const canvas = $('canvas');
-  const dpr = window.devicePixelRatio || 1;
+  const dpr = M.renderer.software ? 1 : window.devicePixelRatio || 1;
   const w = Math.max(1, Math.round(canvas.clientWidth * dpr));
   const h = Math.max(1, Math.round(canvas.clientHeight * dpr));
   if (canvas.width !== w || canvas.height !== h) { canvas.width = w; canvas.height = h; }
@@ -232,6 +317,7 @@ function draw() {
   if (!M.info || !mesh.vertexCount) return;
   const { view, proj } = matrices(w / h);
   gl.enable(gl.DEPTH_TEST);
+  if (mesh.front) { gl.enable(gl.CULL_FACE); gl.frontFace(mesh.front); } else gl.disable(gl.CULL_FACE);
   gl.enable(gl.POLYGON_OFFSET_FILL);
   gl.polygonOffset(1, 1);
   gl.useProgram(shadeProgram);
@@ -260,8 +346,21 @@ function stateBody() {
   return JSON.stringify({ gains: M.gains, normal_only: M.normalOnly, moves });
 }
 
+// The server's parts of an answer, from its `Server-Timing` header: {synthesis: ms, ...}.
+function serverTiming(response) {
+  const parts = {};
+  for (const entry of (response.headers.get('Server-Timing') || '').split(',')) {
+    const m = entry.trim().match(/^([\w-]+);dur=([\d.]+)$/);
+    if (m) parts[m[1]] = Number(m[2]);
+  }
+  return parts;
+}
+
 // Asks for the result of the current state; while one request runs, later changes wait and
-// go out together, so the view never falls behind the sliders.
+// go out together, so the view never falls behind the sliders. Each result's latency is kept
+// with its parts: the server's (synthesis, reordering to the input's order, encoding), the
+// transfer (request, answer and the rest of the round trip), the normals, the upload and the
+// draw, which the page waits for with a one-pixel read.
 function requestResult() {
   if (request.since === null) request.since = performance.now();
   if (request.busy) { request.dirty = true; return; }
@@ -276,16 +375,27 @@ function requestResult() {
       const positions = new Float32Array(await response.arrayBuffer());
       const received = performance.now();
       M.positions = positions;
-      finest.setPositions(positions);
+      const normalsDone = finest.setPositions(positions);
       const uploaded = performance.now();
       showFinest();
       draw();
       gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4)); // wait until drawn
       const drawn = performance.now();
       const ms = drawn - since;
+      const server = serverTiming(response);
+      const serverMs = (server.synthesis || 0) + (server.reorder || 0) + (server.encode || 0);
+      const answered = Math.min(since + serverMs, received);
+      const parts = [['server', since, answered], ['transfer', answered, received],
+        ['normals', received, normalsDone], ['upload', normalsDone, uploaded], ['draw', uploaded, drawn]];
+      for (const [name, from, to] of parts) {
+        performance.clearMeasures('meshpyr ' + name);
+        performance.measure('meshpyr ' + name, { start: from, end: to });
+      }
       M.latencies.push({
-        ms, kind, synthesisMs: Number(response.headers.get('X-Meshpyr-Synthesis-Ms')),
-        receivedMs: received - since, uploadMs: uploaded - received, drawMs: drawn - uploaded,
+        ms, kind, synthesisMs: server.synthesis ?? Number(response.headers.get('X-Meshpyr-Synthesis-Ms')),
+        reorderMs: server.reorder || 0, encodeMs: server.encode || 0, receivedMs: received - since,
+        transferMs: received - since - serverMs, normalsMs: normalsDone - received,
+        uploadMs: uploaded - normalsDone, drawMs: drawn - uploaded,
       });
       M.updates += 1;
       setStatus(`${kind}: ${ms.toFixed(0)} ms (synthesis ${response.headers.get('X-Meshpyr-Synthesis-Ms')} ms)`);
@@ -568,8 +678,8 @@ async function start() {
   if (!gl) throw new Error('this browser has no WebGL2');
   shadeProgram = compile(VERTEX, SHADE);
   lineProgram = compile(VERTEX, LINE);
-  finest = new GpuMesh();
-  level = new GpuMesh();
+  finest = new GpuMesh(M.renderer.software);
+  level = new GpuMesh(false);
   M.info = await (await api('/api/info')).json();
   const i = M.info;
   document.title = `${i.name} · meshpyr view`;
