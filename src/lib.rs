@@ -129,7 +129,8 @@ pub use mesh::{MeshInfo, PolygonMesh};
 pub use pm::{ProgressiveMesh, Simplified, SimplifyTarget, simplify};
 pub use progress::NoProgress;
 pub use pyramid::{
-    Filter, LevelMove, MoveHandle, PyrFileError, Pyramid, PyramidOptions, Spectrum, SynthesisCache,
+    Filter, LevelMove, MoveHandle, PyrContent, PyrFileError, Pyramid, PyramidOptions, Spectrum,
+    StoredDetails, SynthesisCache,
 };
 pub use relax::RelaxationSpec;
 pub use render::{RenderError, RenderOptions, Shading, View, render_mesh, render_meshes};
