@@ -207,11 +207,14 @@ fn read_base(r: &mut ByteReader<'_>, n_base: usize) -> Result<Vec<DVec3>, Format
         .collect())
 }
 
-/// The blocks of `n_splits` splits: their bytes with their file offsets.
+/// A block of the section: how many splits it holds, its bytes and their file offset.
+type Block<'a> = (usize, &'a [u8], u64);
+
+/// The blocks of `n_splits` splits.
 fn block_slices<'a>(
     r: &mut ByteReader<'a>,
     n_splits: usize,
-) -> Result<Vec<(usize, &'a [u8], u64)>, FormatError> {
+) -> Result<Vec<Block<'a>>, FormatError> {
     let mut blocks = Vec::new();
     let mut left = n_splits;
     while left > 0 {
@@ -229,7 +232,7 @@ fn block_slices<'a>(
 
 /// Decodes the blocks on all cores; the counts must add up to `n_details`.
 fn decode_blocks(
-    blocks: &[(usize, &[u8], u64)],
+    blocks: &[Block<'_>],
     n_details: usize,
     step: f64,
 ) -> Result<(Vec<u32>, Vec<DVec3>), FormatError> {

@@ -28,11 +28,11 @@ impl Default for Context {
 }
 
 impl Context {
-    /// The Rice parameter: the smallest `k` with `n · 2^k ≥ sum`.
+    /// The Rice parameter: the smallest `k` with `n · 2^k ≥ sum`, at most 60.
     #[inline]
     fn k(&self) -> u32 {
         let mut k = 0;
-        while (u64::from(self.n) << k) < self.sum && k < 60 {
+        while (u128::from(self.n) << k) < u128::from(self.sum) && k < 60 {
             k += 1;
         }
         k
@@ -43,7 +43,7 @@ impl Context {
         self.sum = self.sum.saturating_add(v);
         self.n += 1;
         if self.n >= RESET {
-            self.sum = (self.sum + 1) / 2;
+            self.sum = self.sum.div_ceil(2);
             self.n /= 2;
         }
     }
