@@ -50,10 +50,11 @@ impl StoredDetails {
     /// The details of `pyramid` (analysed with `relaxation`) quantised for a `.pyr` file: each
     /// component rounded to a multiple of a power-of-two step, the coarsest from 2^-36 of the
     /// bounding-box diagonal down to 2^-52 for which synthesis from the rounded details stays
-    /// within [`QUANTISATION_CHECK`] of the diagonal of synthesis from the exact ones, both
-    /// with unit gains and with every level's gain 2 (a fine-band enhancement shows the
-    /// largest errors; near-degenerate triangles, whose frames turn with small changes, need
-    /// the finer steps). Details read from a file keep their step.
+    /// within 2.5e-10 of the diagonal of synthesis from the exact ones (a quarter of the 1e-9
+    /// promised for any filter), both with unit gains and with every level's gain 2 (a
+    /// fine-band enhancement shows the largest errors; near-degenerate triangles, whose frames
+    /// turn with small changes, need the finer steps). Details read from a file keep their
+    /// step.
     pub fn quantised(pyramid: &DetailPyramid, relaxation: RelaxationSpec) -> StoredDetails {
         if pyramid.detail_step > 0.0 {
             return StoredDetails {
@@ -144,7 +145,7 @@ impl StoredDetails {
 
 /// The largest synthesis error, relative to the diagonal, that [`StoredDetails::quantised`]
 /// accepts: a quarter of the 1e-9 the stored details promise for any filter.
-pub const QUANTISATION_CHECK: f64 = 2.5e-10;
+const QUANTISATION_CHECK: f64 = 2.5e-10;
 
 /// The coarsest step [`StoredDetails::quantised`] tries, in bits below the diagonal.
 const FIRST_STEP_BITS: i32 = 36;
