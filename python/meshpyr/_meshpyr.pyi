@@ -164,10 +164,10 @@ class Pyramid:
         """The .pyr file's bytes, with the quantised details unless details=False."""
     @classmethod
     def from_bytes(cls, data: bytes) -> "Pyramid":
-        """Opens .pyr bytes (fast when they store details)."""
+        """Opens .pyr bytes (with their stored details, if any)."""
     def save(self, path: Path, *, details: bool = True) -> None:
         """Saves the .pyr file at path, atomically (with details unless details=False)."""
     @classmethod
     def load(cls, path: Path) -> "Pyramid":
-        """Opens the .pyr file at path (fast when it stores details)."""
+        """Opens the .pyr file at path (with its stored details, if any)."""
     def __reduce__(self) -> Tuple[object, Tuple[bytes]]: ...

@@ -276,9 +276,10 @@ impl Pyramid {
     }
 
     /// Opens .pyr bytes (from ``to_bytes``, a file, or the network): the hierarchy as saved,
-    /// with the stored details (fast; filters agree with the saved pyramid's to about 1e-10 of
-    /// the bounding-box diagonal) or, without them, the pyramid recomputed bit-identical to
-    /// the one that was saved. Raises FormatError for damaged or foreign bytes.
+    /// with the stored details (the detail pass skipped, the relaxation weights computed;
+    /// filters agree with the saved pyramid's to about 1e-10 of the bounding-box diagonal) or,
+    /// without them, the pyramid recomputed bit-identical to the one that was saved. Raises
+    /// FormatError for damaged or foreign bytes.
     #[classmethod]
     fn from_bytes(_cls: &Bound<'_, PyType>, py: Python<'_>, data: &[u8]) -> PyResult<Self> {
         let inner = py
@@ -296,7 +297,7 @@ impl Pyramid {
     }
 
     /// Opens the .pyr file at ``path`` (written by ``save`` or ``meshpyr build``), as
-    /// ``from_bytes``: fast when it stores details. Raises OSError when it cannot be read,
+    /// ``from_bytes``. Raises OSError when it cannot be read,
     /// FormatError when it is damaged or not a .pyr file.
     #[classmethod]
     fn load(_cls: &Bound<'_, PyType>, py: Python<'_>, path: PathBuf) -> PyResult<Self> {

@@ -25,7 +25,7 @@ pub(crate) struct BuildArgs {
     /// `spectrum` and `edit` use it).
     #[arg(long, value_enum, default_value_t = RelaxKind::SecondDifference)]
     pub(crate) relax: RelaxKind,
-    /// Leave the details out: a smaller file (about 40 % less on scans), whose readers run
+    /// Leave the details out: a smaller file (about 60 % less on scans), whose readers run
     /// the detail analysis every time they open it.
     #[arg(long)]
     pub(crate) no_details: bool,
