@@ -354,7 +354,8 @@ fn the_relaxation_is_recorded_and_another_one_is_analysed_afresh() {
         "{said}"
     );
     assert!(std::fs::read(&c).unwrap() == std::fs::read(&d).unwrap());
-    // The stored ones are used when they fit, and that is said too.
+    // The stored ones are used when they fit, and that is said too; the spectrum needs no
+    // analysis at all.
     let out = meshpyr(&["filter", &pyr, "-o", &d, "--enhance", "30:221=2"]);
     ok(&out);
     assert!(
@@ -362,6 +363,18 @@ fn the_relaxation_is_recorded_and_another_one_is_analysed_afresh() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
+    let png = scratch("jm.png");
+    let out = meshpyr(&["spectrum", &pyr, "-o", &png]);
+    ok(&out);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("stored details") && said.contains("no analysis"),
+        "{said}"
+    );
+    let out = meshpyr(&["spectrum", &pyr, "-o", &png, "--relax", "normal"]);
+    ok(&out);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(said.contains("details recomputed"), "{said}");
 }
 
 /// Every command that reads a mesh takes a `.pyr` file as the mesh it stores: the same output
