@@ -13,7 +13,8 @@
 //!    per level gives low-pass, stop-band and enhancement [`Filter`]s. Moving a coarse level
 //!    and resynthesising is a multiresolution [edit](Pyramid::edit).
 //! 4. A `.pyr` file ([`Pyramid::save`], [`Pyramid::load`]) keeps the hierarchy with the exact
-//!    input, compact, versioned and checksummed.
+//!    input and the pyramid's details (quantised, so a load skips the detail pass;
+//!    [`PyrContent`] leaves them out), compact, versioned and checksummed.
 //!
 //! Every mesh a [`Pyramid`] returns is its input with new positions: the same vertices and
 //! faces in the same order, and the same attributes.
@@ -129,8 +130,8 @@ pub use mesh::{MeshInfo, PolygonMesh};
 pub use pm::{ProgressiveMesh, Simplified, SimplifyTarget, simplify};
 pub use progress::NoProgress;
 pub use pyramid::{
-    Filter, LevelMove, MoveHandle, PyrFileError, Pyramid, PyramidDenoise, PyramidOptions, Spectrum,
-    SynthesisCache,
+    Filter, LevelMove, MoveHandle, PyrContent, PyrFileError, Pyramid, PyramidDenoise,
+    PyramidOptions, Spectrum, StoredDetails, SynthesisCache,
 };
 pub use relax::RelaxationSpec;
 pub use render::{RenderError, RenderOptions, Shading, View, render_mesh, render_meshes};

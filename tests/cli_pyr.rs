@@ -22,6 +22,45 @@ fn data(name: &str) -> String {
         .to_string()
 }
 
+/// The two mesh files have the same vertices within 1e-9 of the bounding-box diagonal plus
+/// the rounding of their position type (what filtering from stored details promises).
+fn assert_same_within_bound(a: &str, b: &str) {
+    let (ma, mb) = (
+        io::read_mesh(Path::new(a)).unwrap(),
+        io::read_mesh(Path::new(b)).unwrap(),
+    );
+    assert_eq!(ma.face_indices, mb.face_indices, "{a} / {b}");
+    let (lo, hi) = ma.positions.iter().fold(
+        (glam::DVec3::splat(f64::MAX), glam::DVec3::splat(f64::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let f32_ulp = hi.abs().max(lo.abs()).max_element() * f64::from(f32::EPSILON);
+    for (p, q) in ma.positions.iter().zip(&mb.positions) {
+        let off = (*p - *q).abs().max_element();
+        assert!(
+            off <= 1e-9 * (hi - lo).length() + f32_ulp,
+            "{a} / {b}: {off:e}"
+        );
+    }
+}
+
+/// The values of two spectrum CSV files, equal to 1e-6 relative.
+fn assert_same_spectrum(a: &str, b: &str) {
+    let rows = |p: &str| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect()
+    };
+    let (ra, rb) = (rows(a), rows(b));
+    assert_eq!(ra.len(), rb.len());
+    for (x, y) in ra.iter().flatten().zip(rb.iter().flatten()) {
+        assert!((x - y).abs() <= 1e-6 * x.abs().max(y.abs()), "{x} / {y}");
+    }
+}
+
 fn scratch(name: &str) -> String {
     let dir: PathBuf = std::env::temp_dir().join(format!("meshpyr-cli-pyr-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -132,7 +171,12 @@ fn extract_level_and_truncated_files() {
     let bytes = std::fs::read(&pyr).unwrap();
     // Cut inside the split blocks: the last complete level, with a warning.
     let cut = scratch("joint-cut.pyr");
-    std::fs::write(&cut, &bytes[..bytes.len() / 3]).unwrap();
+    let splits = meshpyr::format::container::Container::parse(&bytes)
+        .unwrap()
+        .entry(*b"SPLT")
+        .unwrap();
+    let inside = (splits.offset + splits.length / 2) as usize;
+    std::fs::write(&cut, &bytes[..inside]).unwrap();
     let w = ok(&meshpyr(&["-q", "extract", &cut, "-o", &out]));
     assert!(w.contains("warning:") && w.contains("truncated"), "{w}");
     assert_eq!(w.lines().count(), 1, "{w}");
@@ -183,6 +227,27 @@ fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
         "--lowpass",
         "500",
     ]));
+    assert_same_within_bound(&a, &b);
+    // Without stored details the file is analysed again: the very bytes of the mesh's filter.
+    let plain = scratch("elephant-plain.pyr");
+    ok(&meshpyr(&[
+        "-q",
+        "build",
+        &data("elephant_holes.ply"),
+        "-o",
+        &plain,
+        "--no-details",
+    ]));
+    assert!(std::fs::metadata(&plain).unwrap().len() < std::fs::metadata(&pyr).unwrap().len());
+    ok(&meshpyr(&[
+        "-q",
+        "filter",
+        &plain,
+        "-o",
+        &b,
+        "--lowpass",
+        "500",
+    ]));
     assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap());
 
     let (ca, cb) = (scratch("sa.csv"), scratch("sb.csv"));
@@ -199,9 +264,14 @@ fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
     ok(&meshpyr(&[
         "-q", "spectrum", &pyr, "-o", &png, "--csv", &cb,
     ]));
+    assert_same_spectrum(&ca, &cb);
+    ok(&meshpyr(&[
+        "-q", "spectrum", &plain, "-o", &png, "--csv", &cb,
+    ]));
     assert_eq!(std::fs::read(&ca).unwrap(), std::fs::read(&cb).unwrap());
 
-    // edit: mesh output from .pyr input == from the mesh; .pyr output extracts to the same.
+    // edit: mesh output from .pyr input agrees with the mesh's; .pyr output extracts to the
+    // very output of the edit.
     let m = io::read_mesh(Path::new(&data("elephant_holes.ply"))).unwrap();
     let p = m.positions[0];
     let mv = format!("{},{},{}:0.01,0.02,0.0", p.x, p.y, p.z);
@@ -220,13 +290,13 @@ fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
     edit(&pyr, &eb);
     edit(&pyr, &ep);
     ok(&meshpyr(&["-q", "extract", &ep, "-o", &ex]));
-    let ra = std::fs::read(&ea).unwrap();
-    assert!(ra == std::fs::read(&eb).unwrap());
+    assert_same_within_bound(&ea, &eb);
+    let rb = std::fs::read(&eb).unwrap();
     assert!(
-        ra == std::fs::read(&ex).unwrap(),
+        rb == std::fs::read(&ex).unwrap(),
         "edit to .pyr then extract differs"
     );
-    assert!(ra != std::fs::read(data("elephant_holes.ply")).unwrap());
+    assert!(rb != std::fs::read(data("elephant_holes.ply")).unwrap());
     // The edited file is a valid hierarchy: filtering it works.
     ok(&meshpyr(&[
         "-q",
@@ -240,7 +310,7 @@ fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
 }
 
 #[test]
-fn the_relaxation_is_recorded_and_a_different_one_is_refused() {
+fn the_relaxation_is_recorded_and_another_one_is_analysed_afresh() {
     let mesh = data("joint.ply");
     let pyr = scratch("joint-mcm.pyr");
     ok(&meshpyr(&[
@@ -260,16 +330,51 @@ fn the_relaxation_is_recorded_and_a_different_one_is_refused() {
     ok(&filter(&mesh, &a, &["--relax", "mcm"]));
     ok(&filter(&pyr, &b, &[]));
     ok(&filter(&mesh, &c, &[]));
-    let ra = std::fs::read(&a).unwrap();
-    assert!(ra == std::fs::read(&b).unwrap());
+    assert_same_within_bound(&a, &b);
     assert!(
-        ra != std::fs::read(&c).unwrap(),
+        std::fs::read(&a).unwrap() != std::fs::read(&c).unwrap(),
         "mcm and second-difference differ"
     );
-    fails_with(
-        &filter(&pyr, &c, &["--relax", "second-difference"]),
-        "was built with --relax mcm",
+    // Another operator than the stored details': analysed afresh, and said so.
+    let d = scratch("jm-d.ply");
+    let out = meshpyr(&[
+        "filter",
+        &pyr,
+        "-o",
+        &d,
+        "--enhance",
+        "30:221=2",
+        "--relax",
+        "second-difference",
+    ]);
+    ok(&out);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("details recomputed") && said.contains("analysed with --relax mcm"),
+        "{said}"
     );
+    assert!(std::fs::read(&c).unwrap() == std::fs::read(&d).unwrap());
+    // The stored ones are used when they fit, and that is said too; the spectrum needs no
+    // analysis at all.
+    let out = meshpyr(&["filter", &pyr, "-o", &d, "--enhance", "30:221=2"]);
+    ok(&out);
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("stored details"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let png = scratch("jm.png");
+    let out = meshpyr(&["spectrum", &pyr, "-o", &png]);
+    ok(&out);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("stored details") && said.contains("no analysis"),
+        "{said}"
+    );
+    let out = meshpyr(&["spectrum", &pyr, "-o", &png, "--relax", "normal"]);
+    ok(&out);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(said.contains("details recomputed"), "{said}");
 }
 
 /// Every command that reads a mesh takes a `.pyr` file as the mesh it stores: the same output

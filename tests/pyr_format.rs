@@ -10,16 +10,32 @@ use meshpyr::io;
 use meshpyr::mesh::{Mesh, PolygonMesh};
 use meshpyr::pm::ProgressiveMesh;
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{DetailPyramid, Pyramid};
+use meshpyr::pyramid::{DetailPyramid, Pyramid, StoredDetails};
 use std::path::PathBuf;
 
+/// The file `meshpyr build` writes: the hierarchy, the exact input and the details.
 fn build(input: &PolygonMesh) -> (ProgressiveMesh, Vec<u8>) {
     let built = Mesh::from_polygons(input).unwrap();
     let info = PyramidOptions::default();
     let pm = ProgressiveMesh::build(&built.mesh, &info.pm, &NoProgress).unwrap();
-    let (bytes, sizes) = format::encode(input, &pm, &info).unwrap();
+    let op = info.relaxation.operator();
+    let pyramid = DetailPyramid::analyze(&pm, op.as_ref(), &NoProgress).unwrap();
+    let details = StoredDetails::quantised(&pyramid, info.relaxation);
+    let (bytes, sizes) = format::encode_with_details(input, &pm, &info, Some(&details)).unwrap();
     assert_eq!(sizes.total, bytes.len());
+    assert!(sizes.details > 0);
     (pm, bytes)
+}
+
+/// A decoded file written again with what it holds (its details too, if it has them).
+fn reencode(d: &format::PyrData) -> Vec<u8> {
+    let details = match &d.details {
+        format::FileDetails::Stored(s) => Some(s),
+        _ => None,
+    };
+    format::encode_with_details(&d.input, &d.pm, &d.info, details)
+        .unwrap()
+        .0
 }
 
 /// Split errors as bit patterns, so that NaN and −0.0 compare exactly.
@@ -86,9 +102,15 @@ fn decode_restores_input_and_hierarchy_exactly() {
             error_bits(d.pm.split_errors()),
             error_bits(pm.split_errors())
         );
-        // write → read → write is byte-identical
-        let (again, _) = format::encode(&d.input, &d.pm, &d.info).unwrap();
-        assert!(again == bytes, "{name}: re-encoding changed the bytes");
+        // write → read → write is byte-identical, details included
+        assert!(
+            matches!(d.details, format::FileDetails::Stored(_)),
+            "{name}"
+        );
+        assert!(
+            reencode(&d) == bytes,
+            "{name}: re-encoding changed the bytes"
+        );
     }
 }
 
@@ -309,6 +331,29 @@ fn golden_files_are_byte_identical() {
     }
 }
 
+/// Files of format 2.0 (no details) still load: the golden files of 2.0 decode to the input
+/// mesh without details, and their pyramid is the analysis' (the details recomputed).
+#[test]
+fn format_2_0_files_still_load() {
+    for (file, mesh) in [("tetra.pyr", "tetrahedron.ply"), ("joint.pyr", "joint.ply")] {
+        let old = std::fs::read(golden(&format!("v2.0/{file}"))).unwrap();
+        assert_eq!(&old[8..12], &[2, 0, 0, 0], "{file}: not a 2.0 file");
+        let input = io::read_mesh(data(mesh)).unwrap();
+        let d = format::decode(&old).unwrap();
+        assert_same_mesh(&input, &d.input, file);
+        assert!(matches!(d.details, format::FileDetails::Absent), "{file}");
+        let (pyramid, from) = d.clone().into_pyramid_with(None, &NoProgress).unwrap();
+        assert_eq!(
+            from,
+            format::DetailSource::Recomputed(format::NO_STORED_DETAILS.into())
+        );
+        let op = d.info.relaxation.operator();
+        let fresh = DetailPyramid::analyze(&d.pm, op.as_ref(), &NoProgress).unwrap();
+        let unit = meshpyr::pyramid::LevelGains::unit();
+        assert_eq!(pyramid.pyramid.synthesize(&unit), fresh.synthesize(&unit));
+    }
+}
+
 /// Files of format 1.0 (split errors as raw f32) still load: the golden files of 1.0 decode to
 /// the input mesh and a complete hierarchy, and saving that hierarchy again writes a current
 /// file that decodes to the same splits and error bits. (They hold the hierarchy the builder
@@ -325,11 +370,7 @@ fn format_1_files_still_load() {
         let level = format::read_level(&old, None).unwrap();
         assert_eq!(level.level, d.pm.n_vertices(), "{file}");
         let (again, _) = format::encode(&d.input, &d.pm, &d.info).unwrap();
-        assert_eq!(
-            &again[8..10],
-            &2u16.to_le_bytes(),
-            "{file}: not saved as 2.x"
-        );
+        assert_eq!(&again[8..12], &[2, 0, 1, 0], "{file}: not saved as 2.1");
         let resaved = format::decode(&again).unwrap();
         assert_eq!(resaved.pm.splits(), d.pm.splits(), "{file}");
         assert_eq!(
@@ -548,7 +589,7 @@ fn split_blocks_decode_the_same_on_any_thread_count() {
     let run = |threads: usize| {
         on_threads(threads, || {
             let d = format::decode(&bytes).unwrap();
-            let again = format::encode(&d.input, &d.pm, &d.info).unwrap().0;
+            let again = reencode(&d);
             (
                 again,
                 format::decode(&both).err(),

@@ -160,14 +160,14 @@ class Pyramid:
         """A multiresolution edit: move level `level` near each point, resynthesise."""
     def spectrum(self) -> Dict[str, npt.NDArray[np.generic]]:
         """Detail energy per band of levels: lo, hi, levels, details, energy, rms, feature_size."""
-    def to_bytes(self) -> bytes:
-        """The .pyr file's bytes."""
+    def to_bytes(self, *, details: bool = True) -> bytes:
+        """The .pyr file's bytes, with the quantised details unless details=False."""
     @classmethod
     def from_bytes(cls, data: bytes) -> "Pyramid":
-        """Opens .pyr bytes."""
-    def save(self, path: Path) -> None:
-        """Saves the .pyr file at path, atomically."""
+        """Opens .pyr bytes (with their stored details, if any)."""
+    def save(self, path: Path, *, details: bool = True) -> None:
+        """Saves the .pyr file at path, atomically (with details unless details=False)."""
     @classmethod
     def load(cls, path: Path) -> "Pyramid":
-        """Opens the .pyr file at path."""
+        """Opens the .pyr file at path (with its stored details, if any)."""
     def __reduce__(self) -> Tuple[object, Tuple[bytes]]: ...

@@ -33,6 +33,15 @@ pub(crate) struct Pyramid {
 }
 
 /// Moves `[(point, delta), ...]` with one radius.
+/// What ``to_bytes`` and ``save`` write.
+fn content(details: bool) -> meshpyr::PyrContent {
+    if details {
+        meshpyr::PyrContent::WithDetails
+    } else {
+        meshpyr::PyrContent::HierarchyOnly
+    }
+}
+
 fn move_handles(moves: &Bound<'_, PyAny>, radius: f64) -> PyResult<Vec<MoveHandle>> {
     let form = "moves must be a list of (point, delta) pairs of 3 numbers each";
     let mut handles = Vec::new();
@@ -255,18 +264,21 @@ impl Pyramid {
         Ok(dict)
     }
 
-    /// The .pyr file's bytes: the hierarchy with the exact input and the build options
-    /// (compact, versioned, checksummed), the same bytes ``meshpyr build`` writes for the same
-    /// input and relaxation.
-    fn to_bytes<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyBytes>> {
+    /// The .pyr file's bytes: the hierarchy with the exact input, the build options and
+    /// (unless ``details=False``) the quantised details (compact, versioned, checksummed), the
+    /// same bytes ``meshpyr build`` (``--no-details``) writes for the same input and relaxation.
+    #[pyo3(signature = (*, details=true))]
+    fn to_bytes<'py>(&self, py: Python<'py>, details: bool) -> PyResult<Bound<'py, PyBytes>> {
         let bytes = py
-            .detach(|| self.inner.to_pyr_bytes())
+            .detach(|| self.inner.to_pyr_bytes_as(content(details)))
             .map_err(|e| pyr_error(e.into()))?;
         Ok(PyBytes::new(py, &bytes.0))
     }
 
     /// Opens .pyr bytes (from ``to_bytes``, a file, or the network): the hierarchy as saved,
-    /// with the pyramid recomputed bit-identical to the one that was saved. Raises
+    /// with the stored details (the detail pass skipped, the relaxation weights computed;
+    /// filters agree with the saved pyramid's to about 1e-10 of the bounding-box diagonal) or,
+    /// without them, the pyramid recomputed bit-identical to the one that was saved. Raises
     /// FormatError for damaged or foreign bytes.
     #[classmethod]
     fn from_bytes(_cls: &Bound<'_, PyType>, py: Python<'_>, data: &[u8]) -> PyResult<Self> {
@@ -276,14 +288,17 @@ impl Pyramid {
         Ok(Pyramid { inner })
     }
 
-    /// Saves the .pyr file at ``path``, atomically (an existing file is replaced only once the
-    /// new one is complete). Raises OSError when it cannot be written.
-    fn save(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        py.detach(|| self.inner.save(&path)).map_err(pyr_error)
+    /// Saves the .pyr file at ``path`` (``to_bytes``), atomically (an existing file is replaced
+    /// only once the new one is complete). Raises OSError when it cannot be written.
+    #[pyo3(signature = (path, *, details=true))]
+    fn save(&self, py: Python<'_>, path: PathBuf, details: bool) -> PyResult<()> {
+        py.detach(|| self.inner.save_as(&path, content(details)))
+            .map_err(pyr_error)
     }
 
-    /// Opens the .pyr file at ``path`` (written by ``save`` or ``meshpyr build``). Raises
-    /// OSError when it cannot be read, FormatError when it is damaged or not a .pyr file.
+    /// Opens the .pyr file at ``path`` (written by ``save`` or ``meshpyr build``), as
+    /// ``from_bytes``. Raises OSError when it cannot be read,
+    /// FormatError when it is damaged or not a .pyr file.
     #[classmethod]
     fn load(_cls: &Bound<'_, PyType>, py: Python<'_>, path: PathBuf) -> PyResult<Self> {
         let inner = py
@@ -292,11 +307,12 @@ impl Pyramid {
         Ok(Pyramid { inner })
     }
 
-    /// Pickles as ``Pyramid.from_bytes(self.to_bytes())``.
+    /// Pickles as ``Pyramid.from_bytes(self.to_bytes(details=False))``: the unpickled pyramid
+    /// recomputes its details, so its filters give the very bits of this one's.
     fn __reduce__<'py>(slf: &Bound<'py, Self>) -> PyResult<Bound<'py, PyTuple>> {
         let py = slf.py();
         let from_bytes = slf.get_type().getattr("from_bytes")?;
-        let bytes = slf.get().to_bytes(py)?;
+        let bytes = slf.get().to_bytes(py, false)?;
         PyTuple::new(py, [from_bytes, PyTuple::new(py, [bytes])?.into_any()])
     }
 

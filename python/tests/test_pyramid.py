@@ -72,10 +72,10 @@ def test_an_edit_moves_the_region_around_the_point_and_leaves_far_vertices(spher
 
 
 def test_bytes_files_and_pickles_give_back_the_same_pyramid(sphere_pyramid, tmp_path):
-    blob = sphere_pyramid.to_bytes()
+    blob = sphere_pyramid.to_bytes(details=False)
     assert isinstance(blob, bytes)
     path = tmp_path / "sphere.pyr"
-    sphere_pyramid.save(path)
+    sphere_pyramid.save(path, details=False)
     assert path.read_bytes() == blob
     expected = sphere_pyramid.filter(stopband=[(50, 400)])
     for again in [
@@ -88,6 +88,20 @@ def test_bytes_files_and_pickles_give_back_the_same_pyramid(sphere_pyramid, tmp_
         assert isinstance(again, meshpyr.Pyramid)
         assert again.levels == sphere_pyramid.levels and again.relax == sphere_pyramid.relax
         assert_same_bits(again.filter(stopband=[(50, 400)]), expected)
+        assert again.to_bytes(details=False) == blob
+
+
+def test_files_with_details_filter_within_their_bound_and_keep_their_bytes(sphere, sphere_pyramid, tmp_path):
+    blob = sphere_pyramid.to_bytes()
+    assert len(blob) > len(sphere_pyramid.to_bytes(details=False))
+    path = tmp_path / "sphere-details.pyr"
+    sphere_pyramid.save(path)
+    assert path.read_bytes() == blob
+    diagonal = np.linalg.norm(sphere[0].max(axis=0) - sphere[0].min(axis=0))
+    expected = sphere_pyramid.filter(stopband=[(50, 400)])
+    for again in [meshpyr.Pyramid.from_bytes(blob), meshpyr.Pyramid.load(path)]:
+        assert np.max(np.abs(again.filter(stopband=[(50, 400)]) - expected)) < 1e-9 * diagonal
+        assert_same_bits(again.filter(gains=[(50, 400, 1.0)]), sphere[0])
         assert again.to_bytes() == blob
 
 

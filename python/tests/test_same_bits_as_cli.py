@@ -87,6 +87,11 @@ def test_a_pyr_file_saved_by_the_bindings_filters_like_the_bindings_in_the_cli(c
     sphere_pyramid.save(pyr)
     out = tmp_path / "out.ply"
     cli("filter", pyr, "-o", out, "--lowpass", "300")
+    # Both open the file's stored details: the same bits.
+    assert_same_bits(meshpyr.Pyramid.load(pyr).filter(lowpass=300), meshpyr.read(out)[0])
+    # Without details both recompute them: the bits of the pyramid that was saved.
+    sphere_pyramid.save(pyr, details=False)
+    cli("filter", pyr, "-o", out, "--lowpass", "300")
     assert_same_bits(sphere_pyramid.filter(lowpass=300), meshpyr.read(out)[0])
 
 

@@ -5,9 +5,8 @@
 use super::Global;
 use super::filter::{FilterOptions, resolve_reporting};
 use super::input::load_pyramid;
-use crate::format;
 use crate::io;
-use crate::pyramid::{HandleReach, MoveHandle, Pyramid};
+use crate::pyramid::{HandleReach, MoveHandle, PyrContent, Pyramid};
 use crate::relax::RelaxKind;
 use anyhow::Context;
 use glam::DVec3;
@@ -74,6 +73,10 @@ pub(crate) struct EditArgs {
     /// uses the one it was built with).
     #[arg(long, value_enum)]
     pub(crate) relax: Option<RelaxKind>,
+    /// With a `.pyr` output: leave the details out (a smaller file whose readers recompute
+    /// them; with them, saving analyses the edited positions).
+    #[arg(long)]
+    pub(crate) no_details: bool,
 }
 
 /// Runs `meshpyr edit`.
@@ -114,7 +117,12 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
     warn_unreached(&args, &reach);
     if writes_pyr {
         let positions = scan.to_input_positions(&out);
-        save_edited(&scan, positions, &args.output)?;
+        let content = if args.no_details {
+            PyrContent::HierarchyOnly
+        } else {
+            PyrContent::WithDetails
+        };
+        save_edited(&scan, positions, content, &args.output)?;
     } else {
         io::write_mesh(&args.output, &scan.output_mesh(&out))?;
     }
@@ -143,11 +151,16 @@ fn warn_unreached(args: &EditArgs, reach: &[HandleReach]) {
 }
 
 /// Saves `scan` with new input positions as a `.pyr` file (same hierarchy and options, new
-/// originals).
-fn save_edited(scan: &Pyramid, input_positions: Vec<DVec3>, path: &Path) -> anyhow::Result<()> {
-    let (input, pm) = format::with_positions(&scan.input, &scan.source, &scan.pm, input_positions)
+/// originals, and their details unless `content` leaves them out).
+fn save_edited(
+    scan: &Pyramid,
+    input_positions: Vec<DVec3>,
+    content: PyrContent,
+    path: &Path,
+) -> anyhow::Result<()> {
+    let (bytes, _) = scan
+        .to_pyr_bytes_with_positions_as(input_positions, content)
         .context("cannot save the edit")?;
-    let (bytes, _) = format::encode(&input, &pm, &scan.options).context("cannot save the edit")?;
     io::write_atomic(path, &bytes)?;
     Ok(())
 }

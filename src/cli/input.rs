@@ -2,7 +2,7 @@
 //! whatever its name), read as a mesh or turned into a detail pyramid.
 
 use super::{BarProgress, Global};
-use crate::format;
+use crate::format::{self, DetailSource};
 use crate::io;
 use crate::mesh::{MissingSurface, PolygonMesh};
 use crate::pyramid::{Pyramid, PyramidOptions};
@@ -62,8 +62,10 @@ pub(crate) fn load_pyr(path: &Path) -> anyhow::Result<format::PyrData> {
 
 /// Reads `path` and builds its progressive mesh and pyramid, reporting progress and timing
 /// (the pyramid's options say which relaxation it was analysed with). `relax` defaults to the
-/// second-difference operator. A `.pyr` file (detected by its signature) is loaded instead and
-/// analysed with the relaxation recorded in it; asking for another one is an error.
+/// second-difference operator. A `.pyr` file (detected by its signature) is loaded instead,
+/// with the relaxation recorded in it unless `relax` asks for another, and with its stored
+/// details when they were analysed with that relaxation (else they are recomputed, and the
+/// message says why).
 pub(crate) fn load_pyramid(
     path: &Path,
     relax: Option<RelaxKind>,
@@ -71,19 +73,7 @@ pub(crate) fn load_pyramid(
 ) -> anyhow::Result<Pyramid> {
     let wanted = relax.map(RelaxKind::spec);
     if is_pyr_file(path) {
-        let scan = load_pyr_scan(path, global)?;
-        let spec = scan.options.relaxation;
-        if let Some(w) = wanted
-            && w != spec
-        {
-            anyhow::bail!(
-                "{} was built with --relax {}; rebuild it with `meshpyr build --relax {}` to use that operator",
-                path.display(),
-                spec.name(),
-                w.name()
-            );
-        }
-        return Ok(scan);
+        return load_pyr_scan(path, wanted, global);
     }
     let input = io::read_mesh(path)?;
     require(path, input.check_surface())?;
@@ -95,28 +85,82 @@ pub(crate) fn load_pyramid(
     )
 }
 
-/// Loads a `.pyr` file and recomputes its pyramid (the relaxation recorded in the file).
-fn load_pyr_scan(path: &Path, global: &Global) -> anyhow::Result<Pyramid> {
+/// Loads a `.pyr` file and its pyramid (with `relaxation`, default the file's), from its
+/// stored details when they fit, and says which path it took.
+fn load_pyr_scan(
+    path: &Path,
+    relaxation: Option<RelaxationSpec>,
+    global: &Global,
+) -> anyhow::Result<Pyramid> {
     let start = Instant::now();
     let data = load_pyr(path)?;
+    pyramid_of_pyr(path, data, relaxation, start, global)
+}
+
+/// The pyramid of a loaded `.pyr` file (`start`: when loading began), saying which path it
+/// took: the stored details, or the analysis and why.
+fn pyramid_of_pyr(
+    path: &Path,
+    data: format::PyrData,
+    relaxation: Option<RelaxationSpec>,
+    start: Instant,
+    global: &Global,
+) -> anyhow::Result<Pyramid> {
     let loaded = start.elapsed().as_secs_f64();
     let bar = global.progress("analysis");
-    let scan = data
-        .into_pyramid(&BarProgress(&bar))
+    let (scan, from) = data
+        .into_pyramid_with(relaxation, &BarProgress(&bar))
         .with_context(|| format!("cannot analyse {}", path.display()))?;
     bar.finish_and_clear();
     let p = &scan.pyramid;
+    let took = start.elapsed().as_secs_f64() - loaded;
+    let path_taken = match &from {
+        DetailSource::Stored => format!("stored details, weights and fans computed in {took:.2} s"),
+        // A file without details says what it always said.
+        DetailSource::Recomputed(why) if why == format::NO_STORED_DETAILS => {
+            format!("details recomputed in {took:.2} s")
+        }
+        DetailSource::Recomputed(why) => format!("details recomputed in {took:.2} s: {why}"),
+    };
     global.say(format_args!(
-        "{}: {} vertices, levels {}..={} (loaded in {:.2} s, details recomputed in {:.2} s){}",
+        "{}: {} vertices, levels {}..={} (loaded in {:.2} s, {path_taken}){}",
         path.display(),
         scan.input.n_vertices(),
         p.n_base_vertices(),
         p.n_vertices(),
         loaded,
-        start.elapsed().as_secs_f64() - loaded,
         extra_vertices_note(scan.input.n_vertices(), p.n_vertices()),
     ));
     Ok(scan)
+}
+
+/// The detail spectrum of `path` (relaxation `relax`, default the file's or
+/// second-difference): a `.pyr` file with usable stored details gives it without any
+/// analysis, and says so; anything else goes through [`load_pyramid`].
+pub(crate) fn load_spectrum(
+    path: &Path,
+    relax: Option<RelaxKind>,
+    global: &Global,
+) -> anyhow::Result<crate::pyramid::Spectrum> {
+    if !is_pyr_file(path) {
+        return Ok(load_pyramid(path, relax, global)?.spectrum());
+    }
+    let relaxation = relax.map(RelaxKind::spec);
+    let start = Instant::now();
+    let data = load_pyr(path)?;
+    let Ok(spectrum) = data.stored_spectrum(relaxation) else {
+        return Ok(pyramid_of_pyr(path, data, relaxation, start, global)?.spectrum());
+    };
+    global.say(format_args!(
+        "{}: {} vertices, levels {}..={} (loaded with its stored details in {:.2} s, no analysis){}",
+        path.display(),
+        data.input.n_vertices(),
+        data.pm.n_base_vertices(),
+        data.pm.n_vertices(),
+        start.elapsed().as_secs_f64(),
+        extra_vertices_note(data.input.n_vertices(), data.pm.n_vertices()),
+    ));
+    Ok(spectrum)
 }
 
 /// Builds the pyramid of an already-read mesh; `name` is used in messages.

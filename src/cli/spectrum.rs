@@ -1,7 +1,7 @@
 //! `meshpyr spectrum IN -o F.png [--csv F]`: detail energy per octave of levels, plotted.
 
 use super::Global;
-use super::input::load_pyramid;
+use super::input::load_spectrum;
 use crate::io;
 use crate::relax::RelaxKind;
 use std::path::PathBuf;
@@ -18,7 +18,7 @@ pub(crate) struct SpectrumArgs {
     #[arg(long, value_name = "FILE")]
     pub(crate) csv: Option<PathBuf>,
     /// Relaxation operator used for the prediction (default second-difference; a .pyr input
-    /// uses the one it was built with).
+    /// uses the one it was built with, and its stored details if they were analysed with it).
     #[arg(long, value_enum)]
     pub(crate) relax: Option<RelaxKind>,
 }
@@ -29,8 +29,7 @@ pub(crate) fn run(args: SpectrumArgs, global: &Global) -> anyhow::Result<()> {
     if let Some(csv) = &args.csv {
         super::output::check_output_folder(csv)?;
     }
-    let scan = load_pyramid(&args.input, args.relax, global)?;
-    let spectrum = scan.pyramid.spectrum();
+    let spectrum = load_spectrum(&args.input, args.relax, global)?;
     let png = spectrum.chart("input", &[]).encode_png()?;
     io::write_atomic(&args.output, &png)?;
     global.say(format_args!("wrote {}", args.output.display()));

@@ -7,8 +7,8 @@ pub mod varint;
 
 #[cfg(feature = "cli")]
 pub(crate) use pyr::is_pyr;
-pub use pyr::{LevelMesh, PyrData, SizeReport};
-pub use pyr::{MAJOR, MINOR, OLDEST_MAJOR, decode, encode, read_level};
+pub use pyr::{DetailSource, FileDetails, LevelMesh, NO_STORED_DETAILS, PyrData, SizeReport};
+pub use pyr::{MAJOR, MINOR, OLDEST_MAJOR, decode, encode, encode_with_details, read_level};
 pub(crate) use pyr::{fix_checksums, fuzz_read_pyr, with_positions};
 
 /// What can go wrong reading a `.pyr` file. Every variant says where.

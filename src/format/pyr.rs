@@ -2,9 +2,12 @@
 //! checksummed blocks), the exact original positions, and trailing sections that restore the
 //! user's file exactly (vertex order, polygons, attributes). Specified in `formats/pyr.md`.
 //!
-//! Details of the detail pyramid are *not* stored: the analysis is a deterministic function of
-//! the hierarchy, the original positions and the relaxation operator, so a loader recomputes
-//! them bit for bit ([`PyrData::into_pyramid`]).
+//! The details of the detail pyramid are stored, quantised, in the optional `DETL` section
+//! (format 2.1, module `details`), so that a loader needs only the relaxation weights and fans
+//! for synthesis and nothing for the spectrum. Files without it (2.0, or written without
+//! details) are analysed again: the analysis is a deterministic function of the hierarchy,
+//! the original positions and the relaxation operator, so a loader recomputes the details bit
+//! for bit ([`PyrData::into_pyramid`]).
 //!
 //! This module holds the types a file decodes to (the relaxation is `relax::RelaxationSpec`),
 //! and [`encode`] and [`decode`], which assemble a file from its sections; each concern has a child module: the
@@ -18,29 +21,34 @@ use super::container::{Container, REQUIRED, Section, write_container};
 use super::varint::ByteReader;
 #[cfg(feature = "cli")]
 use crate::mesh::ScalarType;
-use crate::mesh::{Built, Mesh, PolygonMesh, SourceMap};
+use crate::mesh::{Built, PolygonMesh};
 use crate::pm::{PmParts, ProgressiveMesh};
-use crate::progress::Progress;
-use crate::pyramid::{DetailPyramid, Pyramid, PyramidError, PyramidOptions};
+use crate::pyramid::{PyramidOptions, StoredDetails};
 use crate::relax::RelaxationSpec;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 mod attributes;
 mod decode_ahead;
+mod details;
 mod edit;
 mod fuzz;
 mod hierarchy;
 mod input_side;
+mod loaded;
 mod meta;
 mod positions;
+mod rice;
 mod split_block;
 
 pub(crate) use edit::with_positions;
 pub(crate) use fuzz::{fix_checksums, fuzz_read_pyr};
 pub use hierarchy::read_level;
+use loaded::file_details;
+pub use loaded::{DetailSource, FileDetails, NO_STORED_DETAILS};
 
 use attributes::encode_attributes;
+use details::{decode_details, encode_details, step_exponent};
 use hierarchy::{
     Progressive, encode_base, encode_isolated, encode_splits, read_isolated, read_progressive,
 };
@@ -57,8 +65,8 @@ pub const MAJOR: u16 = 2;
 /// The oldest major this reader still decodes.
 pub const OLDEST_MAJOR: u16 = 1;
 /// Minor version written; readers accept any minor of their major (unknown optional sections
-/// are skipped).
-pub const MINOR: u16 = 0;
+/// are skipped). 2.1 adds the optional `DETL` section.
+pub const MINOR: u16 = 1;
 /// Vertex splits per block of the `SPLT` section.
 pub(crate) const SPLITS_PER_BLOCK: u32 = 4096;
 
@@ -69,7 +77,8 @@ const ISOL: [u8; 4] = *b"ISOL";
 const ORDR: [u8; 4] = *b"ORDR";
 const POLY: [u8; 4] = *b"POLY";
 const ATTR: [u8; 4] = *b"ATTR";
-const KNOWN: [[u8; 4]; 7] = [META, BASE, SPLT, ISOL, ORDR, POLY, ATTR];
+const DETL: [u8; 4] = *b"DETL";
+const KNOWN: [[u8; 4]; 8] = [META, BASE, SPLT, ISOL, ORDR, POLY, ATTR, DETL];
 
 /// The `META` section (bincode 2 standard configuration). Fixed-size fields only: nothing in
 /// it allocates while decoding, so a damaged length cannot make bincode allocate.
@@ -107,44 +116,8 @@ pub struct PyrData {
     pub pm: ProgressiveMesh,
     /// Build options.
     pub info: PyramidOptions,
-}
-
-impl PyrData {
-    /// Recomputes the detail pyramid (bit-identical to the one the file was built with) and
-    /// returns the whole scan.
-    pub fn into_pyramid(self, progress: &dyn Progress) -> Result<Pyramid, PyramidError> {
-        let op = crate::pyramid::relaxation_for(&self.info.relaxation, &self.pm);
-        let pyramid = DetailPyramid::analyze(&self.pm, op.as_ref(), progress)?;
-        // A file whose input needed no repair was loaded without building the half-edge mesh
-        // (see `clean_triangle_faces`): its mesh is the input itself, vertex for vertex and
-        // face for face.
-        let source = match self.built {
-            Some(b) => b.source,
-            None => SourceMap {
-                vertex_source: (0..self.input.positions.len() as u32).collect(),
-                face_source: (0..self.input.n_faces() as u32).collect(),
-                input_vertices: self.input.positions.len(),
-            },
-        };
-        Ok(Pyramid {
-            input: self.input,
-            source,
-            pm: self.pm,
-            pyramid,
-            options: self.info,
-        })
-    }
-}
-
-impl PyrData {
-    /// The repaired half-edge mesh of [`Self::input`] and its map back (the one `build` made;
-    /// deterministic). Built on demand unless loading already needed it.
-    pub fn built(&self) -> Result<Built, FormatError> {
-        match &self.built {
-            Some(b) => Ok(b.clone()),
-            None => Mesh::from_polygons(&self.input).map_err(|e| corrupt(0, e.to_string())),
-        }
-    }
+    /// The details the file stores, if any, and whether they fit it.
+    pub details: FileDetails,
 }
 
 /// One level of the hierarchy read from a (possibly truncated) file.
@@ -193,6 +166,8 @@ pub struct SizeReport {
     pub positions: usize,
     /// Input vertex order, polygons and attributes.
     pub trailing: usize,
+    /// The stored details (section `DETL`; 0 without).
+    pub details: usize,
 }
 
 fn corrupt(offset: u64, reason: impl Into<String>) -> FormatError {
@@ -216,11 +191,24 @@ fn required<'a>(c: &Container<'a>, tag: [u8; 4]) -> Result<ByteReader<'a>, Forma
     })
 }
 
-/// Encodes `input` with its hierarchy `pm` (built from `Mesh::from_polygons(input)`).
+/// Encodes `input` with its hierarchy `pm` (built from `Mesh::from_polygons(input)`), without
+/// details ([`encode_with_details`] stores them).
 pub fn encode(
     input: &PolygonMesh,
     pm: &ProgressiveMesh,
     info: &PyramidOptions,
+) -> Result<(Vec<u8>, SizeReport), FormatError> {
+    encode_with_details(input, pm, info, None)
+}
+
+/// [`encode`], with `details` (the pyramid of `pm`'s original positions, analysed with
+/// `info.relaxation`) in a `DETL` section, quantised (see `formats/pyr.md`). Details that
+/// cannot be quantised (not finite) leave the section out.
+pub fn encode_with_details(
+    input: &PolygonMesh,
+    pm: &ProgressiveMesh,
+    info: &PyramidOptions,
+    details: Option<&StoredDetails>,
 ) -> Result<(Vec<u8>, SizeReport), FormatError> {
     check_pm_belongs(input, pm)?;
     let f32 = pm.original_positions().iter().all(|&p| exactly_f32(p));
@@ -245,7 +233,11 @@ pub fn encode(
     sizes.positions += split_sizes.positions + isol.len();
     sizes.split_errors += split_sizes.split_errors;
     sizes.trailing = ordr.len() + poly.len() + attr.len();
-    let sections = [
+    let detl = details.and_then(|d| {
+        let crcs = [crc32fast::hash(&base), crc32fast::hash(&splt)];
+        encode_details(d, step_exponent(bbox_diagonal(pm)), crcs)
+    });
+    let mut sections: Vec<Section> = [
         (META, meta),
         (BASE, base),
         (SPLT, splt),
@@ -254,14 +246,30 @@ pub fn encode(
         (POLY, poly),
         (ATTR, attr),
     ]
+    .into_iter()
     .map(|(tag, bytes)| Section {
         tag,
         flags: REQUIRED,
         bytes,
-    });
+    })
+    .collect();
+    if let Some(bytes) = detl {
+        sizes.details = bytes.len();
+        // Optional: a 2.0 reader skips it and analyses the hierarchy as before.
+        sections.push(Section {
+            tag: DETL,
+            flags: 0,
+            bytes,
+        });
+    }
     let bytes = write_container(MAJOR, MINOR, &sections);
     sizes.total = bytes.len();
     Ok((bytes, sizes))
+}
+
+/// The bounding-box diagonal of the finest level, as the analysis computes it.
+fn bbox_diagonal(pm: &ProgressiveMesh) -> f64 {
+    crate::pyramid::analysis::surface_stats(&pm.original_positions()[..pm.n_vertices()], &[]).1
 }
 
 /// The input positions are restored from the PM positions through the vertex order, so check
@@ -290,7 +298,13 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
     // so it is decoded on another core meanwhile (after that core has decoded split blocks
     // ahead of the replay). Errors come in the order a sequential reader meets them: the
     // progressive part, ISOL, then the input's side.
-    let (c, p, input_side) = read_progressive(bytes, None, decode_input_side)?;
+    let (c, p, (input_side, detl)) = read_progressive(bytes, None, |c, meta| {
+        let detl = c.section(DETL).and_then(|r| {
+            r.map(|r| decode_details(r, meta.n_base as usize, meta.n_splits as usize))
+                .transpose()
+        });
+        (decode_input_side(c, meta), detl)
+    })?;
     check_complete(&p, bytes.len())?;
     let Progressive {
         meta,
@@ -323,11 +337,13 @@ pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
         permutation.then_some(mesh_to_pm),
     )
     .map_err(|e| corrupt(0, e.to_string()))?;
+    let details = file_details(&c, detl?);
     Ok(PyrData {
         input,
         built,
         pm,
         info: build_info(&meta),
+        details,
     })
 }
 

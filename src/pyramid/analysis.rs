@@ -62,12 +62,46 @@ impl DetailPyramid {
                 geometry.len()
             )));
         }
+        let layout = Layout::record(pm, relaxation, progress)?;
+        // Steps 2–5, finest split first: waves in reverse storage order, which, like split
+        // order, runs every split after the splits it depends on.
+        let mut f = signal.to_vec();
+        let slotted = &layout.slotted;
+        let mut details = vec![DVec3::ZERO; slotted.offsets.last().map_or(0, |o| o.details)];
+        let min_length = frame_min_length(layout.bbox_diagonal);
+        with_codes!(&slotted.codes, c => {
+            slotted.downsample(c, &layout.waves, &mut f, &mut details, min_length, progress)
+        });
+        progress.update(1.0);
+        let base = f[..layout.n_base].to_vec();
+        Ok(layout.into_pyramid(relaxation, signal, base, details))
+    }
+}
+
+/// The signal-independent part of a pyramid (step 1 for every split, in storage order): what
+/// synthesis needs besides the base signal and the details.
+pub(crate) struct Layout {
+    pub(crate) n_base: usize,
+    pub(crate) n_finest: usize,
+    pub(crate) surface_area: f64,
+    pub(crate) bbox_diagonal: f64,
+    pub(crate) waves: Waves,
+    slotted: Slotted,
+}
+
+impl Layout {
+    /// Step 1 for every split of `pm`, then the storage order: wave by wave (see `waves`).
+    /// Reports progress from 0 to [`RECORDS_SHARE`].
+    pub(crate) fn record(
+        pm: &ProgressiveMesh,
+        relaxation: &dyn Relaxation,
+        progress: &dyn Progress,
+    ) -> Result<Layout, PyramidError> {
+        let geometry = pm.original_positions();
         let n_base = pm.n_base_vertices();
         let n_finest = pm.n_vertices();
         let n_splits = n_finest - n_base;
         let (surface_area, bbox_diagonal) = surface_stats(&geometry[..n_finest], pm.finest_faces());
-
-        // Step 1 for every split, then the storage order: wave by wave (see `waves`).
         let ranges = split_ranges(n_splits, rayon::current_num_threads());
         let cursor = relaxation.as_ring_stencils().is_none().then(|| pm.cursor());
         let mut records = record_ranges(pm, relaxation, cursor, &ranges, progress)?;
@@ -80,7 +114,7 @@ impl DetailPyramid {
         let morton = morton_codes(&geometry[n_base..n_finest]);
         let waves = Waves::schedule(
             n_splits,
-            signal.len(),
+            geometry.len(),
             |k| {
                 let (rec, i) = record_of(&records, k);
                 let (o, next) = (rec.offsets[i], rec.offsets[i + 1]);
@@ -89,22 +123,54 @@ impl DetailPyramid {
             |k| morton.as_ref().map_or(0, |m| m[k]),
         );
         let slotted = Slotted::new(records, &waves);
+        Ok(Layout {
+            n_base,
+            n_finest,
+            surface_area,
+            bbox_diagonal,
+            waves,
+            slotted,
+        })
+    }
 
-        // Steps 2–5, finest split first: waves in reverse storage order, which, like split
-        // order, runs every split after the splits it depends on.
-        let mut f = signal.to_vec();
-        let mut details = vec![DVec3::ZERO; slotted.offsets.last().map_or(0, |o| o.details)];
-        let min_length = frame_min_length(bbox_diagonal);
-        with_codes!(&slotted.codes, c => {
-            slotted.downsample(c, &waves, &mut f, &mut details, min_length, progress)
-        });
-        progress.update(1.0);
+    /// How many details split `k` carries (its touched vertices: the new vertex and its ring).
+    pub(crate) fn details_of_split(&self, k: usize) -> usize {
+        let slot = self.waves.slot_of(k);
+        self.slotted.offsets[slot + 1].details - self.slotted.offsets[slot].details
+    }
 
-        Ok(DetailPyramid {
+    /// Where split `k`'s details start in storage order.
+    pub(crate) fn details_start(&self, k: usize) -> usize {
+        self.slotted.offsets[self.waves.slot_of(k)].details
+    }
+
+    /// Total number of details.
+    pub(crate) fn n_details(&self) -> usize {
+        self.slotted.offsets.last().map_or(0, |o| o.details)
+    }
+
+    /// The pyramid of `signal` with this layout, its `base` signal and `details` (storage
+    /// order).
+    pub(crate) fn into_pyramid(
+        self,
+        relaxation: &dyn Relaxation,
+        signal: &[DVec3],
+        base: Vec<DVec3>,
+        details: Vec<DVec3>,
+    ) -> DetailPyramid {
+        let Layout {
+            n_base,
+            n_finest,
+            surface_area,
+            bbox_diagonal,
+            waves,
+            slotted,
+        } = self;
+        DetailPyramid {
             n_base,
             n_finest,
             passthrough: signal[n_finest..].to_vec(),
-            base: f[..n_base].to_vec(),
+            base,
             offsets: slotted.offsets,
             locals: slotted.locals,
             codes: slotted.codes,
@@ -112,15 +178,16 @@ impl DetailPyramid {
             details,
             waves,
             relaxation: relaxation.name(),
+            detail_step: 0.0,
             surface_area,
             bbox_diagonal,
-        })
+        }
     }
 }
 
 /// The share of the analysis' time the records take (the progress bar's split between the
 /// two phases; about two thirds with Guskov's operator).
-const RECORDS_SHARE: f64 = 0.7;
+pub(crate) const RECORDS_SHARE: f64 = 0.7;
 
 /// Splits per range below which one thread records them all: a range's walk first reaches the
 /// start of its range (a replay from the base, or a cursor collapsing from the finest level),
@@ -666,7 +733,7 @@ fn gather<'r, T: Copy + Send + Sync + 'r>(
 }
 
 /// Total area and bounding-box diagonal of a mesh.
-fn surface_stats(positions: &[DVec3], faces: &[[u32; 3]]) -> (f64, f64) {
+pub(crate) fn surface_stats(positions: &[DVec3], faces: &[[u32; 3]]) -> (f64, f64) {
     // Face order and formula of `Mesh::face_area` summed over a mesh built from `faces`.
     let area = faces
         .iter()

@@ -289,6 +289,11 @@ impl LevelGains {
         LevelGains::default()
     }
 
+    /// True when every level's gain is 1 (synthesis then gives the analysed signal back).
+    pub fn is_unit(&self) -> bool {
+        self.bands.iter().all(|b| b.2 == 1.0)
+    }
+
     /// The gain of level `n`.
     #[inline]
     pub fn gain(&self, n: usize) -> f64 {

@@ -50,6 +50,7 @@ mod fuzz;
 pub(crate) mod gains;
 pub(crate) mod pipeline;
 pub(crate) mod spectrum;
+mod stored;
 pub(crate) mod synthesis;
 pub(crate) mod waves;
 
@@ -60,9 +61,10 @@ pub(crate) use fuzz::fuzz_pyramid;
 pub use gains::{Filter, LevelGains, LevelSpec};
 pub use gains::{GainBand, GainParseError};
 pub(crate) use pipeline::relaxation_for;
-pub use pipeline::{PyrFileError, Pyramid, PyramidOptions};
+pub use pipeline::{PyrContent, PyrFileError, Pyramid, PyramidOptions};
 pub use spectrum::BandEnergy;
 pub use spectrum::Spectrum;
+pub use stored::StoredDetails;
 
 use crate::pm::PmError;
 use glam::DVec3;
@@ -122,6 +124,8 @@ pub struct DetailPyramid {
     /// The splits grouped into waves of independent splits (parallel synthesis).
     pub(crate) waves: waves::Waves,
     pub(crate) relaxation: &'static str,
+    /// The quantisation step of details read from a file (0: analysed here, exact).
+    pub(crate) detail_step: f64,
     pub(crate) surface_area: f64,
     pub(crate) bbox_diagonal: f64,
 }

@@ -3,7 +3,7 @@
 //! vertices and faces in the same order** (attributes untouched), so per-vertex data still
 //! lines up after filtering.
 
-use super::{DetailPyramid, MoveHandle, PyramidError, Spectrum};
+use super::{DetailPyramid, MoveHandle, PyramidError, Spectrum, StoredDetails};
 use crate::format::{self, FormatError, PyrData, SizeReport};
 use crate::io::IoError;
 use crate::mesh::{Mesh, PolygonMesh, SourceMap};
@@ -25,6 +25,18 @@ pub struct PyramidOptions {
     /// The relaxation operator that predicts each level from the coarser one (default: Guskov's
     /// second differences).
     pub relaxation: RelaxationSpec,
+}
+
+/// What a `.pyr` file keeps besides the hierarchy and the exact input.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PyrContent {
+    /// Also the pyramid's details, quantised (format 2.1, section `DETL`): the file opens
+    /// without the detail pass, and its spectrum without any analysis.
+    #[default]
+    WithDetails,
+    /// The hierarchy and the exact input only (as format 2.0): smaller; readers recompute the
+    /// details.
+    HierarchyOnly,
 }
 
 /// A scan with its progressive mesh and detail pyramid: the library's front door for
@@ -144,10 +156,15 @@ impl Pyramid {
         self.pyramid.n_base_vertices()..=self.pyramid.n_vertices()
     }
 
-    /// The input with `filter` applied to its details (unit gains give the input back to
-    /// rounding). Bands beyond the levels act on the levels they cover.
+    /// The input with `filter` applied to its details (unit gains give the input back: to
+    /// rounding from analysed details, exactly from details read from a `.pyr` file, whose
+    /// quantisation would otherwise show). Bands beyond the levels act on the levels they
+    /// cover.
     pub fn filter(&self, filter: &Filter) -> PolygonMesh {
         let gains = filter.resolve(self.pyramid.surface_area());
+        if self.pyramid.detail_step > 0.0 && gains.is_unit() {
+            return self.input.clone();
+        }
         self.output_mesh(&self.pyramid.synthesize(&gains))
     }
 
@@ -170,24 +187,59 @@ impl Pyramid {
         self.pyramid.spectrum()
     }
 
-    /// The `.pyr` file of this pyramid: its hierarchy with the exact input, and the options to
-    /// rebuild it (formats/pyr.md), with its size by section.
+    /// The `.pyr` file of this pyramid: its hierarchy with the exact input, the options to
+    /// rebuild it and its details (formats/pyr.md), with its size by section.
     pub fn to_pyr_bytes(&self) -> Result<(Vec<u8>, SizeReport), FormatError> {
-        format::encode(&self.input, &self.pm, &self.options)
+        self.to_pyr_bytes_as(PyrContent::WithDetails)
+    }
+
+    /// [`Self::to_pyr_bytes`], with or without the details.
+    pub fn to_pyr_bytes_as(
+        &self,
+        content: PyrContent,
+    ) -> Result<(Vec<u8>, SizeReport), FormatError> {
+        let details = (content == PyrContent::WithDetails)
+            .then(|| StoredDetails::quantised(&self.pyramid, self.options.relaxation));
+        format::encode_with_details(&self.input, &self.pm, &self.options, details.as_ref())
     }
 
     /// The `.pyr` file of an edit: this hierarchy and options with `positions` (one per input
-    /// vertex, as [`Pyramid::to_input_positions`] gives them) as its new original positions.
+    /// vertex, as [`Pyramid::to_input_positions`] gives them) as its new original positions,
+    /// with their details (analysed here).
     pub fn to_pyr_bytes_with_positions(
         &self,
         positions: Vec<DVec3>,
-    ) -> Result<(Vec<u8>, SizeReport), FormatError> {
-        let (input, pm) = format::with_positions(&self.input, &self.source, &self.pm, positions)?;
-        format::encode(&input, &pm, &self.options)
+    ) -> Result<(Vec<u8>, SizeReport), PyrFileError> {
+        self.to_pyr_bytes_with_positions_as(positions, PyrContent::WithDetails)
     }
 
-    /// Opens a `.pyr` file's bytes: the hierarchy as saved, and the pyramid recomputed
-    /// bit-identical to the one that was saved.
+    /// [`Self::to_pyr_bytes_with_positions`], with or without the details (which take an
+    /// analysis of the new positions).
+    pub fn to_pyr_bytes_with_positions_as(
+        &self,
+        positions: Vec<DVec3>,
+        content: PyrContent,
+    ) -> Result<(Vec<u8>, SizeReport), PyrFileError> {
+        let (input, pm) = format::with_positions(&self.input, &self.source, &self.pm, positions)?;
+        let details = match content {
+            PyrContent::WithDetails => {
+                let op = relaxation_for(&self.options.relaxation, &pm);
+                let pyramid = DetailPyramid::analyze(&pm, op.as_ref(), &NoProgress)?;
+                Some(StoredDetails::quantised(&pyramid, self.options.relaxation))
+            }
+            PyrContent::HierarchyOnly => None,
+        };
+        Ok(format::encode_with_details(
+            &input,
+            &pm,
+            &self.options,
+            details.as_ref(),
+        )?)
+    }
+
+    /// Opens a `.pyr` file's bytes: the hierarchy as saved, and the pyramid with the file's
+    /// details (only the relaxation weights and fans computed) or, for a file without usable
+    /// ones, recomputed bit-identical to the one that was saved.
     pub fn from_pyr_bytes(bytes: &[u8], progress: &dyn Progress) -> Result<Self, PyrFileError> {
         let data: PyrData = format::decode(bytes)?;
         Ok(data.into_pyramid(progress)?)
@@ -196,9 +248,14 @@ impl Pyramid {
     /// Saves [`Self::to_pyr_bytes`] to `path`, atomically (an existing file is replaced only
     /// once the new one is complete).
     pub fn save(&self, path: impl AsRef<Path>) -> Result<(), PyrFileError> {
+        self.save_as(path, PyrContent::WithDetails)
+    }
+
+    /// [`Self::save`], with or without the details.
+    pub fn save_as(&self, path: impl AsRef<Path>, content: PyrContent) -> Result<(), PyrFileError> {
         let path = path.as_ref();
         let (bytes, _) = self
-            .to_pyr_bytes()
+            .to_pyr_bytes_as(content)
             .map_err(|e| PyrFileError::from(e).in_file(path))?;
         crate::io::write_atomic(path, &bytes)?;
         Ok(())

@@ -43,45 +43,63 @@ pub struct Spectrum {
 impl DetailPyramid {
     /// The detail spectrum of the pyramid (octave bands).
     pub fn spectrum(&self) -> Spectrum {
-        let diag2 = (self.bbox_diagonal * self.bbox_diagonal).max(f64::MIN_POSITIVE);
-        let mut bands: Vec<BandEnergy> = Vec::new();
-        let mut sums: Vec<f64> = Vec::new();
-        for k in 0..self.n_splits() {
-            let level = self.level_of_split(k);
-            // Octave (2^b, 2^(b+1)] holding `level`.
-            let hi = (level).next_power_of_two();
-            let lo = (hi / 2).max(self.n_base);
-            if bands.last().is_none_or(|b| b.hi != hi.min(self.n_finest)) {
-                bands.push(BandEnergy {
-                    lo,
-                    hi: hi.min(self.n_finest),
-                    levels: 0,
-                    details: 0,
-                    energy: 0.0,
-                    rms: 0.0,
-                    feature_size: feature_size_of_level(hi.min(self.n_finest), self.surface_area),
-                });
-                sums.push(0.0);
-            }
-            let (_, details) = self.split_details(k);
-            let band = bands.last_mut().expect("pushed above");
-            band.levels += 1;
-            band.details += details.len();
-            let sum = sums.last_mut().expect("pushed above");
-            for d in details {
-                *sum += d.length_squared();
-            }
-        }
-        for (b, s) in bands.iter_mut().zip(sums) {
-            b.energy = s / diag2;
-            b.rms = if b.details > 0 {
-                (s / b.details as f64).sqrt() / diag2.sqrt()
-            } else {
-                0.0
-            };
-        }
-        Spectrum { bands }
+        octave_spectrum(
+            self.n_base,
+            self.n_finest,
+            self.surface_area,
+            self.bbox_diagonal,
+            (0..self.n_splits()).map(|k| self.split_details(k).1),
+        )
     }
+}
+
+/// The spectrum of the details of each split in split order (`per_split`), on a hierarchy from
+/// `n_base` to `n_finest` vertices whose finest mesh has area `surface_area` and bounding-box
+/// diagonal `diagonal`.
+pub(crate) fn octave_spectrum<'a>(
+    n_base: usize,
+    n_finest: usize,
+    surface_area: f64,
+    diagonal: f64,
+    per_split: impl Iterator<Item = &'a [glam::DVec3]>,
+) -> Spectrum {
+    let diag2 = (diagonal * diagonal).max(f64::MIN_POSITIVE);
+    let mut bands: Vec<BandEnergy> = Vec::new();
+    let mut sums: Vec<f64> = Vec::new();
+    for (k, details) in per_split.enumerate() {
+        let level = n_base + k + 1;
+        // Octave (2^b, 2^(b+1)] holding `level`.
+        let hi = (level).next_power_of_two();
+        let lo = (hi / 2).max(n_base);
+        if bands.last().is_none_or(|b| b.hi != hi.min(n_finest)) {
+            bands.push(BandEnergy {
+                lo,
+                hi: hi.min(n_finest),
+                levels: 0,
+                details: 0,
+                energy: 0.0,
+                rms: 0.0,
+                feature_size: feature_size_of_level(hi.min(n_finest), surface_area),
+            });
+            sums.push(0.0);
+        }
+        let band = bands.last_mut().expect("pushed above");
+        band.levels += 1;
+        band.details += details.len();
+        let sum = sums.last_mut().expect("pushed above");
+        for d in details {
+            *sum += d.length_squared();
+        }
+    }
+    for (b, s) in bands.iter_mut().zip(sums) {
+        b.energy = s / diag2;
+        b.rms = if b.details > 0 {
+            (s / b.details as f64).sqrt() / diag2.sqrt()
+        } else {
+            0.0
+        };
+    }
+    Spectrum { bands }
 }
 
 impl Spectrum {

@@ -193,9 +193,11 @@ impl DetailPyramid {
     /// Computes the values the split stored at `slot` gives its touched vertices (the new
     /// vertex, then its 1-ring) from `f = f^(n−1)`, and writes them into `f`.
     #[inline]
+    #[allow(clippy::too_many_arguments)]
     fn synthesize_split<I: LocalIndex>(
         &self,
         codes: &[I],
+        details: &[DVec3],
         slot: usize,
         f: &SharedSignal,
         gains: &LevelGains,
@@ -235,7 +237,7 @@ impl DetailPyramid {
             &mut scratch.frames,
             frame_min_length(self.bbox_diagonal),
         );
-        let details = &self.details[o.details..next.details];
+        let details = &details[o.details..next.details];
         // The touched vertices open the local table; there is one detail for each.
         for (((&x, &q), frame), &d) in locals
             .iter()
@@ -252,6 +254,7 @@ impl DetailPyramid {
     fn synthesize_splits<I: LocalIndex>(
         &self,
         codes: &[I],
+        details: &[DVec3],
         f: &mut [DVec3],
         splits: std::ops::Range<usize>,
         gains: &LevelGains,
@@ -281,7 +284,7 @@ impl DetailPyramid {
             |_| {},
             |i, scratch: &mut Scratch| {
                 let slot = listed.as_ref().map_or(i, |slots| slots[i] as usize);
-                self.synthesize_split(codes, slot, &f, gains, scratch)
+                self.synthesize_split(codes, details, slot, &f, gains, scratch)
             },
         );
     }
@@ -321,7 +324,25 @@ impl DetailPyramid {
         let from = from.clamp(self.n_base, self.n_finest);
         let to = to.clamp(from, self.n_finest);
         let splits = from - self.n_base..to - self.n_base;
-        with_codes!(&self.codes, c => self.synthesize_splits(c, f, splits, gains))
+        with_codes!(&self.codes, c => self.synthesize_splits(c, &self.details, f, splits, gains))
+    }
+
+    /// [`DetailPyramid::synthesize`] with `details` (storage order, as many as the pyramid's)
+    /// in place of the pyramid's own.
+    pub(crate) fn synthesize_with_details(
+        &self,
+        gains: &LevelGains,
+        details: &[DVec3],
+    ) -> Vec<DVec3> {
+        assert_eq!(
+            details.len(),
+            self.details.len(),
+            "one detail per touched vertex"
+        );
+        let mut f = self.base_signal();
+        let splits = 0..self.n_splits();
+        with_codes!(&self.codes, c => self.synthesize_splits(c, details, &mut f, splits, gains));
+        f
     }
 
     /// [`DetailPyramid::synthesize_range`] from `from` to the finest level, checking that `f` fits.

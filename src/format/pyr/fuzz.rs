@@ -3,7 +3,9 @@
 
 use crate::format::container::Container;
 
-use super::{SPLT, decode, encode, read_level};
+use super::{FileDetails, PyrData, SPLT, decode, encode, encode_with_details, read_level};
+use crate::progress::NoProgress;
+use crate::pyramid::Filter;
 
 /// `bytes` with every checksum (header, sections, `SPLT` blocks) recomputed, where the
 /// structure can be followed. Lets the fuzzer reach the decoders behind the checksums, which
@@ -70,5 +72,34 @@ fn fuzz_one(data: &[u8]) {
             panic!("cannot re-encode");
         };
         assert!(third == again, "encode is not idempotent");
+    }
+    if let Ok(d) = decode(data) {
+        fuzz_details(d);
+    }
+}
+
+/// A file whose `DETL` section decoded and fits its hierarchy: the spectrum and a pyramid from
+/// the stored details, a filter, and a re-encoding that keeps the details.
+fn fuzz_details(d: PyrData) {
+    let FileDetails::Stored(stored) = &d.details else {
+        return;
+    };
+    let _ = d.stored_spectrum(None);
+    let Ok((again, _)) = encode_with_details(&d.input, &d.pm, &d.info, Some(stored)) else {
+        return;
+    };
+    let Ok(d2) = decode(&again) else {
+        panic!("re-encoded file with details does not decode");
+    };
+    let FileDetails::Stored(kept) = &d2.details else {
+        panic!("re-encoded details do not fit their own file");
+    };
+    let Ok((third, _)) = encode_with_details(&d2.input, &d2.pm, &d2.info, Some(kept)) else {
+        panic!("cannot re-encode the details");
+    };
+    assert!(third == again, "encoding details is not idempotent");
+    if let Ok(p) = d.into_pyramid(&NoProgress) {
+        let _ = p.filter(&Filter::new().gain(p.pyramid.n_base_vertices(), usize::MAX, 1.5));
+        let _ = p.spectrum();
     }
 }
