@@ -58,8 +58,13 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
         None
     } else {
         let bar = global.progress("details");
-        let op = crate::pyramid::relaxation_for(&options.relaxation, &pm);
-        let pyramid = DetailPyramid::analyze(&pm, op.as_ref(), &BarProgress(&bar))
+        let share = crate::pyramid::guide_share(&options.relaxation);
+        let progress: &dyn crate::progress::Progress = &BarProgress(&bar);
+        let op = crate::pyramid::relaxation_for(&options.relaxation, &pm, &|x: f64| {
+            progress.update(share * x)
+        });
+        let rest = |x: f64| progress.update(share + (1.0 - share) * x);
+        let pyramid = DetailPyramid::analyze(&pm, op.as_ref(), &rest)
             .with_context(|| format!("cannot analyse {}", args.input.display()))?;
         bar.finish_and_clear();
         Some(StoredDetails::quantised(&pyramid, options.relaxation))

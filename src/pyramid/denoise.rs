@@ -84,9 +84,11 @@ pub fn pyramid_denoise(
         progress.update(0.3 * x)
     })
     .map_err(|e| failed(&e))?;
-    let relaxation = relaxation_for(&RelaxKind::Normal.spec(), &pm);
+    let relaxation = relaxation_for(&RelaxKind::Normal.spec(), &pm, &|x: f64| {
+        progress.update(0.3 + 0.3 * x)
+    });
     let pyramid = DetailPyramid::analyze(&pm, relaxation.as_ref(), &|x: f64| {
-        progress.update(0.3 + 0.5 * x)
+        progress.update(0.6 + 0.2 * x)
     })
     .map_err(|e| failed(&e))?;
     let noise = white_noise(pm.original_positions().len(), NOISE_SEED);

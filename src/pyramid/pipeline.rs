@@ -138,9 +138,12 @@ impl Pyramid {
             ProgressiveMesh::build(&built.mesh, &options.pm, &|x: f64| progress.update(0.5 * x))?;
         let source = built.source;
         drop(built.mesh);
-        let relaxation = relaxation_for(&options.relaxation, &pm);
+        let share = 0.5 * guide_share(&options.relaxation);
+        let relaxation = relaxation_for(&options.relaxation, &pm, &|x: f64| {
+            progress.update(0.5 + share * x)
+        });
         let pyramid = DetailPyramid::analyze(&pm, relaxation.as_ref(), &|x: f64| {
-            progress.update(0.5 + 0.5 * x)
+            progress.update(0.5 + share + (0.5 - share) * x)
         })?;
         Ok(Pyramid {
             input,
@@ -223,7 +226,7 @@ impl Pyramid {
         let (input, pm) = format::with_positions(&self.input, &self.source, &self.pm, positions)?;
         let details = match content {
             PyrContent::WithDetails => {
-                let op = relaxation_for(&self.options.relaxation, &pm);
+                let op = relaxation_for(&self.options.relaxation, &pm, &NoProgress);
                 let pyramid = DetailPyramid::analyze(&pm, op.as_ref(), &NoProgress)?;
                 Some(StoredDetails::quantised(&pyramid, self.options.relaxation))
             }
@@ -306,7 +309,12 @@ impl Pyramid {
 /// normals from the finest level denoised by `smooth --method auto` (Ohtake's filter keeps
 /// creases and removes the noise that would steer it at random; `relax::normal_adaptive`).
 /// Deterministic, so a `.pyr` loader rebuilds the same operator from the stored input.
-pub(crate) fn relaxation_for(spec: &RelaxationSpec, pm: &ProgressiveMesh) -> Box<dyn Relaxation> {
+/// `progress` goes 0 → 1 while the guide is made (see [`guide_share`]).
+pub(crate) fn relaxation_for(
+    spec: &RelaxationSpec,
+    pm: &ProgressiveMesh,
+    progress: &dyn Progress,
+) -> Box<dyn Relaxation> {
     match *spec {
         RelaxationSpec::NormalAdaptive {
             normal_scale,
@@ -317,7 +325,7 @@ pub(crate) fn relaxation_for(spec: &RelaxationSpec, pm: &ProgressiveMesh) -> Box
                 degenerate_area_ratio,
                 ..NormalAdaptive::default()
             };
-            Box::new(match denoised_guide(pm) {
+            Box::new(match denoised_guide(pm, progress) {
                 Some(guide) => op.with_guide(guide),
                 None => op,
             })
@@ -326,13 +334,23 @@ pub(crate) fn relaxation_for(spec: &RelaxationSpec, pm: &ProgressiveMesh) -> Box
     }
 }
 
+/// The share of a progress bar that [`relaxation_for`] takes before the analysis, so the bar
+/// moves while the guide is made: smoothing the finest level costs about what analysing it
+/// does.
+pub(crate) fn guide_share(spec: &RelaxationSpec) -> f64 {
+    match spec {
+        RelaxationSpec::NormalAdaptive { .. } => 0.4,
+        _ => 0.0,
+    }
+}
+
 /// The PM's vertices (in PM order) at their positions after `smooth --method auto` on the
 /// finest level; vertices without faces keep theirs. `None` when the smoother refuses the
 /// mesh, and the operator then reads the normals of the positions themselves.
-fn denoised_guide(pm: &ProgressiveMesh) -> Option<Vec<DVec3>> {
+fn denoised_guide(pm: &ProgressiveMesh, progress: &dyn Progress) -> Option<Vec<DVec3>> {
     let positions = pm.original_positions();
     let built = Mesh::from_triangles(positions, pm.finest_faces()).ok()?;
-    let (smoothed, _) = smooth_positions(&built.mesh, &SmoothMethod::Auto, &NoProgress).ok()?;
+    let (smoothed, _) = smooth_positions(&built.mesh, &SmoothMethod::Auto, progress).ok()?;
     let mut guide = positions.to_vec();
     for (&source, &p) in built.source.vertex_source.iter().zip(&smoothed) {
         if let Some(g) = guide.get_mut(source as usize) {

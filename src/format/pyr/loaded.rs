@@ -48,7 +48,10 @@ impl PyrData {
         progress: &dyn Progress,
     ) -> Result<(Pyramid, DetailSource), PyramidError> {
         let spec = relaxation.unwrap_or(self.info.relaxation);
-        let op = crate::pyramid::relaxation_for(&spec, &self.pm);
+        let share = crate::pyramid::guide_share(&spec);
+        let op =
+            crate::pyramid::relaxation_for(&spec, &self.pm, &|x: f64| progress.update(share * x));
+        let progress = &|x: f64| progress.update(share + (1.0 - share) * x);
         let details = std::mem::replace(&mut self.details, FileDetails::Absent);
         let (pyramid, from) = match stored_for(details, spec) {
             Ok(stored) => {
