@@ -7,7 +7,7 @@ use glam::DVec3;
 use meshpyr::io::MeshFormat;
 use meshpyr::{Filter, MoveHandle, Pyramid};
 use std::sync::OnceLock;
-use view_support::{Running, raw, request, serve};
+use view_support::{Running, bits, f32_bits, raw, request, serve};
 
 const MESH: &str = "mc/mc_bunny_vox40.ply";
 
@@ -33,17 +33,6 @@ fn octaves(server: &Running) -> Vec<(usize, usize)> {
             )
         })
         .collect()
-}
-
-fn f32_bits(positions: &[DVec3]) -> Vec<u32> {
-    positions
-        .iter()
-        .flat_map(|p| p.to_array().map(|x| (x as f32).to_bits()))
-        .collect()
-}
-
-fn bits(values: &[f32]) -> Vec<u32> {
-    values.iter().map(|x| x.to_bits()).collect()
 }
 
 #[test]

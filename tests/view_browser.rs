@@ -15,7 +15,7 @@ use serde_json::{Value, json};
 use std::path::PathBuf;
 use std::time::Instant;
 use view_support::webdriver::{Driver, ELEMENT, driver_or_skip};
-use view_support::{Running, base64_decode, serve};
+use view_support::{Running, base64_decode, bits, f32_bits, serve};
 
 /// Share of pixels that differ by more than a little in some channel.
 fn changed_share(a: &[u8], b: &[u8]) -> f64 {
@@ -26,17 +26,6 @@ fn changed_share(a: &[u8], b: &[u8]) -> f64 {
         .filter(|(p, q)| p.iter().zip(*q).any(|(x, y)| x.abs_diff(*y) > 8))
         .count();
     changed as f64 / (a.len() / 3) as f64
-}
-
-fn f32_bits(positions: &[glam::DVec3]) -> Vec<u32> {
-    positions
-        .iter()
-        .flat_map(|p| p.to_array().map(|x| (x as f32).to_bits()))
-        .collect()
-}
-
-fn bits(values: &[f32]) -> Vec<u32> {
-    values.iter().map(|x| x.to_bits()).collect()
 }
 
 #[test]

@@ -237,3 +237,16 @@ pub fn base64_decode(text: &str) -> Vec<u8> {
     }
     out
 }
+
+/// The bits of `positions` rounded to f32, as the API sends them (x, y, z of each in turn).
+pub fn f32_bits(positions: &[glam::DVec3]) -> Vec<u32> {
+    positions
+        .iter()
+        .flat_map(|p| p.to_array().map(|x| (x as f32).to_bits()))
+        .collect()
+}
+
+/// The bits of f32 values, to compare them exactly.
+pub fn bits(values: &[f32]) -> Vec<u32> {
+    values.iter().map(|x| x.to_bits()).collect()
+}
