@@ -42,6 +42,20 @@ pub use second_difference::SecondDifference;
 pub use spec::RelaxKind;
 pub use spec::RelaxationSpec;
 
+/// An (n+1)² grid of unit squares in the plane z = 0; with `fold`, the points with x > `fold`
+/// are bent up by 90° about the line x = fold (a crease along it). For the operators' tests.
+#[cfg(test)]
+pub(crate) fn folded_grid(n: usize, fold: Option<f64>) -> Mesh {
+    let (p, t) = crate::mesh::shapes::grid(n, |i, j| {
+        let (x, y) = (i as f64, j as f64);
+        match fold {
+            Some(f) if x > f => DVec3::new(f, y, x - f),
+            _ => DVec3::new(x, y, 0.0),
+        }
+    });
+    Mesh::from_triangles(&p, &t).expect("valid grid").mesh
+}
+
 /// One relaxation of `vertices`, Jacobi style: `out[i]` gets `Σ w · signal[j]` over the
 /// stencil of `vertices[i]` (in stencil order), or keeps its value where it has none.
 ///

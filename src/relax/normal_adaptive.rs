@@ -159,19 +159,8 @@ impl RingStencils for NormalAdaptive {
 mod tests {
     use super::*;
     use crate::mesh::SlotIndex;
+    use crate::relax::folded_grid as grid;
     use crate::relax::relax_by_stencils;
-
-    /// An (n+1)² grid; points with x > `fold` are bent up by 90° about the line x = fold.
-    fn grid(n: usize, fold: Option<f64>) -> Mesh {
-        let (p, t) = crate::mesh::shapes::grid(n, |i, j| {
-            let (x, y) = (i as f64, j as f64);
-            match fold {
-                Some(f) if x > f => DVec3::new(f, y, x - f),
-                _ => DVec3::new(x, y, 0.0),
-            }
-        });
-        Mesh::from_triangles(&p, &t).expect("valid grid").mesh
-    }
 
     /// The relaxed positions `R(p)` of every vertex.
     fn relaxed_positions(op: &dyn Relaxation, m: &Mesh) -> Vec<DVec3> {
