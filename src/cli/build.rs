@@ -7,7 +7,7 @@ use super::{BarProgress, Global};
 use crate::format;
 use crate::io;
 use crate::pm::ProgressiveMesh;
-use crate::pyramid::{DetailPyramid, PyramidOptions, StoredDetails};
+use crate::pyramid::{PyramidOptions, StoredDetails};
 use crate::relax::RelaxKind;
 use anyhow::Context;
 use std::path::PathBuf;
@@ -58,14 +58,9 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
         None
     } else {
         let bar = global.progress("details");
-        let share = crate::pyramid::guide_share(&options.relaxation);
-        let progress: &dyn crate::progress::Progress = &BarProgress(&bar);
-        let op = crate::pyramid::relaxation_for(&options.relaxation, &pm, &|x: f64| {
-            progress.update(share * x)
-        });
-        let rest = |x: f64| progress.update(share + (1.0 - share) * x);
-        let pyramid = DetailPyramid::analyze(&pm, op.as_ref(), &rest)
-            .with_context(|| format!("cannot analyse {}", args.input.display()))?;
+        let (_, pyramid) =
+            crate::pyramid::analyze_with(&options.relaxation, &pm, &BarProgress(&bar))
+                .with_context(|| format!("cannot analyse {}", args.input.display()))?;
         bar.finish_and_clear();
         Some(StoredDetails::quantised(&pyramid, options.relaxation))
     };

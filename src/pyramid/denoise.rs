@@ -5,7 +5,7 @@
 //! Steps:
 //!
 //! 1. **Pyramid.** The progressive mesh of the noisy mesh and its details under the
-//!    normal-adaptive operator ([`relaxation_for`]), whose predictions keep creases, so a
+//!    normal-adaptive operator ([`analyze_with`]), whose predictions keep creases, so a
 //!    crease costs small details and survives attenuation.
 //! 2. **Noise response.** Analysis is linear and its weights come from the geometry alone, so
 //!    analysing seeded white noise of unit deviation on the same hierarchy tells how large the
@@ -24,7 +24,7 @@
 //! details per vertex), and shrinking one split's details leaves the noise in the ring details
 //! of the splits after it.
 
-use super::{DetailPyramid, Filter, LevelSpec, relaxation_for};
+use super::{DetailPyramid, Filter, LevelSpec, analyze_with};
 use crate::mesh::Mesh;
 use crate::pm::{PmOptions, ProgressiveMesh};
 use crate::progress::{NoProgress, Progress};
@@ -84,11 +84,8 @@ pub fn pyramid_denoise(
         progress.update(0.3 * x)
     })
     .map_err(|e| failed(&e))?;
-    let relaxation = relaxation_for(&RelaxKind::Normal.spec(), &pm, &|x: f64| {
-        progress.update(0.3 + 0.3 * x)
-    });
-    let pyramid = DetailPyramid::analyze(&pm, relaxation.as_ref(), &|x: f64| {
-        progress.update(0.6 + 0.2 * x)
+    let (relaxation, pyramid) = analyze_with(&RelaxKind::Normal.spec(), &pm, &|x: f64| {
+        progress.update(0.3 + 0.5 * x)
     })
     .map_err(|e| failed(&e))?;
     let noise = white_noise(pm.original_positions().len(), NOISE_SEED);

@@ -61,7 +61,7 @@ pub(crate) use fuzz::fuzz_pyramid;
 pub use gains::{Filter, LevelGains, LevelSpec};
 pub use gains::{GainBand, GainParseError};
 pub use pipeline::{PyrContent, PyrFileError, Pyramid, PyramidOptions};
-pub(crate) use pipeline::{guide_share, relaxation_for};
+pub(crate) use pipeline::{analyze_with, guide_share, relaxation_for};
 pub use spectrum::BandEnergy;
 pub use spectrum::Spectrum;
 pub use stored::StoredDetails;

@@ -138,12 +138,8 @@ impl Pyramid {
             ProgressiveMesh::build(&built.mesh, &options.pm, &|x: f64| progress.update(0.5 * x))?;
         let source = built.source;
         drop(built.mesh);
-        let share = 0.5 * guide_share(&options.relaxation);
-        let relaxation = relaxation_for(&options.relaxation, &pm, &|x: f64| {
-            progress.update(0.5 + share * x)
-        });
-        let pyramid = DetailPyramid::analyze(&pm, relaxation.as_ref(), &|x: f64| {
-            progress.update(0.5 + share + (0.5 - share) * x)
+        let (_, pyramid) = analyze_with(&options.relaxation, &pm, &|x: f64| {
+            progress.update(0.5 + 0.5 * x)
         })?;
         Ok(Pyramid {
             input,
@@ -226,8 +222,7 @@ impl Pyramid {
         let (input, pm) = format::with_positions(&self.input, &self.source, &self.pm, positions)?;
         let details = match content {
             PyrContent::WithDetails => {
-                let op = relaxation_for(&self.options.relaxation, &pm, &NoProgress);
-                let pyramid = DetailPyramid::analyze(&pm, op.as_ref(), &NoProgress)?;
+                let (_, pyramid) = analyze_with(&self.options.relaxation, &pm, &NoProgress)?;
                 Some(StoredDetails::quantised(&pyramid, self.options.relaxation))
             }
             PyrContent::HierarchyOnly => None,
@@ -332,6 +327,21 @@ pub(crate) fn relaxation_for(
         }
         _ => spec.operator(),
     }
+}
+
+/// The operator `spec` names for `pm` ([`relaxation_for`]) and the analysis of `pm`'s original
+/// positions with it; `progress` goes 0 → 1 over both (the guide takes [`guide_share`]).
+pub(crate) fn analyze_with(
+    spec: &RelaxationSpec,
+    pm: &ProgressiveMesh,
+    progress: &dyn Progress,
+) -> Result<(Box<dyn Relaxation>, DetailPyramid), PyramidError> {
+    let share = guide_share(spec);
+    let op = relaxation_for(spec, pm, &|x: f64| progress.update(share * x));
+    let pyramid = DetailPyramid::analyze(pm, op.as_ref(), &|x: f64| {
+        progress.update(share + (1.0 - share) * x)
+    })?;
+    Ok((op, pyramid))
 }
 
 /// The share of a progress bar that [`relaxation_for`] takes before the analysis, so the bar
