@@ -116,7 +116,10 @@ pub fn pyramid_denoise(
 const NOISE_SEED: u64 = 0x006d_6573_6870_7972;
 
 /// The octave of `level` in a pyramid whose finest level is `finest`: 0 for `(finest/2,
-/// finest]`, 1 for the half below, …
+/// finest]`, 1 for the half below, … Counted down from the finest level, not on the powers
+/// of two of the spectrum's bands ([`DetailPyramid::levels_of_octaves`]), whose finest band
+/// can hold a sliver of the levels: here the finest octave estimates the noise, so it always
+/// holds half of them.
 fn octave(level: usize, finest: usize) -> usize {
     let mut o = 0;
     let mut top = finest;
