@@ -1,8 +1,8 @@
 """Ours vs meshoptimizer at equal face counts: Hausdorff, RMS and time per mesh and ratio.
 
-usage: python3 pm_table.py MESH [MESH ...] [--ratios 0.01 0.05 0.10] [--repeats 3]
-                           [--samples 200000] [--seed 1] [--json OUT.json] [--workdir DIR]
-                           [--timeout 900] [--keep]
+usage: python3 pm_table.py MESH [MESH ...] [--ratios 0.003 0.01 0.05 0.10] [--lowpass 0.005]
+                           [--repeats 3] [--samples 200000] [--seed 1] [--json OUT.json]
+                           [--workdir DIR] [--timeout 900] [--keep]
 
 For each mesh and ratio R:
   ours  `$MESHPYR simplify MESH -o OUT.ply --ratio R -q` (MESHPYR defaults to
@@ -16,6 +16,11 @@ For each mesh and ratio R:
   both results are measured against the input with distance.compare_arrays (--samples
   area-uniform samples on each surface plus all vertices, --seed): symmetric Hausdorff and RMS
   relative to the input's bbox diagonal.
+For each --lowpass fraction L (none with `--lowpass`): a row "lowpass L" where ours is
+`$MESHPYR filter MESH -o OUT --lowpass n -q` with n = round(L x V) (the input's connectivity,
+positions low-passed to the level of n vertices), and mo is meshoptimizer's simplification to 2n
+faces (about n vertices); both distances are measured against the input as above, and the time
+column is ours (process) against mo's call.
 Prints a markdown table (ratios are ours / mo: < 1 means ours is smaller/faster); --json writes
 every number, including each run's time and the distance seconds. Inputs that are not binary
 little-endian PLY are converted once with trimesh into --workdir and both sides read that copy.
@@ -80,6 +85,56 @@ def run_ours(binary, src, dst, target, repeats, timeout):
         return None, times, f"unreadable output: {e}"
 
 
+def run_lowpass(binary, src, dst, n, timeout):
+    t0 = time.perf_counter()
+    try:
+        p = subprocess.run([binary, "filter", src, "-o", dst, "--lowpass", str(n), "-q"],
+                           capture_output=True, text=True, timeout=timeout)
+    except subprocess.TimeoutExpired:
+        return None, None, f"timeout after {timeout} s"
+    dt = time.perf_counter() - t0
+    if p.returncode != 0:
+        msg = (p.stderr.strip().splitlines() or ["(no message)"])[-1]
+        return None, dt, f"exit {p.returncode}: {msg}"
+    return read_ply(dst), dt, None
+
+
+def lowpass_row(args, binary, workdir, mesh, name, stem, pos, tris, src, frac):
+    n = max(4, int(round(frac * len(pos))))
+    r = {"mesh": mesh, "V_in": len(pos), "F_in": len(tris), "lowpass": frac, "lowpass_vertices": n,
+         "binary": binary, "samples": args.samples, "seed": args.seed}
+    ours_out = os.path.join(workdir, f"{stem}_lowpass_{frac:g}.ply")
+    mo_out = os.path.join(workdir, f"{stem}_mo_lowpass_{frac:g}.ply")
+    res, dt, err = run_lowpass(binary, src, ours_out, n, args.timeout)
+    r.update(ours_time=dt, ours_error=err, ours_faces=None if res is None else len(res[1]))
+    if res is not None:
+        r["ours_hausdorff"], r["ours_rms"], _ = distance.compare_arrays(
+            pos, tris, res[0], res[1], args.samples, args.seed)
+    else:
+        r["ours_hausdorff"] = r["ours_rms"] = None
+    try:
+        mp, mt, mtimes, _ = meshopt_simplify.simplify(pos, tris, 3 * 2 * n, 1)
+        write_ply(mo_out, mp, mt)
+        r.update(mo_faces=len(mt), mo_time=float(np.median(mtimes)), mo_error=None)
+        r["mo_hausdorff"], r["mo_rms"], _ = distance.compare_arrays(pos, tris, mp, mt, args.samples,
+                                                                    args.seed)
+    except Exception as e:  # noqa: BLE001
+        r.update(mo_faces=None, mo_time=None, mo_hausdorff=None, mo_rms=None, mo_error=str(e))
+    if not args.keep:
+        for p in (ours_out, mo_out):
+            if os.path.exists(p):
+                os.remove(p)
+    ours = f"filter --lowpass {n}" if err is None else f"FAILED ({err})"
+    print(f"| {name} | {len(pos)} | {len(tris)} | lowpass {frac:g} | {ours} | {fmt(r['mo_faces'], 'd')} | "
+          f"{fmt(r['ours_hausdorff'], '.3e')} | {fmt(r['mo_hausdorff'], '.3e')} | "
+          f"{fmt(ratio_of(r['ours_hausdorff'], r['mo_hausdorff']), '.2f')} | "
+          f"{fmt(r['ours_rms'], '.3e')} | {fmt(r['mo_rms'], '.3e')} | "
+          f"{fmt(ratio_of(r['ours_rms'], r['mo_rms']), '.2f')} | "
+          f"{fmt(r['ours_time'], '.4g')} | {fmt(r['mo_time'], '.4g')} | "
+          f"{fmt(ratio_of(r['ours_time'], r['mo_time']), '.1f')} |", flush=True)
+    return r
+
+
 def fmt(x, spec):
     return "-" if x is None else format(x, spec)
 
@@ -91,7 +146,9 @@ def ratio_of(a, b):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("meshes", nargs="+")
-    ap.add_argument("--ratios", nargs="+", type=float, default=[0.01, 0.05, 0.10])
+    ap.add_argument("--ratios", nargs="*", type=float, default=[0.003, 0.01, 0.05, 0.10])
+    ap.add_argument("--lowpass", nargs="*", type=float, default=[0.005],
+                    help="low-pass rows at these fractions of the input's vertices")
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--samples", type=int, default=200000)
     ap.add_argument("--seed", type=int, default=1)
@@ -180,6 +237,11 @@ def main():
                   f"{fmt(r['ours_time'], '.4g')} | {fmt(r['mo_time'], '.4g')} | "
                   f"{fmt(ratio_of(r['ours_time'], r['mo_time']), '.1f')} |", flush=True)
             if args.json:  # rewritten after every row, so a long run leaves partial results
+                with open(args.json, "w") as f:
+                    json.dump(rows, f, indent=1)
+        for frac in args.lowpass:
+            rows.append(lowpass_row(args, binary, workdir, mesh, name, stem, pos, tris, src, frac))
+            if args.json:
                 with open(args.json, "w") as f:
                     json.dump(rows, f, indent=1)
     if not args.keep and not args.workdir:
