@@ -43,7 +43,7 @@ def simplify(
     error: Optional[float] = None,
     max_angle: float = 45.0,
     min_quality: float = 0.05,
-    boundary_weight: float = 100.0,
+    boundary_weight: float = 10.0,
 ) -> Tuple[Vertices, Faces, npt.NDArray[np.int64]]:
     """Quadric-error simplification to one target; returns (V2, F2, vertex_map)."""
 

@@ -126,7 +126,7 @@ fn simplify_target(
 /// collapse may leave, ``boundary_weight`` the weight of the planes that keep boundaries in
 /// place (0 lets them drift).
 #[pyfunction]
-#[pyo3(signature = (v, f, /, *, faces=None, ratio=None, error=None, max_angle=45.0, min_quality=0.05, boundary_weight=100.0))]
+#[pyo3(signature = (v, f, /, *, faces=None, ratio=None, error=None, max_angle=45.0, min_quality=0.05, boundary_weight=10.0))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simplify<'py>(
     py: Python<'py>,

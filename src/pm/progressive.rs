@@ -36,7 +36,8 @@ pub struct PmOptions {
     /// Largest valence a collapse may create. Default 32.
     pub max_valence: usize,
     /// Weight λ of the boundary constraint planes (each boundary edge adds a plane through it,
-    /// perpendicular to its face, scaled by λ·|e|²). Default 100; 0 lets boundaries drift.
+    /// perpendicular to its face, scaled by λ·|e|²). Default 10 (`docs/algorithms.md` §4.3); 0
+    /// lets boundaries drift.
     pub boundary_weight: f64,
 }
 
@@ -49,7 +50,7 @@ impl Default for PmOptions {
             max_normal_angle_degrees: 45.0,
             min_quality: 0.05,
             max_valence: 32,
-            boundary_weight: 100.0,
+            boundary_weight: 10.0,
         }
     }
 }
