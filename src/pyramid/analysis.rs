@@ -527,7 +527,7 @@ struct Records {
     widest: u32,
 }
 
-/// Weights in chunks of [`Chunked::CHUNK`]: the largest stream (about 600 bytes per split), so
+/// Weights in chunks of [`Chunked::CHUNK`] entries: the largest stream (about 600 bytes per split), so
 /// that turning the ranges' streams into the pyramid's one holds a chunk twice, not a range.
 #[derive(Default)]
 struct Chunked {
@@ -538,8 +538,11 @@ struct Chunked {
 }
 
 impl Chunked {
-    /// 8 MB chunks: small against a large scan's weights, large against the allocator's costs.
-    const CHUNK: usize = 1 << 20;
+    /// 64 MiB chunks: small against a large scan's weights, and above glibc's largest mmap
+    /// threshold (32 MiB), so that a freed chunk goes back to the system instead of staying in
+    /// the allocator's heap, where the joined stream could not reuse it (it is mapped anew).
+    /// An untouched chunk costs address space only.
+    const CHUNK: usize = 1 << 23;
 
     fn push(&mut self, w: f64) {
         match self.chunks.last_mut() {
