@@ -62,7 +62,7 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
             crate::pyramid::analyze_with(&options.relaxation, &pm, &BarProgress(&bar))
                 .with_context(|| format!("cannot analyse {}", args.input.display()))?;
         bar.finish_and_clear();
-        Some(StoredDetails::quantised(&pyramid, options.relaxation))
+        Some(StoredDetails::of(&pyramid, options.relaxation))
     };
     let details_s = start.elapsed().as_secs_f64();
     let start = Instant::now();
