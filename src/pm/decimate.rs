@@ -2,8 +2,7 @@
 //! [`ProgressiveMesh::build`](super::ProgressiveMesh::build) and `meshpyr simplify`.
 //!
 //! Every edge is evaluated in both directions (`u→v` keeps `v`'s original position, so the
-//! cost is `(Q_u + Q_v)(p_v)`, the area-integrated squared distance; the error bound and the
-//! recorded errors use it normalised to a mean squared distance). The priority queue is
+//! cost is `(Q_u + Q_v)(p_v)`, normalised to a squared distance). The priority queue is
 //! batched, in the manner of meshoptimizer: each pass evaluates all live edges, sorts them by
 //! `(cost, half-edge slot)` and collapses them in that order, skipping an edge once one of its
 //! endpoints was the survivor of a collapse in this pass — the only vertex whose quadric
@@ -396,33 +395,16 @@ impl FlatMesh {
         });
     }
 
-    /// Costs (integrated errors, [`Quadric::integrated`]) of collapsing the edge of `h` in both
-    /// directions (`h`'s direction first); `None` for a direction that is never allowed (a
-    /// boundary vertex may only slide along its boundary) or whose normalised error exceeds
-    /// `max_error_sq`.
+    /// Costs of collapsing the edge of `h` in both directions (`h`'s direction first); `None`
+    /// for a direction that is never allowed (a boundary vertex may only slide along its
+    /// boundary).
     #[inline]
-    fn edge_costs(
-        &self,
-        quadric: &[Quadric],
-        h: u32,
-        o: u32,
-        max_error_sq: f64,
-    ) -> (Option<f64>, Option<f64>) {
+    fn edge_costs(&self, quadric: &[Quadric], h: u32, o: u32) -> (Option<f64>, Option<f64>) {
         let boundary_edge = self.is_boundary_halfedge(h) || self.is_boundary_halfedge(o);
         let (a, b) = (self.tail_vertex(h), self.head_vertex(h));
         let q = quadric[a as usize].sum(&quadric[b as usize]);
-        let cost = |allowed: bool, p: DVec3| {
-            let c = q.integrated(p);
-            (allowed && q.normalised(c) <= max_error_sq).then_some(c)
-        };
-        let ab = cost(
-            boundary_edge || !self.is_boundary_vertex(a),
-            self.position(b),
-        );
-        let ba = cost(
-            boundary_edge || !self.is_boundary_vertex(b),
-            self.position(a),
-        );
+        let ab = (boundary_edge || !self.is_boundary_vertex(a)).then(|| q.error(self.position(b)));
+        let ba = (boundary_edge || !self.is_boundary_vertex(b)).then(|| q.error(self.position(a)));
         (ab, ba)
     }
 
@@ -440,7 +422,7 @@ impl FlatMesh {
         } else {
             return None;
         };
-        let (ch, co) = self.edge_costs(quadric, h, o, max_error_sq);
+        let (ch, co) = self.edge_costs(quadric, h, o);
         let (cost, h, alt_cost) = match (ch, co) {
             (Some(a), Some(b)) if b < a => (b, o, a),
             (Some(a), Some(b)) => (a, h, b),
@@ -448,7 +430,7 @@ impl FlatMesh {
             (None, Some(b)) => (b, o, f64::INFINITY),
             (None, None) => return None,
         };
-        Some(Candidate {
+        (cost <= max_error_sq).then(|| Candidate {
             cost,
             alt_cost,
             key: self.slot_of(h),
@@ -754,14 +736,18 @@ impl Schedule {
     }
 
     /// After a pass: whether decimation is over, i.e. a full pass with every rule relaxed
-    /// found no legal collapse. (The error bound is applied when candidates are collected, so
-    /// a pass under a finite cut always leaves something for a pass without it to try.)
-    pub(crate) fn pass_ended(&mut self, collapsed: bool, error_cut: f64) -> bool {
+    /// found no legal collapse.
+    pub(crate) fn pass_ended(
+        &mut self,
+        collapsed: bool,
+        error_cut: f64,
+        params: &DecimateParams,
+    ) -> bool {
         if collapsed {
             *self = Schedule::new();
             return false;
         }
-        if self.use_goal && error_cut.is_finite() {
+        if self.use_goal && error_cut.is_finite() && error_cut < params.max_error_sq {
             self.use_goal = false;
             return false;
         }
@@ -841,7 +827,7 @@ pub(crate) fn decimate(
             relaxed[schedule.relaxation as usize - 1] += made;
         }
         progress.update((start_faces - mesh.n_faces) as f64 / work as f64);
-        if schedule.pass_ended(made > 0, error_cut) {
+        if schedule.pass_ended(made > 0, error_cut, params) {
             stop = Stop::NoLegalCollapse(mesh.refusals(&state.quadric, params));
             break;
         }
@@ -888,7 +874,8 @@ fn cut_at_goal(
         1.5 * nth.cost
     } else {
         f64::INFINITY
-    };
+    }
+    .min(params.max_error_sq);
     if error_cut < f64::INFINITY {
         cands.retain(|c| c.cost <= error_cut);
     }
@@ -952,7 +939,6 @@ fn perform_collapses(
         let [u, v, left, right] = mesh.collapse(h, valence);
         let qu = quadric[u as usize];
         quadric[v as usize].add(&qu);
-        let error_sq = quadric[v as usize].normalised(cost);
         mesh.set_locked(v, true);
         state.locked.push(v);
         state.collapses.push(Collapse {
@@ -960,7 +946,7 @@ fn perform_collapses(
             to: v,
             left,
             right,
-            error_sq,
+            error_sq: cost,
         });
         budget -= 1;
     }
@@ -1034,9 +1020,8 @@ impl FlatMesh {
             }
             let refusal = match self.candidate(quadric, c, f64::INFINITY) {
                 None => Some(Refusal::Boundary),
-                Some(_) => self
-                    .candidate(quadric, c, params.max_error_sq)
-                    .and_then(|x| self.legal(x.h, &legality).err()),
+                Some(x) if x.cost <= params.max_error_sq => self.legal(x.h, &legality).err(),
+                Some(_) => None,
             };
             if let Some(r) = refusal {
                 *counts.entry(r).or_default() += 1;

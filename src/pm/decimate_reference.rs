@@ -21,32 +21,20 @@ struct Candidate {
     alt_cost: f64,
 }
 
-/// Costs (integrated errors) of collapsing the edge of `h` in both directions (`h`'s direction
-/// first); `None` for a direction that is never allowed (a boundary vertex may only slide along
-/// its boundary) or whose normalised error exceeds `max_error_sq`.
+/// Costs of collapsing the edge of `h` in both directions (`h`'s direction first); `None` for
+/// a direction that is never allowed (a boundary vertex may only slide along its boundary).
 #[inline]
 fn edge_costs(
     mesh: &Mesh,
     quadric: &[Quadric],
     h: HalfedgeId,
     o: HalfedgeId,
-    max_error_sq: f64,
 ) -> (Option<f64>, Option<f64>) {
     let boundary_edge = mesh.is_boundary_halfedge(h) || mesh.is_boundary_halfedge(o);
     let (a, b) = (mesh.to_vertex(o), mesh.to_vertex(h));
     let q = quadric[a.slot()].sum(&quadric[b.slot()]);
-    let cost = |allowed: bool, p| {
-        let c = q.integrated(p);
-        (allowed && q.normalised(c) <= max_error_sq).then_some(c)
-    };
-    let ab = cost(
-        boundary_edge || !mesh.is_boundary_vertex(a),
-        mesh.position(b),
-    );
-    let ba = cost(
-        boundary_edge || !mesh.is_boundary_vertex(b),
-        mesh.position(a),
-    );
+    let ab = (boundary_edge || !mesh.is_boundary_vertex(a)).then(|| q.error(mesh.position(b)));
+    let ba = (boundary_edge || !mesh.is_boundary_vertex(b)).then(|| q.error(mesh.position(a)));
     (ab, ba)
 }
 
@@ -168,7 +156,7 @@ pub(crate) fn decimate(
         let made = perform_collapses(&mut mesh, &mut state, &mut edges, &cands, &hid, &pass, done);
         unlock_survivors(&mut state);
         progress.update((start_faces - mesh.n_faces()) as f64 / work as f64);
-        if schedule.pass_ended(made > 0, error_cut) {
+        if schedule.pass_ended(made > 0, error_cut, params) {
             break;
         }
     }
@@ -232,7 +220,7 @@ fn collect_candidates(
     for &s in edges {
         let h = hid[s as usize];
         let o = mesh.twin(h);
-        let (ch, co) = edge_costs(mesh, quadric, h, o, params.max_error_sq);
+        let (ch, co) = edge_costs(mesh, quadric, h, o);
         let (cost, hs, alt_cost) = match (ch, co) {
             (Some(a), Some(b)) if b < a => (b, o.slot(), a),
             (Some(a), Some(b)) => (a, h.slot(), b),
@@ -240,11 +228,13 @@ fn collect_candidates(
             (None, Some(b)) => (b, o.slot(), f64::INFINITY),
             (None, None) => continue,
         };
-        cands.push(Candidate {
-            cost,
-            h: hs as u32,
-            alt_cost,
-        });
+        if cost <= params.max_error_sq {
+            cands.push(Candidate {
+                cost,
+                h: hs as u32,
+                alt_cost,
+            });
+        }
     }
 }
 
@@ -269,6 +259,7 @@ fn cut_at_goal(
     } else {
         f64::INFINITY
     }
+    .min(params.max_error_sq)
 }
 
 /// Collapses the ranked candidates under the cut in order, each in its cheaper legal
@@ -315,7 +306,6 @@ fn perform_collapses(
         let topo = half_edge_collapse(mesh, h);
         let qu = state.quadric[u.slot()];
         state.quadric[v.slot()].add(&qu);
-        let error_sq = state.quadric[v.slot()].normalised(cost);
         state.locked[v.slot()] = true;
         state.locked_list.push(v.slot() as u32);
         // Glued edges may have lost their representative: re-list v's edges.
@@ -327,7 +317,7 @@ fn perform_collapses(
             to: v.slot() as u32,
             left: topo.left.map_or(NONE, |x| x.slot() as u32),
             right: topo.right.map_or(NONE, |x| x.slot() as u32),
-            error_sq,
+            error_sq: cost,
         });
         budget -= 1;
     }

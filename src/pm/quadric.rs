@@ -115,29 +115,13 @@ impl Quadric {
 
     /// The normalised error at `p`: [`Quadric::raw`] divided by the face weight (a mean squared
     /// distance, length²). Never negative or NaN for finite input.
-    #[cfg(test)]
+    #[inline]
     pub(crate) fn error(&self, p: DVec3) -> f64 {
-        self.normalised(self.integrated(p))
-    }
-
-    /// The area-integrated squared distance at `p` (length⁴): [`Quadric::raw`], never negative
-    /// or NaN. Collapses are ranked by it rather than by the mean ([`Quadric::error`]): a mean
-    /// over a survivor that has absorbed a large area dilutes what one more collapse adds to
-    /// it, so the survivors of many collapses would attract ever more of them and the coarse
-    /// levels would end in a few huge fans (`docs/algorithms.md` §4.3).
-    #[inline]
-    pub(crate) fn integrated(&self, p: DVec3) -> f64 {
-        self.raw(p).max(0.0)
-    }
-
-    /// An integrated error of this quadric ([`Quadric::integrated`]) as a mean squared
-    /// distance: divided by the face weight (kept as it is when there is none).
-    #[inline]
-    pub(crate) fn normalised(&self, integrated: f64) -> f64 {
+        let r = self.raw(p).max(0.0);
         let e = if self.weight > 0.0 {
-            integrated / self.weight
+            r / self.weight
         } else {
-            integrated
+            r
         };
         if e.is_nan() { f64::MAX } else { e }
     }
