@@ -4,12 +4,12 @@
 
 use super::input::read_input_mesh;
 use super::{BarProgress, Global};
-use crate::format;
-use crate::io;
-use crate::pm::ProgressiveMesh;
-use crate::pyramid::{PyramidOptions, StoredDetails};
-use crate::relax::RelaxKind;
 use anyhow::Context;
+use meshpyr::format;
+use meshpyr::io;
+use meshpyr::pm::ProgressiveMesh;
+use meshpyr::pyramid::{PyrContent, Pyramid, PyramidOptions};
+use meshpyr::relax::RelaxKind;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -23,7 +23,7 @@ pub(crate) struct BuildArgs {
     pub(crate) output: PathBuf,
     /// Relaxation operator the pyramid is analysed with (recorded in the file; `filter`,
     /// `spectrum` and `edit` use it).
-    #[arg(long, value_enum, default_value_t = RelaxKind::SecondDifference)]
+    #[arg(long, value_parser = crate::choices::relax_kind(), default_value = RelaxKind::default().spec().name())]
     pub(crate) relax: RelaxKind,
     /// Leave the details out: a smaller file (about 60 % less on scans), whose readers run
     /// the detail analysis every time they open it.
@@ -40,51 +40,47 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
     super::output::check_output_folder(&args.output)?;
     let input = read_input_mesh(&args.input)?;
     let start = Instant::now();
-    let built = crate::mesh::Mesh::from_polygons(&input)
-        .with_context(|| format!("cannot build the mesh of {}", args.input.display()))?;
-    let bar = global.progress("build");
-    let pm = ProgressiveMesh::build(&built.mesh, &options.pm, &BarProgress(&bar)).with_context(
-        || {
-            format!(
-                "cannot build the progressive mesh of {}",
-                args.input.display()
-            )
-        },
-    )?;
-    bar.finish_and_clear();
-    let built_s = start.elapsed().as_secs_f64();
-    let start = Instant::now();
-    let details = if args.no_details {
-        None
-    } else {
-        let bar = global.progress("details");
-        let (_, pyramid) =
-            crate::pyramid::analyze_with(&options.relaxation, &pm, &BarProgress(&bar))
-                .with_context(|| format!("cannot analyse {}", args.input.display()))?;
+    // Without details the file needs the hierarchy only: the analysis would be wasted.
+    let (bytes, sizes, pm) = if args.no_details {
+        let built = meshpyr::mesh::Mesh::from_polygons(&input)
+            .with_context(|| format!("cannot build the mesh of {}", args.input.display()))?;
+        let bar = global.progress("build");
+        let pm = ProgressiveMesh::build(&built.mesh, &options.pm, &BarProgress(&bar))
+            .with_context(|| {
+                format!(
+                    "cannot build the progressive mesh of {}",
+                    args.input.display()
+                )
+            })?;
         bar.finish_and_clear();
-        Some(StoredDetails::quantised(&pyramid, options.relaxation))
+        let (bytes, sizes) = format::encode(&input, &pm, &options)
+            .with_context(|| format!("cannot encode {}", args.input.display()))?;
+        (bytes, sizes, pm)
+    } else {
+        let bar = global.progress("build");
+        let pyramid = Pyramid::build_with(input.clone(), &options, &BarProgress(&bar))
+            .with_context(|| format!("cannot build the pyramid of {}", args.input.display()))?;
+        bar.finish_and_clear();
+        let (bytes, sizes) = pyramid
+            .to_pyr_bytes_as(PyrContent::WithDetails)
+            .with_context(|| format!("cannot encode {}", args.input.display()))?;
+        (bytes, sizes, pyramid.pm)
     };
-    let details_s = start.elapsed().as_secs_f64();
-    let start = Instant::now();
-    let (bytes, sizes) = format::encode_with_details(&input, &pm, &options, details.as_ref())
-        .with_context(|| format!("cannot encode {}", args.input.display()))?;
-    let encode_s = start.elapsed().as_secs_f64();
+    let took = start.elapsed().as_secs_f64();
     io::write_atomic(&args.output, &bytes)?;
     let n = input.n_vertices().max(1) as f64;
     global.say(format_args!(
-        "wrote {}: {} bytes for {} vertices, levels {}..={} (PM {:.1} s,{} encode {:.3} s){}",
+        "wrote {}: {} bytes for {} vertices, levels {}..={} ({} and encoded in {took:.1} s){}",
         args.output.display(),
         sizes.total,
         input.n_vertices(),
         pm.n_base_vertices(),
         pm.n_vertices(),
-        built_s,
-        if details.is_some() {
-            format!(" details {details_s:.1} s,")
+        if args.no_details {
+            "hierarchy built"
         } else {
-            String::new()
+            "hierarchy and details built"
         },
-        encode_s,
         super::input::extra_vertices_note(input.n_vertices(), pm.n_vertices()),
     ));
     global.say(format_args!(
@@ -94,10 +90,10 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
         sizes.split_errors as f64 / n,
         sizes.positions as f64 / n,
         sizes.trailing as f64 / n,
-        if details.is_some() {
-            format!(", details {:.2}", sizes.details as f64 / n)
-        } else {
+        if args.no_details {
             String::new()
+        } else {
+            format!(", details {:.2}", sizes.details as f64 / n)
         }
     ));
     global.say(format_args!("  {}", pm.describe_base()));

@@ -1,11 +1,11 @@
 //! `meshpyr compare RESULT REFERENCE [--json]`: E_v, E_n and the sampled Hausdorff distance of
-//! a processed mesh against a reference (see [`crate::metrics::error`]).
+//! a processed mesh against a reference (see [`meshpyr::metrics::error`]).
 
 use super::Global;
-use crate::mesh::Mesh;
-use crate::mesh::{Attribute, AttributeData};
-use crate::metrics::{Comparison, FieldPercentiles, Reference, compare, vertex_distances};
 use anyhow::Context;
+use meshpyr::mesh::Mesh;
+use meshpyr::mesh::{Attribute, AttributeData};
+use meshpyr::metrics::{Comparison, FieldPercentiles, Reference, compare, vertex_distances};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `meshpyr compare`.
@@ -131,9 +131,9 @@ fn comparison_json(c: &Comparison, field: Option<FieldPercentiles>) -> anyhow::R
 /// Fails before any work when `--per-vertex` does not name a PLY file, the one format that
 /// keeps a per-vertex property.
 fn check_ply_output(path: &Path) -> anyhow::Result<()> {
-    let format = crate::io::MeshFormat::from_path(path)?;
+    let format = meshpyr::io::MeshFormat::from_path(path)?;
     anyhow::ensure!(
-        format == crate::io::MeshFormat::Ply,
+        format == meshpyr::io::MeshFormat::Ply,
         "--per-vertex {}: the distance field needs a .ply output (the only format with per-vertex properties)",
         path.display()
     );
@@ -161,7 +161,7 @@ fn write_per_vertex(
         data: AttributeData::F32(field.iter().map(|&d| d as f32).collect()),
     })
     .map_err(anyhow::Error::msg)?;
-    crate::io::write_mesh(out, &poly)?;
+    meshpyr::io::write_mesh(out, &poly)?;
     global.say(format_args!(
         "wrote {} with the per-vertex distance ({} vertices)",
         out.display(),

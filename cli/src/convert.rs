@@ -1,8 +1,8 @@
 //! `meshpyr convert IN OUT`: any supported format to any other, data kept as it is.
 
 use super::Global;
-use crate::io::{self, PlyEncoding, WriteOptions};
-use crate::wording::Count;
+use meshpyr::io::{self, PlyEncoding, WriteOptions};
+use meshpyr::wording::Count;
 use std::path::PathBuf;
 
 /// PLY encodings selectable on the command line.

@@ -2,12 +2,12 @@
 
 use super::Global;
 use super::input::build_pyramid;
-use crate::io::{self, MeshFormat};
-use crate::mesh::PolygonMesh;
-use crate::pyramid::{DetailPyramid, Filter, Pyramid};
-use crate::relax::SecondDifference;
 use anyhow::Context;
 use glam::DVec3;
+use meshpyr::io::{self, MeshFormat};
+use meshpyr::mesh::PolygonMesh;
+use meshpyr::pyramid::{DetailPyramid, Filter, Pyramid};
+use meshpyr::relax::SecondDifference;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -27,7 +27,7 @@ pub(crate) fn run(args: DemoArgs, global: &Global) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
     let poly = io::read_mesh_bytes(BUNDLED_SCAN, MeshFormat::Ply)?;
-    let info = crate::mesh::MeshInfo::of(&poly)?;
+    let info = meshpyr::mesh::MeshInfo::of(&poly)?;
     global.say(format_args!(
         "bundled scan: {} vertices, {} faces, genus {}, bbox diagonal {:.4}",
         info.vertices,
@@ -113,15 +113,15 @@ fn write_spectra(
     let mut spectra = vec![scan.pyramid.spectrum()];
     for (_, s) in &signals[1..] {
         let p =
-            DetailPyramid::analyze_signal(&scan.pm, relaxation, s, &crate::progress::NoProgress)?;
+            DetailPyramid::analyze_signal(&scan.pm, relaxation, s, &meshpyr::progress::NoProgress)?;
         spectra.push(p.spectrum());
     }
-    let others: Vec<(&str, &crate::pyramid::Spectrum)> = signals[1..]
+    let others: Vec<(&str, &meshpyr::pyramid::Spectrum)> = signals[1..]
         .iter()
         .map(|(n, _)| *n)
         .zip(&spectra[1..])
         .collect();
-    let chart = spectra[0].chart("input", &others);
+    let chart = crate::plot::spectrum_chart(&spectra[0], "input", &others);
     let path = dir.join(format!("{stem}-spectrum.png"));
     io::write_atomic(&path, &chart.encode_png()?)?;
     let mut csv = String::new();
@@ -154,7 +154,7 @@ fn write_previews(
     dir: &Path,
     global: &Global,
 ) -> anyhow::Result<()> {
-    use crate::render::{Panel, RenderOptions, Triangles, render_panels, render_scene};
+    use meshpyr::render::{Panel, RenderOptions, Triangles, render_panels, render_scene};
 
     let faces = scan.pm.finest_faces();
     let options = RenderOptions {

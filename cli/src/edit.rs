@@ -5,11 +5,11 @@
 use super::Global;
 use super::filter::{FilterOptions, resolve_reporting};
 use super::input::load_pyramid;
-use crate::io;
-use crate::pyramid::{HandleReach, MoveHandle, PyrContent, Pyramid};
-use crate::relax::RelaxKind;
 use anyhow::Context;
 use glam::DVec3;
+use meshpyr::io;
+use meshpyr::pyramid::{HandleReach, MoveHandle, PyrContent, Pyramid};
+use meshpyr::relax::RelaxKind;
 use std::path::{Path, PathBuf};
 
 /// One `--move X,Y,Z:DX,DY,DZ`.
@@ -71,7 +71,7 @@ pub(crate) struct EditArgs {
     pub(crate) filters: FilterOptions,
     /// Relaxation operator used for the prediction (default second-difference; a .pyr input
     /// uses the one it was built with).
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = crate::choices::relax_kind())]
     pub(crate) relax: Option<RelaxKind>,
     /// With a `.pyr` output: leave the details out (a smaller file whose readers recompute
     /// them; with them, saving analyses the edited positions).

@@ -3,10 +3,10 @@
 //! attributes, f32 bits); coarser levels and truncated files read only the progressive prefix.
 
 use super::Global;
-use crate::format;
-use crate::io;
-use crate::wording::Count;
 use anyhow::Context;
+use meshpyr::format;
+use meshpyr::io;
+use meshpyr::wording::Count;
 use std::path::PathBuf;
 
 /// Arguments of `meshpyr extract`.

@@ -5,10 +5,10 @@
 
 use super::Global;
 use super::input::load_pyramid;
-use crate::io;
-use crate::pyramid::{DetailPyramid, Filter, GainBand, LevelGains, LevelSpec};
-use crate::relax::RelaxKind;
-use crate::wording::Count;
+use meshpyr::io;
+use meshpyr::pyramid::{DetailPyramid, Filter, GainBand, LevelGains, LevelSpec};
+use meshpyr::relax::RelaxKind;
+use meshpyr::wording::Count;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -98,7 +98,7 @@ pub(crate) struct FilterArgs {
     pub(crate) filters: FilterOptions,
     /// Relaxation operator used for the prediction (default second-difference; a .pyr input
     /// uses the one it was built with).
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = crate::choices::relax_kind())]
     pub(crate) relax: Option<RelaxKind>,
 }
 

@@ -2,9 +2,9 @@
 
 use super::Global;
 use super::input::{is_pyr_file, load_pyr};
-use crate::mesh::MeshInfo;
-use crate::wording::Count;
 use anyhow::Context;
+use meshpyr::mesh::MeshInfo;
+use meshpyr::wording::Count;
 use std::path::PathBuf;
 
 /// Arguments of `meshpyr info`.
@@ -25,7 +25,7 @@ pub(crate) fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
         let base = data.pm.describe_base();
         (data.input, Some(base))
     } else {
-        (crate::io::read_mesh(&args.mesh)?, None)
+        (meshpyr::io::read_mesh(&args.mesh)?, None)
     };
     super::input::require(&args.mesh, poly.check_not_empty())?;
     let mut info = MeshInfo::of(&poly).with_context(|| args.mesh.display().to_string())?;

@@ -1,16 +1,22 @@
-//! The `meshpyr` command line: one subcommand per module. Each subcommand lives in its own file
-//! with a clap `Args` struct and a `run` function; `input` reads what they take (a mesh file or
-//! a `.pyr` file) as a mesh or a detail pyramid.
+//! The `meshpyr` command line and the browser editor behind `meshpyr view`, on the public API
+//! of the [`meshpyr`] library like any other user of it.
+//!
+//! One subcommand per module, each with a clap `Args` struct and a `run` function; `input`
+//! reads what they take (a mesh file or a `.pyr` file) as a mesh or a detail pyramid. The
+//! editor's HTTP server and its page are [`view`]; `plot` draws the charts of `spectrum` and
+//! `compare`.
+#![warn(missing_docs)]
 
 /// `println!` for command output that returns the write error instead of panicking, so a
 /// closed pipe (`meshpyr info scan.ply | head -1`) ends the command quietly (see [`main`]).
 macro_rules! outln {
     ($($arg:tt)*) => {
-        $crate::cli::stdout_line(format_args!($($arg)*))?
+        $crate::stdout_line(format_args!($($arg)*))?
     };
 }
 
 mod build;
+mod choices;
 mod compare;
 mod convert;
 mod demo;
@@ -20,12 +26,14 @@ mod filter;
 mod info;
 mod input;
 mod output;
+mod plot;
 mod render;
 mod simplify;
 mod smooth;
 mod spectrum;
 mod subdivide;
-mod view;
+pub mod view;
+mod view_command;
 
 use clap::{Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -82,10 +90,10 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
     })
 }
 
-/// Adapts an indicatif bar to the library's [`crate::progress::Progress`].
+/// Adapts an indicatif bar to the library's [`meshpyr::progress::Progress`].
 pub(crate) struct BarProgress<'a>(pub &'a ProgressBar);
 
-impl crate::progress::Progress for BarProgress<'_> {
+impl meshpyr::progress::Progress for BarProgress<'_> {
     fn update(&self, fraction: f64) {
         self.0
             .set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
@@ -130,7 +138,7 @@ enum Command {
     /// Error of a processed mesh against a reference: E_v, E_n, Hausdorff.
     Compare(compare::CompareArgs),
     /// Interactive editor in the browser: detail equalizer, level scrubber, drag-to-edit.
-    View(view::ViewArgs),
+    View(view_command::ViewArgs),
     /// Draw meshes side by side as a PNG, optionally coloured by a per-vertex attribute.
     Render(render::RenderArgs),
 }
@@ -149,14 +157,26 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
         Command::Extract(a) => extract::run(a, global),
         Command::Smooth(a) => smooth::run(a, global),
         Command::Compare(a) => compare::run(a, global),
-        Command::View(a) => view::run(a, global),
+        Command::View(a) => view_command::run(a, global),
         Command::Render(a) => render::run(a, global),
     }
 }
 
+/// Test hook, not an interface: when set to a number of milliseconds, every output file
+/// announces its temporary file on standard error and waits that long before its rename, so
+/// that a test can interrupt a write reliably.
+#[doc(hidden)]
+pub const HOLD_WRITE_ENV: &str = "MESHPYR_TEST_HOLD_WRITE_MS";
+
 /// Parses the command line and runs the subcommand; returns the process exit code.
 pub fn main() -> std::process::ExitCode {
     remove_temporary_files_on_signals();
+    if let Some(ms) = std::env::var(HOLD_WRITE_ENV)
+        .ok()
+        .and_then(|v| v.parse::<u64>().ok())
+    {
+        meshpyr::io::hold_writes_for_tests(ms);
+    }
     let cli = Cli::parse();
     match run(cli.command, &cli.global) {
         Ok(()) => std::process::ExitCode::SUCCESS,
@@ -173,7 +193,7 @@ pub fn main() -> std::process::ExitCode {
 
 /// Ctrl-C, SIGTERM and SIGHUP end the process with 128 + the signal number, as the default
 /// action would, but first remove the temporary files of the outputs being written (see
-/// [`crate::io::exit_removing_temporary_files`]); without this they stay behind, hidden.
+/// [`meshpyr::io::exit_removing_temporary_files`]); without this they stay behind, hidden.
 fn remove_temporary_files_on_signals() {
     #[cfg(unix)]
     {
@@ -184,7 +204,7 @@ fn remove_temporary_files_on_signals() {
         };
         std::thread::spawn(move || {
             if let Some(signal) = signals.forever().next() {
-                crate::io::exit_removing_temporary_files(128 + signal);
+                meshpyr::io::exit_removing_temporary_files(128 + signal);
             }
         });
     }

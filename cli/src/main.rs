@@ -1,3 +1,3 @@
 fn main() -> std::process::ExitCode {
-    meshpyr::cli::main()
+    meshpyr_cli::main()
 }

@@ -15,7 +15,7 @@ pub(crate) fn check_mesh_output(path: &Path) -> anyhow::Result<()> {
             path.display()
         );
     }
-    crate::io::MeshFormat::from_path(path)?;
+    meshpyr::io::MeshFormat::from_path(path)?;
     check_output_folder(path)
 }
 

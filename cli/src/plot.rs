@@ -5,7 +5,8 @@
 //! binary free of a vendored 740 KB TrueType font and of plotters' stale dependency tree, and
 //! makes the PNG byte-identical everywhere (no font rasteriser, no anti-aliasing differences).
 
-use crate::render::{Image, font};
+use meshpyr::Spectrum;
+use meshpyr::render::{Image, font};
 
 /// One data series: a value per category (non-positive values are not drawn on a log axis).
 #[derive(Clone, Debug, PartialEq)]
@@ -168,6 +169,40 @@ pub(crate) fn compact_count(n: usize) -> String {
     } else {
         format!("{}{unit}", v.round())
     }
+}
+
+/// A bar chart of the energies of `spectrum` and of `others` (same bands expected, e.g.
+/// the spectra of filtered versions), each series named.
+pub(crate) fn spectrum_chart(
+    spectrum: &Spectrum,
+    name: &str,
+    others: &[(&str, &Spectrum)],
+) -> Image {
+    let categories = spectrum.bands.iter().map(|b| compact_count(b.hi)).collect();
+    let mut c = BarChart::new(
+        "DETAIL SPECTRUM: ENERGY PER LEVEL OCTAVE",
+        "LEVEL (VERTICES, UPPER END OF OCTAVE)",
+        "SUM |D|^2 / DIAG^2",
+        categories,
+    );
+    let all = std::iter::once((name, spectrum)).chain(others.iter().copied());
+    for (i, (n, s)) in all.enumerate() {
+        c.series.push(Series {
+            name: n.to_string(),
+            values: spectrum
+                .bands
+                .iter()
+                .map(|b| {
+                    s.bands
+                        .iter()
+                        .find(|o| o.hi == b.hi)
+                        .map_or(0.0, |o| o.energy)
+                })
+                .collect(),
+            color: PALETTE[i % PALETTE.len()],
+        });
+    }
+    c.draw()
 }
 
 #[cfg(test)]

@@ -1,11 +1,11 @@
 //! `meshpyr render IN... -o OUT.png`: a picture of meshes side by side under one camera,
-//! optionally coloured by a per-vertex attribute (see [`crate::render`]).
+//! optionally coloured by a per-vertex attribute (see [`meshpyr::render`]).
 
 use super::Global;
-use crate::format;
-use crate::mesh::PolygonMesh;
-use crate::render::{RenderOptions, Shading, View, render_meshes};
 use anyhow::Context;
+use meshpyr::format;
+use meshpyr::mesh::PolygonMesh;
+use meshpyr::render::{RenderOptions, Shading, View, render_meshes};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `meshpyr render`.
@@ -92,7 +92,7 @@ pub(crate) fn run(args: RenderArgs, global: &Global) -> anyhow::Result<()> {
     let labels: Vec<String> = args.inputs.iter().map(|p| file_label(p)).collect();
     let pairs: Vec<(&str, &PolygonMesh)> = labels.iter().map(String::as_str).zip(&meshes).collect();
     let image = render_meshes(&pairs, &render_options(&args))?;
-    crate::io::write_atomic(&args.output, &image.encode_png()?)?;
+    meshpyr::io::write_atomic(&args.output, &image.encode_png()?)?;
     global.say(format_args!(
         "wrote {} ({}x{})",
         args.output.display(),

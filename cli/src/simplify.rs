@@ -2,10 +2,10 @@
 //! progressive mesh cut at a level, written compacted with per-vertex attributes carried along.
 
 use super::{BarProgress, Global};
-use crate::io;
-use crate::pm::{PmOptions, SimplifyTarget, simplify};
-use crate::wording::Count;
 use anyhow::Context;
+use meshpyr::io;
+use meshpyr::pm::{PmOptions, SimplifyTarget, simplify};
+use meshpyr::wording::Count;
 use std::path::PathBuf;
 
 /// Arguments of `meshpyr simplify`.
@@ -68,7 +68,7 @@ pub(crate) fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
         {
             target = SimplifyTarget::Faces((r * input.n_triangles() as f64).round() as usize);
         }
-        let (kept, pruned) = crate::mesh::prune_small_components(&input, fraction);
+        let (kept, pruned) = meshpyr::mesh::prune_small_components(&input, fraction);
         global.say(format_args!(
             "pruned {} of {} ({}) smaller than {fraction} of the diagonal",
             pruned.components,

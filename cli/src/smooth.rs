@@ -2,13 +2,13 @@
 //! keeps the input's vertices (count and order), faces and attributes; only positions change.
 
 use super::{BarProgress, Global};
-use crate::io;
-use crate::pyramid::PyramidDenoise;
-use crate::smooth::{
+use anyhow::Context;
+use meshpyr::io;
+use meshpyr::pyramid::PyramidDenoise;
+use meshpyr::smooth::{
     Boundary, DenoiseOptions, McfOptions, SmoothMethod, TaubinOptions, Variance, Weights,
     smooth_mesh,
 };
-use anyhow::Context;
 use std::path::PathBuf;
 use std::time::Instant;
 

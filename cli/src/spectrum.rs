@@ -2,8 +2,8 @@
 
 use super::Global;
 use super::input::load_spectrum;
-use crate::io;
-use crate::relax::RelaxKind;
+use meshpyr::io;
+use meshpyr::relax::RelaxKind;
 use std::path::PathBuf;
 
 /// Arguments of `meshpyr spectrum`.
@@ -19,7 +19,7 @@ pub(crate) struct SpectrumArgs {
     pub(crate) csv: Option<PathBuf>,
     /// Relaxation operator used for the prediction (default second-difference; a .pyr input
     /// uses the one it was built with, and its stored details if they were analysed with it).
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = crate::choices::relax_kind())]
     pub(crate) relax: Option<RelaxKind>,
 }
 
@@ -30,7 +30,7 @@ pub(crate) fn run(args: SpectrumArgs, global: &Global) -> anyhow::Result<()> {
         super::output::check_output_folder(csv)?;
     }
     let spectrum = load_spectrum(&args.input, args.relax, global)?;
-    let png = spectrum.chart("input", &[]).encode_png()?;
+    let png = crate::plot::spectrum_chart(&spectrum, "input", &[]).encode_png()?;
     io::write_atomic(&args.output, &png)?;
     global.say(format_args!("wrote {}", args.output.display()));
     if let Some(csv) = &args.csv {

@@ -1,11 +1,11 @@
 //! `meshpyr subdivide IN -o OUT --levels K`: cascadic MCM subdivision (or Loop).
 
 use super::{BarProgress, Global};
-use crate::io;
-use crate::mesh::{Mesh, PolygonMesh};
-use crate::subdiv::{self, Refinement, Scheme, Solver, SubdivOptions};
-use crate::wording::Count;
 use anyhow::Context;
+use meshpyr::io;
+use meshpyr::mesh::{Mesh, PolygonMesh};
+use meshpyr::subdiv::{self, Refinement, Scheme, Solver, SubdivOptions};
+use meshpyr::wording::Count;
 use std::path::PathBuf;
 
 /// Subdivision rule.

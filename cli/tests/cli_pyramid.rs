@@ -13,7 +13,7 @@ fn meshpyr(args: &[&str]) -> Output {
 
 fn data(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
+        .join("../tests/data")
         .join(name)
         .display()
         .to_string()

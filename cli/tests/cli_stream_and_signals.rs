@@ -16,7 +16,7 @@ fn folder(test: &str) -> PathBuf {
 
 fn data(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
+        .join("../tests/data")
         .join(name)
         .display()
         .to_string()
@@ -75,7 +75,7 @@ fn interrupt_a_write(dir: &Path, signal: &str) -> Option<i32> {
     let mut child = Command::new(env!("CARGO_BIN_EXE_meshpyr"))
         .args(["convert", &data("bunny.ply")])
         .arg(&out)
-        .env(meshpyr::io::HOLD_WRITE_ENV, "60000")
+        .env(meshpyr_cli::HOLD_WRITE_ENV, "60000")
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();

@@ -219,9 +219,9 @@ fn the_api_needs_the_token_and_the_page_carries_it() {
 fn bad_requests_get_4xx_json_and_the_server_keeps_serving() {
     let (server, reference) = setup();
     let n = octaves(server).len();
-    let big = vec![b' '; meshpyr::view::limits::BODY_BYTES + 1];
+    let big = vec![b' '; meshpyr_cli::view::limits::BODY_BYTES + 1];
     let max = reference.levels().end() + 1;
-    let too_many: Vec<_> = (0..meshpyr::view::limits::MAX_MOVES + 1)
+    let too_many: Vec<_> = (0..meshpyr_cli::view::limits::MAX_MOVES + 1)
         .map(|_| serde_json::json!({"level": max - 1, "center": [0,0,0], "displacement": [0,0,0], "radius": 1}))
         .collect();
     let cases: Vec<(&str, String, Vec<u8>, u16)> = vec![
@@ -300,7 +300,7 @@ fn a_stalled_client_does_not_hold_up_the_others() {
 #[test]
 fn stop_ends_run() {
     let input = meshpyr::read_mesh(view_support::data("tetrahedron.ply")).unwrap();
-    let server = meshpyr::view::ViewServer::bind(Pyramid::build(&input).unwrap(), 0).unwrap();
+    let server = meshpyr_cli::view::ViewServer::bind(Pyramid::build(&input).unwrap(), 0).unwrap();
     let stopper = server.stopper();
     let running = std::thread::spawn(move || server.run());
     stopper.stop();

@@ -219,7 +219,7 @@ fn equalizer_latency_on_a_large_scan() {
         input.n_vertices(),
         start.elapsed().as_secs_f64()
     );
-    let server = meshpyr::view::ViewServer::bind(pyramid, 0).unwrap();
+    let server = meshpyr_cli::view::ViewServer::bind(pyramid, 0).unwrap();
     let url = server.url();
     std::thread::spawn(move || server.run());
     driver.navigate(&url);

@@ -130,8 +130,7 @@ pub struct GainBand {
 
 impl GainBand {
     /// Parses `A:B` (a band, gain left to the caller) into its two ends.
-    #[cfg(feature = "cli")]
-    pub(crate) fn parse_band(s: &str) -> Result<(LevelSpec, LevelSpec), GainParseError> {
+    pub fn parse_band(s: &str) -> Result<(LevelSpec, LevelSpec), GainParseError> {
         let (a, b) = s
             .split_once(':')
             .ok_or_else(|| parse_error(s, "expected a band A:B such as 1000:15000"))?;
@@ -150,8 +149,7 @@ impl GainBand {
     }
 
     /// Parses `A:B=G`.
-    #[cfg(feature = "cli")]
-    pub(crate) fn parse_with_gain(s: &str) -> Result<GainBand, GainParseError> {
+    pub fn parse_with_gain(s: &str) -> Result<GainBand, GainParseError> {
         let (band, gain) = s
             .split_once('=')
             .ok_or_else(|| parse_error(s, "expected A:B=G such as 1000:15000=2"))?;

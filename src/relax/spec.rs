@@ -10,7 +10,6 @@ use serde::{Deserialize, Serialize};
 
 /// An operator without its parameters: the values of the command line's `--relax`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum RelaxKind {
     /// Guskov's non-uniform second-difference operator.
     #[default]
@@ -29,6 +28,20 @@ impl RelaxKind {
         RelaxKind::Mcm,
         RelaxKind::Normal,
     ];
+
+    /// One line on what the operator does, for the help of front ends that list the kinds.
+    pub fn about(self) -> &'static str {
+        match self {
+            RelaxKind::SecondDifference => "Guskov's non-uniform second-difference operator",
+            RelaxKind::Mcm => {
+                "One Jacobi step of implicit mean-curvature motion (cotangent weights, lumped mass)"
+            }
+            RelaxKind::Normal => {
+                "Guskov's operator with hinges weighted by the agreement of their normals (from \
+                 the input denoised by Ohtake's filter), so that predictions keep creases"
+            }
+        }
+    }
 
     /// The operator of this kind with its default parameters.
     pub fn spec(self) -> RelaxationSpec {

@@ -3,8 +3,8 @@
 
 use super::reply::Reply;
 use super::session::{EditorState, Session, ms_between, push_f32_bytes};
-use crate::pyramid::{LevelMove, MoveHandle};
 use glam::DVec3;
+use meshpyr::pyramid::{LevelMove, MoveHandle};
 use serde::Deserialize;
 use std::time::Instant;
 

@@ -1,4 +1,4 @@
-//! The browser editor behind `meshpyr view` (feature `view`): a small HTTP server on
+//! The browser editor behind `meshpyr view`: a small HTTP server on
 //! 127.0.0.1 that serves one embedded page (WebGL2, no external assets) and the `/api` it
 //! uses — the spectrum as an equalizer, progressive-mesh levels, multiresolution edits and
 //! exports, all computed by [`Pyramid`].
@@ -12,7 +12,7 @@
 //! ```no_run
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let scan = meshpyr::read_mesh("scan.ply")?;
-//! let server = meshpyr::view::ViewServer::bind(meshpyr::Pyramid::build(&scan)?, 0)?;
+//! let server = meshpyr_cli::view::ViewServer::bind(meshpyr::Pyramid::build(&scan)?, 0)?;
 //! println!("serving {}", server.url());
 //! server.run(); // until `server.stopper().stop()` is called from another thread
 //! # Ok(()) }
@@ -24,8 +24,8 @@ mod http;
 mod reply;
 mod session;
 
-use crate::pyramid::Pyramid;
 use http::{HttpRequest, Message};
+use meshpyr::pyramid::Pyramid;
 use reply::Reply;
 use session::Session;
 use std::net::TcpListener;

@@ -1,10 +1,10 @@
 //! The editor's state on the server: the pyramid, the synthesis cache behind the equalizer, and
 //! the last result a client asked for (what a bare `GET /api/export` exports).
 
-use crate::io::{MeshFormat, WriteOptions};
-use crate::mesh::PolygonMesh;
-use crate::pyramid::{Filter, LevelGains, LevelMove, Pyramid, SynthesisCache};
 use glam::DVec3;
+use meshpyr::io::{MeshFormat, WriteOptions};
+use meshpyr::mesh::PolygonMesh;
+use meshpyr::pyramid::{Filter, LevelGains, LevelMove, Pyramid, SynthesisCache};
 use serde_json::json;
 use std::time::Instant;
 
@@ -185,13 +185,13 @@ impl Session {
         let mut mesh = self.pyramid.input.clone();
         mesh.positions = positions;
         let opts = WriteOptions::default();
-        crate::io::write_mesh_bytes(&mesh, format, &opts).or_else(|_| {
+        meshpyr::io::write_mesh_bytes(&mesh, format, &opts).or_else(|_| {
             let mut bare = PolygonMesh::new();
             bare.positions = mesh.positions;
             for f in self.pyramid.input.faces() {
                 bare.push_face(f);
             }
-            crate::io::write_mesh_bytes(&bare, format, &opts).map_err(|e| e.to_string())
+            meshpyr::io::write_mesh_bytes(&bare, format, &opts).map_err(|e| e.to_string())
         })
     }
 }

@@ -5,7 +5,7 @@
 pub mod webdriver;
 
 use meshpyr::Pyramid;
-use meshpyr::view::ViewServer;
+use meshpyr_cli::view::ViewServer;
 use std::io::{Read, Write};
 use std::net::TcpStream;
 use std::path::PathBuf;
@@ -14,7 +14,7 @@ use std::time::Duration;
 /// Path of a file in `tests/data`.
 pub fn data(name: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
+        .join("../tests/data")
         .join(name)
 }
 
