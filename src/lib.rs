@@ -85,6 +85,7 @@
 //!
 //! | module | what it holds |
 //! |---|---|
+//! | [`choice`] | the named values of options, and the message for an unknown name |
 //! | [`mesh`] | the file-level [`PolygonMesh`], the half-edge [`mesh::Mesh`] and its repairs |
 //! | [`io`] | the mesh file formats |
 //! | [`pm`] | the progressive mesh and simplification |
@@ -105,6 +106,7 @@
 //! solver of subdivision is left out.
 #![warn(missing_docs)]
 
+pub mod choice;
 pub mod format;
 #[doc(hidden)]
 pub mod fuzzing;

@@ -23,7 +23,7 @@ pub(crate) struct BuildArgs {
     pub(crate) output: PathBuf,
     /// Relaxation operator the pyramid is analysed with (recorded in the file; `filter`,
     /// `spectrum` and `edit` use it).
-    #[arg(long, value_parser = crate::choices::relax_kind(), default_value = RelaxKind::default().spec().name())]
+    #[arg(long, value_parser = crate::choices::named::<RelaxKind>(), default_value = RelaxKind::default().spec().name())]
     pub(crate) relax: RelaxKind,
     /// Leave the details out: a smaller file (about 60 % less on scans), whose readers run
     /// the detail analysis every time they open it.

@@ -71,7 +71,7 @@ pub(crate) struct EditArgs {
     pub(crate) filters: FilterOptions,
     /// Relaxation operator used for the prediction (default second-difference; a .pyr input
     /// uses the one it was built with).
-    #[arg(long, value_parser = crate::choices::relax_kind())]
+    #[arg(long, value_parser = crate::choices::named::<RelaxKind>())]
     pub(crate) relax: Option<RelaxKind>,
     /// With a `.pyr` output: leave the details out (a smaller file whose readers recompute
     /// them; with them, saving analyses the edited positions).

@@ -6,7 +6,7 @@
 use super::Global;
 use super::input::load_pyramid;
 use meshpyr::io;
-use meshpyr::pyramid::{DetailPyramid, Filter, GainBand, LevelGains, LevelSpec};
+use meshpyr::pyramid::{DetailPyramid, Filter, GainBand, GainParseError, LevelGains, LevelSpec};
 use meshpyr::relax::RelaxKind;
 use meshpyr::wording::Count;
 use std::path::PathBuf;
@@ -20,12 +20,8 @@ fn parse_band(s: &str) -> Result<(LevelSpec, LevelSpec), String> {
 /// low-pass may not). The option takes hyphen values so that `-1` reaches the level parser,
 /// which says why it is wrong, instead of clap's advice to write `-- -1`.
 fn parse_lowpass(s: &str) -> Result<LevelSpec, String> {
-    match s.parse::<LevelSpec>().map_err(|e| e.to_string())? {
-        LevelSpec::Vertices(0) => Err(format!(
-            "`{s}`: a low-pass keeps the levels up to N vertices, so N must be at least 1"
-        )),
-        level => Ok(level),
-    }
+    let level: LevelSpec = s.parse().map_err(|e: GainParseError| e.to_string())?;
+    level.for_lowpass(s).map_err(|e| e.to_string())
 }
 
 fn parse_gain_band(s: &str) -> Result<GainBand, String> {
@@ -98,7 +94,7 @@ pub(crate) struct FilterArgs {
     pub(crate) filters: FilterOptions,
     /// Relaxation operator used for the prediction (default second-difference; a .pyr input
     /// uses the one it was built with).
-    #[arg(long, value_parser = crate::choices::relax_kind())]
+    #[arg(long, value_parser = crate::choices::named::<RelaxKind>())]
     pub(crate) relax: Option<RelaxKind>,
 }
 

@@ -4,7 +4,7 @@
 use super::{BarProgress, Global};
 use anyhow::Context;
 use meshpyr::io;
-use meshpyr::pm::{PmOptions, SimplifyTarget, simplify};
+use meshpyr::pm::{PmOptions, SimplifyGoal, simplify_to_goal};
 use meshpyr::wording::Count;
 use std::path::PathBuf;
 
@@ -48,35 +48,8 @@ pub(crate) struct SimplifyArgs {
 /// Runs `meshpyr simplify`.
 pub(crate) fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
-    let target = match (args.faces, args.ratio, args.error) {
-        (Some(f), _, _) => SimplifyTarget::Faces(f),
-        (_, Some(r), _) => SimplifyTarget::Ratio(r),
-        (_, _, Some(e)) => SimplifyTarget::Error(e),
-        _ => anyhow::bail!("one of --faces, --ratio, --error is required"),
-    };
-    let mut input = super::input::read_input_mesh(&args.input)?;
-    let mut target = target;
-    if let Some(fraction) = args.prune {
-        anyhow::ensure!(
-            (0.0..=1.0).contains(&fraction),
-            "--prune must be a fraction in [0, 1], got {fraction}"
-        );
-        // A ratio refers to the file as given, not to what is left after pruning.
-        if let SimplifyTarget::Ratio(r) = target
-            && r > 0.0
-            && r <= 1.0
-        {
-            target = SimplifyTarget::Faces((r * input.n_triangles() as f64).round() as usize);
-        }
-        let (kept, pruned) = meshpyr::mesh::prune_small_components(&input, fraction);
-        global.say(format_args!(
-            "pruned {} of {} ({}) smaller than {fraction} of the diagonal",
-            pruned.components,
-            Count(pruned.of_components, "component", "components"),
-            Count(pruned.faces, "polygon", "polygons")
-        ));
-        input = kept;
-    }
+    let goal = SimplifyGoal::one_of(args.faces, args.ratio, args.error, args.prune)?;
+    let input = super::input::read_input_mesh(&args.input)?;
     let opts = PmOptions {
         max_normal_angle_degrees: args.max_angle,
         min_quality: args.min_quality,
@@ -84,9 +57,17 @@ pub(crate) fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
         ..PmOptions::default()
     };
     let bar = global.progress("simplify");
-    let result = simplify(&input, target, &opts, &BarProgress(&bar))
+    let (result, pruned) = simplify_to_goal(&input, &goal, &opts, &BarProgress(&bar))
         .with_context(|| format!("cannot simplify {}", args.input.display()))?;
     bar.finish_and_clear();
+    if let (Some(pruned), Some(fraction)) = (pruned, goal.prune) {
+        global.say(format_args!(
+            "pruned {} of {} ({}) smaller than {fraction} of the diagonal",
+            pruned.components,
+            Count(pruned.of_components, "component", "components"),
+            Count(pruned.faces, "polygon", "polygons")
+        ));
+    }
     io::write_mesh(&args.output, &result.mesh)?;
     if let Some(shortfall) = result.shortfall() {
         eprintln!("warning: {}: {shortfall}", args.input.display());

@@ -2,73 +2,15 @@
 //! keeps the input's vertices (count and order), faces and attributes; only positions change.
 
 use super::{BarProgress, Global};
+use crate::choices::named;
 use anyhow::Context;
+use meshpyr::choice::Choice;
 use meshpyr::io;
-use meshpyr::pyramid::PyramidDenoise;
 use meshpyr::smooth::{
-    Boundary, DenoiseOptions, McfOptions, SmoothMethod, TaubinOptions, Variance, Weights,
-    smooth_mesh,
+    Boundary, FilterScale, SmoothKind, SmoothSettings, Variance, Weights, smooth_mesh,
 };
 use std::path::PathBuf;
 use std::time::Instant;
-
-/// Smoothing method. Each variant maps to one [`SmoothMethod`].
-#[derive(clap::ValueEnum, Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) enum MethodArg {
-    /// The recommended automatic method: the adaptive filter at the local scale of each
-    /// face, fitted by local vertex updates, two passes (options as for adaptive).
-    #[default]
-    Auto,
-    /// Ohtake–Belyaev–Seidel adaptive Gaussian filter of the face normals + vertex fitting.
-    Adaptive,
-    /// The same on anisotropic neighbourhoods that do not reach across sharp edges.
-    Anisotropic,
-    /// Taubin λ|μ smoothing (explicit; `--weights`, `--lambda`, `--mu`).
-    Taubin,
-    /// Implicit mean-curvature flow (Desbrun et al. 1999; `--time-step`).
-    Mcf,
-    /// Octaves of the detail pyramid attenuated by how far they stand above the noise the
-    /// pyramid estimates, with the crease-keeping normal-adaptive operator (`--strength`).
-    Pyramid,
-}
-
-/// Edge weights of Taubin smoothing.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum WeightsArg {
-    /// Equal weights.
-    Uniform,
-    /// Inverse edge length.
-    InverseEdge,
-    /// Cotangent weights clamped at zero.
-    Cotan,
-}
-
-/// Boundary rule of the baselines.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum BoundaryArg {
-    /// Boundary vertices do not move.
-    Fixed,
-    /// Boundary vertices move (Taubin: along the boundary curve; MCF: natural boundary).
-    Smooth,
-}
-
-/// Unit of the filter scales.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum ScaleArg {
-    /// The mean edge length of the whole mesh.
-    Global,
-    /// Each face's own edge length (averaged with its neighbours').
-    Local,
-}
-
-/// Variance estimate of the scale selection.
-#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum VarianceArg {
-    /// Weighted variance of the normals (as reconstructed from the paper).
-    Biased,
-    /// With the reliability-weights correction (default; see the library docs).
-    Unbiased,
-}
 
 /// Arguments of `meshpyr smooth`.
 #[derive(clap::Args, Debug)]
@@ -91,8 +33,8 @@ pub(crate) struct SmoothArgs {
     #[arg(short, long)]
     pub(crate) output: PathBuf,
     /// Smoothing method.
-    #[arg(long, value_enum, default_value_t = MethodArg::Auto)]
-    pub(crate) method: MethodArg,
+    #[arg(long, value_parser = named::<SmoothKind>(), default_value = SmoothKind::default().name())]
+    pub(crate) method: SmoothKind,
     /// auto/adaptive/anisotropic: ε of the scale selection (× L²); larger smooths more.
     #[arg(long)]
     pub(crate) epsilon: Option<f64>,
@@ -111,12 +53,12 @@ pub(crate) struct SmoothArgs {
     #[arg(long)]
     pub(crate) rho: Option<f64>,
     /// auto/adaptive/anisotropic: variance estimate of the scale selection.
-    #[arg(long, value_enum)]
-    pub(crate) variance: Option<VarianceArg>,
+    #[arg(long, value_parser = named::<Variance>())]
+    pub(crate) variance: Option<Variance>,
     /// auto/adaptive/anisotropic: what σ is measured in: the mean edge length L everywhere
     /// (`global`) or each face's local edge length (`local`, for non-uniform sampling).
-    #[arg(long, value_enum)]
-    pub(crate) scale: Option<ScaleArg>,
+    #[arg(long, value_parser = named::<FilterScale>())]
+    pub(crate) scale: Option<FilterScale>,
     /// auto/adaptive/anisotropic: fit the vertices with this many rounds of the local vertex
     /// update (Sun et al. 2007) instead of minimising the global energy.
     #[arg(long)]
@@ -134,8 +76,8 @@ pub(crate) struct SmoothArgs {
     #[arg(long)]
     pub(crate) iterations: Option<usize>,
     /// taubin: edge weights [default: cotan].
-    #[arg(long, value_enum)]
-    pub(crate) weights: Option<WeightsArg>,
+    #[arg(long, value_parser = named::<Weights>())]
+    pub(crate) weights: Option<Weights>,
     /// taubin: shrinking factor λ, in (0, 1] [default: 0.5].
     #[arg(long, allow_hyphen_values = true)]
     pub(crate) lambda: Option<f64>,
@@ -146,8 +88,8 @@ pub(crate) struct SmoothArgs {
     #[arg(long, allow_hyphen_values = true)]
     pub(crate) time_step: Option<f64>,
     /// taubin/mcf: what boundary vertices do [default: fixed].
-    #[arg(long, value_enum)]
-    pub(crate) boundary: Option<BoundaryArg>,
+    #[arg(long, value_parser = named::<Boundary>())]
+    pub(crate) boundary: Option<Boundary>,
     /// pyramid: how much noise to assume, in units of the estimated noise power (octave gain
     /// 1 − strength / r², r the octave's details over the noise); more removes more [default: 1].
     #[arg(long)]
@@ -155,132 +97,36 @@ pub(crate) struct SmoothArgs {
 }
 
 impl SmoothArgs {
-    /// The method and options these arguments describe; an option of another method is an
-    /// error rather than silently ignored.
-    pub(crate) fn method(&self) -> anyhow::Result<SmoothMethod> {
-        self.reject_options_of_other_methods()?;
-        let boundary = match self.boundary {
-            Some(BoundaryArg::Smooth) => Boundary::Smooth,
-            Some(BoundaryArg::Fixed) | None => Boundary::Fixed,
-        };
-        Ok(match self.method {
-            MethodArg::Auto if self.given_options().is_empty() => SmoothMethod::Auto,
-            MethodArg::Auto | MethodArg::Adaptive | MethodArg::Anisotropic => {
-                SmoothMethod::Ohtake(self.denoise_options())
-            }
-            MethodArg::Taubin => {
-                let d = TaubinOptions::default();
-                SmoothMethod::Taubin(TaubinOptions {
-                    iterations: self.iterations.unwrap_or(d.iterations),
-                    lambda: self.lambda.unwrap_or(d.lambda),
-                    mu: self.mu.unwrap_or(d.mu),
-                    weights: match self.weights {
-                        Some(WeightsArg::Uniform) => Weights::Uniform,
-                        Some(WeightsArg::InverseEdge) => Weights::InverseEdgeLength,
-                        Some(WeightsArg::Cotan) => Weights::Cotangent,
-                        None => d.weights,
-                    },
-                    boundary,
-                })
-            }
-            MethodArg::Pyramid => SmoothMethod::Pyramid(PyramidDenoise {
-                strength: self.strength.unwrap_or(PyramidDenoise::default().strength),
-            }),
-            MethodArg::Mcf => {
-                let d = McfOptions::default();
-                SmoothMethod::Mcf(McfOptions {
-                    iterations: self.iterations.unwrap_or(d.iterations),
-                    time_step: self.time_step.unwrap_or(d.time_step),
-                    boundary,
-                })
-            }
-        })
-    }
-
-    /// Every option given on the command line, with the methods it applies to.
-    fn given_options(&self) -> Vec<(&'static str, &'static [MethodArg])> {
-        use MethodArg::{Adaptive, Anisotropic, Auto, Mcf, Pyramid, Taubin};
-        const OHTAKE: &[MethodArg] = &[Auto, Adaptive, Anisotropic];
-        let given = [
-            ("--epsilon", self.epsilon.is_some(), OHTAKE),
-            ("--sigma-min", self.sigma_min.is_some(), OHTAKE),
-            ("--sigma-max", self.sigma_max.is_some(), OHTAKE),
-            ("--scales", self.scales.is_some(), OHTAKE),
-            ("--rho", self.rho.is_some(), OHTAKE),
-            ("--variance", self.variance.is_some(), OHTAKE),
-            ("--fit-iterations", self.fit_iterations.is_some(), OHTAKE),
-            ("--scale", self.scale.is_some(), OHTAKE),
-            ("--vertex-updates", self.vertex_updates.is_some(), OHTAKE),
-            ("--passes", self.passes.is_some(), OHTAKE),
-            ("--step-cap", self.step_cap.is_some(), OHTAKE),
-            ("--iterations", self.iterations.is_some(), &[Taubin, Mcf]),
-            ("--weights", self.weights.is_some(), &[Taubin]),
-            ("--lambda", self.lambda.is_some(), &[Taubin]),
-            ("--mu", self.mu.is_some(), &[Taubin]),
-            ("--time-step", self.time_step.is_some(), &[Mcf]),
-            ("--boundary", self.boundary.is_some(), &[Taubin, Mcf]),
-            ("--strength", self.strength.is_some(), &[Pyramid]),
-        ];
-        given
-            .into_iter()
-            .filter(|(_, set, _)| *set)
-            .map(|(name, _, methods)| (name, methods))
-            .collect()
-    }
-
-    fn reject_options_of_other_methods(&self) -> anyhow::Result<()> {
-        for (name, methods) in self.given_options() {
-            if !methods.contains(&self.method) {
-                let names: Vec<String> = methods.iter().map(method_name).collect();
-                anyhow::bail!(
-                    "{name} does not apply to --method {} (it is an option of {})",
-                    method_name(&self.method),
-                    names.join(" and ")
-                );
-            }
+    /// The library's settings these arguments spell.
+    fn settings(&self) -> SmoothSettings {
+        SmoothSettings {
+            method: self.method,
+            epsilon: self.epsilon,
+            sigma_min: self.sigma_min,
+            sigma_max: self.sigma_max,
+            scales: self.scales,
+            rho: self.rho,
+            variance: self.variance,
+            scale: self.scale,
+            vertex_updates: self.vertex_updates,
+            passes: self.passes,
+            fit_iterations: self.fit_iterations,
+            step_cap: self.step_cap,
+            iterations: self.iterations,
+            weights: self.weights,
+            lambda: self.lambda,
+            mu: self.mu,
+            time_step: self.time_step,
+            boundary: self.boundary,
+            strength: self.strength,
         }
-        Ok(())
     }
-
-    /// The Ohtake options these arguments describe (`adaptive` presets unless the method is
-    /// `anisotropic`).
-    fn denoise_options(&self) -> DenoiseOptions {
-        let mut o = match self.method {
-            MethodArg::Anisotropic => DenoiseOptions::anisotropic(),
-            MethodArg::Auto => DenoiseOptions::automatic(),
-            _ => DenoiseOptions::adaptive(),
-        };
-        o.epsilon = self.epsilon.unwrap_or(o.epsilon);
-        o.sigma_min = self.sigma_min.unwrap_or(o.sigma_min);
-        o.sigma_max = self.sigma_max.unwrap_or(o.sigma_max);
-        o.scales = self.scales.unwrap_or(o.scales);
-        o.rho = self.rho.unwrap_or(o.rho);
-        o.variance = match self.variance {
-            Some(VarianceArg::Biased) => Variance::Biased,
-            Some(VarianceArg::Unbiased) => Variance::Unbiased,
-            None => o.variance,
-        };
-        o.max_iterations = self.fit_iterations.unwrap_or(o.max_iterations);
-        o.step_cap = self.step_cap.unwrap_or(o.step_cap);
-        o.passes = self.passes.unwrap_or(o.passes);
-        o.vertex_updates = self.vertex_updates.unwrap_or(o.vertex_updates);
-        o.local_scale = self.scale.map_or(o.local_scale, |s| s == ScaleArg::Local);
-        o
-    }
-}
-
-fn method_name(method: &MethodArg) -> String {
-    use clap::ValueEnum;
-    method
-        .to_possible_value()
-        .map_or_else(String::new, |v| v.get_name().to_string())
 }
 
 /// Runs `meshpyr smooth`.
 pub(crate) fn run(args: SmoothArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
-    let method = args.method()?;
-    method.validate()?;
+    let method = args.settings().method()?;
     let input = super::input::read_input_mesh(&args.input)?;
     let start = Instant::now();
     let bar = global.progress("smooth");

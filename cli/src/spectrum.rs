@@ -19,7 +19,7 @@ pub(crate) struct SpectrumArgs {
     pub(crate) csv: Option<PathBuf>,
     /// Relaxation operator used for the prediction (default second-difference; a .pyr input
     /// uses the one it was built with, and its stored details if they were analysed with it).
-    #[arg(long, value_parser = crate::choices::relax_kind())]
+    #[arg(long, value_parser = crate::choices::named::<RelaxKind>())]
     pub(crate) relax: Option<RelaxKind>,
 }
 

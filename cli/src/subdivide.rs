@@ -1,44 +1,14 @@
 //! `meshpyr subdivide IN -o OUT --levels K`: cascadic MCM subdivision (or Loop).
 
 use super::{BarProgress, Global};
+use crate::choices::named;
 use anyhow::Context;
+use meshpyr::choice::Choice;
 use meshpyr::io;
 use meshpyr::mesh::{Mesh, PolygonMesh};
-use meshpyr::subdiv::{self, Refinement, Scheme, Solver, SubdivOptions};
+use meshpyr::subdiv::{self, Refinement, Scheme, SolverChoice, SubdivSettings};
 use meshpyr::wording::Count;
 use std::path::PathBuf;
-
-/// Subdivision rule.
-#[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub(crate) enum SchemeArg {
-    /// Implicit mean-curvature motion with cascadic multigrid (Diewald–Morigi–Rumpf).
-    Mcm,
-    /// Loop's scheme (quadrisection only).
-    Loop,
-}
-
-/// Refinement rule.
-#[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub(crate) enum RefineArg {
-    /// 1-to-4 split at edge midpoints (4× faces per level).
-    Quad,
-    /// Conforming newest-vertex bisection (2× faces per level).
-    Bisect,
-}
-
-/// Linear solver of each MCM level.
-#[derive(clap::ValueEnum, Clone, Copy, Debug)]
-pub(crate) enum SolverArg {
-    /// `exact` while the output has at most 250k vertices (where the cascadic approximation
-    /// visibly oscillates on coarse inputs and the exact solve costs little), `cg` above.
-    Auto,
-    /// Cascadic damped Jacobi.
-    Jacobi,
-    /// Cascadic Jacobi-preconditioned CG.
-    Cg,
-    /// Exact per level (sparse Cholesky; CG to 1e-10 in builds without the `solver` feature).
-    Exact,
-}
 
 /// Arguments of `meshpyr subdivide`.
 #[derive(clap::Args, Debug)]
@@ -54,27 +24,27 @@ pub(crate) struct SubdivideArgs {
     #[arg(short, long)]
     pub(crate) output: PathBuf,
     /// Refinement levels.
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = SubdivSettings::default().levels)]
     pub(crate) levels: usize,
     /// Position rule.
-    #[arg(long, value_enum, default_value = "mcm")]
-    pub(crate) scheme: SchemeArg,
+    #[arg(long, value_parser = named::<Scheme>(), default_value = SubdivSettings::default().scheme.name())]
+    pub(crate) scheme: Scheme,
     /// Refinement rule.
-    #[arg(long, value_enum, default_value = "quad")]
-    pub(crate) refine: RefineArg,
+    #[arg(long, value_parser = named::<Refinement>(), default_value = SubdivSettings::default().refinement.name())]
+    pub(crate) refine: Refinement,
     /// Solver for MCM levels (`exact` gives the true fixed point; `cg`/`jacobi` are the
     /// faster cascadic approximations, linear in the output size).
-    #[arg(long, value_enum, default_value = "auto")]
-    pub(crate) solver: SolverArg,
+    #[arg(long, value_parser = named::<SolverChoice>(), default_value = SubdivSettings::default().solver.name())]
+    pub(crate) solver: SolverChoice,
     /// Filter-width constant c (σ = c · mean edge length of the input). Larger values
     /// smooth and shrink more; coarse meshes collapse above about 0.4.
-    #[arg(long, default_value_t = 0.25)]
+    #[arg(long, default_value_t = SubdivSettings::default().width)]
     pub(crate) width: f64,
     /// Let the filter width follow the local edge length (for meshes with very uneven edges).
     #[arg(long)]
     pub(crate) local_width: bool,
     /// Cascadic steps on the finest level (m_lmax).
-    #[arg(long, default_value_t = 2)]
+    #[arg(long, default_value_t = SubdivSettings::default().finest_steps)]
     pub(crate) finest_steps: usize,
     /// Growth factor of the cascadic schedule (default: 2√2 for CG, 4 for Jacobi; quad).
     #[arg(long)]
@@ -93,35 +63,17 @@ pub(crate) fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
             built.report
         ));
     }
-    let options = SubdivOptions {
+    let settings = SubdivSettings {
         levels: args.levels,
-        scheme: match args.scheme {
-            SchemeArg::Mcm => Scheme::Mcm,
-            SchemeArg::Loop => Scheme::Loop,
-        },
-        refinement: match args.refine {
-            RefineArg::Quad => Refinement::Quadrisection,
-            RefineArg::Bisect => Refinement::Bisection,
-        },
-        solver: match args.solver {
-            SolverArg::Auto => Solver::auto(
-                built.mesh.n_vertices(),
-                args.levels,
-                match args.refine {
-                    RefineArg::Quad => Refinement::Quadrisection,
-                    RefineArg::Bisect => Refinement::Bisection,
-                },
-            ),
-            SolverArg::Jacobi => Solver::Jacobi,
-            SolverArg::Cg => Solver::Cg,
-            SolverArg::Exact => Solver::Exact,
-        },
+        scheme: args.scheme,
+        refinement: args.refine,
+        solver: args.solver,
         width: args.width,
         local_width: args.local_width,
         finest_steps: args.finest_steps,
         beta: args.beta,
-        ..SubdivOptions::default()
     };
+    let options = settings.options(built.mesh.n_vertices());
     let bar = global.progress("subdivide");
     let result = subdiv::subdivide(&built.mesh, &options, &BarProgress(&bar))
         .with_context(|| format!("subdividing {}", args.input.display()))?;

@@ -212,7 +212,10 @@ fn an_option_of_another_method_is_refused_before_any_work() {
         assert!(!o.status.success(), "{args:?}");
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(
-            err.contains(&format!("{option} does not apply to --method {method}")),
+            err.contains(&format!(
+                "{} does not apply to method {method}",
+                option.trim_start_matches("--").replace('-', "_")
+            )),
             "{err}"
         );
         assert_eq!(err.trim_end().lines().count(), 1, "{err}");

@@ -79,6 +79,21 @@ fn parse_error(text: &str, reason: impl Into<String>) -> GainParseError {
     }
 }
 
+impl LevelSpec {
+    /// `self` as the level of a low-pass, which keeps the levels up to it: at least one vertex
+    /// (a band may start at level 0, a low-pass may not). `text` is the level as the caller
+    /// wrote it, for the message.
+    pub fn for_lowpass(self, text: &str) -> Result<LevelSpec, GainParseError> {
+        match self {
+            LevelSpec::Vertices(0) => Err(parse_error(
+                text,
+                "a low-pass keeps the levels up to N vertices, so N must be at least 1",
+            )),
+            level => Ok(level),
+        }
+    }
+}
+
 impl FromStr for LevelSpec {
     type Err = GainParseError;
 
