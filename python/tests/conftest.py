@@ -62,6 +62,28 @@ def cli():
 
 
 @pytest.fixture(scope="session")
+def cli_error():
+    """Runs the meshpyr command line expecting it to fail: ``cli_error("smooth", ...)``;
+    returns its stderr."""
+    binary = find_cli()
+    if binary is None or not binary.is_file():
+        pytest.skip("no meshpyr binary: build it with `cargo build --release` (or set MESHPYR_CLI)")
+
+    def run(*args):
+        done = subprocess.run(
+            [str(binary), "--quiet", *map(str, args)],
+            capture_output=True,
+            text=True,
+            check=False,
+        )
+        if done.returncode == 0:
+            raise AssertionError(f"meshpyr {' '.join(map(str, args))} succeeded")
+        return done.stderr
+
+    return run
+
+
+@pytest.fixture(scope="session")
 def sphere():
     """A 926-vertex closed sphere with high-valence poles (float32 PLY)."""
     return meshpyr.read(data("sphere_highval.ply"))
