@@ -3,7 +3,7 @@
 
 mod common;
 
-use common::on_threads;
+use common::{closed_loop_bound, on_threads};
 use glam::DVec3;
 use meshpyr::mesh::{Mesh, SlotIndex};
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
@@ -99,7 +99,7 @@ fn assert_reconstructs(p: &[DVec3], t: &[[u32; 3]]) -> (ProgressiveMesh, DetailP
     let diag = pyr.bbox_diagonal();
     let err = max_dist(&out, pm.original_positions());
     assert!(
-        err <= 1e-12 * diag,
+        err <= closed_loop_bound(&pyr),
         "reconstruction error {err:e} (diag {diag})"
     );
     (pm, pyr)
@@ -153,10 +153,10 @@ fn reconstruction_does_not_depend_on_the_presmoothing() {
         DetailPyramid::analyze_signal(&pm, &SecondDifference::default(), &signal, &NoProgress)
             .unwrap();
     let out = pyr.synthesize(&LevelGains::unit());
-    // Frames built from a wild signal are badly conditioned (tiny, twisted predicted fans), so
-    // rounding grows more than for a surface (1e-12 there); still far from any modelling error.
+    // Frames built from a wild signal are badly conditioned (tiny, twisted predicted fans), and
+    // the closed loop bounds the error all the same.
     let err = max_dist(&out, &signal);
-    assert!(err < 1e-9 * 7.0, "{err:e}");
+    assert!(err <= closed_loop_bound(&pyr), "{err:e}");
 }
 
 /// The bumpy grid with deterministic noise added to the heights, and the clean height function.
@@ -260,7 +260,7 @@ fn planar_linear_signal_has_no_details() {
     }
     let (pm, pyr) = pyramid_of(&p, &t);
     let largest = (0..pyr.n_splits())
-        .flat_map(|k| pyr.split_details(k).1.to_vec())
+        .flat_map(|k| pyr.split_details(k).1)
         .map(|d| d.length())
         .fold(0.0, f64::max);
     assert!(largest < 1e-12, "{largest:e}");
@@ -375,7 +375,7 @@ fn check_relaxation_drives_the_pyramid(op: &dyn meshpyr::relax::Relaxation, name
     assert_eq!(pyr.relaxation(), name);
     let out = pyr.synthesize(&LevelGains::unit());
     let err = max_dist(&out, pm.original_positions());
-    assert!(err <= 1e-12 * pyr.bbox_diagonal(), "{name}: {err:e}");
+    assert!(err <= closed_loop_bound(&pyr), "{name}: {err:e}");
     let n = pyr.n_vertices();
     let low = pyr.synthesize(
         &Filter::default()
@@ -389,7 +389,7 @@ fn check_relaxation_drives_the_pyramid(op: &dyn meshpyr::relax::Relaxation, name
     );
     assert!(r1 < 0.7 * r0, "{name}: roughness {r0} → {r1}");
     let (_, sd) = pyramid_of(&p, &t);
-    assert_ne!(sd.split_details(0).1, pyr.split_details(0).1, "{name}");
+    assert!(!sd.split_details(0).1.eq(pyr.split_details(0).1), "{name}");
 }
 
 #[test]
@@ -450,7 +450,8 @@ fn analysis_gives_the_same_pyramid_on_any_thread_count() {
                     "{name}, {threads} threads"
                 );
                 assert!(
-                    one.split_details(k) == many.split_details(k),
+                    one.split_details(k).0 == many.split_details(k).0
+                        && one.split_details(k).1.eq(many.split_details(k).1),
                     "{name}, {threads} threads: split {k}"
                 );
             }

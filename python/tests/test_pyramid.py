@@ -178,4 +178,5 @@ def test_a_move_that_reaches_no_vertex_warns_and_changes_nothing(sphere, sphere_
     far_away = (100.0, 100.0, 100.0)
     with pytest.warns(UserWarning, match="reaches no vertex of level 200"):
         edited = sphere_pyramid.edit(200, [(far_away, (0.0, 0.0, 1.0))], 1.0)
-    assert np.max(np.abs(edited - sphere[0])) < 1e-9 * np.ptp(sphere[0])
+    # Resynthesised from quantised details: within their bound (1e-6 of the diagonal).
+    assert np.max(np.abs(edited - sphere[0])) < 1e-6 * np.ptp(sphere[0])

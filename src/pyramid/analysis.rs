@@ -11,6 +11,10 @@
 //! Presmoothing only changes vertices the synthesis overwrites with `q + d`, so the pyramid
 //! reconstructs exactly whatever the presmoothing does (the Burt–Adelson property).
 //!
+//! Steps 4 and 5 run in a second pass, coarsest split first (module `quantise`): the walk down
+//! keeps each split's targets `f^(n)_j`, and the details are quantised against the
+//! predictions synthesis itself makes, so that rounding does not add up across levels.
+//!
 //! Step 1 never reads the signal, and it is most of the work (the hinge coefficients), so it
 //! runs first, for all splits, on rayon's threads: the hierarchy is cut into contiguous ranges
 //! of splits, each recorded on its own thread from the very mesh the single walk would have
@@ -22,10 +26,9 @@
 //! finest level. Steps 2–5 then run over the records, finest split first; like synthesis,
 //! they run the splits of a wave (see `waves`) at once, in reverse.
 
-use super::frames::{LocalIndex, frame_min_length};
-use super::synthesis::{
-    Scratch, decode, local_frames, predict_values, prefetch_next_split, presmooth_local,
-};
+use super::frames::LocalIndex;
+use super::quantise::{detail_step, signal_diagonal};
+use super::synthesis::{Scratch, decode, prefetch_next_split, presmooth_local};
 use super::waves::{SharedSignal, Waves, run_waves};
 use super::{CodeWidth, Codes, DetailPyramid, PyramidError, SplitOffsets};
 use crate::mesh::geometry::morton_codes;
@@ -63,18 +66,24 @@ impl DetailPyramid {
             )));
         }
         let layout = Layout::record(pm, relaxation, progress)?;
-        // Steps 2–5, finest split first: waves in reverse storage order, which, like split
+        // Steps 2–3, finest split first: waves in reverse storage order, which, like split
         // order, runs every split after the splits it depends on.
         let mut f = signal.to_vec();
         let slotted = &layout.slotted;
-        let mut details = vec![DVec3::ZERO; slotted.offsets.last().map_or(0, |o| o.details)];
-        let min_length = frame_min_length(layout.bbox_diagonal);
+        let mut targets = vec![DVec3::ZERO; slotted.offsets.last().map_or(0, |o| o.details)];
         with_codes!(&slotted.codes, c => {
-            slotted.downsample(c, &layout.waves, &mut f, &mut details, min_length, progress)
+            slotted.downsample(c, &layout.waves, &mut f, &mut targets, progress)
         });
-        progress.update(1.0);
         let base = f[..layout.n_base].to_vec();
-        Ok(layout.into_pyramid(relaxation, signal, base, details))
+        drop(f);
+        // Steps 4–5 in synthesis order, quantised in the closed loop.
+        let step = detail_step(signal_diagonal(signal));
+        let mut pyramid = layout.into_pyramid(relaxation, signal, base, Vec::new(), step);
+        let done = RECORDS_SHARE + DOWNSAMPLE_SHARE;
+        pyramid.details =
+            pyramid.quantise_details(targets, |x| progress.update(done + (1.0 - done) * x));
+        progress.update(1.0);
+        Ok(pyramid)
     }
 }
 
@@ -156,7 +165,8 @@ impl Layout {
         relaxation: &dyn Relaxation,
         signal: &[DVec3],
         base: Vec<DVec3>,
-        details: Vec<DVec3>,
+        details: Vec<[i32; 3]>,
+        detail_step: f64,
     ) -> DetailPyramid {
         let Layout {
             n_base,
@@ -178,7 +188,7 @@ impl Layout {
             details,
             waves,
             relaxation: relaxation.name(),
-            detail_step: 0.0,
+            detail_step,
             surface_area,
             bbox_diagonal,
         }
@@ -186,8 +196,11 @@ impl Layout {
 }
 
 /// The share of the analysis' time the records take (the progress bar's split between the
-/// two phases; about two thirds with Guskov's operator).
+/// three phases; about two thirds with Guskov's operator).
 pub(crate) const RECORDS_SHARE: f64 = 0.7;
+
+/// The share of the walk down (presmoothing and collapsing); the closed loop takes the rest.
+const DOWNSAMPLE_SHARE: f64 = 0.1;
 
 /// Splits per range below which one thread records them all: a range's walk first reaches the
 /// start of its range (a replay from the base, or a cursor collapsing from the finest level),
@@ -398,7 +411,7 @@ impl Recorder {
                 // doubling copies the stream.
                 locals: Vec::with_capacity(40 * n),
                 codes: Codes::Byte(Vec::with_capacity(160 * n)),
-                weights: Vec::with_capacity(96 * n),
+                weights: Chunked::default(),
                 range,
                 reversed,
                 widest: 0,
@@ -505,12 +518,99 @@ struct Records {
     offsets: Vec<SplitOffsets>,
     locals: Vec<u32>,
     codes: Codes,
-    weights: Vec<f64>,
+    /// In chunks, so that joining the ranges' weights frees them as it goes.
+    weights: Chunked,
     /// The splits recorded, in the order given by `reversed` (finest first when set).
     range: std::ops::Range<usize>,
     reversed: bool,
     /// The largest code.
     widest: u32,
+}
+
+/// Weights in chunks of [`Chunked::CHUNK`] entries: the largest stream (about 600 bytes per split), so
+/// that turning the ranges' streams into the pyramid's one holds a chunk twice, not a range.
+#[derive(Default)]
+struct Chunked {
+    chunks: Vec<Vec<f64>>,
+    len: usize,
+    /// Chunks freed by [`Chunked::free_before`].
+    freed: usize,
+}
+
+impl Chunked {
+    /// 64 MiB chunks: small against a large scan's weights, and above glibc's largest mmap
+    /// threshold (32 MiB), so that a freed chunk goes back to the system instead of staying in
+    /// the allocator's heap, where the joined stream could not reuse it (it is mapped anew).
+    /// An untouched chunk costs address space only.
+    const CHUNK: usize = 1 << 23;
+
+    fn push(&mut self, w: f64) {
+        match self.chunks.last_mut() {
+            Some(last) if last.len() < Self::CHUNK => last.push(w),
+            _ => {
+                let mut chunk = Vec::with_capacity(Self::CHUNK);
+                chunk.push(w);
+                self.chunks.push(chunk);
+            }
+        }
+        self.len += 1;
+    }
+
+    fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Appends entries `from..to` to `out`.
+    fn copy_to(&self, from: usize, to: usize, out: &mut Vec<f64>) {
+        let mut at = from;
+        while at < to {
+            let (c, i) = (at / Self::CHUNK, at % Self::CHUNK);
+            let n = (Self::CHUNK - i).min(to - at);
+            out.extend_from_slice(&self.chunks[c][i..i + n]);
+            at += n;
+        }
+    }
+
+    /// Frees the chunks wholly at or after entry `from` (a walk back to front).
+    fn free_from(&mut self, from: usize) {
+        while self.chunks.len() > from.div_ceil(Self::CHUNK) {
+            self.chunks.pop();
+        }
+    }
+
+    /// Frees the chunks wholly before entry `to` (a walk front to back).
+    fn free_before(&mut self, to: usize) {
+        while self.freed < to / Self::CHUNK {
+            self.chunks[self.freed] = Vec::new();
+            self.freed += 1;
+        }
+    }
+}
+
+/// The weights of all splits in split order (a range recorded finest first is read back to
+/// front), each chunk of the ranges' streams freed once copied; and where each split's
+/// weights start.
+fn join_weights(ranges: &mut [Records]) -> (Vec<f64>, Vec<usize>) {
+    let total = ranges.iter().map(|r| r.weights.len()).sum();
+    let n_splits: usize = ranges.iter().map(|r| r.offsets.len() - 1).sum();
+    let mut weights = Vec::with_capacity(total);
+    let mut starts = Vec::with_capacity(n_splits);
+    for r in ranges {
+        let n = r.offsets.len() - 1;
+        for j in 0..n {
+            let i = if r.reversed { n - 1 - j } else { j };
+            let (from, to) = (r.offsets[i].weights, r.offsets[i + 1].weights);
+            starts.push(weights.len());
+            r.weights.copy_to(from, to, &mut weights);
+            if r.reversed {
+                r.weights.free_from(from);
+            } else {
+                r.weights.free_before(to);
+            }
+        }
+        r.weights = Chunked::default();
+    }
+    (weights, starts)
 }
 
 /// The range record holding split `k` (ranges are contiguous and in split order), and the
@@ -537,25 +637,29 @@ struct Slotted {
 
 impl Slotted {
     /// The records of all ranges copied into the slots `waves` assigns them (every range's
-    /// codes already in one width). Streams are copied one at a time and each range stream is
-    /// freed once copied, so the peak is the slotted streams plus the range's weights (the
-    /// largest stream), not both layouts whole. Each stream is copied by all threads at once
-    /// (the reads are scattered, so one thread would mostly wait for memory).
+    /// codes already in one width), but for the weights: they are only ever read from a
+    /// split's start, so they stay in range order, joined chunk by chunk, which never holds
+    /// the largest stream twice. The other streams are copied one at a time and each range
+    /// stream is freed once copied. Each is copied by all threads at once (the reads are
+    /// scattered, so one thread would mostly wait for memory).
     fn new(mut ranges: Vec<Records>, waves: &Waves) -> Slotted {
         let n_splits: usize = ranges.iter().map(|r| r.offsets.len() - 1).sum();
+        let (weights, weights_start) = join_weights(&mut ranges);
         let at = |slot: usize| record_of(&ranges, waves.split_at(slot));
         let mut next = SplitOffsets::default();
         let mut offsets = Vec::with_capacity(n_splits + 1);
-        offsets.push(next);
         for slot in 0..n_splits {
             let (r, i) = at(slot);
             let (o, end) = (r.offsets[i], r.offsets[i + 1]);
+            next.weights = weights_start[waves.split_at(slot)];
+            offsets.push(next);
             next.locals += end.locals - o.locals;
             next.codes += end.codes - o.codes;
-            next.weights += end.weights - o.weights;
             next.details += end.details - o.details;
-            offsets.push(next);
         }
+        drop(weights_start);
+        next.weights = weights.len();
+        offsets.push(next);
         let chunks = 4 * rayon::current_num_threads();
         let cuts: Vec<usize> = (0..=chunks).map(|c| n_splits * c / chunks).collect();
         let locals = stream(&cuts, &offsets, &at, |r| &r.locals, |o| o.locals);
@@ -573,8 +677,6 @@ impl Slotted {
         for r in &mut ranges {
             r.codes = Codes::Byte(Vec::new());
         }
-        let at = |slot: usize| record_of(&ranges, waves.split_at(slot));
-        let weights = stream(&cuts, &offsets, &at, |r| &r.weights, |o| o.weights);
         Slotted {
             offsets,
             locals,
@@ -583,30 +685,28 @@ impl Slotted {
         }
     }
 
-    /// Steps 2–5 of the split stored at `slot`, reading `f = f^(n)`: writes the presmoothed
-    /// values of its 1-ring (`f^(n−1)` there) into `f` and its details into their places in
-    /// `details` (`min_length`: see [`vertex_frame`](super::frames::vertex_frame)).
-    #[allow(clippy::too_many_arguments)]
-    fn split_details<I: LocalIndex>(
+    /// Steps 2–3 of the split stored at `slot`, reading `f = f^(n)`: writes the presmoothed
+    /// values of its 1-ring (`f^(n−1)` there) into `f`, and the values `f^(n)` of its touched
+    /// vertices, which synthesis must reach, into their places in `targets`.
+    fn split_targets<I: LocalIndex>(
         &self,
         codes: &[I],
         slot: usize,
         f: &SharedSignal,
-        details: &SharedSignal,
-        min_length: f64,
+        targets: &SharedSignal,
         scratch: &mut Scratch,
     ) {
         let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
         let table = &self.locals[o.locals..next.locals];
         let t = next.details - o.details;
-        let survivor = decode(codes, o.codes, o.weights, &mut scratch.entries);
+        decode(codes, o.codes, o.weights, &mut scratch.entries);
         prefetch_next_split(f, &self.offsets, &self.locals, slot);
-        // 2. Presmooth the ring from f^(n); remember f^(n) on the touched vertices.
         let g = &mut scratch.g;
         g.clear();
         g.extend(table.iter().map(|&x| f.get(x as usize)));
-        scratch.saved.clear();
-        scratch.saved.extend_from_slice(&g[..t]);
+        for (i, &value) in g[..t].iter().enumerate() {
+            targets.set(o.details + i, value);
+        }
         presmooth_local(
             codes,
             &self.weights,
@@ -614,54 +714,29 @@ impl Slotted {
             g,
             &mut scratch.smoothed,
         );
-        // 3. Downsample: f^(n−1) is the presmoothed ring; the removed vertex is gone (its
-        //    value is never read again: the prediction starts it at its survivor).
-        g[1..t].copy_from_slice(&scratch.smoothed);
+        // Downsample: f^(n−1) is the presmoothed ring; the removed vertex is gone (its value is
+        // never read again: the prediction starts it at its survivor).
         for (&x, &s) in table[1..t].iter().zip(&scratch.smoothed) {
             f.set(x as usize, s);
         }
-        // 4. Predict, 5. details in the frames of the predicted geometry.
-        predict_values(
-            codes,
-            &self.weights,
-            &scratch.entries,
-            survivor,
-            g,
-            &mut scratch.q,
-        );
-        local_frames(
-            codes,
-            &scratch.entries,
-            survivor,
-            g,
-            &mut scratch.frames,
-            min_length,
-        );
-        for i in 0..t {
-            let d = scratch.frames[i].to_local(scratch.saved[i] - scratch.q[i]);
-            details.set(o.details + i, d);
-        }
     }
 
-    /// Steps 2–5 for every split, turning `f = f^(finest)` into the base signal (on the base
-    /// vertices) and filling `details`: waves from the last to the first, large waves on
+    /// Steps 2–3 for every split, turning `f = f^(finest)` into the base signal (on the base
+    /// vertices) and filling `targets`: waves from the last to the first, large waves on
     /// rayon's threads (see [`run_waves`]).
     fn downsample<I: LocalIndex>(
         &self,
         codes: &[I],
         waves: &Waves,
         f: &mut [DVec3],
-        details: &mut [DVec3],
-        min_length: f64,
+        targets: &mut [DVec3],
         progress: &dyn Progress,
     ) {
-        let (f, details) = (SharedSignal::new(f), SharedSignal::new(details));
+        let (f, targets) = (SharedSignal::new(f), SharedSignal::new(targets));
         run_waves(
             (0..waves.len()).rev().map(|w| waves.wave(w)),
-            |done| progress.update(RECORDS_SHARE + (1.0 - RECORDS_SHARE) * done),
-            |slot, scratch: &mut Scratch| {
-                self.split_details(codes, slot, &f, &details, min_length, scratch)
-            },
+            |done| progress.update(RECORDS_SHARE + DOWNSAMPLE_SHARE * done),
+            |slot, scratch: &mut Scratch| self.split_targets(codes, slot, &f, &targets, scratch),
         );
     }
 }

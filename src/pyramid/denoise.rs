@@ -99,10 +99,15 @@ pub fn pyramid_denoise(
     };
     let gains = wiener_gains(&signal, &unit, sigma, options.strength);
     let filter = octave_filter(&gains, pyramid.n_vertices());
-    let filtered = pyramid.synthesize(&filter.resolve(pyramid.surface_area()));
+    let level_gains = filter.resolve(pyramid.surface_area());
     let mut positions = mesh.positions().to_vec();
-    for (&slot, &p) in pm.pm_to_mesh().iter().zip(&filtered) {
-        positions[slot as usize] = p;
+    // Unit gains keep the input exactly, as `Pyramid::filter` does (synthesis would be within
+    // the details' quantisation of it).
+    if !level_gains.is_unit() {
+        let filtered = pyramid.synthesize(&level_gains);
+        for (&slot, &p) in pm.pm_to_mesh().iter().zip(&filtered) {
+            positions[slot as usize] = p;
+        }
     }
     progress.update(1.0);
     Ok(PyramidDenoised {
@@ -140,7 +145,7 @@ fn octave_medians(pyramid: &DetailPyramid) -> Vec<f64> {
         if octaves.len() <= o {
             octaves.resize_with(o + 1, Vec::new);
         }
-        if let Some(d) = pyramid.split_details(k).1.first() {
+        if let Some(d) = pyramid.split_details(k).1.next() {
             octaves[o].push(d.z.abs());
         }
     }
@@ -260,7 +265,7 @@ mod tests {
             assert!(weaker[o] >= gains[o] && gains[o] >= stronger[o]);
         }
         let (none, _) = run(0.0);
-        assert!((none - noisy).abs() < 1e-9 * noisy);
+        assert_eq!(none, noisy);
     }
 
     #[test]

@@ -40,7 +40,8 @@ fn band(r: &mut Bytes, n0: usize, n: usize) -> (LevelSpec, LevelSpec, f64) {
 ///
 /// - the analysis gives the same pyramid (storage order, base, every detail) on 1 and 3
 ///   threads;
-/// - unit gains reproduce the analysed signal to 1e-9 of the bounding-box diagonal;
+/// - unit gains reproduce the analysed signal to 1e-6 of the bounding-box diagonal (the
+///   details are quantised, docs/algorithms.md §1f);
 /// - a filter of up to three bands from the bytes gives finite values, the same bits on 1 and
 ///   3 threads, and the same bits when resumed from a level in the middle or run as an edit
 ///   that moves nothing;
@@ -76,14 +77,15 @@ pub(crate) fn fuzz_pyramid(data: &[u8]) {
     for k in 0..pyr.n_splits() {
         assert_eq!(pyr.split_slot(k), again.split_slot(k));
         assert!(
-            pyr.split_details(k) == again.split_details(k),
+            pyr.split_details(k).0 == again.split_details(k).0
+                && pyr.split_details(k).1.eq(again.split_details(k).1),
             "split {k} differs on 3 threads"
         );
     }
 
     let original = scan.pm.original_positions();
     let unit = one.install(|| pyr.synthesize(&LevelGains::unit()));
-    let tolerance = 1e-9 * pyr.bbox_diagonal().max(f64::MIN_POSITIVE);
+    let tolerance = 1e-6 * pyr.bbox_diagonal().max(f64::MIN_POSITIVE);
     for (i, (a, b)) in unit.iter().zip(original).enumerate() {
         assert!(
             a.distance(*b) <= tolerance,

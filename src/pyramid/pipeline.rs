@@ -155,13 +155,13 @@ impl Pyramid {
         self.pyramid.n_base_vertices()..=self.pyramid.n_vertices()
     }
 
-    /// The input with `filter` applied to its details (unit gains give the input back: to
-    /// rounding from analysed details, exactly from details read from a `.pyr` file, whose
-    /// quantisation would otherwise show). Bands beyond the levels act on the levels they
-    /// cover.
+    /// The input with `filter` applied to its details (unit gains give the input back
+    /// exactly; synthesis with them would be within `√3/2` of a detail step, about 4e-7 of the
+    /// bounding-box diagonal, because details are quantised). Bands beyond the levels act on
+    /// the levels they cover.
     pub fn filter(&self, filter: &Filter) -> PolygonMesh {
         let gains = filter.resolve(self.pyramid.surface_area());
-        if self.pyramid.detail_step > 0.0 && gains.is_unit() {
+        if gains.is_unit() {
             return self.input.clone();
         }
         self.output_mesh(&self.pyramid.synthesize(&gains))
@@ -198,7 +198,7 @@ impl Pyramid {
         content: PyrContent,
     ) -> Result<(Vec<u8>, SizeReport), FormatError> {
         let details = (content == PyrContent::WithDetails)
-            .then(|| StoredDetails::quantised(&self.pyramid, self.options.relaxation));
+            .then(|| StoredDetails::of(&self.pyramid, self.options.relaxation));
         format::encode_with_details(&self.input, &self.pm, &self.options, details.as_ref())
     }
 
@@ -223,7 +223,7 @@ impl Pyramid {
         let details = match content {
             PyrContent::WithDetails => {
                 let (_, pyramid) = analyze_with(&self.options.relaxation, &pm, &NoProgress)?;
-                Some(StoredDetails::quantised(&pyramid, self.options.relaxation))
+                Some(StoredDetails::of(&pyramid, self.options.relaxation))
             }
             PyrContent::HierarchyOnly => None,
         };

@@ -51,12 +51,12 @@ impl DetailPyramid {
 /// The spectrum of the details of each split in split order (`per_split`), on a hierarchy from
 /// `n_base` to `n_finest` vertices whose finest mesh has area `surface_area` and bounding-box
 /// diagonal `diagonal`.
-pub(crate) fn octave_spectrum<'a>(
+pub(crate) fn octave_spectrum<D: ExactSizeIterator<Item = glam::DVec3>>(
     n_base: usize,
     n_finest: usize,
     surface_area: f64,
     diagonal: f64,
-    per_split: impl Iterator<Item = &'a [glam::DVec3]>,
+    per_split: impl Iterator<Item = D>,
 ) -> Spectrum {
     let diag2 = (diagonal * diagonal).max(f64::MIN_POSITIVE);
     let mut bands: Vec<BandEnergy> = Vec::new();

@@ -1,10 +1,11 @@
 //! A pyramid whose details come from a `.pyr` file's `DETL` section: synthesis still needs the
 //! relaxation weights and fans (step 1 of the analysis, [`Layout::record`]), but not the
-//! detail pass (steps 2–5), and the spectrum needs neither.
+//! detail passes (steps 2–5), and the spectrum needs neither.
 
 use super::analysis::{Layout, surface_stats};
+use super::quantise::{dequantised, quantised};
 use super::spectrum::octave_spectrum;
-use super::{DetailPyramid, LevelGains, PyramidError, Spectrum};
+use super::{DetailPyramid, PyramidError, Spectrum};
 use crate::pm::ProgressiveMesh;
 use crate::progress::Progress;
 use crate::relax::RelaxationSpec;
@@ -28,7 +29,9 @@ pub struct StoredDetails {
 }
 
 impl StoredDetails {
-    /// The details of `pyramid`, analysed with `relaxation`, in split order (exact: `step` 0).
+    /// The details of `pyramid`, analysed with `relaxation`, in split order, with the step
+    /// they are whole multiples of (what a `.pyr` file stores; the pyramid's own values, so
+    /// a pyramid opened from them filters with the very same bits).
     pub fn of(pyramid: &DetailPyramid, relaxation: RelaxationSpec) -> StoredDetails {
         let n = pyramid.n_splits();
         let mut counts = Vec::with_capacity(n);
@@ -36,69 +39,14 @@ impl StoredDetails {
         for k in 0..n {
             let (_, d) = pyramid.split_details(k);
             counts.push(d.len() as u32);
-            details.extend_from_slice(d);
+            details.extend(d);
         }
         StoredDetails {
             relaxation,
             base: pyramid.base.clone(),
             counts,
             details,
-            step: 0.0,
-        }
-    }
-
-    /// The details of `pyramid` (analysed with `relaxation`) quantised for a `.pyr` file: each
-    /// component rounded to a multiple of a power-of-two step, the coarsest from 2^-36 of the
-    /// bounding-box diagonal down to 2^-52 for which synthesis from the rounded details stays
-    /// within 2.5e-10 of the diagonal of synthesis from the exact ones (a quarter of the 1e-9
-    /// promised for any filter), both with unit gains and with every level's gain 2 (a
-    /// fine-band enhancement shows the largest errors; near-degenerate triangles, whose frames
-    /// turn with small changes, need the finer steps). Details read from a file keep their
-    /// step.
-    pub fn quantised(pyramid: &DetailPyramid, relaxation: RelaxationSpec) -> StoredDetails {
-        if pyramid.detail_step > 0.0 {
-            return StoredDetails {
-                step: pyramid.detail_step,
-                ..StoredDetails::of(pyramid, relaxation)
-            };
-        }
-        let diagonal = pyramid.bbox_diagonal;
-        let top = if diagonal > 0.0 && diagonal.is_finite() {
-            diagonal.log2().floor() as i32
-        } else {
-            0
-        };
-        let doubled = LevelGains {
-            bands: vec![(0, usize::MAX, 2.0)],
-            normal_only: false,
-        };
-        let gains = [LevelGains::unit(), doubled];
-        let exact: Vec<Vec<DVec3>> = gains.iter().map(|g| pyramid.synthesize(g)).collect();
-        let mut bits = FIRST_STEP_BITS;
-        loop {
-            let step = 2f64.powi(top - bits);
-            let rounded: Vec<DVec3> = pyramid
-                .details
-                .iter()
-                .map(|d| (*d / step).round() * step)
-                .collect();
-            let within = |(g, e): (&LevelGains, &Vec<DVec3>)| {
-                let synthesized = pyramid.synthesize_with_details(g, &rounded);
-                max_distance(&synthesized, e) <= QUANTISATION_CHECK * diagonal
-            };
-            if bits >= LAST_STEP_BITS || gains.iter().zip(&exact).all(within) {
-                let mut stored = StoredDetails::of(pyramid, relaxation);
-                stored.step = step;
-                let mut at = 0;
-                for k in 0..pyramid.n_splits() {
-                    let from = pyramid.offsets[pyramid.split_slot(k)].details;
-                    let n = stored.counts[k] as usize;
-                    stored.details[at..at + n].copy_from_slice(&rounded[from..from + n]);
-                    at += n;
-                }
-                return stored;
-            }
-            bits += 2;
+            step: pyramid.detail_step,
         }
     }
 
@@ -110,7 +58,7 @@ impl StoredDetails {
             surface_stats(&pm.original_positions()[..n_finest], pm.finest_faces());
         let mut at = 0;
         let per_split = self.counts.iter().map(|&c| {
-            let d = &self.details[at..at + c as usize];
+            let d = self.details[at..at + c as usize].iter().copied();
             at += c as usize;
             d
         });
@@ -143,23 +91,6 @@ impl StoredDetails {
     }
 }
 
-/// The largest synthesis error, relative to the diagonal, that [`StoredDetails::quantised`]
-/// accepts: a quarter of the 1e-9 the stored details promise for any filter.
-const QUANTISATION_CHECK: f64 = 2.5e-10;
-
-/// The coarsest step [`StoredDetails::quantised`] tries, in bits below the diagonal.
-const FIRST_STEP_BITS: i32 = 36;
-
-/// The finest: 2^-52 of the diagonal is the rounding of the positions themselves.
-const LAST_STEP_BITS: i32 = 52;
-
-fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| (*x - *y).length())
-        .fold(0.0, f64::max)
-}
-
 fn mismatch(what: String) -> PyramidError {
     PyramidError::Invalid(format!(
         "the stored details do not match the hierarchy: {what}"
@@ -186,7 +117,13 @@ impl DetailPyramid {
                 layout.n_details()
             )));
         }
-        let mut details = vec![DVec3::ZERO; stored.details.len()];
+        let step = stored.step;
+        if !(step > 0.0 && step.log2().fract() == 0.0) {
+            return Err(mismatch(format!(
+                "a detail step of {step} (the steps are powers of two)"
+            )));
+        }
+        let mut details = vec![[0; 3]; stored.details.len()];
         let mut at = 0;
         for (k, &c) in stored.counts.iter().enumerate() {
             let c = c as usize;
@@ -197,17 +134,27 @@ impl DetailPyramid {
                 )));
             }
             let to = layout.details_start(k);
-            details[to..to + c].copy_from_slice(&stored.details[at..at + c]);
+            for (q, &d) in details[to..to + c]
+                .iter_mut()
+                .zip(&stored.details[at..at + c])
+            {
+                *q = quantised(d, step);
+                if dequantised(*q, step) != d {
+                    return Err(mismatch(format!(
+                        "split {k} has a detail that is not a whole multiple of the step {step} in 32 bits"
+                    )));
+                }
+            }
             at += c;
         }
         progress.update(1.0);
-        let mut pyramid = layout.into_pyramid(
+        let pyramid = layout.into_pyramid(
             relaxation,
             pm.original_positions(),
             stored.base.clone(),
             details,
+            step,
         );
-        pyramid.detail_step = stored.step;
         Ok(pyramid)
     }
 }

@@ -14,6 +14,7 @@
 
 use super::frames::{Frame, LocalIndex, frame_min_length, vertex_frame};
 use super::gains::LevelGains;
+use super::quantise::{dequantised, quantised};
 use super::waves::{SharedSignal, run_waves};
 use super::{Codes, DetailPyramid, PyramidError, SplitOffsets};
 use glam::DVec3;
@@ -40,7 +41,6 @@ pub(crate) struct Scratch {
     pub q: Vec<DVec3>,
     pub frames: Vec<Frame>,
     pub entries: Vec<Entry>,
-    pub saved: Vec<DVec3>,
     pub smoothed: Vec<DVec3>,
 }
 
@@ -197,7 +197,7 @@ impl DetailPyramid {
     fn synthesize_split<I: LocalIndex>(
         &self,
         codes: &[I],
-        details: &[DVec3],
+        details: &[[i32; 3]],
         slot: usize,
         f: &SharedSignal,
         gains: &LevelGains,
@@ -245,8 +245,88 @@ impl DetailPyramid {
             .zip(&scratch.frames)
             .zip(details)
         {
+            let d = dequantised(d, self.detail_step);
             f.set(x as usize, q + frame.to_world_scaled(d, tangential, normal));
         }
+    }
+
+    /// The closed loop of the analysis (module `quantise`) for the split stored at `slot`:
+    /// predicts its touched vertices from `f = f^(n−1)` as synthesis with unit gains does,
+    /// replaces their targets in `targets` by the quantised details that bring them closest,
+    /// and writes the values synthesis will compute from those into `f`.
+    fn quantise_split<I: LocalIndex>(
+        &self,
+        codes: &[I],
+        slot: usize,
+        f: &SharedSignal,
+        targets: &SharedSignal,
+        scratch: &mut Scratch,
+    ) {
+        let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
+        let locals = &self.locals[o.locals..next.locals];
+        prefetch_next_split(f, &self.offsets, &self.locals, slot);
+        let g = &mut scratch.g;
+        g.clear();
+        g.extend(locals.iter().map(|&x| f.get(x as usize)));
+        let survivor = decode(codes, o.codes, o.weights, &mut scratch.entries);
+        predict_values(
+            codes,
+            &self.weights,
+            &scratch.entries,
+            survivor,
+            g,
+            &mut scratch.q,
+        );
+        local_frames(
+            codes,
+            &scratch.entries,
+            survivor,
+            g,
+            &mut scratch.frames,
+            frame_min_length(self.bbox_diagonal),
+        );
+        let step = self.detail_step;
+        for (i, ((&x, &q), frame)) in locals
+            .iter()
+            .zip(&scratch.q)
+            .zip(&scratch.frames)
+            .enumerate()
+        {
+            let target = targets.get(o.details + i);
+            let d = dequantised(quantised(frame.to_local(target - q), step), step);
+            targets.set(o.details + i, d);
+            // The very expression synthesis evaluates with unit gains, so that it computes
+            // these bits.
+            f.set(x as usize, q + frame.to_world_scaled(d, 1.0, 1.0));
+        }
+    }
+
+    /// Turns `targets` (storage order: per touched entry, the value the analysis had there
+    /// before its split's presmoothing) into the pyramid's quantised details, synthesising
+    /// from the base with unit gains as it goes (the closed loop of module `quantise`).
+    /// `progress` hears the share of splits done.
+    pub(crate) fn quantise_details(
+        &self,
+        mut targets: Vec<DVec3>,
+        progress: impl Fn(f64) + Sync,
+    ) -> Vec<[i32; 3]> {
+        let mut f = self.base_signal();
+        {
+            let f = SharedSignal::new(&mut f);
+            let targets = SharedSignal::new(&mut targets);
+            with_codes!(&self.codes, c => run_waves(
+                (0..self.waves.len()).map(|w| self.waves.wave(w)),
+                &progress,
+                |slot, scratch: &mut Scratch| self.quantise_split(c, slot, &f, &targets, scratch),
+            ));
+        }
+        drop(f);
+        // The targets now hold whole multiples of the step: their integers are exact, and
+        // collecting in place reuses the allocation instead of holding both arrays.
+        let step = self.detail_step;
+        let mut details: Vec<[i32; 3]> = targets.into_iter().map(|d| quantised(d, step)).collect();
+        details.shrink_to_fit();
+        details
     }
 
     /// Synthesis of the splits `splits` on `f`: wave after wave, in storage order, large waves
@@ -254,7 +334,7 @@ impl DetailPyramid {
     fn synthesize_splits<I: LocalIndex>(
         &self,
         codes: &[I],
-        details: &[DVec3],
+        details: &[[i32; 3]],
         f: &mut [DVec3],
         splits: std::ops::Range<usize>,
         gains: &LevelGains,
@@ -325,24 +405,6 @@ impl DetailPyramid {
         let to = to.clamp(from, self.n_finest);
         let splits = from - self.n_base..to - self.n_base;
         with_codes!(&self.codes, c => self.synthesize_splits(c, &self.details, f, splits, gains))
-    }
-
-    /// [`DetailPyramid::synthesize`] with `details` (storage order, as many as the pyramid's)
-    /// in place of the pyramid's own.
-    pub(crate) fn synthesize_with_details(
-        &self,
-        gains: &LevelGains,
-        details: &[DVec3],
-    ) -> Vec<DVec3> {
-        assert_eq!(
-            details.len(),
-            self.details.len(),
-            "one detail per touched vertex"
-        );
-        let mut f = self.base_signal();
-        let splits = 0..self.n_splits();
-        with_codes!(&self.codes, c => self.synthesize_splits(c, details, &mut f, splits, gains));
-        f
     }
 
     /// [`DetailPyramid::synthesize_range`] from `from` to the finest level, checking that `f` fits.

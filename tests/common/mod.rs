@@ -275,3 +275,9 @@ pub fn byte_patterns(n: u32, len: u32) -> impl Iterator<Item = Vec<u8>> {
             .collect()
     })
 }
+
+/// How far unit gains may land from the analysed signal: `√3/2` of the pyramid's detail step
+/// (details are quantised in a closed loop, docs/algorithms.md §1f), plus rounding.
+pub fn closed_loop_bound(p: &meshpyr::pyramid::DetailPyramid) -> f64 {
+    0.5 * 3f64.sqrt() * p.detail_step() + 1e-12 * p.bbox_diagonal()
+}

@@ -14,7 +14,7 @@ use glam::DVec3;
 
 /// The version of the analysis the stored details come from: bumped whenever the analysis
 /// changes its output, so that details of an older analysis are recomputed, not used.
-pub(crate) const ANALYSIS_VERSION: u8 = 1;
+pub(crate) const ANALYSIS_VERSION: u8 = 2;
 
 /// Details given without a step (exact) are quantised with `2^(⌊log2 diagonal⌋ − STEP_BITS)`:
 /// at most 2^-STEP_BITS of the diagonal, at least half that.
@@ -64,7 +64,7 @@ pub(crate) fn step_exponent(diagonal: f64) -> i32 {
 }
 
 /// The `DETL` payload of `stored` (details in split order), quantised with its step if it has
-/// one (a power of two, as [`StoredDetails::quantised`] chooses), else with `2^step_exp`, analysed on the hierarchy whose `BASE` and `SPLT` payloads have checksums
+/// one (a power of two, as [`StoredDetails::of`] gives), else with `2^step_exp`, analysed on the hierarchy whose `BASE` and `SPLT` payloads have checksums
 /// `hierarchy_crcs`. `None` when a detail is not finite or too large to quantise (the file is
 /// then written without the section).
 pub(crate) fn encode_details(
