@@ -85,6 +85,7 @@
 //!
 //! | module | what it holds |
 //! |---|---|
+//! | [`choice`] | the named values of options, and the message for an unknown name |
 //! | [`mesh`] | the file-level [`PolygonMesh`], the half-edge [`mesh::Mesh`] and its repairs |
 //! | [`io`] | the mesh file formats |
 //! | [`pm`] | the progressive mesh and simplification |
@@ -97,14 +98,15 @@
 //! | [`numerics`] | the finite elements and solvers that subdivision and smoothing share |
 //! | [`render`] | PNG pictures of meshes, coloured by a per-vertex value if asked |
 //! | [`progress`] | progress reporting |
-//! | `view` | the browser editor's server (feature `view`) |
+//! | [`wording`] | counts with their nouns, as messages show them |
 //!
-//! Without default features (`meshpyr = { version = "…", default-features = false }`) the
-//! crate is the library alone, without the command line's dependencies.
+//! The `meshpyr` command line and its browser editor are a crate of their own (`cli/` in the
+//! repository) that uses this library through the door above like any other caller. Without
+//! default features (`meshpyr = { version = "…", default-features = false }`) the exact sparse
+//! solver of subdivision is left out.
 #![warn(missing_docs)]
 
-#[cfg(feature = "cli")]
-pub mod cli;
+pub mod choice;
 pub mod format;
 #[doc(hidden)]
 pub mod fuzzing;
@@ -112,8 +114,6 @@ pub mod io;
 pub mod mesh;
 pub mod metrics;
 pub mod numerics;
-#[cfg(feature = "cli")]
-pub(crate) mod plot;
 pub mod pm;
 pub mod progress;
 pub mod pyramid;
@@ -121,9 +121,7 @@ pub mod relax;
 pub mod render;
 pub mod smooth;
 pub mod subdiv;
-#[cfg(feature = "view")]
-pub mod view;
-pub(crate) mod wording;
+pub mod wording;
 
 pub use io::{read_mesh, write_mesh};
 pub use mesh::{MeshInfo, PolygonMesh};

@@ -5,7 +5,7 @@ use std::fmt;
 /// A count with its noun in the right number: `Count(n, "face", "faces")` shows as `1 face` or
 /// `3 faces`.
 #[derive(Clone, Copy, Debug)]
-pub(crate) struct Count<'a>(pub usize, pub &'a str, pub &'a str);
+pub struct Count<'a>(pub usize, pub &'a str, pub &'a str);
 
 impl fmt::Display for Count<'_> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

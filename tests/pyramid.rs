@@ -253,7 +253,9 @@ fn removed_levels_give_what_a_vanishing_gain_gives() {
 #[test]
 fn planar_linear_signal_has_no_details() {
     // Linear precision carried through the whole pyramid: on a flat mesh the prediction of
-    // every split is exact, so all details vanish and any filter returns the input.
+    // every split is exact up to the rounding of its weights to f32 (a fraction 1e-7 of the
+    // stencil's extent), so every detail is a step or two at most and any filter returns the
+    // input to within the details' quantisation.
     let (mut p, t) = bumpy_grid(15);
     for q in &mut p {
         q.z = 0.0;
@@ -263,13 +265,14 @@ fn planar_linear_signal_has_no_details() {
         .flat_map(|k| pyr.split_details(k).1)
         .map(|d| d.length())
         .fold(0.0, f64::max);
-    assert!(largest < 1e-12, "{largest:e}");
+    assert!(largest <= 2.0 * pyr.detail_step(), "{largest:e}");
     let low = pyr.synthesize(
         &Filter::default()
             .lowpass(LevelSpec::Vertices(0))
             .resolve(1.0),
     );
-    assert!(max_dist(&low, pm.original_positions()) < 1e-12);
+    let off = max_dist(&low, pm.original_positions());
+    assert!(off < 1e-6 * pyr.bbox_diagonal(), "{off:e}");
 }
 
 /// Mean `|x_i − mean of its neighbours|` of a vector field over the vertices passing `keep`.

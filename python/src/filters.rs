@@ -2,7 +2,7 @@
 //! `--stopband`, `--enhance`, `--gain` and `--normal-only` (same order of bands, so the same
 //! gains and the same bits).
 
-use crate::errors::value_error;
+use crate::errors::{input_error, value_error};
 use meshpyr::Filter;
 use meshpyr::pyramid::{GainBand, LevelSpec};
 use pyo3::prelude::*;
@@ -118,13 +118,9 @@ impl FilterArgs<'_, '_> {
             ..Filter::default()
         };
         if let Some(obj) = self.lowpass.filter(|o| !o.is_none()) {
-            let n = level(obj, "lowpass")?;
-            if n == LevelSpec::Vertices(0) {
-                return Err(value_error(
-                    "lowpass=0: a low-pass keeps the levels up to N vertices, so N must be at \
-                     least 1",
-                ));
-            }
+            let n = level(obj, "lowpass")?
+                .for_lowpass(&obj.to_string())
+                .map_err(input_error)?;
             filter = filter.lowpass(n);
         }
         for (i, p) in tuples(self.stopband, "stopband", 2, "(a, b)")?

@@ -3,11 +3,12 @@
 use crate::arrays::{self, index_array, mesh_arrays, positions_array, triangles_array};
 use crate::errors::{input_error, io_error, value_error};
 use meshpyr::MeshInfo;
+use meshpyr::choice::Choice;
 use meshpyr::mesh::{Mesh, ScalarType};
 use meshpyr::metrics::{FieldPercentiles, Reference, vertex_distances};
-use meshpyr::pm::PmOptions;
-use meshpyr::subdiv::{self, Refinement, Scheme, Solver, SubdivOptions};
-use meshpyr::{NoProgress, PolygonMesh, SimplifyTarget};
+use meshpyr::pm::{PmOptions, SimplifyGoal, simplify_to_goal};
+use meshpyr::subdiv::{self, Refinement, Scheme, SolverChoice, SubdivSettings};
+use meshpyr::{NoProgress, PolygonMesh};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -94,27 +95,12 @@ pub(crate) fn info<'py>(
     to_dict(py, &info)
 }
 
-/// The one target among `faces`, `ratio` and `error`.
-fn simplify_target(
-    faces: Option<usize>,
-    ratio: Option<f64>,
-    error: Option<f64>,
-) -> PyResult<SimplifyTarget> {
-    match (faces, ratio, error) {
-        (Some(n), None, None) => Ok(SimplifyTarget::Faces(n)),
-        (None, Some(r), None) => Ok(SimplifyTarget::Ratio(r)),
-        (None, None, Some(e)) => Ok(SimplifyTarget::Error(e)),
-        _ => Err(value_error(
-            "give exactly one of faces= (a triangle count), ratio= (a fraction in (0, 1]) or \
-             error= (a fraction of the bounding-box diagonal)",
-        )),
-    }
-}
-
 /// Quadric-error simplification by half-edge collapses, as ``meshpyr simplify``; give exactly
 /// one target: ``faces`` (at most this many triangles), ``ratio`` (at most this fraction of
 /// the triangles, in (0, 1]) or ``error`` (collapse while the quadric error, an RMS distance,
-/// stays below this fraction of the bounding-box diagonal).
+/// stays below this fraction of the bounding-box diagonal). ``prune`` first drops the connected
+/// pieces whose bounding-box diagonal is below this fraction of the whole mesh's (a ratio still
+/// refers to the input's triangles).
 ///
 /// Returns ``(V2, F2, vertex_map)``: the kept vertices keep their positions, and
 /// ``vertex_map[i]`` is the index in V of vertex i of V2 (so ``V2 == V[vertex_map]``).
@@ -126,7 +112,7 @@ fn simplify_target(
 /// collapse may leave, ``boundary_weight`` the weight of the planes that keep boundaries in
 /// place (0 lets them drift).
 #[pyfunction]
-#[pyo3(signature = (v, f, /, *, faces=None, ratio=None, error=None, max_angle=45.0, min_quality=0.05, boundary_weight=10.0))]
+#[pyo3(signature = (v, f, /, *, faces=None, ratio=None, error=None, prune=None, max_angle=PmOptions::default().max_normal_angle_degrees, min_quality=PmOptions::default().min_quality, boundary_weight=PmOptions::default().boundary_weight))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simplify<'py>(
     py: Python<'py>,
@@ -135,12 +121,13 @@ pub(crate) fn simplify<'py>(
     faces: Option<i64>,
     ratio: Option<f64>,
     error: Option<f64>,
+    prune: Option<f64>,
     max_angle: f64,
     min_quality: f64,
     boundary_weight: f64,
 ) -> PyResult<SimplifiedArrays<'py>> {
     let faces = faces.map(|n| arrays::count("faces", n)).transpose()?;
-    let target = simplify_target(faces, ratio, error)?;
+    let goal = SimplifyGoal::one_of(faces, ratio, error, prune).map_err(input_error)?;
     let mesh = arrays::mesh(v, f)?;
     let options = PmOptions {
         max_normal_angle_degrees: max_angle,
@@ -148,8 +135,8 @@ pub(crate) fn simplify<'py>(
         boundary_weight,
         ..PmOptions::default()
     };
-    let result = py
-        .detach(|| meshpyr::simplify(&mesh, target, &options, &NoProgress))
+    let (result, _pruned) = py
+        .detach(|| simplify_to_goal(&mesh, &goal, &options, &NoProgress))
         .map_err(input_error)?;
     if let Some(shortfall) = result.shortfall() {
         crate::warn(py, &shortfall)?;
@@ -169,7 +156,7 @@ pub(crate) fn simplify<'py>(
 /// Returns ``(V2, F2)``: the input's vertices first (same order; repaired copies follow), the
 /// new vertices after.
 #[pyfunction]
-#[pyo3(signature = (v, f, /, *, levels=3, scheme="mcm", refine="quad", solver="auto", width=0.25, local_width=false, finest_steps=2, beta=None))]
+#[pyo3(signature = (v, f, /, *, levels=SubdivSettings::default().levels as i64, scheme=SubdivSettings::default().scheme.name(), refine=SubdivSettings::default().refinement.name(), solver=SubdivSettings::default().solver.name(), width=SubdivSettings::default().width, local_width=SubdivSettings::default().local_width, finest_steps=SubdivSettings::default().finest_steps as i64, beta=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn subdivide<'py>(
     py: Python<'py>,
@@ -184,64 +171,26 @@ pub(crate) fn subdivide<'py>(
     finest_steps: i64,
     beta: Option<f64>,
 ) -> PyResult<MeshPair<'py>> {
-    let levels = arrays::count("levels", levels)?;
-    let finest_steps = arrays::count("finest_steps", finest_steps)?;
-    let scheme = match scheme {
-        "mcm" => Scheme::Mcm,
-        "loop" => Scheme::Loop,
-        other => return Err(choice_error("scheme", other, &["mcm", "loop"])),
-    };
-    let refinement = match refine {
-        "quad" => Refinement::Quadrisection,
-        "bisect" => Refinement::Bisection,
-        other => return Err(choice_error("refine", other, &["quad", "bisect"])),
-    };
-    let solver = match solver {
-        "auto" => None,
-        "exact" => Some(Solver::Exact),
-        "cg" => Some(Solver::Cg),
-        "jacobi" => Some(Solver::Jacobi),
-        other => {
-            return Err(choice_error(
-                "solver",
-                other,
-                &["auto", "exact", "cg", "jacobi"],
-            ));
-        }
+    let settings = SubdivSettings {
+        levels: arrays::count("levels", levels)?,
+        scheme: Scheme::parse(scheme).map_err(input_error)?,
+        refinement: Refinement::parse(refine).map_err(input_error)?,
+        solver: SolverChoice::parse(solver).map_err(input_error)?,
+        width,
+        local_width,
+        finest_steps: arrays::count("finest_steps", finest_steps)?,
+        beta,
     };
     let mesh = arrays::mesh(v, f)?;
     let result = py.detach(|| {
         let built = Mesh::from_polygons(&mesh).map_err(|e| e.to_string())?;
-        let options = SubdivOptions {
-            levels,
-            scheme,
-            refinement,
-            solver: solver
-                .unwrap_or_else(|| Solver::auto(built.mesh.n_vertices(), levels, refinement)),
-            width,
-            local_width,
-            finest_steps,
-            beta,
-            ..SubdivOptions::default()
-        };
+        let options = settings.options(built.mesh.n_vertices());
         subdiv::subdivide(&built.mesh, &options, &NoProgress).map_err(|e| e.to_string())
     });
     let result = result.map_err(value_error)?;
     Ok((
         positions_array(py, &result.positions),
         triangles_array(py, &result.triangles),
-    ))
-}
-
-/// A `ValueError` for an option that is not one of `choices`.
-pub(crate) fn choice_error(option: &str, got: &str, choices: &[&str]) -> PyErr {
-    value_error(format!(
-        "{option}={got:?} is not one of {}",
-        choices
-            .iter()
-            .map(|c| format!("{c:?}"))
-            .collect::<Vec<_>>()
-            .join(", ")
     ))
 }
 

@@ -2,7 +2,7 @@
 //! spectra, and the `.pyr` file as a file, as bytes and as a pickle.
 
 use crate::arrays::{self, mesh_arrays, positions_array, triangles_array};
-use crate::errors::{pyr_error, pyramid_error, value_error};
+use crate::errors::{input_error, pyr_error, pyramid_error, value_error};
 use crate::filters::FilterArgs;
 use glam::DVec3;
 use meshpyr::pyramid::PyramidError;
@@ -93,7 +93,7 @@ impl Pyramid {
         f: &Bound<'_, PyAny>,
         relax: &str,
     ) -> PyResult<Self> {
-        let kind: RelaxKind = relax.parse().map_err(value_error)?;
+        let kind: RelaxKind = relax.parse().map_err(input_error)?;
         let mesh = arrays::mesh(v, f)?;
         let options = PyramidOptions {
             relaxation: kind.spec(),

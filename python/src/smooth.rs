@@ -2,190 +2,21 @@
 //! command line's methods and options.
 
 use crate::arrays::{self, count, positions_array};
-use crate::errors::{input_error, value_error};
-use crate::functions::choice_error;
-use meshpyr::smooth::{Boundary, McfOptions, TaubinOptions, Variance, Weights};
-use meshpyr::{DenoiseOptions, NoProgress, PyramidDenoise, SmoothMethod};
+use crate::errors::input_error;
+use meshpyr::NoProgress;
+use meshpyr::choice::Choice;
+use meshpyr::smooth::SmoothSettings;
 use numpy::PyArray2;
 use pyo3::prelude::*;
 
-const METHODS: [&str; 6] = [
-    "auto",
-    "adaptive",
-    "anisotropic",
-    "taubin",
-    "mcf",
-    "pyramid",
-];
-const OHTAKE: &[&str] = &["auto", "adaptive", "anisotropic"];
-
-/// The keywords of `smooth` as given (`None`: not given).
-struct SmoothArgs<'a> {
-    method: &'a str,
-    epsilon: Option<f64>,
-    sigma_min: Option<f64>,
-    sigma_max: Option<f64>,
-    scales: Option<i64>,
-    rho: Option<f64>,
-    variance: Option<&'a str>,
-    scale: Option<&'a str>,
-    vertex_updates: Option<i64>,
-    passes: Option<i64>,
-    fit_iterations: Option<i64>,
-    step_cap: Option<f64>,
-    iterations: Option<i64>,
-    weights: Option<&'a str>,
-    lambda: Option<f64>,
-    mu: Option<f64>,
-    time_step: Option<f64>,
-    boundary: Option<&'a str>,
-    strength: Option<f64>,
+/// A named value of a keyword (`method="taubin"`), as the library names it.
+fn named<T: Choice>(name: Option<&str>) -> PyResult<Option<T>> {
+    name.map(T::parse).transpose().map_err(input_error)
 }
 
-impl SmoothArgs<'_> {
-    /// The method these keywords describe; a keyword of another method is a `ValueError`
-    /// rather than silently ignored, as on the command line.
-    fn method(&self) -> PyResult<SmoothMethod> {
-        if !METHODS.contains(&self.method) {
-            return Err(choice_error("method", self.method, &METHODS));
-        }
-        self.reject_keywords_of_other_methods()?;
-        match self.method {
-            // Named without options, the recommended method as the library defines it.
-            "auto" if self.given().is_empty() => Ok(SmoothMethod::Auto),
-            "taubin" => self.taubin(),
-            "mcf" => self.mcf(),
-            "pyramid" => Ok(SmoothMethod::Pyramid(PyramidDenoise {
-                strength: self.strength.unwrap_or(PyramidDenoise::default().strength),
-            })),
-            _ => self.ohtake(),
-        }
-    }
-
-    /// Every keyword given, with the methods it applies to.
-    fn given(&self) -> Vec<(&'static str, &'static [&'static str])> {
-        [
-            ("epsilon", self.epsilon.is_some(), OHTAKE),
-            ("sigma_min", self.sigma_min.is_some(), OHTAKE),
-            ("sigma_max", self.sigma_max.is_some(), OHTAKE),
-            ("scales", self.scales.is_some(), OHTAKE),
-            ("rho", self.rho.is_some(), OHTAKE),
-            ("variance", self.variance.is_some(), OHTAKE),
-            ("scale", self.scale.is_some(), OHTAKE),
-            ("vertex_updates", self.vertex_updates.is_some(), OHTAKE),
-            ("passes", self.passes.is_some(), OHTAKE),
-            ("fit_iterations", self.fit_iterations.is_some(), OHTAKE),
-            ("step_cap", self.step_cap.is_some(), OHTAKE),
-            ("iterations", self.iterations.is_some(), &["taubin", "mcf"]),
-            ("weights", self.weights.is_some(), &["taubin"]),
-            ("lambda_", self.lambda.is_some(), &["taubin"]),
-            ("mu", self.mu.is_some(), &["taubin"]),
-            ("time_step", self.time_step.is_some(), &["mcf"]),
-            ("boundary", self.boundary.is_some(), &["taubin", "mcf"]),
-            ("strength", self.strength.is_some(), &["pyramid"]),
-        ]
-        .into_iter()
-        .filter(|&(_, set, _)| set)
-        .map(|(name, _, methods)| (name, methods))
-        .collect()
-    }
-
-    fn reject_keywords_of_other_methods(&self) -> PyResult<()> {
-        for (name, methods) in self.given() {
-            if !methods.contains(&self.method) {
-                return Err(value_error(format!(
-                    "{name}= does not apply to method={:?} (it is an option of {})",
-                    self.method,
-                    methods.join(" and ")
-                )));
-            }
-        }
-        Ok(())
-    }
-
-    fn ohtake(&self) -> PyResult<SmoothMethod> {
-        let mut o = match self.method {
-            "anisotropic" => DenoiseOptions::anisotropic(),
-            "auto" => DenoiseOptions::automatic(),
-            _ => DenoiseOptions::adaptive(),
-        };
-        o.epsilon = self.epsilon.unwrap_or(o.epsilon);
-        o.sigma_min = self.sigma_min.unwrap_or(o.sigma_min);
-        o.sigma_max = self.sigma_max.unwrap_or(o.sigma_max);
-        if let Some(n) = self.scales {
-            o.scales = count("scales", n)?;
-        }
-        o.rho = self.rho.unwrap_or(o.rho);
-        o.variance = match self.variance {
-            None => o.variance,
-            Some("unbiased") => Variance::Unbiased,
-            Some("biased") => Variance::Biased,
-            Some(other) => return Err(choice_error("variance", other, &["unbiased", "biased"])),
-        };
-        if let Some(n) = self.fit_iterations {
-            o.max_iterations = count("fit_iterations", n)?;
-        }
-        o.step_cap = self.step_cap.unwrap_or(o.step_cap);
-        if let Some(n) = self.passes {
-            o.passes = count("passes", n)?;
-        }
-        if let Some(n) = self.vertex_updates {
-            o.vertex_updates = count("vertex_updates", n)?;
-        }
-        o.local_scale = match self.scale {
-            None => o.local_scale,
-            Some("global") => false,
-            Some("local") => true,
-            Some(other) => return Err(choice_error("scale", other, &["global", "local"])),
-        };
-        Ok(SmoothMethod::Ohtake(o))
-    }
-
-    fn boundary(&self) -> PyResult<Boundary> {
-        match self.boundary {
-            None | Some("fixed") => Ok(Boundary::Fixed),
-            Some("smooth") => Ok(Boundary::Smooth),
-            Some(other) => Err(choice_error("boundary", other, &["fixed", "smooth"])),
-        }
-    }
-
-    fn taubin(&self) -> PyResult<SmoothMethod> {
-        let d = TaubinOptions::default();
-        Ok(SmoothMethod::Taubin(TaubinOptions {
-            iterations: match self.iterations {
-                Some(n) => count("iterations", n)?,
-                None => d.iterations,
-            },
-            lambda: self.lambda.unwrap_or(d.lambda),
-            mu: self.mu.unwrap_or(d.mu),
-            weights: match self.weights {
-                None => d.weights,
-                Some("uniform") => Weights::Uniform,
-                Some("inverse-edge") => Weights::InverseEdgeLength,
-                Some("cotan") => Weights::Cotangent,
-                Some(other) => {
-                    return Err(choice_error(
-                        "weights",
-                        other,
-                        &["uniform", "inverse-edge", "cotan"],
-                    ));
-                }
-            },
-            boundary: self.boundary()?,
-        }))
-    }
-
-    fn mcf(&self) -> PyResult<SmoothMethod> {
-        let d = McfOptions::default();
-        Ok(SmoothMethod::Mcf(McfOptions {
-            iterations: match self.iterations {
-                Some(n) => count("iterations", n)?,
-                None => d.iterations,
-            },
-            time_step: self.time_step.unwrap_or(d.time_step),
-            boundary: self.boundary()?,
-        }))
-    }
+/// A count keyword, negative numbers refused.
+fn optional_count(name: &str, n: Option<i64>) -> PyResult<Option<usize>> {
+    n.map(|n| count(name, n)).transpose()
 }
 
 /// Denoises ``(V, F)``, as ``meshpyr smooth`` (same methods, options and bits). ``method``:
@@ -240,29 +71,28 @@ pub(crate) fn smooth<'py>(
     boundary: Option<&str>,
     strength: Option<f64>,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    let method = SmoothArgs {
-        method,
+    let settings = SmoothSettings {
+        method: named(Some(method))?.unwrap_or_default(),
         epsilon,
         sigma_min,
         sigma_max,
-        scales,
+        scales: optional_count("scales", scales)?,
         rho,
-        variance,
-        scale,
-        vertex_updates,
-        passes,
-        fit_iterations,
+        variance: named(variance)?,
+        scale: named(scale)?,
+        vertex_updates: optional_count("vertex_updates", vertex_updates)?,
+        passes: optional_count("passes", passes)?,
+        fit_iterations: optional_count("fit_iterations", fit_iterations)?,
         step_cap,
-        iterations,
-        weights,
+        iterations: optional_count("iterations", iterations)?,
+        weights: named(weights)?,
         lambda: lambda_,
         mu,
         time_step,
-        boundary,
+        boundary: named(boundary)?,
         strength,
-    }
-    .method()?;
-    method.validate().map_err(input_error)?;
+    };
+    let method = settings.method().map_err(input_error)?;
     let mesh = arrays::mesh(v, f)?;
     let smoothed = py
         .detach(|| meshpyr::smooth_mesh(&mesh, &method, &NoProgress))

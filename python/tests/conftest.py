@@ -37,9 +37,9 @@ def find_cli():
     return Path(found) if found else None
 
 
-@pytest.fixture(scope="session")
-def cli():
-    """Runs the meshpyr command line: ``cli("filter", a, "-o", b)``; returns stdout."""
+def cli_runner():
+    """A function that runs the meshpyr binary quietly with its arguments and returns the
+    finished process; skips the test when there is no binary."""
     binary = find_cli()
     if binary is None or not binary.is_file():
         pytest.skip(
@@ -48,17 +48,43 @@ def cli():
         )
 
     def run(*args):
-        done = subprocess.run(
+        return subprocess.run(
             [str(binary), "--quiet", *map(str, args)],
             capture_output=True,
             text=True,
             check=False,
         )
+
+    return run
+
+
+@pytest.fixture(scope="session")
+def cli():
+    """Runs the meshpyr command line: ``cli("filter", a, "-o", b)``; returns stdout."""
+    run = cli_runner()
+
+    def succeed(*args):
+        done = run(*args)
         if done.returncode != 0:
             raise AssertionError(f"meshpyr {' '.join(map(str, args))} failed: {done.stderr}")
         return done.stdout
 
-    return run
+    return succeed
+
+
+@pytest.fixture(scope="session")
+def cli_error():
+    """Runs the meshpyr command line expecting it to fail: ``cli_error("smooth", ...)``;
+    returns its stderr."""
+    run = cli_runner()
+
+    def fail(*args):
+        done = run(*args)
+        if done.returncode == 0:
+            raise AssertionError(f"meshpyr {' '.join(map(str, args))} succeeded")
+        return done.stderr
+
+    return fail
 
 
 @pytest.fixture(scope="session")

@@ -28,7 +28,8 @@ def test_filters_keep_the_vertex_order_and_touch_only_their_bands(sphere, sphere
     # A band above the finest level changes nothing (and says so).
     with pytest.warns(UserWarning, match="changes nothing"):
         same = sphere_pyramid.filter(stopband=[(top + 5, top + 50)])
-    assert np.max(np.abs(same - v)) < 1e-9 * np.ptp(v)
+    # Resynthesised from quantised details: within their bound (1e-6 of the diagonal).
+    assert np.max(np.abs(same - v)) < 1e-6 * np.ptp(v)
     smooth = sphere_pyramid.filter(lowpass=100)
     assert smooth.shape == v.shape and smooth.dtype == np.float64
     rough = sphere_pyramid.filter(enhance=[(100, top, 2.0)])

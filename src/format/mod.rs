@@ -5,8 +5,7 @@ pub mod container;
 pub(crate) mod pyr;
 pub mod varint;
 
-#[cfg(feature = "cli")]
-pub(crate) use pyr::is_pyr;
+pub use pyr::is_pyr;
 pub use pyr::{DetailSource, FileDetails, LevelMesh, NO_STORED_DETAILS, PyrData, SizeReport};
 pub use pyr::{MAJOR, MINOR, OLDEST_MAJOR, decode, encode, encode_with_details, read_level};
 pub(crate) use pyr::{fix_checksums, fuzz_read_pyr, with_positions};

@@ -19,9 +19,7 @@
 use super::FormatError;
 use super::container::{Container, REQUIRED, Section, write_container};
 use super::varint::ByteReader;
-#[cfg(feature = "cli")]
-use crate::mesh::ScalarType;
-use crate::mesh::{Built, PolygonMesh};
+use crate::mesh::{Built, PolygonMesh, ScalarType};
 use crate::pm::{PmParts, ProgressiveMesh};
 use crate::pyramid::{PyramidOptions, StoredDetails};
 use crate::relax::RelaxationSpec;
@@ -141,8 +139,7 @@ pub struct LevelMesh {
 
 impl LevelMesh {
     /// As a polygon mesh (positions typed f32 when the file stored f32).
-    #[cfg(feature = "cli")]
-    pub(crate) fn to_polygon_mesh(&self) -> PolygonMesh {
+    pub fn to_polygon_mesh(&self) -> PolygonMesh {
         let mut m = PolygonMesh::from_triangles(self.positions.clone(), &self.triangles);
         m.position_type = Some(if self.f32_positions {
             ScalarType::F32
@@ -363,7 +360,6 @@ fn check_complete(p: &Progressive, file_len: usize) -> Result<(), FormatError> {
 }
 
 /// True when `bytes` start with the `.pyr` signature.
-#[cfg(feature = "cli")]
-pub(crate) fn is_pyr(bytes: &[u8]) -> bool {
+pub fn is_pyr(bytes: &[u8]) -> bool {
     bytes.starts_with(&super::container::MAGIC)
 }

@@ -18,11 +18,17 @@ static COUNTER: AtomicU64 = AtomicU64::new(0);
 /// the lock, so once [`exit_removing_temporary_files`] holds it no new one can appear.
 static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
-/// Test hook, not an interface: when set to a number of milliseconds, every atomic write
-/// announces its temporary file on standard error and waits that long before renaming it, so
-/// a test can interrupt a write reliably.
+/// How long every atomic write waits before its rename, in milliseconds (0: not at all); set by
+/// [`hold_writes_for_tests`].
+static HOLD_WRITES_MS: AtomicU64 = AtomicU64::new(0);
+
+/// Test hook, not an interface: from now on every atomic write announces its temporary file on
+/// standard error and waits `ms` milliseconds before renaming it, so that a test can interrupt
+/// a write reliably (the command line turns it on from an environment variable).
 #[doc(hidden)]
-pub const HOLD_WRITE_ENV: &str = "MESHPYR_TEST_HOLD_WRITE_MS";
+pub fn hold_writes_for_tests(ms: u64) {
+    HOLD_WRITES_MS.store(ms, Ordering::Relaxed);
+}
 
 fn in_flight() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
     IN_FLIGHT
@@ -108,17 +114,12 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
     Ok(())
 }
 
-/// The [`HOLD_WRITE_ENV`] test hook.
+/// The [`hold_writes_for_tests`] hook.
 fn hold_for_tests(tmp: &Path) {
-    if !cfg!(feature = "cli") {
+    let ms = HOLD_WRITES_MS.load(Ordering::Relaxed);
+    if ms == 0 {
         return;
     }
-    let Some(ms) = std::env::var(HOLD_WRITE_ENV)
-        .ok()
-        .and_then(|v| v.parse::<u64>().ok())
-    else {
-        return;
-    };
     eprintln!("holding {}", tmp.display());
     std::thread::sleep(std::time::Duration::from_millis(ms));
 }

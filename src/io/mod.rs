@@ -44,7 +44,7 @@ pub(crate) mod stl;
 mod text;
 
 #[doc(hidden)]
-pub use atomic::HOLD_WRITE_ENV;
+pub use atomic::hold_writes_for_tests;
 pub use atomic::{exit_removing_temporary_files, write_atomic};
 pub(crate) use fuzz::fuzz_read;
 pub use gz::{gunzip, gzip};

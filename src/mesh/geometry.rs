@@ -22,7 +22,6 @@ impl BoundingBox {
     }
 
     /// The smallest box holding this one and `p`.
-    #[cfg(feature = "cli")]
     pub(crate) fn including(self, p: DVec3) -> BoundingBox {
         BoundingBox {
             min: self.min.min(p),

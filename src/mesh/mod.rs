@@ -6,8 +6,7 @@ pub(crate) mod geometry;
 pub(crate) mod halfedge;
 pub(crate) mod info;
 pub(crate) mod polygon;
-#[cfg(feature = "cli")]
-pub(crate) mod prune;
+mod prune;
 pub mod shapes;
 mod surface;
 pub(crate) mod topology;
@@ -25,8 +24,7 @@ pub use info::MeshInfo;
 pub use polygon::{
     Attribute, AttributeData, ElementProperty, ExtraElement, ListProperty, PolygonMesh, ScalarType,
 };
-#[cfg(feature = "cli")]
-pub(crate) use prune::prune_small_components;
+pub use prune::{Pruned, prune_small_components};
 pub use surface::MissingSurface;
 pub use topology::Topology;
 pub use validate::ValidationError;

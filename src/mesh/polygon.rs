@@ -235,7 +235,7 @@ impl PolygonMesh {
     /// A mesh taking ownership of positions and triangles (no attributes): the triangle
     /// array becomes the index array without a copy, which matters for the million-face
     /// outputs of subdivision.
-    pub(crate) fn from_triangle_vec(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Self {
+    pub fn from_triangle_vec(positions: Vec<DVec3>, triangles: Vec<[u32; 3]>) -> Self {
         let face_starts = (0..=triangles.len()).map(|t| 3 * t as u32).collect();
         PolygonMesh {
             positions,

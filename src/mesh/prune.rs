@@ -11,7 +11,7 @@ use super::{BoundingBox, PolygonMesh};
 
 /// What [`prune_small_components`] removed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub(crate) struct Pruned {
+pub struct Pruned {
     /// Components dropped.
     pub components: usize,
     /// Components in the input (pieces joined by shared vertex indices).
@@ -24,10 +24,7 @@ pub(crate) struct Pruned {
 /// bounding-box diagonal is below `min_fraction` of the whole mesh's. The largest component is
 /// always kept. Vertices, their attributes and the order of the kept polygons are unchanged
 /// (dropped pieces leave unreferenced vertices); per-face attributes follow their polygons.
-pub(crate) fn prune_small_components(
-    mesh: &PolygonMesh,
-    min_fraction: f64,
-) -> (PolygonMesh, Pruned) {
+pub fn prune_small_components(mesh: &PolygonMesh, min_fraction: f64) -> (PolygonMesh, Pruned) {
     let n = mesh.positions.len();
     let mut sets = UnionFind::new(n);
     for f in mesh.faces() {

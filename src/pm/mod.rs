@@ -10,7 +10,8 @@
 //! - `decimate`: the greedy batched decimation loop, on a flat corner table.
 //! - [`ProgressiveMesh`] / [`PmCursor`]: the hierarchy and its cursor.
 //! - [`FlatReplay`]: vertex splits replayed on flat arrays (reading and writing `.pyr` files).
-//! - [`simplify()`]: a file-level mesh cut at a level, attributes carried along.
+//! - [`simplify()`]: a file-level mesh cut at a level, attributes carried along;
+//!   [`simplify_to_goal`] takes the target as front ends give it, small pieces pruned first.
 //! - `fuzz`: the body of the `pm_ops` fuzz target (`meshpyr::fuzzing::fuzz_operations`).
 
 pub(crate) mod collapse;
@@ -18,6 +19,7 @@ mod decimate;
 #[cfg(test)]
 mod decimate_reference;
 pub(crate) mod fuzz;
+mod goal;
 mod legality;
 pub(crate) mod prefetch;
 mod progressive;
@@ -31,6 +33,7 @@ pub use collapse::{
 };
 pub use decimate::Stop;
 pub(crate) use fuzz::fuzz_operations;
+pub use goal::{SimplifyGoal, simplify_to_goal};
 pub use legality::Refusal;
 pub use legality::{Legality, Relaxation};
 pub use progressive::SplitReplay;

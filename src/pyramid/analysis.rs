@@ -478,7 +478,10 @@ impl Recorder {
             codes.extend([0, 0]);
             for &(u, w) in &self.stencils[next_stencil..next_stencil + len] {
                 codes.push(local(u, locals));
-                weights.push(w);
+                // f32 is enough: synthesis anchors every stencil at its first vertex (see
+                // `relax_local`), so rounding a weight moves a prediction by a fraction 1e-7 of
+                // the local edge length, wherever the scan sits.
+                weights.push(w as f32);
             }
             next_stencil += len;
             self.fan.clear();
@@ -527,11 +530,11 @@ struct Records {
     widest: u32,
 }
 
-/// Weights in chunks of [`Chunked::CHUNK`] entries: the largest stream (about 600 bytes per split), so
+/// Weights in chunks of [`Chunked::CHUNK`] entries: the largest stream (about 300 bytes per split), so
 /// that turning the ranges' streams into the pyramid's one holds a chunk twice, not a range.
 #[derive(Default)]
 struct Chunked {
-    chunks: Vec<Vec<f64>>,
+    chunks: Vec<Vec<f32>>,
     len: usize,
     /// Chunks freed by [`Chunked::free_before`].
     freed: usize,
@@ -542,9 +545,9 @@ impl Chunked {
     /// threshold (32 MiB), so that a freed chunk goes back to the system instead of staying in
     /// the allocator's heap, where the joined stream could not reuse it (it is mapped anew).
     /// An untouched chunk costs address space only.
-    const CHUNK: usize = 1 << 23;
+    const CHUNK: usize = 1 << 24;
 
-    fn push(&mut self, w: f64) {
+    fn push(&mut self, w: f32) {
         match self.chunks.last_mut() {
             Some(last) if last.len() < Self::CHUNK => last.push(w),
             _ => {
@@ -561,7 +564,7 @@ impl Chunked {
     }
 
     /// Appends entries `from..to` to `out`.
-    fn copy_to(&self, from: usize, to: usize, out: &mut Vec<f64>) {
+    fn copy_to(&self, from: usize, to: usize, out: &mut Vec<f32>) {
         let mut at = from;
         while at < to {
             let (c, i) = (at / Self::CHUNK, at % Self::CHUNK);
@@ -590,7 +593,7 @@ impl Chunked {
 /// The weights of all splits in split order (a range recorded finest first is read back to
 /// front), each chunk of the ranges' streams freed once copied; and where each split's
 /// weights start.
-fn join_weights(ranges: &mut [Records]) -> (Vec<f64>, Vec<usize>) {
+fn join_weights(ranges: &mut [Records]) -> (Vec<f32>, Vec<usize>) {
     let total = ranges.iter().map(|r| r.weights.len()).sum();
     let n_splits: usize = ranges.iter().map(|r| r.offsets.len() - 1).sum();
     let mut weights = Vec::with_capacity(total);
@@ -632,7 +635,7 @@ struct Slotted {
     offsets: Vec<SplitOffsets>,
     locals: Vec<u32>,
     codes: Codes,
-    weights: Vec<f64>,
+    weights: Vec<f32>,
 }
 
 impl Slotted {

@@ -79,6 +79,21 @@ fn parse_error(text: &str, reason: impl Into<String>) -> GainParseError {
     }
 }
 
+impl LevelSpec {
+    /// `self` as the level of a low-pass, which keeps the levels up to it: at least one vertex
+    /// (a band may start at level 0, a low-pass may not). `text` is the level as the caller
+    /// wrote it, for the message.
+    pub fn for_lowpass(self, text: &str) -> Result<LevelSpec, GainParseError> {
+        match self {
+            LevelSpec::Vertices(0) => Err(parse_error(
+                text,
+                "a low-pass keeps the levels up to N vertices, so N must be at least 1",
+            )),
+            level => Ok(level),
+        }
+    }
+}
+
 impl FromStr for LevelSpec {
     type Err = GainParseError;
 
@@ -130,8 +145,7 @@ pub struct GainBand {
 
 impl GainBand {
     /// Parses `A:B` (a band, gain left to the caller) into its two ends.
-    #[cfg(feature = "cli")]
-    pub(crate) fn parse_band(s: &str) -> Result<(LevelSpec, LevelSpec), GainParseError> {
+    pub fn parse_band(s: &str) -> Result<(LevelSpec, LevelSpec), GainParseError> {
         let (a, b) = s
             .split_once(':')
             .ok_or_else(|| parse_error(s, "expected a band A:B such as 1000:15000"))?;
@@ -150,8 +164,7 @@ impl GainBand {
     }
 
     /// Parses `A:B=G`.
-    #[cfg(feature = "cli")]
-    pub(crate) fn parse_with_gain(s: &str) -> Result<GainBand, GainParseError> {
+    pub fn parse_with_gain(s: &str) -> Result<GainBand, GainParseError> {
         let (band, gain) = s
             .split_once('=')
             .ok_or_else(|| parse_error(s, "expected A:B=G such as 1000:15000=2"))?;

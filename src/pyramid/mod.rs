@@ -105,8 +105,10 @@ pub enum PyramidError {
 ///   `s` stencil and `m` fan indices — all indices into the split's local table, so they are
 ///   stored in 8 bits when every neighbourhood has fewer than 256 vertices and every valence is
 ///   below 128 (typical scans), else in 16 bits, and in 32 bits only for extreme valences.
-/// * `weights`: per touched entry its `s` stencil weights (f64: they set the prediction's
-///   linear precision).
+/// * `weights`: per touched entry its `s` stencil weights, in f32 and in split order (they are
+///   only read from a split's start). Synthesis applies them anchored at the stencil's first
+///   vertex, so their rounding costs a fraction 1e-7 of a stencil's extent, not of the
+///   coordinates.
 /// * `details`: per touched entry its detail in the local frame `(t1, t2, n)`, in whole
 ///   `detail_step`s (module `quantise`: quantised in a closed loop, so that the rounding does
 ///   not add up across levels).
@@ -122,7 +124,7 @@ pub struct DetailPyramid {
     pub(crate) offsets: Vec<SplitOffsets>,
     pub(crate) locals: Vec<u32>,
     pub(crate) codes: Codes,
-    pub(crate) weights: Vec<f64>,
+    pub(crate) weights: Vec<f32>,
     pub(crate) details: Vec<[i32; 3]>,
     /// The splits grouped into waves of independent splits (parallel synthesis).
     pub(crate) waves: waves::Waves,
@@ -313,7 +315,7 @@ impl DetailPyramid {
         std::mem::size_of::<SplitOffsets>() * self.offsets.len()
             + 4 * self.locals.len()
             + self.codes.bytes()
-            + 8 * self.weights.len()
+            + 4 * self.weights.len()
             + 12 * self.details.len()
             + 24 * (self.base.len() + self.passthrough.len())
             + self.waves.memory_bytes()

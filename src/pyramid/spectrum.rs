@@ -7,11 +7,6 @@
 
 use super::DetailPyramid;
 use super::gains::feature_size_of_level;
-#[cfg(feature = "cli")]
-use crate::plot::{BarChart, PALETTE, Series, compact_count};
-#[cfg(feature = "cli")]
-use crate::render::Image;
-#[cfg(feature = "cli")]
 use std::fmt::Write;
 
 /// The detail energy of one band of levels `(lo, hi]`.
@@ -104,8 +99,7 @@ pub(crate) fn octave_spectrum<D: ExactSizeIterator<Item = glam::DVec3>>(
 
 impl Spectrum {
     /// The table as CSV with a header line.
-    #[cfg(feature = "cli")]
-    pub(crate) fn to_csv(&self) -> String {
+    pub fn to_csv(&self) -> String {
         let mut s = String::from(
             "level_from,level_to,levels,details,energy_rel_diag2,rms_rel_diag,feature_size\n",
         );
@@ -117,36 +111,5 @@ impl Spectrum {
             );
         }
         s
-    }
-
-    /// A bar chart of the energies of this spectrum and of `others` (same bands expected, e.g.
-    /// the spectra of filtered versions), each series named.
-    #[cfg(feature = "cli")]
-    pub(crate) fn chart(&self, name: &str, others: &[(&str, &Spectrum)]) -> Image {
-        let categories = self.bands.iter().map(|b| compact_count(b.hi)).collect();
-        let mut c = BarChart::new(
-            "DETAIL SPECTRUM: ENERGY PER LEVEL OCTAVE",
-            "LEVEL (VERTICES, UPPER END OF OCTAVE)",
-            "SUM |D|^2 / DIAG^2",
-            categories,
-        );
-        let all = std::iter::once((name, self)).chain(others.iter().copied());
-        for (i, (n, s)) in all.enumerate() {
-            c.series.push(Series {
-                name: n.to_string(),
-                values: self
-                    .bands
-                    .iter()
-                    .map(|b| {
-                        s.bands
-                            .iter()
-                            .find(|o| o.hi == b.hi)
-                            .map_or(0.0, |o| o.energy)
-                    })
-                    .collect(),
-                color: PALETTE[i % PALETTE.len()],
-            });
-        }
-        c.draw()
     }
 }

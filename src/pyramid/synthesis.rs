@@ -92,29 +92,35 @@ pub(crate) fn prefetch_next_split(
     }
 }
 
-/// `Σ w g[i]` over a stencil (two interleaved accumulators: the dependency chain of the sum
-/// is what bounds this loop).
+/// `Σ w g[i]` over a stencil whose weights sum to one (every relaxation's do), evaluated as
+/// `a + Σ w (g[i] − a)` with `a` the stencil's first value: the first weight is implied, so
+/// the weights used always sum to exactly one and their f32 rounding moves the result by a
+/// fraction of the stencil's extent, not of the coordinates (a scan far from the origin
+/// predicts as well as one at it). Two interleaved accumulators: the dependency chain of the
+/// sum is what bounds this loop.
 #[inline(always)]
-fn relax_local<I: LocalIndex>(idx: &[I], w: &[f64], g: &[DVec3]) -> DVec3 {
+fn relax_local<I: LocalIndex>(idx: &[I], w: &[f32], g: &[DVec3]) -> DVec3 {
+    let anchor = g[idx[0].at()];
+    let term = |k: usize| f64::from(w[k]) * (g[idx[k].at()] - anchor);
     let mut a0 = DVec3::ZERO;
     let mut a1 = DVec3::ZERO;
-    let mut pairs = idx.chunks_exact(2).zip(w.chunks_exact(2));
-    for (i, w) in pairs.by_ref() {
-        a0 += w[0] * g[i[0].at()];
-        a1 += w[1] * g[i[1].at()];
+    let mut k = 1;
+    while k + 1 < idx.len() {
+        a0 += term(k);
+        a1 += term(k + 1);
+        k += 2;
     }
-    if idx.len() % 2 == 1 {
-        let last = idx.len() - 1;
-        a0 += w[last] * g[idx[last].at()];
+    if k < idx.len() {
+        a0 += term(k);
     }
-    a0 + a1
+    anchor + (a0 + a1)
 }
 
 /// The value of entry `e` relaxed from `g`, or `fallback` when its stencil is empty.
 #[inline(always)]
 fn relax_entry<I: LocalIndex>(
     codes: &[I],
-    weights: &[f64],
+    weights: &[f32],
     e: &Entry,
     g: &[DVec3],
     fallback: DVec3,
@@ -133,7 +139,7 @@ fn relax_entry<I: LocalIndex>(
 /// the analysis presmoothing.
 pub(crate) fn presmooth_local<I: LocalIndex>(
     codes: &[I],
-    weights: &[f64],
+    weights: &[f32],
     entries: &[Entry],
     g: &[DVec3],
     out: &mut Vec<DVec3>,
@@ -152,7 +158,7 @@ pub(crate) fn presmooth_local<I: LocalIndex>(
 #[inline]
 pub(crate) fn predict_values<I: LocalIndex>(
     codes: &[I],
-    weights: &[f64],
+    weights: &[f32],
     entries: &[Entry],
     survivor: usize,
     g: &mut [DVec3],

@@ -6,11 +6,11 @@
 //! order and its field names and order are part of the file format.
 
 use super::{MeanCurvatureStep, NormalAdaptive, NormalAverage, Relaxation, SecondDifference};
+use crate::choice::{Choice, UnknownChoice};
 use serde::{Deserialize, Serialize};
 
 /// An operator without its parameters: the values of the command line's `--relax`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-#[cfg_attr(feature = "cli", derive(clap::ValueEnum))]
 pub enum RelaxKind {
     /// Guskov's non-uniform second-difference operator.
     #[default]
@@ -22,14 +22,34 @@ pub enum RelaxKind {
     Normal,
 }
 
-impl RelaxKind {
-    /// Every kind, in the order the command line lists them.
-    pub const ALL: [RelaxKind; 3] = [
+/// The values of `--relax`, by the names of their operators ([`RelaxationSpec::name`]).
+impl Choice for RelaxKind {
+    const WHAT: &'static str = "relaxation";
+    const ALL: &'static [RelaxKind] = &[
         RelaxKind::SecondDifference,
         RelaxKind::Mcm,
         RelaxKind::Normal,
     ];
 
+    fn name(self) -> &'static str {
+        self.spec().name()
+    }
+
+    fn about(self) -> &'static str {
+        match self {
+            RelaxKind::SecondDifference => "Guskov's non-uniform second-difference operator",
+            RelaxKind::Mcm => {
+                "One Jacobi step of implicit mean-curvature motion (cotangent weights, lumped mass)"
+            }
+            RelaxKind::Normal => {
+                "Guskov's operator with hinges weighted by the agreement of their normals (from \
+                 the input denoised by Ohtake's filter), so that predictions keep creases"
+            }
+        }
+    }
+}
+
+impl RelaxKind {
     /// The operator of this kind with its default parameters.
     pub fn spec(self) -> RelaxationSpec {
         match self {
@@ -40,22 +60,12 @@ impl RelaxKind {
     }
 }
 
-/// A kind by its command-line name (`second-difference`, `mcm`, `normal`), for bindings and
-/// configuration files that name operators as `--relax` does.
+/// A kind by its name ([`Choice::parse`]).
 impl std::str::FromStr for RelaxKind {
-    type Err = String;
+    type Err = UnknownChoice;
 
     fn from_str(name: &str) -> Result<Self, Self::Err> {
-        RelaxKind::ALL
-            .into_iter()
-            .find(|kind| kind.spec().name() == name)
-            .ok_or_else(|| {
-                let names: Vec<&str> = RelaxKind::ALL.iter().map(|k| k.spec().name()).collect();
-                format!(
-                    "unknown relaxation {name:?}: expected one of {}",
-                    names.join(", ")
-                )
-            })
+        RelaxKind::parse(name)
     }
 }
 
@@ -194,15 +204,6 @@ impl RelaxationSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn every_kind_is_found_by_its_operators_name_and_unknown_names_are_listed() {
-        for kind in RelaxKind::ALL {
-            assert_eq!(kind.spec().name().parse::<RelaxKind>(), Ok(kind));
-        }
-        let err = "laplace".parse::<RelaxKind>().unwrap_err();
-        assert!(err.contains("\"laplace\"") && err.contains("second-difference, mcm, normal"));
-    }
 
     #[test]
     fn the_default_is_guskovs_operator_with_its_defaults() {

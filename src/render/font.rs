@@ -7,18 +7,18 @@ use super::Image;
 const CELL: i64 = 6;
 
 /// Height in pixels of a line of text at `scale` (seven rows).
-pub(crate) fn text_height(scale: i64) -> i64 {
+pub fn text_height(scale: i64) -> i64 {
     7 * scale
 }
 
 /// Width in pixels of `text` at `scale`.
-pub(crate) fn text_width(text: &str, scale: i64) -> i64 {
+pub fn text_width(text: &str, scale: i64) -> i64 {
     text.chars().count() as i64 * CELL * scale
 }
 
 /// Draws `text` with its top-left corner at `(x, y)`, each font pixel a `scale`×`scale`
 /// square; lower case is drawn as upper case and characters without a glyph as blanks.
-pub(crate) fn draw_text(img: &mut Image, text: &str, x: i64, y: i64, color: [u8; 3], scale: i64) {
+pub fn draw_text(img: &mut Image, text: &str, x: i64, y: i64, color: [u8; 3], scale: i64) {
     for (k, ch) in text.chars().enumerate() {
         let rows = glyph(ch.to_ascii_uppercase());
         let gx = x + k as i64 * CELL * scale;

@@ -11,7 +11,7 @@
 //! `meshpyr render` does); [`render_scene`] draws triangle soups with captions and values.
 
 mod colormap;
-pub(crate) mod font;
+pub mod font;
 mod polygon;
 mod raster;
 mod scene;
@@ -59,8 +59,7 @@ impl Image {
     }
 
     /// The colour at `(x, y)`, or `None` outside the image.
-    #[cfg(test)]
-    pub(crate) fn pixel(&self, x: usize, y: usize) -> Option<[u8; 3]> {
+    pub fn pixel(&self, x: usize, y: usize) -> Option<[u8; 3]> {
         (x < self.width && y < self.height).then(|| {
             let i = 3 * (y * self.width + x);
             [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
@@ -77,7 +76,7 @@ impl Image {
     }
 
     /// Fills the rectangle `[x0, x1) × [y0, y1)` (clipped to the image).
-    pub(crate) fn fill_rect(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: [u8; 3]) {
+    pub fn fill_rect(&mut self, x0: i64, y0: i64, x1: i64, y1: i64, color: [u8; 3]) {
         let (xa, xb) = (x0.max(0), x1.min(self.width as i64));
         let (ya, yb) = (y0.max(0), y1.min(self.height as i64));
         for y in ya..yb {

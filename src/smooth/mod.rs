@@ -12,6 +12,9 @@
 //!   with uniform, inverse-edge-length or cotangent weights) and `mcf` (implicit
 //!   mean-curvature flow, Desbrun et al. 1999).
 //!
+//! [`SmoothSettings`] names a method and the options a front end was given, and says which
+//! option applies to which method.
+//!
 //! Measure results with [`crate::metrics::compare`] (E_v, E_n, Hausdorff).
 
 pub(crate) mod dual;
@@ -21,6 +24,7 @@ pub(crate) mod mcf;
 pub(crate) mod method;
 pub(crate) mod normal_filter;
 pub(crate) mod ohtake;
+mod settings;
 pub(crate) mod surface;
 pub(crate) mod taubin;
 #[cfg(test)]
@@ -31,6 +35,7 @@ pub use mcf::{McfOptions, implicit_mcf};
 pub use method::{SmoothMethod, Smoothed, smooth_mesh, smooth_positions};
 pub use normal_filter::Variance;
 pub use ohtake::{DenoiseOptions, Denoised, denoise};
+pub use settings::{FilterScale, SmoothKind, SmoothSettings};
 pub use taubin::{TaubinOptions, Weights, taubin_smoothing};
 
 /// What the smoothers do with boundary vertices (those on a hole's rim).

@@ -20,12 +20,14 @@ pub(crate) mod cascadic;
 mod halfedge_arrays;
 pub(crate) mod loop_scheme;
 pub mod refine;
+mod settings;
 
 pub use cascadic::LevelReport;
 pub use cascadic::subdivide_mcm;
 pub use loop_scheme::{loop_step, subdivide_loop};
 pub use refine::Prolongation;
 pub use refine::{Marking, Refined};
+pub use settings::{SolverChoice, SubdivSettings};
 
 use crate::mesh::{Mesh, PolygonMesh};
 use crate::progress::Progress;

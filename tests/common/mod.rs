@@ -1,5 +1,5 @@
 //! Helpers shared by the integration tests: test data paths, io round trips, and small meshes
-//! built in code.
+//! built in code. The command line's tests (`cli/tests/common`) include this file too.
 #![allow(dead_code)]
 
 use std::path::PathBuf;
@@ -21,11 +21,20 @@ pub fn on_threads<R: Send>(threads: usize, f: impl FnOnce() -> R + Send) -> R {
         .install(f)
 }
 
+/// The library's folder, which holds `tests/data` and `fuzz`, seen from the crate being tested
+/// (the library, or the command line in `cli/`).
+pub fn library_dir() -> PathBuf {
+    let crate_dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    if env!("CARGO_PKG_NAME") == "meshpyr" {
+        crate_dir
+    } else {
+        crate_dir.join("..")
+    }
+}
+
 /// Path of a file in `tests/data`.
 pub fn data(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data")
-        .join(name)
+    library_dir().join("tests/data").join(name)
 }
 
 /// A fresh-per-process scratch file `name` in a temporary folder named after `test`.
@@ -33,33 +42,6 @@ pub fn scratch(test: &str, name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("meshpyr-{test}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     dir.join(name)
-}
-
-/// Runs the `meshpyr` binary with `args`.
-#[cfg(feature = "cli")]
-pub fn meshpyr(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_meshpyr"))
-        .args(args)
-        .output()
-        .expect("the meshpyr binary runs")
-}
-
-/// A path as the `&str` argument [`meshpyr`] takes.
-pub fn path(p: &std::path::Path) -> &str {
-    p.to_str().expect("a UTF-8 path")
-}
-
-/// Asserts that a run succeeded, showing its stderr otherwise.
-pub fn ok(o: &std::process::Output) {
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-}
-
-/// The one-line error of a failed run (asserting it failed, and without a panic).
-pub fn error_line(o: &std::process::Output) -> String {
-    assert!(!o.status.success(), "expected a failure");
-    let err = String::from_utf8_lossy(&o.stderr).trim().to_string();
-    assert!(!err.contains("panicked"), "{err}");
-    err
 }
 
 /// Bytes of a file in `tests/data`.
@@ -268,7 +250,7 @@ pub fn volume(mesh: &Mesh) -> f64 {
 /// Calls `run` on every file of `fuzz/corpus/<target>` and `fuzz/regressions/<target>`, in
 /// name order, and returns how many there were.
 pub fn replay_fuzz_corpus(target: &str, run: impl Fn(&[u8])) -> usize {
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fuzz");
+    let root = library_dir().join("fuzz");
     let mut n = 0;
     for dir in ["corpus", "regressions"] {
         let Ok(entries) = std::fs::read_dir(root.join(dir).join(target)) else {

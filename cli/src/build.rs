@@ -1,0 +1,101 @@
+//! `meshpyr build IN -o OUT.pyr [--relax …] [--no-details]`: build the progressive mesh and
+//! its detail pyramid and save them with the exact input as a `.pyr` file (see
+//! `formats/pyr.md`).
+
+use super::input::read_input_mesh;
+use super::{BarProgress, Global};
+use anyhow::Context;
+use meshpyr::format;
+use meshpyr::io;
+use meshpyr::pm::ProgressiveMesh;
+use meshpyr::pyramid::{PyrContent, Pyramid, PyramidOptions};
+use meshpyr::relax::RelaxKind;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `meshpyr build`.
+#[derive(clap::Args, Debug)]
+pub(crate) struct BuildArgs {
+    /// Input mesh (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
+    pub(crate) input: PathBuf,
+    /// Output `.pyr` file.
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
+    /// Relaxation operator the pyramid is analysed with (recorded in the file; `filter`,
+    /// `spectrum` and `edit` use it).
+    #[arg(long, value_parser = crate::choices::named::<RelaxKind>(), default_value = RelaxKind::default().spec().name())]
+    pub(crate) relax: RelaxKind,
+    /// Leave the details out: a smaller file (about 60 % less on scans), whose readers run
+    /// the detail analysis every time they open it.
+    #[arg(long)]
+    pub(crate) no_details: bool,
+}
+
+/// Runs `meshpyr build`.
+pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
+    let options = PyramidOptions {
+        relaxation: args.relax.spec(),
+        ..PyramidOptions::default()
+    };
+    super::output::check_output_folder(&args.output)?;
+    let input = read_input_mesh(&args.input)?;
+    let start = Instant::now();
+    // Without details the file needs the hierarchy only: the analysis would be wasted.
+    let (bytes, sizes, pm) = if args.no_details {
+        let built = meshpyr::mesh::Mesh::from_polygons(&input)
+            .with_context(|| format!("cannot build the mesh of {}", args.input.display()))?;
+        let bar = global.progress("build");
+        let pm = ProgressiveMesh::build(&built.mesh, &options.pm, &BarProgress(&bar))
+            .with_context(|| {
+                format!(
+                    "cannot build the progressive mesh of {}",
+                    args.input.display()
+                )
+            })?;
+        bar.finish_and_clear();
+        let (bytes, sizes) = format::encode(&input, &pm, &options)
+            .with_context(|| format!("cannot encode {}", args.input.display()))?;
+        (bytes, sizes, pm)
+    } else {
+        let bar = global.progress("build");
+        let pyramid = Pyramid::build_with(input.clone(), &options, &BarProgress(&bar))
+            .with_context(|| format!("cannot build the pyramid of {}", args.input.display()))?;
+        bar.finish_and_clear();
+        let (bytes, sizes) = pyramid
+            .to_pyr_bytes_as(PyrContent::WithDetails)
+            .with_context(|| format!("cannot encode {}", args.input.display()))?;
+        (bytes, sizes, pyramid.pm)
+    };
+    let took = start.elapsed().as_secs_f64();
+    io::write_atomic(&args.output, &bytes)?;
+    let n = input.n_vertices().max(1) as f64;
+    global.say(format_args!(
+        "wrote {}: {} bytes for {} vertices, levels {}..={} ({} and encoded in {took:.1} s){}",
+        args.output.display(),
+        sizes.total,
+        input.n_vertices(),
+        pm.n_base_vertices(),
+        pm.n_vertices(),
+        if args.no_details {
+            "hierarchy built"
+        } else {
+            "hierarchy and details built"
+        },
+        super::input::extra_vertices_note(input.n_vertices(), pm.n_vertices()),
+    ));
+    global.say(format_args!(
+        "  bytes/vertex: whole file {:.2}, PM connectivity {:.2}, split errors {:.2}, positions {:.2}, input order+polygons+attributes {:.2}{}",
+        sizes.total as f64 / n,
+        sizes.pm_connectivity as f64 / n,
+        sizes.split_errors as f64 / n,
+        sizes.positions as f64 / n,
+        sizes.trailing as f64 / n,
+        if args.no_details {
+            String::new()
+        } else {
+            format!(", details {:.2}", sizes.details as f64 / n)
+        }
+    ));
+    global.say(format_args!("  {}", pm.describe_base()));
+    Ok(())
+}

@@ -1,0 +1,207 @@
+//! The input of the commands: a mesh file or a `.pyr` file (recognised by its signature,
+//! whatever its name), read as a mesh or turned into a detail pyramid.
+
+use super::{BarProgress, Global};
+use anyhow::Context;
+use meshpyr::format::{self, DetailSource};
+use meshpyr::io;
+use meshpyr::mesh::{MissingSurface, PolygonMesh};
+use meshpyr::pyramid::{Pyramid, PyramidOptions};
+use meshpyr::relax::{RelaxKind, RelaxationSpec};
+use meshpyr::wording::Count;
+use std::path::Path;
+use std::time::Instant;
+
+/// Reads the mesh a command works on: a mesh file, or a `.pyr` file (recognised by its
+/// signature, whatever its name), whose stored input mesh is restored exactly — the file the
+/// user built it from, so `info`, `convert`, `simplify`, `subdivide`, `smooth`, `compare` and
+/// `build` take the file they keep as well.
+///
+/// Every command that takes this needs a surface: a file with nothing in it, a point cloud or
+/// faces that all repeat a vertex is an error naming the file and what is missing
+/// ([`read_input_points`] takes point clouds too).
+pub(crate) fn read_input_mesh(path: &Path) -> anyhow::Result<PolygonMesh> {
+    let mesh = read_any_input(path)?;
+    require(path, mesh.check_surface())?;
+    Ok(mesh)
+}
+
+/// [`read_input_mesh`] for the commands that take point clouds as well (`convert`): only a
+/// file with nothing in it is an error.
+pub(crate) fn read_input_points(path: &Path) -> anyhow::Result<PolygonMesh> {
+    let mesh = read_any_input(path)?;
+    require(path, mesh.check_not_empty())?;
+    Ok(mesh)
+}
+
+fn read_any_input(path: &Path) -> anyhow::Result<PolygonMesh> {
+    if is_pyr_file(path) {
+        return Ok(load_pyr(path)?.input);
+    }
+    Ok(io::read_mesh(path)?)
+}
+
+/// A failed content check as an error naming the file.
+pub(crate) fn require(path: &Path, check: Result<(), MissingSurface>) -> anyhow::Result<()> {
+    check.map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}
+
+/// True when `path` is a `.pyr` file (by its signature; an unreadable file is "not").
+pub(crate) fn is_pyr_file(path: &Path) -> bool {
+    let mut head = [0u8; 8];
+    std::fs::File::open(path)
+        .and_then(|mut f| std::io::Read::read_exact(&mut f, &mut head))
+        .is_ok_and(|_| format::is_pyr(&head))
+}
+
+/// Reads and decodes a whole `.pyr` file (validated), errors naming the file.
+pub(crate) fn load_pyr(path: &Path) -> anyhow::Result<format::PyrData> {
+    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
+    format::decode(&bytes).with_context(|| format!("cannot load {}", path.display()))
+}
+
+/// Reads `path` and builds its progressive mesh and pyramid, reporting progress and timing
+/// (the pyramid's options say which relaxation it was analysed with). `relax` defaults to the
+/// second-difference operator. A `.pyr` file (detected by its signature) is loaded instead,
+/// with the relaxation recorded in it unless `relax` asks for another, and with its stored
+/// details when they were analysed with that relaxation (else they are recomputed, and the
+/// message says why).
+pub(crate) fn load_pyramid(
+    path: &Path,
+    relax: Option<RelaxKind>,
+    global: &Global,
+) -> anyhow::Result<Pyramid> {
+    let wanted = relax.map(RelaxKind::spec);
+    if is_pyr_file(path) {
+        return load_pyr_scan(path, wanted, global);
+    }
+    let input = io::read_mesh(path)?;
+    require(path, input.check_surface())?;
+    build_pyramid(
+        input,
+        wanted.unwrap_or_default(),
+        &path.display().to_string(),
+        global,
+    )
+}
+
+/// Loads a `.pyr` file and its pyramid (with `relaxation`, default the file's), from its
+/// stored details when they fit, and says which path it took.
+fn load_pyr_scan(
+    path: &Path,
+    relaxation: Option<RelaxationSpec>,
+    global: &Global,
+) -> anyhow::Result<Pyramid> {
+    let start = Instant::now();
+    let data = load_pyr(path)?;
+    pyramid_of_pyr(path, data, relaxation, start, global)
+}
+
+/// The pyramid of a loaded `.pyr` file (`start`: when loading began), saying which path it
+/// took: the stored details, or the analysis and why.
+fn pyramid_of_pyr(
+    path: &Path,
+    data: format::PyrData,
+    relaxation: Option<RelaxationSpec>,
+    start: Instant,
+    global: &Global,
+) -> anyhow::Result<Pyramid> {
+    let loaded = start.elapsed().as_secs_f64();
+    let bar = global.progress("analysis");
+    let (scan, from) = data
+        .into_pyramid_with(relaxation, &BarProgress(&bar))
+        .with_context(|| format!("cannot analyse {}", path.display()))?;
+    bar.finish_and_clear();
+    let p = &scan.pyramid;
+    let took = start.elapsed().as_secs_f64() - loaded;
+    let path_taken = match &from {
+        DetailSource::Stored => format!("stored details, weights and fans computed in {took:.2} s"),
+        // A file without details says what it always said.
+        DetailSource::Recomputed(why) if why == format::NO_STORED_DETAILS => {
+            format!("details recomputed in {took:.2} s")
+        }
+        DetailSource::Recomputed(why) => format!("details recomputed in {took:.2} s: {why}"),
+    };
+    global.say(format_args!(
+        "{}: {} vertices, levels {}..={} (loaded in {:.2} s, {path_taken}){}",
+        path.display(),
+        scan.input.n_vertices(),
+        p.n_base_vertices(),
+        p.n_vertices(),
+        loaded,
+        extra_vertices_note(scan.input.n_vertices(), p.n_vertices()),
+    ));
+    Ok(scan)
+}
+
+/// The detail spectrum of `path` (relaxation `relax`, default the file's or
+/// second-difference): a `.pyr` file with usable stored details gives it without any
+/// analysis, and says so; anything else goes through [`load_pyramid`].
+pub(crate) fn load_spectrum(
+    path: &Path,
+    relax: Option<RelaxKind>,
+    global: &Global,
+) -> anyhow::Result<meshpyr::pyramid::Spectrum> {
+    if !is_pyr_file(path) {
+        return Ok(load_pyramid(path, relax, global)?.spectrum());
+    }
+    let relaxation = relax.map(RelaxKind::spec);
+    let start = Instant::now();
+    let data = load_pyr(path)?;
+    let Ok(spectrum) = data.stored_spectrum(relaxation) else {
+        return Ok(pyramid_of_pyr(path, data, relaxation, start, global)?.spectrum());
+    };
+    global.say(format_args!(
+        "{}: {} vertices, levels {}..={} (loaded with its stored details in {:.2} s, no analysis){}",
+        path.display(),
+        data.input.n_vertices(),
+        data.pm.n_base_vertices(),
+        data.pm.n_vertices(),
+        start.elapsed().as_secs_f64(),
+        extra_vertices_note(data.input.n_vertices(), data.pm.n_vertices()),
+    ));
+    Ok(spectrum)
+}
+
+/// Builds the pyramid of an already-read mesh; `name` is used in messages.
+pub(crate) fn build_pyramid(
+    input: PolygonMesh,
+    relaxation: RelaxationSpec,
+    name: &str,
+    global: &Global,
+) -> anyhow::Result<Pyramid> {
+    let start = Instant::now();
+    let bar = global.progress("pyramid");
+    let options = PyramidOptions {
+        relaxation,
+        ..PyramidOptions::default()
+    };
+    let scan = Pyramid::build_with(input, &options, &BarProgress(&bar))
+        .with_context(|| format!("cannot build the detail pyramid of {name}"))?;
+    bar.finish_and_clear();
+    let p = &scan.pyramid;
+    global.say(format_args!(
+        "{name}: {} vertices, levels {}..={}, {} details ({} relaxation) in {:.2} s{}",
+        scan.input.positions.len(),
+        p.n_base_vertices(),
+        p.n_vertices(),
+        p.n_details(),
+        p.relaxation(),
+        start.elapsed().as_secs_f64(),
+        extra_vertices_note(scan.input.n_vertices(), p.n_vertices()),
+    ));
+    Ok(scan)
+}
+
+/// Levels are vertex counts of the repaired mesh, so they can run past the file's vertex
+/// count: says why when they do (empty otherwise).
+pub(crate) fn extra_vertices_note(file_vertices: usize, finest: usize) -> String {
+    if finest <= file_vertices {
+        return String::new();
+    }
+    format!(
+        "; levels above {file_vertices} count the {} the repair added at non-manifold spots \
+         (see `meshpyr info`)",
+        Count(finest - file_vertices, "vertex copy", "vertex copies")
+    )
+}

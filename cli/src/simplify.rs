@@ -1,0 +1,88 @@
+//! `meshpyr simplify IN -o OUT (--faces N | --ratio R | --error E)`: QEM decimation, i.e. the
+//! progressive mesh cut at a level, written compacted with per-vertex attributes carried along.
+
+use super::{BarProgress, Global};
+use anyhow::Context;
+use meshpyr::io;
+use meshpyr::pm::{PmOptions, SimplifyGoal, simplify_to_goal};
+use meshpyr::wording::Count;
+use std::path::PathBuf;
+
+/// Arguments of `meshpyr simplify`.
+#[derive(clap::Args, Debug)]
+#[command(group(clap::ArgGroup::new("target").required(true).args(["faces", "ratio", "error"])))]
+pub(crate) struct SimplifyArgs {
+    /// Input mesh (.obj, .ply, .off, .stl, or a .pyr file: its stored input mesh).
+    pub(crate) input: PathBuf,
+    /// Output mesh; the format follows the extension.
+    #[arg(short, long)]
+    pub(crate) output: PathBuf,
+    /// Keep at most this many triangles.
+    #[arg(long)]
+    pub(crate) faces: Option<usize>,
+    /// Keep at most this fraction of the triangles, in (0, 1].
+    #[arg(long)]
+    pub(crate) ratio: Option<f64>,
+    /// Collapse while the quadric error (RMS distance) stays below this fraction of the
+    /// bounding-box diagonal.
+    #[arg(long)]
+    pub(crate) error: Option<f64>,
+    /// Largest rotation of a face normal one collapse may cause, in degrees.
+    #[arg(long, default_value_t = PmOptions::default().max_normal_angle_degrees)]
+    pub(crate) max_angle: f64,
+    /// Smallest triangle quality (4√3·area / Σ edge², 1 = equilateral) a collapse may leave
+    /// around the vertex it removes, unless it was already worse there (0 turns the rule off).
+    #[arg(long, default_value_t = PmOptions::default().min_quality)]
+    pub(crate) min_quality: f64,
+    /// Before simplifying, drop the connected pieces whose bounding-box diagonal is below this
+    /// fraction of the whole mesh's (floating debris of reconstructions; the largest piece
+    /// always stays). Reported; off unless given. `--ratio` still refers to the file's
+    /// triangles.
+    #[arg(long, value_name = "FRACTION")]
+    pub(crate) prune: Option<f64>,
+    /// Weight of the boundary-preserving planes (0 lets boundaries drift).
+    #[arg(long, default_value_t = PmOptions::default().boundary_weight)]
+    pub(crate) boundary_weight: f64,
+}
+
+/// Runs `meshpyr simplify`.
+pub(crate) fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
+    super::check_mesh_output(&args.output)?;
+    let goal = SimplifyGoal::one_of(args.faces, args.ratio, args.error, args.prune)?;
+    let input = super::input::read_input_mesh(&args.input)?;
+    let opts = PmOptions {
+        max_normal_angle_degrees: args.max_angle,
+        min_quality: args.min_quality,
+        boundary_weight: args.boundary_weight,
+        ..PmOptions::default()
+    };
+    let bar = global.progress("simplify");
+    let (result, pruned) = simplify_to_goal(&input, &goal, &opts, &BarProgress(&bar))
+        .with_context(|| format!("cannot simplify {}", args.input.display()))?;
+    bar.finish_and_clear();
+    if let (Some(pruned), Some(fraction)) = (pruned, goal.prune) {
+        global.say(format_args!(
+            "pruned {} of {} ({}) smaller than {fraction} of the diagonal",
+            pruned.components,
+            Count(pruned.of_components, "component", "components"),
+            Count(pruned.faces, "polygon", "polygons")
+        ));
+    }
+    io::write_mesh(&args.output, &result.mesh)?;
+    if let Some(shortfall) = result.shortfall() {
+        eprintln!("warning: {}: {shortfall}", args.input.display());
+    }
+    let relaxed = match result.relaxed_collapses {
+        0 => String::new(),
+        1 => " (1 collapse needed relaxed shape rules)".to_string(),
+        n => format!(" ({n} collapses needed relaxed shape rules)"),
+    };
+    global.say(format_args!(
+        "wrote {}: {} -> {}, {}{relaxed}",
+        args.output.display(),
+        result.input_triangles,
+        Count(result.mesh.n_faces(), "triangle", "triangles"),
+        Count(result.mesh.n_vertices(), "vertex", "vertices")
+    ));
+    Ok(())
+}

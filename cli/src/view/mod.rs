@@ -1,0 +1,173 @@
+//! The browser editor behind `meshpyr view`: a small HTTP server on
+//! 127.0.0.1 that serves one embedded page (WebGL2, no external assets) and the `/api` it
+//! uses — the spectrum as an equalizer, progressive-mesh levels, multiresolution edits and
+//! exports, all computed by [`Pyramid`].
+//!
+//! What it exposes and to whom (see also the README): the server listens on the loopback
+//! interface only and answers only requests whose `Host` is `127.0.0.1:PORT` or
+//! `localhost:PORT` (a page on another site reaching it through DNS rebinding gets 403);
+//! every `/api` request must carry the random per-run token of the printed URL; bodies and
+//! parameters are capped; and it never reads or writes a file: exports are downloads.
+//!
+//! ```no_run
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! let scan = meshpyr::read_mesh("scan.ply")?;
+//! let server = meshpyr_cli::view::ViewServer::bind(meshpyr::Pyramid::build(&scan)?, 0)?;
+//! println!("serving {}", server.url());
+//! server.run(); // until `server.stopper().stop()` is called from another thread
+//! # Ok(()) }
+//! ```
+
+mod api;
+mod guard;
+mod http;
+mod reply;
+mod session;
+
+use http::{HttpRequest, Message};
+use meshpyr::pyramid::Pyramid;
+use reply::Reply;
+use session::Session;
+use std::net::TcpListener;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::{Receiver, Sender};
+
+pub use api::limits;
+
+/// Why the editor's server could not start.
+#[derive(Debug, thiserror::Error)]
+pub enum ViewError {
+    /// The port could not be bound (in use, or not permitted).
+    #[error("cannot listen on 127.0.0.1:{port}: {error}")]
+    Bind {
+        /// The port asked for (0: any free port).
+        port: u16,
+        /// What the system said.
+        error: std::io::Error,
+    },
+    /// No randomness for the access token.
+    #[error("cannot draw a random access token: {0}")]
+    Token(std::io::Error),
+}
+
+/// The editor's HTTP server, bound and ready: [`ViewServer::run`] serves until stopped.
+pub struct ViewServer {
+    listener: TcpListener,
+    port: u16,
+    token: String,
+    session: Session,
+    requests: Receiver<Message>,
+    stopper: Stopper,
+}
+
+/// Stops a running [`ViewServer`] from another thread.
+#[derive(Clone)]
+pub struct Stopper {
+    port: u16,
+    stopped: Arc<AtomicBool>,
+    worker: Sender<Message>,
+}
+
+impl Stopper {
+    /// Makes [`ViewServer::run`] return after the request it is answering, if any, and stops
+    /// accepting connections.
+    pub fn stop(&self) {
+        self.stopped.store(true, Ordering::SeqCst);
+        let _ = self.worker.send(Message::Stop);
+        // Wakes the acceptor, which then sees the flag.
+        let _ = std::net::TcpStream::connect(("127.0.0.1", self.port));
+    }
+}
+
+impl ViewServer {
+    /// Listens on `127.0.0.1:port` (`0`: a free port) for the editor of `pyramid`, with a
+    /// fresh random token.
+    pub fn bind(pyramid: Pyramid, port: u16) -> Result<ViewServer, ViewError> {
+        let token = guard::random_token().map_err(ViewError::Token)?;
+        let bind_error = |error| ViewError::Bind { port, error };
+        let listener = TcpListener::bind(("127.0.0.1", port)).map_err(bind_error)?;
+        let bound = listener.local_addr().map_err(bind_error)?.port();
+        let (worker, requests) = http::worker_channel();
+        Ok(ViewServer {
+            listener,
+            port: bound,
+            token,
+            session: Session::new(pyramid),
+            requests,
+            stopper: Stopper {
+                port: bound,
+                stopped: Arc::new(AtomicBool::new(false)),
+                worker,
+            },
+        })
+    }
+
+    /// Names the mesh (shown on the page and in export file names; default "mesh").
+    pub fn with_name(mut self, name: &str) -> ViewServer {
+        self.session.name = name.to_string();
+        self
+    }
+
+    /// The port it listens on.
+    pub fn port(&self) -> u16 {
+        self.port
+    }
+
+    /// The per-run access token every `/api` request must carry.
+    pub fn token(&self) -> &str {
+        &self.token
+    }
+
+    /// The page's address, token included: `http://127.0.0.1:PORT/?token=…`.
+    pub fn url(&self) -> String {
+        format!("http://127.0.0.1:{}/?token={}", self.port, self.token)
+    }
+
+    /// A handle that stops [`ViewServer::run`] from another thread.
+    pub fn stopper(&self) -> Stopper {
+        self.stopper.clone()
+    }
+
+    /// Serves until [`Stopper::stop`]: connections are read on their own threads, requests
+    /// answered here one at a time (synthesis uses every core already, so a second request
+    /// would only wait for the first).
+    pub fn run(mut self) {
+        let worker = self.stopper.worker.clone();
+        let stopped = Arc::clone(&self.stopper.stopped);
+        let Ok(listener) = self.listener.try_clone() else {
+            return;
+        };
+        std::thread::spawn(move || http::accept(listener, worker, stopped));
+        while let Ok(Message::Request(request, answer)) = self.requests.recv() {
+            let _ = answer.send(self.answer(request));
+        }
+    }
+
+    fn answer(&mut self, request: HttpRequest) -> Reply {
+        match guard::check(&request, self.port, &self.token) {
+            Err(refused) => refused,
+            Ok(guard::Route::Page(path)) => assets(&path),
+            Ok(guard::Route::Api { path, query }) => {
+                // A bug in a handler must not take the editor down with the user's work.
+                let session = &mut self.session;
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                    api::dispatch(session, &request.method, &path, &query, &request.body)
+                }))
+                .unwrap_or_else(|_| Reply::error(500, "internal error (please report)"))
+            }
+        }
+    }
+}
+
+const INDEX_HTML: &str = include_str!("assets/index.html");
+const APP_JS: &str = include_str!("assets/app.js");
+
+/// The embedded page and its script.
+fn assets(path: &str) -> Reply {
+    match path {
+        "/" | "/index.html" => Reply::bytes(200, "text/html; charset=utf-8", INDEX_HTML.into()),
+        "/app.js" => Reply::bytes(200, "text/javascript; charset=utf-8", APP_JS.into()),
+        _ => Reply::error(404, "no such page"),
+    }
+}

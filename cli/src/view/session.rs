@@ -1,0 +1,226 @@
+//! The editor's state on the server: the pyramid, the synthesis cache behind the equalizer, and
+//! the last result a client asked for (what a bare `GET /api/export` exports).
+
+use glam::DVec3;
+use meshpyr::io::{MeshFormat, WriteOptions};
+use meshpyr::mesh::PolygonMesh;
+use meshpyr::pyramid::{Filter, LevelGains, LevelMove, Pyramid, SynthesisCache};
+use serde_json::json;
+use std::time::Instant;
+
+/// What the page shows: one gain per octave, the normal-only switch, the edits so far.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(crate) struct EditorState {
+    pub gains: Vec<f64>,
+    pub normal_only: bool,
+    pub moves: Vec<LevelMove>,
+}
+
+/// Where the time of [`Session::positions_timed`] went, in milliseconds.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Timing {
+    /// Synthesis in PM order (resumed by the cache, or an edit's full synthesis).
+    pub synthesis: f64,
+    /// From PM order to the input's vertices and order.
+    pub reorder: f64,
+}
+
+pub(crate) struct Session {
+    pub pyramid: Pyramid,
+    pub name: String,
+    /// The octave bands `(lo, hi]`, one slider each.
+    pub octaves: Vec<(usize, usize)>,
+    cache: SynthesisCache,
+    pub last: EditorState,
+}
+
+impl Session {
+    pub fn new(pyramid: Pyramid) -> Session {
+        let octaves = pyramid.pyramid.levels_of_octaves();
+        let cache = SynthesisCache::octaves(&pyramid.pyramid);
+        let last = EditorState {
+            gains: vec![1.0; octaves.len()],
+            ..Default::default()
+        };
+        Session {
+            pyramid,
+            name: "mesh".into(),
+            octaves,
+            cache,
+            last,
+        }
+    }
+
+    /// The filter the equalizer's gains stand for (bands at gain 1 left out).
+    pub fn filter_of(&self, state: &EditorState) -> Filter {
+        let mut filter = Filter::new();
+        for (&(lo, hi), &g) in self.octaves.iter().zip(&state.gains) {
+            if g != 1.0 {
+                filter = filter.gain(lo, hi, g);
+            }
+        }
+        filter.normal_only = state.normal_only;
+        filter
+    }
+
+    fn gains_of(&self, state: &EditorState) -> LevelGains {
+        self.filter_of(state)
+            .resolve(self.pyramid.pyramid.surface_area())
+    }
+
+    /// The input's positions for `state` (what `meshpyr filter`/`edit` would write), and
+    /// remembers `state` as the last result.
+    pub fn positions(&mut self, state: EditorState) -> Result<Vec<DVec3>, String> {
+        self.positions_timed(state).map(|(positions, _)| positions)
+    }
+
+    /// [`Session::positions`] and where its time went.
+    pub fn positions_timed(&mut self, state: EditorState) -> Result<(Vec<DVec3>, Timing), String> {
+        let start = Instant::now();
+        let gains = self.gains_of(&state);
+        let p = &self.pyramid.pyramid;
+        let edited;
+        let signal = if state.moves.is_empty() {
+            self.cache.synthesize(p, &gains)
+        } else {
+            edited = p
+                .edit_levels(&state.moves, &gains)
+                .map_err(|e| e.to_string())?;
+            &edited
+        };
+        let synthesized = Instant::now();
+        let input_positions = self.pyramid.to_input_positions(signal);
+        let timing = Timing {
+            synthesis: ms_between(start, synthesized),
+            reorder: ms_between(synthesized, Instant::now()),
+        };
+        self.last = state;
+        Ok((input_positions, timing))
+    }
+
+    /// `/api/info`: counts, levels, octaves with feature sizes and energies, bounds.
+    pub fn info(&self) -> serde_json::Value {
+        let spectrum = self.pyramid.spectrum();
+        let octaves: Vec<_> = spectrum
+            .bands
+            .iter()
+            .map(|b| json!({"from": b.lo, "to": b.hi, "feature_size": b.feature_size, "energy": b.energy}))
+            .collect();
+        let input = &self.pyramid.input;
+        let (lo, hi) = input.positions.iter().fold(
+            (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+            |(lo, hi), &p| (lo.min(p), hi.max(p)),
+        );
+        let levels = self.pyramid.levels();
+        json!({
+            "name": self.name,
+            "vertices": input.n_vertices(),
+            "triangles": input.n_triangles(),
+            "levels": {"min": levels.start(), "max": levels.end()},
+            "octaves": octaves,
+            "bbox": {"min": lo.to_array(), "max": hi.to_array()},
+            "diagonal": self.pyramid.pyramid.bbox_diagonal(),
+            "area": self.pyramid.pyramid.surface_area(),
+            "max_gain": super::limits::MAX_GAIN,
+            "max_moves": super::limits::MAX_MOVES,
+        })
+    }
+
+    /// `/api/faces`: the input's polygons as fan triangles, u32 triples.
+    pub fn faces(&self) -> Vec<u8> {
+        let input = &self.pyramid.input;
+        let mut out = Vec::with_capacity(12 * input.n_triangles());
+        for f in input.faces() {
+            for k in 1..f.len().saturating_sub(1) {
+                for i in [f[0], f[k], f[k + 1]] {
+                    out.extend_from_slice(&i.to_le_bytes());
+                }
+            }
+        }
+        out
+    }
+
+    /// `/api/level`: vertex and triangle counts (u32), positions (f32 triples, PM order) and
+    /// triangles (u32 triples) of the progressive mesh at `n` vertices.
+    pub fn level(&self, n: usize) -> Vec<u8> {
+        let signal = self.pyramid.pyramid.signal_at_level(n);
+        let triangles = self.pyramid.pm.level_triangles(n);
+        let mut out = Vec::with_capacity(8 + 12 * (n + triangles.len()));
+        out.extend_from_slice(&(n as u32).to_le_bytes());
+        out.extend_from_slice(&(triangles.len() as u32).to_le_bytes());
+        push_f32_bytes(&mut out, &signal[..n]);
+        for t in triangles {
+            for i in t {
+                out.extend_from_slice(&i.to_le_bytes());
+            }
+        }
+        out
+    }
+
+    /// A download of `state`'s result: `format` is `ply`, `obj` or `pyr`; returns the bytes and
+    /// a file name.
+    pub fn export(
+        &mut self,
+        state: EditorState,
+        format: &str,
+    ) -> Result<(Vec<u8>, String), String> {
+        let positions = self.positions(state)?;
+        let bytes = match format {
+            "pyr" => {
+                self.pyramid
+                    .to_pyr_bytes_with_positions(positions)
+                    .map_err(|e| e.to_string())?
+                    .0
+            }
+            "ply" => self.mesh_bytes(positions, MeshFormat::Ply)?,
+            "obj" => self.mesh_bytes(positions, MeshFormat::Obj)?,
+            other => return Err(format!("unknown export format {other:?} (ply, obj or pyr)")),
+        };
+        Ok((bytes, format!("{}-view.{format}", safe_stem(&self.name))))
+    }
+
+    /// The input with `positions`; when the format cannot carry the input's other data (PLY
+    /// properties in an OBJ, say), the geometry alone.
+    fn mesh_bytes(&self, positions: Vec<DVec3>, format: MeshFormat) -> Result<Vec<u8>, String> {
+        let mut mesh = self.pyramid.input.clone();
+        mesh.positions = positions;
+        let opts = WriteOptions::default();
+        meshpyr::io::write_mesh_bytes(&mesh, format, &opts).or_else(|_| {
+            let mut bare = PolygonMesh::new();
+            bare.positions = mesh.positions;
+            for f in self.pyramid.input.faces() {
+                bare.push_face(f);
+            }
+            meshpyr::io::write_mesh_bytes(&bare, format, &opts).map_err(|e| e.to_string())
+        })
+    }
+}
+
+/// Appends `positions` to `out` as little-endian f32 triples.
+pub(crate) fn push_f32_bytes(out: &mut Vec<u8>, positions: &[DVec3]) {
+    out.reserve(12 * positions.len());
+    for p in positions {
+        for x in p.to_array() {
+            out.extend_from_slice(&(x as f32).to_le_bytes());
+        }
+    }
+}
+
+/// Milliseconds from `a` to `b`.
+pub(crate) fn ms_between(a: Instant, b: Instant) -> f64 {
+    b.duration_since(a).as_secs_f64() * 1e3
+}
+
+/// The input's file stem reduced to characters safe in a header and a file name.
+fn safe_stem(name: &str) -> String {
+    let stem = std::path::Path::new(name)
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("mesh");
+    let safe: String = stem
+        .chars()
+        .filter(|c| c.is_ascii_alphanumeric() || "-_.".contains(*c))
+        .take(64)
+        .collect();
+    if safe.is_empty() { "mesh".into() } else { safe }
+}

@@ -1,0 +1,437 @@
+//! `meshpyr build`, `extract`, and `.pyr` files as input of `filter`/`spectrum`/`edit` and as
+//! output of `edit`, run as a user runs them.
+
+mod common;
+
+use meshpyr::io;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn meshpyr(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_meshpyr"))
+        .args(args)
+        .output()
+        .expect("the meshpyr binary runs")
+}
+
+fn data(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/data")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+/// The two mesh files have the same vertices within 1e-9 of the bounding-box diagonal plus
+/// the rounding of their position type (what filtering from stored details promises).
+fn assert_same_within_bound(a: &str, b: &str) {
+    let (ma, mb) = (
+        io::read_mesh(Path::new(a)).unwrap(),
+        io::read_mesh(Path::new(b)).unwrap(),
+    );
+    assert_eq!(ma.face_indices, mb.face_indices, "{a} / {b}");
+    let (lo, hi) = ma.positions.iter().fold(
+        (glam::DVec3::splat(f64::MAX), glam::DVec3::splat(f64::MIN)),
+        |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+    );
+    let f32_ulp = hi.abs().max(lo.abs()).max_element() * f64::from(f32::EPSILON);
+    for (p, q) in ma.positions.iter().zip(&mb.positions) {
+        let off = (*p - *q).abs().max_element();
+        assert!(
+            off <= 1e-9 * (hi - lo).length() + f32_ulp,
+            "{a} / {b}: {off:e}"
+        );
+    }
+}
+
+/// The values of two spectrum CSV files, equal to 1e-6 relative.
+fn assert_same_spectrum(a: &str, b: &str) {
+    let rows = |p: &str| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+            .collect()
+    };
+    let (ra, rb) = (rows(a), rows(b));
+    assert_eq!(ra.len(), rb.len());
+    for (x, y) in ra.iter().flatten().zip(rb.iter().flatten()) {
+        assert!((x - y).abs() <= 1e-6 * x.abs().max(y.abs()), "{x} / {y}");
+    }
+}
+
+fn scratch(name: &str) -> String {
+    let dir: PathBuf = std::env::temp_dir().join(format!("meshpyr-cli-pyr-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name).display().to_string()
+}
+
+fn ok(out: &Output) -> String {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn fails_with(out: &Output, needle: &str) {
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error: ")).collect();
+    assert_eq!(errors.len(), 1, "{err}");
+    assert!(errors[0].contains(needle), "{err}");
+}
+
+#[test]
+fn build_then_extract_gives_back_the_file_byte_for_byte() {
+    for name in [
+        "joint.ply",
+        "cube_quad_poly.ply",
+        "spider_assimp.ply",
+        "tetrahedron.off",
+    ] {
+        let pyr = scratch(&format!("{name}.pyr"));
+        let back = scratch(&format!("back-{name}"));
+        let msg = ok(&meshpyr(&["build", &data(name), "-o", &pyr]));
+        assert!(msg.contains("bytes/vertex"), "{msg}");
+        ok(&meshpyr(&["extract", &pyr, "-o", &back]));
+        let a = io::read_mesh(Path::new(&data(name))).unwrap();
+        let b = io::read_mesh(Path::new(&back)).unwrap();
+        assert_eq!(a, b, "{name}");
+        assert_eq!(
+            common::position_bits(&a),
+            common::position_bits(&b),
+            "{name}"
+        );
+        // Our own writers wrote these test files, so even the bytes come back.
+        if name.ends_with(".ply") {
+            assert!(
+                std::fs::read(data(name)).unwrap() == std::fs::read(&back).unwrap(),
+                "{name}"
+            );
+        }
+    }
+}
+
+#[test]
+fn dirty_scans_build_and_extract_exactly() {
+    // Non-manifold edges whose repair needs vertices detached (multi-edges).
+    for name in ["snowden_lo.ply", "back_to_back_scad.stl"] {
+        let pyr = scratch(&format!("{name}.pyr"));
+        let back = scratch(&format!("back-{name}"));
+        ok(&meshpyr(&["build", &data(name), "-o", &pyr]));
+        ok(&meshpyr(&["extract", &pyr, "-o", &back]));
+        let a = io::read_mesh(Path::new(&data(name))).unwrap();
+        let b = io::read_mesh(Path::new(&back)).unwrap();
+        assert_eq!(a.positions.len(), b.positions.len(), "{name}");
+        assert_eq!(
+            common::position_bits(&a),
+            common::position_bits(&b),
+            "{name}"
+        );
+        assert_eq!(a.face_indices, b.face_indices, "{name}");
+        ok(&meshpyr(&[
+            "filter",
+            &pyr,
+            "-o",
+            &scratch(&format!("f-{name}")),
+            "--lowpass",
+            "100",
+        ]));
+    }
+}
+
+#[test]
+fn attributes_survive_build_and_extract() {
+    let src = scratch("rich.ply");
+    io::write_mesh(Path::new(&src), &common::rich_mesh()).unwrap();
+    let pyr = scratch("rich.pyr");
+    let back = scratch("rich-back.ply");
+    ok(&meshpyr(&["build", &src, "-o", &pyr]));
+    ok(&meshpyr(&["extract", &pyr, "-o", &back]));
+    assert!(std::fs::read(&src).unwrap() == std::fs::read(&back).unwrap());
+}
+
+#[test]
+fn extract_level_and_truncated_files() {
+    let pyr = scratch("joint-levels.pyr");
+    ok(&meshpyr(&["-q", "build", &data("joint.ply"), "-o", &pyr]));
+    let out = scratch("joint-60.ply");
+    ok(&meshpyr(&[
+        "-q", "extract", &pyr, "-o", &out, "--level", "60",
+    ]));
+    assert_eq!(io::read_mesh(Path::new(&out)).unwrap().n_vertices(), 60);
+    fails_with(
+        &meshpyr(&["-q", "extract", &pyr, "-o", &out, "--level", "100000"]),
+        "outside this file's levels",
+    );
+
+    let bytes = std::fs::read(&pyr).unwrap();
+    // Cut inside the split blocks: the last complete level, with a warning.
+    let cut = scratch("joint-cut.pyr");
+    let splits = meshpyr::format::container::Container::parse(&bytes)
+        .unwrap()
+        .entry(*b"SPLT")
+        .unwrap();
+    let inside = (splits.offset + splits.length / 2) as usize;
+    std::fs::write(&cut, &bytes[..inside]).unwrap();
+    let w = ok(&meshpyr(&["-q", "extract", &cut, "-o", &out]));
+    assert!(w.contains("warning:") && w.contains("truncated"), "{w}");
+    assert_eq!(w.lines().count(), 1, "{w}");
+    let m = io::read_mesh(Path::new(&out)).unwrap();
+    assert!(m.n_vertices() < 221 && m.n_faces() > 0);
+    // Cut inside the header: a clean error.
+    std::fs::write(&cut, &bytes[..30]).unwrap();
+    fails_with(&meshpyr(&["-q", "extract", &cut, "-o", &out]), "truncated");
+    // A damaged byte: a checksum error, not a wrong mesh.
+    let mut bad = bytes.clone();
+    let k = bad.len() - 100;
+    bad[k] ^= 0x10;
+    std::fs::write(&cut, &bad).unwrap();
+    fails_with(&meshpyr(&["-q", "extract", &cut, "-o", &out]), "checksum");
+    // Not a .pyr at all.
+    fails_with(
+        &meshpyr(&["-q", "extract", &data("joint.ply"), "-o", &out]),
+        "not a .pyr file",
+    );
+}
+
+#[test]
+fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
+    let pyr = scratch("elephant.pyr");
+    ok(&meshpyr(&[
+        "-q",
+        "build",
+        &data("elephant_holes.ply"),
+        "-o",
+        &pyr,
+    ]));
+    let (a, b) = (scratch("el-a.ply"), scratch("el-b.ply"));
+    ok(&meshpyr(&[
+        "-q",
+        "filter",
+        &data("elephant_holes.ply"),
+        "-o",
+        &a,
+        "--lowpass",
+        "500",
+    ]));
+    ok(&meshpyr(&[
+        "-q",
+        "filter",
+        &pyr,
+        "-o",
+        &b,
+        "--lowpass",
+        "500",
+    ]));
+    assert_same_within_bound(&a, &b);
+    // Without stored details the file is analysed again: the very bytes of the mesh's filter.
+    let plain = scratch("elephant-plain.pyr");
+    ok(&meshpyr(&[
+        "-q",
+        "build",
+        &data("elephant_holes.ply"),
+        "-o",
+        &plain,
+        "--no-details",
+    ]));
+    assert!(std::fs::metadata(&plain).unwrap().len() < std::fs::metadata(&pyr).unwrap().len());
+    ok(&meshpyr(&[
+        "-q",
+        "filter",
+        &plain,
+        "-o",
+        &b,
+        "--lowpass",
+        "500",
+    ]));
+    assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap());
+
+    let (ca, cb) = (scratch("sa.csv"), scratch("sb.csv"));
+    let png = scratch("s.png");
+    ok(&meshpyr(&[
+        "-q",
+        "spectrum",
+        &data("elephant_holes.ply"),
+        "-o",
+        &png,
+        "--csv",
+        &ca,
+    ]));
+    ok(&meshpyr(&[
+        "-q", "spectrum", &pyr, "-o", &png, "--csv", &cb,
+    ]));
+    assert_same_spectrum(&ca, &cb);
+    ok(&meshpyr(&[
+        "-q", "spectrum", &plain, "-o", &png, "--csv", &cb,
+    ]));
+    assert_eq!(std::fs::read(&ca).unwrap(), std::fs::read(&cb).unwrap());
+
+    // edit: mesh output from .pyr input agrees with the mesh's; .pyr output extracts to the
+    // very output of the edit.
+    let m = io::read_mesh(Path::new(&data("elephant_holes.ply"))).unwrap();
+    let p = m.positions[0];
+    let mv = format!("{},{},{}:0.01,0.02,0.0", p.x, p.y, p.z);
+    let edit = |input: &str, out: &str| {
+        ok(&meshpyr(&[
+            "-q", "edit", input, "-o", out, "--level", "600", "--move", &mv, "--radius", "0.2",
+        ]))
+    };
+    let (ea, eb, ep, ex) = (
+        scratch("ea.ply"),
+        scratch("eb.ply"),
+        scratch("e.pyr"),
+        scratch("ex.ply"),
+    );
+    edit(&data("elephant_holes.ply"), &ea);
+    edit(&pyr, &eb);
+    edit(&pyr, &ep);
+    ok(&meshpyr(&["-q", "extract", &ep, "-o", &ex]));
+    assert_same_within_bound(&ea, &eb);
+    let rb = std::fs::read(&eb).unwrap();
+    assert!(
+        rb == std::fs::read(&ex).unwrap(),
+        "edit to .pyr then extract differs"
+    );
+    assert!(rb != std::fs::read(data("elephant_holes.ply")).unwrap());
+    // The edited file is a valid hierarchy: filtering it works.
+    ok(&meshpyr(&[
+        "-q",
+        "filter",
+        &ep,
+        "-o",
+        &ex,
+        "--lowpass",
+        "500",
+    ]));
+}
+
+#[test]
+fn the_relaxation_is_recorded_and_another_one_is_analysed_afresh() {
+    let mesh = data("joint.ply");
+    let pyr = scratch("joint-mcm.pyr");
+    ok(&meshpyr(&[
+        "-q", "build", &mesh, "-o", &pyr, "--relax", "mcm",
+    ]));
+    // The file's operator is used without being asked for, like the mesh with --relax mcm.
+    let (a, b, c) = (
+        scratch("jm-a.ply"),
+        scratch("jm-b.ply"),
+        scratch("jm-c.ply"),
+    );
+    let filter = |input: &str, out: &str, relax: &[&str]| {
+        let mut args = vec!["-q", "filter", input, "-o", out, "--enhance", "30:221=2"];
+        args.extend_from_slice(relax);
+        meshpyr(&args)
+    };
+    ok(&filter(&mesh, &a, &["--relax", "mcm"]));
+    ok(&filter(&pyr, &b, &[]));
+    ok(&filter(&mesh, &c, &[]));
+    assert_same_within_bound(&a, &b);
+    assert!(
+        std::fs::read(&a).unwrap() != std::fs::read(&c).unwrap(),
+        "mcm and second-difference differ"
+    );
+    // Another operator than the stored details': analysed afresh, and said so.
+    let d = scratch("jm-d.ply");
+    let out = meshpyr(&[
+        "filter",
+        &pyr,
+        "-o",
+        &d,
+        "--enhance",
+        "30:221=2",
+        "--relax",
+        "second-difference",
+    ]);
+    ok(&out);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("details recomputed") && said.contains("analysed with --relax mcm"),
+        "{said}"
+    );
+    assert!(std::fs::read(&c).unwrap() == std::fs::read(&d).unwrap());
+    // The stored ones are used when they fit, and that is said too; the spectrum needs no
+    // analysis at all.
+    let out = meshpyr(&["filter", &pyr, "-o", &d, "--enhance", "30:221=2"]);
+    ok(&out);
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("stored details"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let png = scratch("jm.png");
+    let out = meshpyr(&["spectrum", &pyr, "-o", &png]);
+    ok(&out);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        said.contains("stored details") && said.contains("no analysis"),
+        "{said}"
+    );
+    let out = meshpyr(&["spectrum", &pyr, "-o", &png, "--relax", "normal"]);
+    ok(&out);
+    let said = String::from_utf8_lossy(&out.stderr);
+    assert!(said.contains("details recomputed"), "{said}");
+}
+
+/// Every command that reads a mesh takes a `.pyr` file as the mesh it stores: the same output
+/// as from the original file, byte for byte; a damaged `.pyr` is a one-line error.
+#[test]
+fn mesh_commands_take_pyr_files() {
+    let mesh = data("joint.ply");
+    let pyr = scratch("joint-as-input.pyr");
+    ok(&meshpyr(&["build", &mesh, "-o", &pyr]));
+    let stdout = |out: Output| {
+        ok(&out);
+        out.stdout
+    };
+    // The same mesh facts; the .pyr file also describes its hierarchy's base level.
+    let info = |path: &str| -> serde_json::Value {
+        serde_json::from_slice(&stdout(meshpyr(&["info", path, "--json"]))).unwrap()
+    };
+    let (mut of_pyr, of_mesh) = (info(&pyr), info(&mesh));
+    let base = of_pyr["pm_base"].take();
+    assert!(base.as_str().unwrap().starts_with("base level "), "{base}");
+    assert!(of_mesh["pm_base"].is_null());
+    assert_eq!(of_pyr, of_mesh);
+    for (name, args) in [
+        ("convert", vec!["convert"]),
+        ("simplify", vec!["simplify", "--ratio", "0.5"]),
+        ("smooth", vec!["smooth", "--method", "taubin"]),
+        ("subdivide", vec!["subdivide", "--levels", "1"]),
+    ] {
+        let from_pyr = scratch(&format!("{name}-from-pyr.ply"));
+        let from_mesh = scratch(&format!("{name}-from-mesh.ply"));
+        let run = |input: &str, out: &str| {
+            let mut a = vec!["-q", args[0], input];
+            if args[0] == "convert" {
+                a.push(out);
+            } else {
+                a.extend(["-o", out]);
+            }
+            a.extend(&args[1..]);
+            ok(&meshpyr(&a));
+        };
+        run(&pyr, &from_pyr);
+        run(&mesh, &from_mesh);
+        assert!(
+            std::fs::read(&from_pyr).unwrap() == std::fs::read(&from_mesh).unwrap(),
+            "{name}: output from the .pyr differs"
+        );
+    }
+    let again = scratch("joint-rebuilt.pyr");
+    ok(&meshpyr(&["build", &pyr, "-o", &again]));
+    assert!(std::fs::read(&again).unwrap() == std::fs::read(&pyr).unwrap());
+    let report = String::from_utf8(stdout(meshpyr(&["compare", &pyr, &mesh, "--json"]))).unwrap();
+    assert!(report.contains("\"e_v\":0.0"), "{report}");
+    // A flipped byte deep in the file: the checksum catches it.
+    let mut bytes = std::fs::read(&pyr).unwrap();
+    let n = bytes.len();
+    bytes[n - 10] ^= 0x40;
+    let damaged = scratch("joint-damaged.pyr");
+    std::fs::write(&damaged, &bytes).unwrap();
+    fails_with(&meshpyr(&["info", &damaged]), "cannot load");
+}

@@ -1,0 +1,283 @@
+//! `meshpyr view` in a real headless Chromium, driven over WebDriver (plain HTTP/JSON, spoken
+//! by the small client in `view_support`): the page draws the bunny, the equalizer returns
+//! exactly what `Pyramid::filter` gives, the scrubber shows a coarser level, a drag edit moves
+//! the surface near the pick only, export gives a mesh that loads, and the page needs its token.
+//!
+//! Needs `chromium` and `chromedriver` on PATH (Debian: `chromium`, `chromium-driver`; .ci/run
+//! installs them). Without them the test prints SKIP and passes, unless
+//! `MESHPYR_REQUIRE_BROWSER=1`, which CI sets.
+
+mod view_support;
+
+use meshpyr::io::MeshFormat;
+use meshpyr::{Filter, Pyramid};
+use serde_json::{Value, json};
+use std::path::PathBuf;
+use std::time::Instant;
+use view_support::webdriver::{Driver, ELEMENT, driver_or_skip};
+use view_support::{Running, base64_decode, bits, f32_bits, serve};
+
+/// Share of pixels that differ by more than a little in some channel.
+fn changed_share(a: &[u8], b: &[u8]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let changed = a
+        .chunks_exact(3)
+        .zip(b.chunks_exact(3))
+        .filter(|(p, q)| p.iter().zip(*q).any(|(x, y)| x.abs_diff(*y) > 8))
+        .count();
+    changed as f64 / (a.len() / 3) as f64
+}
+
+#[test]
+fn the_editor_works_in_a_headless_browser() {
+    let Some(driver) = driver_or_skip("the_editor_works_in_a_headless_browser") else {
+        return;
+    };
+    let server = serve("bunny.ply");
+    let input = meshpyr::read_mesh(view_support::data("bunny.ply")).unwrap();
+    let reference = Pyramid::build(&input).unwrap();
+    driver.navigate(&server.url);
+    driver.wait_for("window.meshpyr && window.meshpyr.ready && window.meshpyr.idle()");
+    let original = page_draws_the_mesh(&driver);
+    let filtered = slider_gives_the_bits_of_filter(&driver, &reference, &original);
+    scrubber_shows_a_coarser_level(&driver, &reference, &filtered);
+    let edited = drag_moves_the_surface_near_the_pick(&driver);
+    export_loads_as_a_mesh(&driver, &edited);
+    if let Some(path) = std::env::var_os("MESHPYR_VIEW_SCREENSHOT") {
+        take_screenshot(&driver, &PathBuf::from(path));
+    }
+    page_needs_the_token(&driver, &server);
+}
+
+fn page_draws_the_mesh(driver: &Driver) -> Vec<u8> {
+    let pixels = driver.canvas_pixels();
+    let background = [18u8, 20, 26];
+    let drawn = pixels
+        .chunks_exact(3)
+        .filter(|p| p.iter().zip(background).any(|(x, y)| x.abs_diff(y) > 30))
+        .count();
+    let share = drawn as f64 / (pixels.len() / 3) as f64;
+    assert!(
+        share > 0.03,
+        "only {:.2}% of the canvas is drawn",
+        100.0 * share
+    );
+    pixels
+}
+
+fn slider_gives_the_bits_of_filter(driver: &Driver, reference: &Pyramid, before: &[u8]) -> Vec<u8> {
+    let octaves = reference.pyramid.levels_of_octaves();
+    let band = octaves.len() - 3;
+    let updates = driver.script("return window.meshpyr.updates;");
+    driver.slide(&format!("#bands input[data-band='{band}']"), 3.0);
+    assert_ne!(driver.script("return window.meshpyr.updates;"), updates);
+    let (lo, hi) = octaves[band];
+    let expected = reference.filter(&Filter::new().gain(lo, hi, 3.0));
+    assert_eq!(bits(&driver.positions()), f32_bits(&expected.positions));
+    let after = driver.canvas_pixels();
+    let share = changed_share(before, &after);
+    assert!(share > 0.003, "the picture hardly changed: {share}");
+    after
+}
+
+fn scrubber_shows_a_coarser_level(driver: &Driver, reference: &Pyramid, before: &[u8]) {
+    driver.slide("#level", 300.0);
+    let shown = driver.script("return window.meshpyr.shownLevel;");
+    let shown = shown.as_u64().expect("a level is shown") as usize;
+    assert!(reference.levels().contains(&shown) && shown < *reference.levels().end());
+    let share = changed_share(before, &driver.canvas_pixels());
+    assert!(share > 0.01, "the coarse level looks the same: {share}");
+    driver.slide("#level", 1000.0);
+    assert_eq!(
+        driver.script("return window.meshpyr.shownLevel;"),
+        Value::Null
+    );
+}
+
+/// Resets the equalizer, drags upwards from the canvas centre in edit mode, and checks where
+/// the surface moved; returns the edited positions.
+fn drag_moves_the_surface_near_the_pick(driver: &Driver) -> Vec<f32> {
+    driver.script("document.querySelector(\"[data-preset='reset']\").click();");
+    driver.wait_for("window.meshpyr.idle() && window.meshpyr.gains.every((g) => g === 1)");
+    let before = driver.positions();
+    driver.script("document.getElementById('edit-mode').click();");
+    let canvas = driver.canvas();
+    let mouse = |actions: Value| {
+        json!({"actions": [{"type": "pointer", "id": "mouse",
+            "parameters": {"pointerType": "mouse"}, "actions": actions}]})
+    };
+    driver.call_session(
+        "POST",
+        "/actions",
+        &mouse(json!([
+            {"type": "pointerMove", "duration": 0, "origin": {ELEMENT: canvas}, "x": 0, "y": 0},
+            {"type": "pointerDown", "button": 0},
+            {"type": "pointerMove", "duration": 400, "origin": "pointer", "x": 0, "y": -60},
+            {"type": "pointerUp", "button": 0},
+        ])),
+    );
+    driver.wait_for("window.meshpyr.moves.length === 1 && window.meshpyr.idle()");
+    let after = driver.positions();
+    let m = driver.script("return window.meshpyr.moves[0];");
+    let v = |k: &str| {
+        glam::DVec3::from_slice(&serde_json::from_value::<Vec<f64>>(m[k].clone()).unwrap())
+    };
+    let (center, push) = (v("center"), v("displacement"));
+    let radius = m["radius"].as_f64().unwrap();
+    assert!(push.length() > 0.0);
+    let moved: Vec<(f64, f64)> = before
+        .chunks_exact(3)
+        .zip(after.chunks_exact(3))
+        .map(|(a, b)| {
+            let a = glam::DVec3::new(a[0].into(), a[1].into(), a[2].into());
+            let b = glam::DVec3::new(b[0].into(), b[1].into(), b[2].into());
+            ((a - center).length(), (b - a).length())
+        })
+        .collect();
+    let (near_distance, most) = moved
+        .iter()
+        .copied()
+        .fold((0.0, 0.0), |best, x| if x.1 > best.1 { x } else { best });
+    assert!(
+        most > 0.5 * push.length(),
+        "moved {most}, pushed {}",
+        push.length()
+    );
+    assert!(
+        near_distance < radius,
+        "largest move {near_distance} from the pick, radius {radius}"
+    );
+    let far = moved
+        .iter()
+        .filter(|(d, _)| *d > 2.0 * radius)
+        .map(|m| m.1)
+        .fold(0.0, f64::max);
+    assert!(
+        far < 0.02 * most,
+        "vertices beyond two radii moved {far} (peak {most})"
+    );
+    println!(
+        "drag edit: peak move {most:.4} at {near_distance:.4} from the pick, at most {far:.2e} beyond two radii ({radius:.4})"
+    );
+    after
+}
+
+fn export_loads_as_a_mesh(driver: &Driver, shown: &[f32]) {
+    let result = driver.async_script(
+        "window.meshpyr.exportBytes('ply').then(({bytes, name}) => {
+            let s = '';
+            for (let i = 0; i < bytes.length; i += 32768) {
+                s += String.fromCharCode.apply(null, bytes.subarray(i, i + 32768));
+            }
+            done({name, data: btoa(s)});
+        }).catch((e) => done({error: String(e)}));",
+    );
+    assert!(result["error"].is_null(), "{}", result["error"]);
+    assert_eq!(result["name"], "bunny-view.ply");
+    let bytes = base64_decode(result["data"].as_str().unwrap());
+    let mesh = meshpyr::io::read_mesh_bytes(&bytes, MeshFormat::Ply).unwrap();
+    let loaded: Vec<f32> = mesh
+        .positions
+        .iter()
+        .flat_map(|p| p.to_array().map(|x| x as f32))
+        .collect();
+    assert_eq!(bits(&loaded), bits(shown));
+}
+
+fn take_screenshot(driver: &Driver, path: &std::path::Path) {
+    driver.script("document.getElementById('edit-mode').click();");
+    driver.script("document.querySelector(\"[data-preset='enhance']\").click();");
+    driver.wait_for("window.meshpyr.idle() && window.meshpyr.gains.some((g) => g === 2)");
+    std::fs::write(path, driver.window_png()).unwrap();
+}
+
+fn page_needs_the_token(driver: &Driver, server: &Running) {
+    driver.navigate(&format!("http://127.0.0.1:{}/", server.port));
+    driver.wait_for("document.getElementById('error').textContent.includes('token')");
+    let by_name = format!("http://localhost:{}/?token={}", server.port, server.token);
+    driver.navigate(&by_name);
+    driver.wait_for("window.meshpyr && window.meshpyr.ready");
+}
+
+/// End-to-end latency of equalizer moves on a large scan: `MESHPYR_VIEW_LATENCY_MESH=scan.ply
+/// cargo test --release --test view_browser -- --ignored --nocapture` (docs/performance.md).
+#[test]
+#[ignore = "needs a large scan named by MESHPYR_VIEW_LATENCY_MESH; run by hand"]
+fn equalizer_latency_on_a_large_scan() {
+    let Some(path) = std::env::var_os("MESHPYR_VIEW_LATENCY_MESH") else {
+        println!("SKIP: set MESHPYR_VIEW_LATENCY_MESH to a mesh file");
+        return;
+    };
+    let Some(driver) = driver_or_skip("equalizer_latency_on_a_large_scan") else {
+        return;
+    };
+    let input = meshpyr::read_mesh(&path).unwrap();
+    let start = Instant::now();
+    let pyramid = Pyramid::build(&input).unwrap();
+    println!(
+        "{} vertices, pyramid built in {:.1} s",
+        input.n_vertices(),
+        start.elapsed().as_secs_f64()
+    );
+    let server = meshpyr_cli::view::ViewServer::bind(pyramid, 0).unwrap();
+    let url = server.url();
+    std::thread::spawn(move || server.run());
+    driver.navigate(&url);
+    driver.wait_for("window.meshpyr && window.meshpyr.ready && window.meshpyr.idle()");
+    let n = driver
+        .script("return window.meshpyr.gains.length;")
+        .as_u64()
+        .unwrap() as usize;
+    let mut all = Vec::new();
+    let mut by_part = vec![Vec::new(); 7];
+    let parts = [
+        "synthesisMs",
+        "reorderMs",
+        "encodeMs",
+        "transferMs",
+        "normalsMs",
+        "uploadMs",
+        "drawMs",
+    ];
+    println!(
+        "octave  gain  end-to-end  synthesis  reorder  encode  transfer  normals  upload     draw  (ms)"
+    );
+    for band in (0..n).rev() {
+        for gain in [1.5, 1.0] {
+            driver.slide(&format!("#bands input[data-band='{band}']"), gain);
+            let last = driver.script("return window.meshpyr.latencies.at(-1);");
+            let ms = last["ms"].as_f64().unwrap();
+            let [synth, reorder, encode, transfer, normals, upload, draw] =
+                parts.map(|k| last[k].as_f64().unwrap());
+            println!(
+                "{band:>6}  {gain:>4}  {ms:>10.1}  {synth:>9.1}  {reorder:>7.1}  {encode:>6.1}  {transfer:>8.1}  {normals:>7.1}  {upload:>6.1}  {draw:>7.1}"
+            );
+            all.push(ms);
+            for (values, x) in by_part
+                .iter_mut()
+                .zip([synth, reorder, encode, transfer, normals, upload, draw])
+            {
+                values.push(x);
+            }
+        }
+    }
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let medians: Vec<String> = parts
+        .iter()
+        .zip(&mut by_part)
+        .map(|(k, v)| format!("{} {:.1}", k.trim_end_matches("Ms"), median(v)))
+        .collect();
+    println!("medians (ms): {}", medians.join(", "));
+    let renderer = driver.script("return window.meshpyr.renderer;");
+    println!("renderer: {renderer}");
+    let max = all.iter().copied().fold(0.0, f64::max);
+    println!(
+        "median {:.1} ms, max {:.1} ms over {} slider moves",
+        median(&mut all),
+        max,
+        all.len()
+    );
+}
