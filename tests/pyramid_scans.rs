@@ -1,6 +1,9 @@
 //! The paper's Venus experiments (Guskov et al. 1999, Fig. 13) on the bundled bunny scan, and
 //! real dirty scans (holes, many components, repaired non-manifold spots) through the filter.
 
+mod common;
+
+use common::closed_loop_bound;
 use glam::DVec3;
 use meshpyr::io;
 use meshpyr::mesh::{Mesh, SlotIndex};
@@ -98,12 +101,6 @@ fn band_changes(before: &Spectrum, after: &Spectrum) -> Vec<(usize, f64)> {
         .zip(&after.bands)
         .map(|(b, a)| (b.hi, a.energy / b.energy - 1.0))
         .collect()
-}
-
-/// How far unit gains may land from the input: `√3/2` of the pyramid's detail step (details
-/// are quantised in a closed loop, docs/algorithms.md §1f), plus rounding.
-fn closed_loop_bound(p: &meshpyr::pyramid::DetailPyramid) -> f64 {
-    0.5 * 3f64.sqrt() * p.detail_step() + 1e-12 * p.bbox_diagonal()
 }
 
 const V: fn(usize) -> LevelSpec = LevelSpec::Vertices;

@@ -23,8 +23,8 @@
 //! before their range first: its rings are the half-edge mesh's circulations, slots included,
 //! in one or two cache lines per vertex instead of linked 48-byte records, and the record
 //! walk is bound by memory, not arithmetic. The others walk a half-edge cursor down from the
-//! finest level. Steps 2–5 then run over the records, finest split first; like synthesis,
-//! they run the splits of a wave (see `waves`) at once, in reverse.
+//! finest level. Steps 2–3 then run over the records, finest split first, and steps 4–5
+//! coarsest first; like synthesis, both run the splits of a wave (see `waves`) at once.
 
 use super::frames::LocalIndex;
 use super::quantise::{detail_step, signal_diagonal};
@@ -641,7 +641,7 @@ struct Slotted {
 impl Slotted {
     /// The records of all ranges copied into the slots `waves` assigns them (every range's
     /// codes already in one width), but for the weights: they are only ever read from a
-    /// split's start, so they stay in range order, joined chunk by chunk, which never holds
+    /// split's start, so they stay in split order, joined chunk by chunk, which never holds
     /// the largest stream twice. The other streams are copied one at a time and each range
     /// stream is freed once copied. Each is copied by all threads at once (the reads are
     /// scattered, so one thread would mostly wait for memory).

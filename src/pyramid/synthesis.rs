@@ -196,21 +196,20 @@ pub(crate) fn local_frames<I: LocalIndex>(
 }
 
 impl DetailPyramid {
-    /// Computes the values the split stored at `slot` gives its touched vertices (the new
-    /// vertex, then its 1-ring) from `f = f^(n−1)`, and writes them into `f`.
+    /// The prediction step shared by synthesis and the analysis' closed loop: gathers the
+    /// local table of the split stored at `slot` from `f = f^(n−1)`, decodes its record and
+    /// predicts its touched vertices into `scratch.q` (the predicted geometry in
+    /// `scratch.g`). Returns the survivor's local index, for [`Self::split_frames`].
     #[inline]
-    #[allow(clippy::too_many_arguments)]
-    fn synthesize_split<I: LocalIndex>(
+    fn predict_split<I: LocalIndex>(
         &self,
         codes: &[I],
-        details: &[[i32; 3]],
         slot: usize,
         f: &SharedSignal,
-        gains: &LevelGains,
         scratch: &mut Scratch,
-    ) {
-        let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
-        let locals = &self.locals[o.locals..next.locals];
+    ) -> usize {
+        let o = self.offsets[slot];
+        let locals = &self.locals[o.locals..self.offsets[slot + 1].locals];
         prefetch_next_split(f, &self.offsets, &self.locals, slot);
         let g = &mut scratch.g;
         g.clear();
@@ -224,6 +223,37 @@ impl DetailPyramid {
             g,
             &mut scratch.q,
         );
+        survivor
+    }
+
+    /// The frames of the touched vertices of the split [`Self::predict_split`] just predicted,
+    /// into `scratch.frames`.
+    #[inline]
+    fn split_frames<I: LocalIndex>(&self, codes: &[I], survivor: usize, scratch: &mut Scratch) {
+        local_frames(
+            codes,
+            &scratch.entries,
+            survivor,
+            &scratch.g,
+            &mut scratch.frames,
+            frame_min_length(self.bbox_diagonal),
+        );
+    }
+
+    /// Computes the values the split stored at `slot` gives its touched vertices (the new
+    /// vertex, then its 1-ring) from `f = f^(n−1)`, and writes them into `f`.
+    #[inline]
+    fn synthesize_split<I: LocalIndex>(
+        &self,
+        codes: &[I],
+        slot: usize,
+        f: &SharedSignal,
+        gains: &LevelGains,
+        scratch: &mut Scratch,
+    ) {
+        let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
+        let locals = &self.locals[o.locals..next.locals];
+        let survivor = self.predict_split(codes, slot, f, scratch);
         let level = self.level_of_split(self.waves.split_at(slot));
         let (tangential, normal) = gains.split_gain(level);
         if tangential == 0.0 && normal == 0.0 {
@@ -235,15 +265,8 @@ impl DetailPyramid {
             }
             return;
         }
-        local_frames(
-            codes,
-            &scratch.entries,
-            survivor,
-            g,
-            &mut scratch.frames,
-            frame_min_length(self.bbox_diagonal),
-        );
-        let details = &details[o.details..next.details];
+        self.split_frames(codes, survivor, scratch);
+        let details = &self.details[o.details..next.details];
         // The touched vertices open the local table; there is one detail for each.
         for (((&x, &q), frame), &d) in locals
             .iter()
@@ -270,27 +293,8 @@ impl DetailPyramid {
     ) {
         let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
         let locals = &self.locals[o.locals..next.locals];
-        prefetch_next_split(f, &self.offsets, &self.locals, slot);
-        let g = &mut scratch.g;
-        g.clear();
-        g.extend(locals.iter().map(|&x| f.get(x as usize)));
-        let survivor = decode(codes, o.codes, o.weights, &mut scratch.entries);
-        predict_values(
-            codes,
-            &self.weights,
-            &scratch.entries,
-            survivor,
-            g,
-            &mut scratch.q,
-        );
-        local_frames(
-            codes,
-            &scratch.entries,
-            survivor,
-            g,
-            &mut scratch.frames,
-            frame_min_length(self.bbox_diagonal),
-        );
+        let survivor = self.predict_split(codes, slot, f, scratch);
+        self.split_frames(codes, survivor, scratch);
         let step = self.detail_step;
         for (i, ((&x, &q), frame)) in locals
             .iter()
@@ -340,7 +344,6 @@ impl DetailPyramid {
     fn synthesize_splits<I: LocalIndex>(
         &self,
         codes: &[I],
-        details: &[[i32; 3]],
         f: &mut [DVec3],
         splits: std::ops::Range<usize>,
         gains: &LevelGains,
@@ -370,7 +373,7 @@ impl DetailPyramid {
             |_| {},
             |i, scratch: &mut Scratch| {
                 let slot = listed.as_ref().map_or(i, |slots| slots[i] as usize);
-                self.synthesize_split(codes, details, slot, &f, gains, scratch)
+                self.synthesize_split(codes, slot, &f, gains, scratch)
             },
         );
     }
@@ -410,7 +413,7 @@ impl DetailPyramid {
         let from = from.clamp(self.n_base, self.n_finest);
         let to = to.clamp(from, self.n_finest);
         let splits = from - self.n_base..to - self.n_base;
-        with_codes!(&self.codes, c => self.synthesize_splits(c, &self.details, f, splits, gains))
+        with_codes!(&self.codes, c => self.synthesize_splits(c, f, splits, gains))
     }
 
     /// [`DetailPyramid::synthesize_range`] from `from` to the finest level, checking that `f` fits.
