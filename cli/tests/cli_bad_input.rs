@@ -3,23 +3,11 @@
 //! one-line error (or a warning) that names the file and what is wrong, with a non-zero exit
 //! code for errors, and nothing written.
 
+mod common;
+
+use common::{data_arg as data, meshpyr};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn meshpyr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshpyr"))
-        .args(args)
-        .output()
-        .expect("the meshpyr binary runs")
-}
-
-fn data(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data")
-        .join(name)
-        .display()
-        .to_string()
-}
+use std::process::Output;
 
 /// A fresh folder for one test.
 fn folder(test: &str) -> PathBuf {

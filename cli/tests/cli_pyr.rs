@@ -3,24 +3,11 @@
 
 mod common;
 
+use common::{data_arg as data, meshpyr};
+
 use meshpyr::io;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn meshpyr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshpyr"))
-        .args(args)
-        .output()
-        .expect("the meshpyr binary runs")
-}
-
-fn data(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data")
-        .join(name)
-        .display()
-        .to_string()
-}
+use std::process::Output;
 
 /// The two mesh files have the same vertices within 1e-9 of the bounding-box diagonal plus
 /// the rounding of their position type (what filtering from stored details promises).

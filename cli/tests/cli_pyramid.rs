@@ -1,23 +1,11 @@
 //! `meshpyr filter`, `spectrum` and `edit` as a user runs them.
 
+mod common;
+
+use common::{data_arg as data, meshpyr};
 use meshpyr::io;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn meshpyr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshpyr"))
-        .args(args)
-        .output()
-        .expect("the meshpyr binary runs")
-}
-
-fn data(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data")
-        .join(name)
-        .display()
-        .to_string()
-}
+use std::process::Output;
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("meshpyr-cli-pyramid-{}", std::process::id()));

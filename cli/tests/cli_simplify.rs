@@ -1,24 +1,12 @@
 //! `meshpyr simplify` as a user runs it.
 
+mod common;
+
+use common::{data_arg as data, meshpyr};
 use meshpyr::io::read_mesh;
 use meshpyr::mesh::{Attribute, AttributeData, Mesh};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn meshpyr(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_meshpyr"))
-        .args(args)
-        .output()
-        .expect("the meshpyr binary runs")
-}
-
-fn data(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data")
-        .join(name)
-        .display()
-        .to_string()
-}
+use std::process::Output;
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("meshpyr-cli-simplify-{}", std::process::id()));

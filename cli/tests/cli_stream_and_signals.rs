@@ -3,6 +3,9 @@
 //! leaves no file behind (neither the output nor a hidden temporary one).
 #![cfg(target_os = "linux")]
 
+mod common;
+
+use common::data_arg as data;
 use std::io::{BufRead, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -12,14 +15,6 @@ fn folder(test: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
-}
-
-fn data(name: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/data")
-        .join(name)
-        .display()
-        .to_string()
 }
 
 /// One triangle, then a comment of `comment_mib` MiB, gzipped while it is generated (the

@@ -31,3 +31,8 @@ pub fn error_line(o: &std::process::Output) -> String {
     assert!(!err.contains("panicked"), "{err}");
     err
 }
+
+/// A test data file as the `String` argument a command line takes.
+pub fn data_arg(name: &str) -> String {
+    data(name).display().to_string()
+}
