@@ -111,10 +111,11 @@ pub(crate) fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
     let start = Instant::now();
     let gains = resolve_reporting(&filter, &scan.pyramid, &args.input.display().to_string());
     let out = scan.pyramid.synthesize(&gains);
-    let mesh = scan.output_mesh(&out);
+    let levels = Count(scan.pyramid.n_splits(), "level", "levels");
+    let mesh = scan.into_output_mesh(&out);
+    drop(out);
     global.say(format_args!(
-        "synthesised {} in {:.3} s",
-        Count(scan.pyramid.n_splits(), "level", "levels"),
+        "synthesised {levels} in {:.3} s",
         start.elapsed().as_secs_f64()
     ));
     io::write_mesh(&args.output, &mesh)?;

@@ -6,7 +6,7 @@
 use super::{DetailPyramid, MoveHandle, PyramidError, Spectrum, StoredDetails};
 use crate::format::{self, FormatError, PyrData, SizeReport};
 use crate::io::IoError;
-use crate::mesh::{Mesh, PolygonMesh, SourceMap};
+use crate::mesh::{CornerTable, Mesh, PolygonMesh, SourceMap};
 use crate::pm::{PmOptions, ProgressiveMesh};
 use crate::progress::{NoProgress, Progress};
 use crate::pyramid::Filter;
@@ -47,9 +47,9 @@ pub enum PyrContent {
 pub struct Pyramid {
     /// The mesh as read.
     pub input: PolygonMesh,
-    /// Where each vertex of the repaired mesh came from in the input. The repaired half-edge
-    /// mesh itself is dropped once the hierarchy is built: filters never read it, and it is
-    /// about 430 B per vertex, which would sit through the analysis' memory peak.
+    /// Where each vertex of the repaired mesh came from in the input. The hierarchy is built
+    /// from the builder's corner table: a half-edge mesh of the input is never made (filters
+    /// never read it, and it is about 430 B per vertex).
     pub source: SourceMap,
     /// The hierarchy.
     pub pm: ProgressiveMesh,
@@ -133,11 +133,15 @@ impl Pyramid {
         progress: &dyn Progress,
     ) -> Result<Pyramid, PyramidError> {
         input.check_surface()?;
-        let built = Mesh::from_polygons(&input)?;
-        let pm =
-            ProgressiveMesh::build(&built.mesh, &options.pm, &|x: f64| progress.update(0.5 * x))?;
-        let source = built.source;
-        drop(built.mesh);
+        let repaired = CornerTable::from_polygons(&input)?;
+        let source = repaired.source;
+        let pm = ProgressiveMesh::from_corners(
+            &input,
+            repaired.corners,
+            &source,
+            &options.pm,
+            &|x: f64| progress.update(0.5 * x),
+        )?;
         let (_, pyramid) = analyze_with(&options.relaxation, &pm, &|x: f64| {
             progress.update(0.5 + 0.5 * x)
         })?;
@@ -273,17 +277,7 @@ impl Pyramid {
     /// outside the hierarchy keep their input positions): the positions [`Pyramid::filter`]
     /// writes, without copying the rest of the mesh.
     pub fn to_input_positions(&self, pm_signal: &[DVec3]) -> Vec<DVec3> {
-        // The PM covers every vertex of the repaired mesh (`pm_to_mesh` is a permutation of its
-        // slots), and its original positions are the mesh's; entries `pm_signal` lacks keep them.
-        let original = self.pm.original_positions();
-        let mut mesh_values = vec![DVec3::ZERO; self.source.vertex_source.len()];
-        for (i, &slot) in self.pm.pm_to_mesh().iter().enumerate() {
-            if let Some(m) = mesh_values.get_mut(slot as usize) {
-                *m = pm_signal.get(i).copied().unwrap_or(original[i]);
-            }
-        }
-        self.source
-            .to_input_positions(&mesh_values, &self.input.positions)
+        input_positions(&self.pm, &self.source, pm_signal, &self.input.positions)
     }
 
     /// The input mesh with its positions replaced by `pm_signal` (PM order).
@@ -293,11 +287,46 @@ impl Pyramid {
         out
     }
 
+    /// [`Self::output_mesh`], consuming the pyramid: the input's arrays become the output's,
+    /// and the hierarchy and details are freed before the positions are mapped, so the peak
+    /// of a one-shot filter does not hold a copy of the input beside them.
+    pub fn into_output_mesh(self, pm_signal: &[DVec3]) -> PolygonMesh {
+        let Pyramid {
+            mut input,
+            source,
+            pm,
+            pyramid,
+            ..
+        } = self;
+        drop(pyramid);
+        input.positions = input_positions(&pm, &source, pm_signal, &input.positions);
+        input
+    }
+
     /// The input's positions and triangles (the repaired mesh) for previews and metrics.
     pub fn triangles(&self, pm_signal: &[DVec3]) -> (Vec<DVec3>, Vec<[u32; 3]>) {
         let n = pm_signal.len().min(self.pm.original_positions().len());
         (pm_signal[..n].to_vec(), self.pm.finest_faces().to_vec())
     }
+}
+
+/// [`Pyramid::to_input_positions`] from the parts it reads.
+fn input_positions(
+    pm: &ProgressiveMesh,
+    source: &SourceMap,
+    pm_signal: &[DVec3],
+    input: &[DVec3],
+) -> Vec<DVec3> {
+    // The PM covers every vertex of the repaired mesh (`pm_to_mesh` is a permutation of its
+    // slots), and its original positions are the mesh's; entries `pm_signal` lacks keep them.
+    let original = pm.original_positions();
+    let mut mesh_values = vec![DVec3::ZERO; source.vertex_source.len()];
+    for (i, &slot) in pm.pm_to_mesh().iter().enumerate() {
+        if let Some(m) = mesh_values.get_mut(slot as usize) {
+            *m = pm_signal.get(i).copied().unwrap_or(original[i]);
+        }
+    }
+    source.to_input_positions(&mesh_values, input)
 }
 
 /// The operator `spec` names, ready to analyse `pm`: the normal-adaptive operator takes its
