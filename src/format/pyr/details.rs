@@ -14,7 +14,7 @@ use glam::DVec3;
 
 /// The version of the analysis the stored details come from: bumped whenever the analysis
 /// changes its output, so that details of an older analysis are recomputed, not used.
-pub(crate) const ANALYSIS_VERSION: u8 = 2;
+pub(crate) const ANALYSIS_VERSION: u8 = 3;
 
 /// Details given without a step (exact) are quantised with `2^(⌊log2 diagonal⌋ − STEP_BITS)`:
 /// at most 2^-STEP_BITS of the diagonal, at least half that.
