@@ -107,6 +107,7 @@
 #![warn(missing_docs)]
 
 pub mod choice;
+pub(crate) mod fairing;
 pub mod format;
 #[doc(hidden)]
 pub mod fuzzing;

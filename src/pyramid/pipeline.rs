@@ -4,6 +4,7 @@
 //! lines up after filtering.
 
 use super::{DetailPyramid, MoveHandle, PyramidError, Spectrum, StoredDetails};
+use crate::fairing::{DenoiseOptions, denoise};
 use crate::format::{self, FormatError, PyrData, SizeReport};
 use crate::io::IoError;
 use crate::mesh::{Mesh, PolygonMesh, SourceMap};
@@ -11,7 +12,6 @@ use crate::pm::{PmOptions, ProgressiveMesh};
 use crate::progress::{NoProgress, Progress};
 use crate::pyramid::Filter;
 use crate::relax::{NormalAdaptive, Relaxation, RelaxationSpec};
-use crate::smooth::{SmoothMethod, smooth_positions};
 use glam::DVec3;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
@@ -301,8 +301,9 @@ impl Pyramid {
 }
 
 /// The operator `spec` names, ready to analyse `pm`: the normal-adaptive operator takes its
-/// normals from the finest level denoised by `smooth --method auto` (Ohtake's filter keeps
-/// creases and removes the noise that would steer it at random; `relax::normal_adaptive`).
+/// normals from the finest level denoised by Ohtake's filter with its automatic preset (what
+/// `smooth --method auto` runs today; it keeps creases and removes the noise that would steer
+/// the operator at random; `relax::normal_adaptive`).
 /// Deterministic, so a `.pyr` loader rebuilds the same operator from the stored input.
 /// `progress` goes 0 → 1 while the guide is made (see [`guide_share`]).
 pub(crate) fn relaxation_for(
@@ -354,15 +355,15 @@ pub(crate) fn guide_share(spec: &RelaxationSpec) -> f64 {
     }
 }
 
-/// The PM's vertices (in PM order) at their positions after `smooth --method auto` on the
-/// finest level; vertices without faces keep theirs. `None` when the smoother refuses the
+/// The PM's vertices (in PM order) at their positions after Ohtake's filter with its
+/// automatic preset ([`DenoiseOptions::automatic`]) on the finest level; vertices without faces keep theirs. `None` when the smoother refuses the
 /// mesh, and the operator then reads the normals of the positions themselves.
 fn denoised_guide(pm: &ProgressiveMesh, progress: &dyn Progress) -> Option<Vec<DVec3>> {
     let positions = pm.original_positions();
     let built = Mesh::from_triangles(positions, pm.finest_faces()).ok()?;
-    let (smoothed, _) = smooth_positions(&built.mesh, &SmoothMethod::Auto, progress).ok()?;
+    let smoothed = denoise(&built.mesh, &DenoiseOptions::automatic(), progress).ok()?;
     let mut guide = positions.to_vec();
-    for (&source, &p) in built.source.vertex_source.iter().zip(&smoothed) {
+    for (&source, &p) in built.source.vertex_source.iter().zip(&smoothed.positions) {
         if let Some(g) = guide.get_mut(source as usize) {
             *g = p;
         }
