@@ -7,9 +7,9 @@ mod common;
 use common::data;
 use glam::DVec3;
 use meshpyr::format::container::{Container, Section, write_container};
-use meshpyr::format::{self, DetailSource, FileDetails, PyrData};
+use meshpyr::format::{self, FileDetails, PyrData};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{DetailPyramid, Filter, LevelGains};
+use meshpyr::pyramid::{DetailPyramid, DetailSource, Filter, LevelGains};
 use meshpyr::relax::RelaxKind;
 use meshpyr::{PyrContent, Pyramid, PyramidOptions};
 

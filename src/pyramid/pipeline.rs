@@ -5,27 +5,16 @@
 
 use super::{DetailPyramid, MoveHandle, PyramidError, Spectrum, StoredDetails};
 use crate::fairing::{DenoiseOptions, denoise};
-use crate::format::{self, FormatError, PyrData, SizeReport};
+use crate::format::{self, FormatError, PyrData, PyramidOptions, SizeReport};
 use crate::io::IoError;
 use crate::mesh::{Mesh, PolygonMesh, SourceMap};
-use crate::pm::{PmOptions, ProgressiveMesh};
+use crate::pm::ProgressiveMesh;
 use crate::progress::{NoProgress, Progress};
 use crate::pyramid::Filter;
 use crate::relax::{NormalAdaptive, Relaxation, RelaxationSpec};
 use glam::DVec3;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
-
-/// How a [`Pyramid`] is built: what a `.pyr` file records in its header, so that loading it
-/// rebuilds the very same pyramid.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct PyramidOptions {
-    /// How the progressive mesh is built (defaults: collapse as far as legal).
-    pub pm: PmOptions,
-    /// The relaxation operator that predicts each level from the coarser one (default: Guskov's
-    /// second differences).
-    pub relaxation: RelaxationSpec,
-}
 
 /// What a `.pyr` file keeps besides the hierarchy and the exact input.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
