@@ -19,6 +19,7 @@
 //!   vertex and face order; `.pyr` bytes out through the codec (`crate::format`).
 //! * `loaded`, `stored`: a decoded `.pyr` file's records turned into a pyramid, with the
 //!   stored details when they fit.
+//! * `reported`: the front door's results that carry their warnings and what was reached.
 //! * `fuzz`: the body of the `pyramid_ops` fuzz target (`meshpyr::fuzzing::fuzz_pyramid`).
 //!
 //! Levels are vertex counts, as in the paper: level `n` is the mesh of the first `n` PM
@@ -53,6 +54,7 @@ pub(crate) mod gains;
 mod loaded;
 pub(crate) mod pipeline;
 mod quantise;
+mod reported;
 pub(crate) mod spectrum;
 mod stored;
 pub(crate) mod synthesis;
@@ -68,6 +70,7 @@ pub use gains::{GainBand, GainParseError};
 pub use loaded::{DetailSource, NO_STORED_DETAILS};
 pub use pipeline::{PyrContent, PyrFileError, Pyramid};
 pub(crate) use pipeline::{analyze_with, guide_share, relaxation_for};
+pub use reported::{Edited, Filtered};
 pub use spectrum::BandEnergy;
 pub use spectrum::Spectrum;
 

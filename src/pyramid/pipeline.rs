@@ -5,7 +5,7 @@
 
 use super::{DetailPyramid, MoveHandle, PyramidError, Spectrum, StoredDetails};
 use crate::fairing::{DenoiseOptions, denoise};
-use crate::format::{self, FormatError, PyrData, PyramidOptions, SizeReport};
+use crate::format::{self, FormatError, PyramidOptions, SizeReport};
 use crate::io::IoError;
 use crate::mesh::{Mesh, PolygonMesh, SourceMap};
 use crate::pm::ProgressiveMesh;
@@ -42,7 +42,11 @@ pub struct Pyramid {
     pub source: SourceMap,
     /// The hierarchy.
     pub pm: ProgressiveMesh,
-    /// The pyramid of the input's positions.
+    /// The pyramid of the input's positions. Filters, edits, spectra and saving go through
+    /// the methods of `Pyramid` (with [`Pyramid::filter_reporting`] and
+    /// [`Pyramid::edit_reporting`] for their warnings); the field is public for callers that
+    /// work on the detail pyramid itself, such as the editor's server (a [`SynthesisCache`](super::SynthesisCache)
+    /// over it, signals of intermediate levels).
     pub pyramid: DetailPyramid,
     /// What it was built with.
     pub options: PyramidOptions,
@@ -80,7 +84,7 @@ fn file_prefix(path: &Option<PathBuf>) -> String {
 }
 
 impl PyrFileError {
-    fn in_file(self, file: &Path) -> PyrFileError {
+    pub(super) fn in_file(self, file: &Path) -> PyrFileError {
         match self {
             PyrFileError::Format { error, .. } => PyrFileError::Format {
                 path: Some(file.to_path_buf()),
@@ -228,8 +232,7 @@ impl Pyramid {
     /// details (only the relaxation weights and fans computed) or, for a file without usable
     /// ones, recomputed bit-identical to the one that was saved.
     pub fn from_pyr_bytes(bytes: &[u8], progress: &dyn Progress) -> Result<Self, PyrFileError> {
-        let data: PyrData = format::decode(bytes)?;
-        Ok(data.into_pyramid(progress)?)
+        Ok(Self::from_pyr_bytes_with(bytes, None, progress)?.0)
     }
 
     /// Saves [`Self::to_pyr_bytes`] to `path`, atomically (an existing file is replaced only
@@ -248,14 +251,10 @@ impl Pyramid {
         Ok(())
     }
 
-    /// Opens the `.pyr` file at `path` ([`Self::from_pyr_bytes`]).
+    /// Opens the `.pyr` file at `path` ([`Self::from_pyr_bytes`]; [`Self::load_with`] chooses
+    /// the relaxation and says whether the stored details were used).
     pub fn load(path: impl AsRef<Path>) -> Result<Self, PyrFileError> {
-        let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|error| IoError::Io {
-            path: path.to_path_buf(),
-            error,
-        })?;
-        Self::from_pyr_bytes(&bytes, &NoProgress).map_err(|e| e.in_file(path))
+        Ok(Self::load_with(path, None, &NoProgress)?.0)
     }
 
     /// Maps a signal in PM order onto the input's vertices (split copies averaged, vertices
