@@ -169,9 +169,7 @@ impl Pyramid {
         handles: &[MoveHandle],
         filter: &Filter,
     ) -> Result<PolygonMesh, PyramidError> {
-        let gains = filter.resolve(self.pyramid.surface_area());
-        let signal = self.pyramid.edit(level, handles, &gains)?;
-        Ok(self.output_mesh(&signal))
+        Ok(self.edit_reporting(level, handles, filter)?.mesh)
     }
 
     /// The detail energy per band of levels.
