@@ -5,7 +5,6 @@ use crate::arrays::{self, mesh_arrays, positions_array, triangles_array};
 use crate::errors::{input_error, pyr_error, pyramid_error, value_error};
 use crate::filters::FilterArgs;
 use glam::DVec3;
-use meshpyr::pyramid::PyramidError;
 use meshpyr::relax::RelaxKind;
 use meshpyr::{MoveHandle, NoProgress, PyramidOptions};
 use numpy::{PyArray1, PyArray2};
