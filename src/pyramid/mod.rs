@@ -16,7 +16,10 @@
 //!   details ride along in their frames.
 //! * `spectrum`: detail energy per level band, as a table and a chart.
 //! * `pipeline`: file-level glue — polygon mesh in, polygon mesh out in the input's exact
-//!   vertex and face order.
+//!   vertex and face order; `.pyr` bytes out through the codec (`crate::format`).
+//! * `loaded`, `stored`: a decoded `.pyr` file's records turned into a pyramid, with the
+//!   stored details when they fit.
+//! * `reported`: the front door's results that carry their warnings and what was reached.
 //! * `fuzz`: the body of the `pyramid_ops` fuzz target (`meshpyr::fuzzing::fuzz_pyramid`).
 //!
 //! Levels are vertex counts, as in the paper: level `n` is the mesh of the first `n` PM
@@ -48,25 +51,29 @@ pub(crate) mod edit;
 pub(crate) mod frames;
 mod fuzz;
 pub(crate) mod gains;
+mod loaded;
 pub(crate) mod pipeline;
 mod quantise;
+mod reported;
 pub(crate) mod spectrum;
 mod spill;
 mod stored;
 pub(crate) mod synthesis;
 pub(crate) mod waves;
 
+pub use crate::format::{PyramidOptions, StoredDetails};
 pub use cached::SynthesisCache;
 pub use denoise::{PyramidDenoise, PyramidDenoised, pyramid_denoise};
 pub use edit::{HandleReach, LevelMove, MoveHandle};
-pub(crate) use fuzz::fuzz_pyramid;
+pub(crate) use fuzz::{fuzz_loaded_pyr, fuzz_pyramid};
 pub use gains::{Filter, LevelGains, LevelSpec};
 pub use gains::{GainBand, GainParseError};
-pub use pipeline::{PyrContent, PyrFileError, Pyramid, PyramidOptions};
+pub use loaded::{DetailSource, NO_STORED_DETAILS};
+pub use pipeline::{PyrContent, PyrFileError, Pyramid};
 pub(crate) use pipeline::{analyze_with, guide_share, relaxation_for};
+pub use reported::{Edited, Filtered};
 pub use spectrum::BandEnergy;
 pub use spectrum::Spectrum;
-pub use stored::StoredDetails;
 
 use crate::pm::PmError;
 use glam::DVec3;

@@ -4,28 +4,17 @@
 //! lines up after filtering.
 
 use super::{DetailPyramid, MoveHandle, PyramidError, Spectrum, StoredDetails};
-use crate::format::{self, FormatError, PyrData, SizeReport};
+use crate::fairing::{DenoiseOptions, denoise};
+use crate::format::{self, FormatError, PyramidOptions, SizeReport};
 use crate::io::IoError;
 use crate::mesh::{CornerTable, Mesh, PolygonMesh, SourceMap};
-use crate::pm::{PmOptions, ProgressiveMesh};
+use crate::pm::ProgressiveMesh;
 use crate::progress::{NoProgress, Progress};
 use crate::pyramid::Filter;
 use crate::relax::{NormalAdaptive, Relaxation, RelaxationSpec};
-use crate::smooth::{SmoothMethod, smooth_positions};
 use glam::DVec3;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
-
-/// How a [`Pyramid`] is built: what a `.pyr` file records in its header, so that loading it
-/// rebuilds the very same pyramid.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct PyramidOptions {
-    /// How the progressive mesh is built (defaults: collapse as far as legal).
-    pub pm: PmOptions,
-    /// The relaxation operator that predicts each level from the coarser one (default: Guskov's
-    /// second differences).
-    pub relaxation: RelaxationSpec,
-}
 
 /// What a `.pyr` file keeps besides the hierarchy and the exact input.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -53,7 +42,11 @@ pub struct Pyramid {
     pub source: SourceMap,
     /// The hierarchy.
     pub pm: ProgressiveMesh,
-    /// The pyramid of the input's positions.
+    /// The pyramid of the input's positions. Filters, edits, spectra and saving go through
+    /// the methods of `Pyramid` (with [`Pyramid::filter_reporting`] and
+    /// [`Pyramid::edit_reporting`] for their warnings); the field is public for callers that
+    /// work on the detail pyramid itself, such as the editor's server (a [`SynthesisCache`](super::SynthesisCache)
+    /// over it, signals of intermediate levels).
     pub pyramid: DetailPyramid,
     /// What it was built with.
     pub options: PyramidOptions,
@@ -91,7 +84,7 @@ fn file_prefix(path: &Option<PathBuf>) -> String {
 }
 
 impl PyrFileError {
-    fn in_file(self, file: &Path) -> PyrFileError {
+    pub(super) fn in_file(self, file: &Path) -> PyrFileError {
         match self {
             PyrFileError::Format { error, .. } => PyrFileError::Format {
                 path: Some(file.to_path_buf()),
@@ -180,9 +173,7 @@ impl Pyramid {
         handles: &[MoveHandle],
         filter: &Filter,
     ) -> Result<PolygonMesh, PyramidError> {
-        let gains = filter.resolve(self.pyramid.surface_area());
-        let signal = self.pyramid.edit(level, handles, &gains)?;
-        Ok(self.output_mesh(&signal))
+        Ok(self.edit_reporting(level, handles, filter)?.mesh)
     }
 
     /// The detail energy per band of levels.
@@ -243,8 +234,7 @@ impl Pyramid {
     /// details (only the relaxation weights and fans computed) or, for a file without usable
     /// ones, recomputed bit-identical to the one that was saved.
     pub fn from_pyr_bytes(bytes: &[u8], progress: &dyn Progress) -> Result<Self, PyrFileError> {
-        let data: PyrData = format::decode(bytes)?;
-        Ok(data.into_pyramid(progress)?)
+        Ok(Self::from_pyr_bytes_with(bytes, None, progress)?.0)
     }
 
     /// Saves [`Self::to_pyr_bytes`] to `path`, atomically (an existing file is replaced only
@@ -263,14 +253,10 @@ impl Pyramid {
         Ok(())
     }
 
-    /// Opens the `.pyr` file at `path` ([`Self::from_pyr_bytes`]).
+    /// Opens the `.pyr` file at `path` ([`Self::from_pyr_bytes`]; [`Self::load_with`] chooses
+    /// the relaxation and says whether the stored details were used).
     pub fn load(path: impl AsRef<Path>) -> Result<Self, PyrFileError> {
-        let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|error| IoError::Io {
-            path: path.to_path_buf(),
-            error,
-        })?;
-        Self::from_pyr_bytes(&bytes, &NoProgress).map_err(|e| e.in_file(path))
+        Ok(Self::load_with(path, None, &NoProgress)?.0)
     }
 
     /// Maps a signal in PM order onto the input's vertices (split copies averaged, vertices
@@ -330,8 +316,9 @@ fn input_positions(
 }
 
 /// The operator `spec` names, ready to analyse `pm`: the normal-adaptive operator takes its
-/// normals from the finest level denoised by `smooth --method auto` (Ohtake's filter keeps
-/// creases and removes the noise that would steer it at random; `relax::normal_adaptive`).
+/// normals from the finest level denoised by Ohtake's filter with its automatic preset (what
+/// `smooth --method auto` runs today; it keeps creases and removes the noise that would steer
+/// the operator at random; `relax::normal_adaptive`).
 /// Deterministic, so a `.pyr` loader rebuilds the same operator from the stored input.
 /// `progress` goes 0 → 1 while the guide is made (see [`guide_share`]).
 pub(crate) fn relaxation_for(
@@ -383,15 +370,15 @@ pub(crate) fn guide_share(spec: &RelaxationSpec) -> f64 {
     }
 }
 
-/// The PM's vertices (in PM order) at their positions after `smooth --method auto` on the
-/// finest level; vertices without faces keep theirs. `None` when the smoother refuses the
+/// The PM's vertices (in PM order) at their positions after Ohtake's filter with its
+/// automatic preset ([`DenoiseOptions::automatic`]) on the finest level; vertices without faces keep theirs. `None` when the smoother refuses the
 /// mesh, and the operator then reads the normals of the positions themselves.
 fn denoised_guide(pm: &ProgressiveMesh, progress: &dyn Progress) -> Option<Vec<DVec3>> {
     let positions = pm.original_positions();
     let built = Mesh::from_triangles(positions, pm.finest_faces()).ok()?;
-    let (smoothed, _) = smooth_positions(&built.mesh, &SmoothMethod::Auto, progress).ok()?;
+    let smoothed = denoise(&built.mesh, &DenoiseOptions::automatic(), progress).ok()?;
     let mut guide = positions.to_vec();
-    for (&source, &p) in built.source.vertex_source.iter().zip(&smoothed) {
+    for (&source, &p) in built.source.vertex_source.iter().zip(&smoothed.positions) {
         if let Some(g) = guide.get_mut(source as usize) {
             *g = p;
         }
