@@ -46,6 +46,7 @@ const M = window.meshpyr = {
   version: 0,         // over the budget: number of the state on screen (server's count)
   exact: true,        // whether the result on screen is exact (false: a preview)
   exactLatencies: [], // over the budget: per exact result, {ms: input to drawn, drawMs}
+  preview: null,      // over the budget: the last preview's positions (shown vertices)
   updates: 0,         // results received and drawn
   latencies: [],      // per result: {ms: input to drawn, its parts (see requestResult), kind}
   renderer: null,     // {name, software, cullsBackFaces}: the WebGL renderer, whether it
@@ -386,6 +387,7 @@ function requestResult() {
       M.positions = positions;
       M.exact = !M.lod;
       if (M.lod) {
+        M.preview = positions;
         M.version = Number(response.headers.get('X-Meshpyr-Version'));
         M.complete = response.headers.get('X-Meshpyr-Preview') === 'complete';
         awaited = { version: M.version, since };
