@@ -297,7 +297,8 @@ fn over_the_budget_the_page_previews_then_shows_the_exact_result() {
 }
 
 /// End-to-end latency of equalizer moves on a large scan: `MESHPYR_VIEW_LATENCY_MESH=scan.ply
-/// cargo test --release --test view_browser -- --ignored --nocapture` (docs/performance.md).
+/// cargo test --release --test view_browser -- --ignored --nocapture` (docs/performance.md;
+/// `MESHPYR_VIEW_BUDGET` sets the display budget in triangles).
 #[test]
 #[ignore = "needs a large scan named by MESHPYR_VIEW_LATENCY_MESH; run by hand"]
 fn equalizer_latency_on_a_large_scan() {
@@ -316,7 +317,13 @@ fn equalizer_latency_on_a_large_scan() {
         input.n_vertices(),
         start.elapsed().as_secs_f64()
     );
-    let server = meshpyr_cli::view::ViewServer::bind(pyramid, 0).unwrap();
+    let budget = std::env::var("MESHPYR_VIEW_BUDGET")
+        .ok()
+        .and_then(|b| b.parse().ok())
+        .unwrap_or(meshpyr_cli::view::DEFAULT_BUDGET);
+    let server = meshpyr_cli::view::ViewServer::bind(pyramid, 0)
+        .unwrap()
+        .with_budget(budget);
     let url = server.url();
     std::thread::spawn(move || server.run());
     driver.navigate(&url);
@@ -326,10 +333,11 @@ fn equalizer_latency_on_a_large_scan() {
         .as_u64()
         .unwrap() as usize;
     let mut all = Vec::new();
-    let mut by_part = vec![Vec::new(); 7];
+    let mut by_part = vec![Vec::new(); 8];
     let parts = [
         "synthesisMs",
         "reorderMs",
+        "combineMs",
         "encodeMs",
         "transferMs",
         "normalsMs",
@@ -337,23 +345,34 @@ fn equalizer_latency_on_a_large_scan() {
         "drawMs",
     ];
     println!(
-        "octave  gain  end-to-end  synthesis  reorder  encode  transfer  normals  upload     draw  (ms)"
+        "display: {}",
+        driver.script("return window.meshpyr.info.display;")
+    );
+    println!(
+        "octave  gain  end-to-end  synthesis  reorder  combine  encode  transfer  normals  upload     draw  (ms)"
     );
     for band in (0..n).rev() {
         for gain in [1.5, 1.0] {
             driver.slide(&format!("#bands input[data-band='{band}']"), gain);
             let last = driver.script("return window.meshpyr.latencies.at(-1);");
             let ms = last["ms"].as_f64().unwrap();
-            let [synth, reorder, encode, transfer, normals, upload, draw] =
-                parts.map(|k| last[k].as_f64().unwrap());
+            let [
+                synth,
+                reorder,
+                combine,
+                encode,
+                transfer,
+                normals,
+                upload,
+                draw,
+            ] = parts.map(|k| last[k].as_f64().unwrap());
             println!(
-                "{band:>6}  {gain:>4}  {ms:>10.1}  {synth:>9.1}  {reorder:>7.1}  {encode:>6.1}  {transfer:>8.1}  {normals:>7.1}  {upload:>6.1}  {draw:>7.1}"
+                "{band:>6}  {gain:>4}  {ms:>10.1}  {synth:>9.1}  {reorder:>7.1}  {combine:>7.1}  {encode:>6.1}  {transfer:>8.1}  {normals:>7.1}  {upload:>6.1}  {draw:>7.1}"
             );
             all.push(ms);
-            for (values, x) in by_part
-                .iter_mut()
-                .zip([synth, reorder, encode, transfer, normals, upload, draw])
-            {
+            for (values, x) in by_part.iter_mut().zip([
+                synth, reorder, combine, encode, transfer, normals, upload, draw,
+            ]) {
                 values.push(x);
             }
         }
