@@ -1,9 +1,10 @@
-//! `meshpyr view IN [--port N] [--no-browser]`: the interactive editor in the browser (see the
+//! `meshpyr view IN [--port N] [--no-browser] [--budget TRIANGLES]`: the interactive editor in the browser (see the
 //! library's `view` module for the page, the API and what the server exposes).
 
 use super::Global;
 use super::input::load_pyramid;
 use crate::view::ViewServer;
+use crate::view::limits::BUDGET;
 use std::path::PathBuf;
 
 /// Arguments of `meshpyr view`.
@@ -21,7 +22,8 @@ pub(crate) struct ViewArgs {
     /// hierarchy within the budget, with the exact result computed in the background
     /// (changeable in the page).
     #[arg(long, default_value_t = crate::view::DEFAULT_BUDGET as u64,
-          value_parser = clap::value_parser!(u64).range(1_000..=100_000_000))]
+          value_parser = clap::value_parser!(u64).range(
+              *BUDGET.start() as u64..=*BUDGET.end() as u64))]
     pub(crate) budget: u64,
 }
 

@@ -1,7 +1,10 @@
 //! The browser editor behind `meshpyr view`: a small HTTP server on
 //! 127.0.0.1 that serves one embedded page (WebGL2, no external assets) and the `/api` it
 //! uses — the spectrum as an equalizer, progressive-mesh levels, multiresolution edits and
-//! exports, all computed by [`Pyramid`].
+//! exports, all computed by [`Pyramid`]. A scan over the display budget
+//! ([`ViewServer::with_budget`]) is shown as a level of its progressive mesh: moves get a
+//! preview at the shown vertices at once and the exact result from a background thread, which
+//! exports use (`docs/view-api.md`).
 //!
 //! What it exposes and to whom (see also the README): the server listens on the loopback
 //! interface only and answers only requests whose `Host` is `127.0.0.1:PORT` or
