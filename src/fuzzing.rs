@@ -17,7 +17,7 @@ pub fn fuzz_read(format: MeshFormat, bytes: &[u8]) {
 /// Body of the `read_pyr` target: every `.pyr` reader on arbitrary bytes (as given and with
 /// their checksums fixed) returns without panicking, and whatever decodes re-encodes stably.
 pub fn fuzz_read_pyr(data: &[u8]) {
-    crate::format::fuzz_read_pyr(data)
+    crate::format::fuzz_read_pyr(data, &crate::pyramid::fuzz_loaded_pyr)
 }
 
 /// `bytes` with every checksum of the `.pyr` container recomputed where the structure can be

@@ -15,6 +15,11 @@
 //! 4. A `.pyr` file ([`Pyramid::save`], [`Pyramid::load`]) keeps the hierarchy with the exact
 //!    input and the pyramid's details (quantised, so a load skips the detail pass;
 //!    [`PyrContent`] leaves them out), compact, versioned and checksummed.
+//!    [`Pyramid::load_with`] chooses the relaxation and says whether the stored details were
+//!    used.
+//!
+//! [`Pyramid::filter_reporting`] and [`Pyramid::edit_reporting`] give the same meshes with what
+//! a user should be told: bands that change nothing, handles that reach no vertex.
 //!
 //! Every mesh a [`Pyramid`] returns is its input with new positions: the same vertices and
 //! faces in the same order, and the same attributes.
@@ -107,6 +112,7 @@
 #![warn(missing_docs)]
 
 pub mod choice;
+pub(crate) mod fairing;
 pub mod format;
 #[doc(hidden)]
 pub mod fuzzing;

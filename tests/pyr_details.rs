@@ -7,9 +7,9 @@ mod common;
 use common::data;
 use glam::DVec3;
 use meshpyr::format::container::{Container, Section, write_container};
-use meshpyr::format::{self, DetailSource, FileDetails, PyrData};
+use meshpyr::format::{self, FileDetails, PyrData};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{DetailPyramid, Filter, LevelGains};
+use meshpyr::pyramid::{DetailPyramid, DetailSource, Filter, LevelGains};
 use meshpyr::relax::RelaxKind;
 use meshpyr::{PyrContent, Pyramid, PyramidOptions};
 
@@ -144,6 +144,73 @@ fn details_of_another_relaxation_are_recomputed() {
     let fresh = DetailPyramid::analyze(&d.pm, wanted.operator().as_ref(), &NoProgress).unwrap();
     let unit = LevelGains::unit();
     assert_eq!(q.pyramid.synthesize(&unit), fresh.synthesize(&unit));
+}
+
+/// `Pyramid::load_with` opens a saved file with its stored details for its own relaxation,
+/// recomputes them for another and says which it did; the pyramid is the same either way as
+/// the one `into_pyramid_with` gives.
+#[test]
+fn load_with_says_whether_the_stored_details_were_used() {
+    let p = pyramid("joint.ply", RelaxKind::Mcm);
+    let dir = std::env::temp_dir().join(format!("meshpyr-load-with-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("joint.pyr");
+    p.save(&path).unwrap();
+    let unit = LevelGains::unit();
+    let (own, from) = Pyramid::load_with(&path, None, &NoProgress).unwrap();
+    assert_eq!(from, DetailSource::Stored);
+    assert_eq!(own.pyramid.synthesize(&unit), p.pyramid.synthesize(&unit));
+    let wanted = RelaxKind::SecondDifference.spec();
+    let (other, from) = Pyramid::load_with(&path, Some(wanted), &NoProgress).unwrap();
+    assert!(matches!(&from, DetailSource::Recomputed(why) if why.contains("--relax mcm")));
+    assert_eq!(other.options.relaxation, wanted);
+    let (expected, _) = decoded(&p)
+        .into_pyramid_with(Some(wanted), &NoProgress)
+        .unwrap();
+    assert_eq!(
+        other.pyramid.synthesize(&unit),
+        expected.pyramid.synthesize(&unit)
+    );
+    let missing = Pyramid::load_with(dir.join("none.pyr"), None, &NoProgress);
+    assert!(missing.is_err_and(|e| e.to_string().contains("none.pyr")));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The reporting variants give the plain results with what the caller should be told: a band
+/// below the coarsest level is warned about, a handle far from every vertex reached nothing.
+#[test]
+fn filter_and_edit_results_carry_their_warnings_and_reach() {
+    let p = pyramid("fandisk.ply", RelaxKind::SecondDifference);
+    let levels = p.levels();
+    let base = *levels.start();
+    let filter = Filter::new().gain(0, base + 10, 2.0);
+    let filtered = p.filter_reporting(&filter);
+    assert_eq!(filtered.mesh, p.filter(&filter));
+    assert_eq!(filtered.warnings, p.band_warnings(&filter));
+    assert_eq!(filtered.warnings.len(), 1, "{:?}", filtered.warnings);
+    assert!(
+        p.filter_reporting(&Filter::new().gain(base, *levels.end(), 2.0))
+            .warnings
+            .is_empty()
+    );
+    let near = p.input.positions[0];
+    let handles = [
+        meshpyr::MoveHandle {
+            center: near,
+            displacement: DVec3::X * 0.01,
+            radius: 0.5,
+        },
+        meshpyr::MoveHandle {
+            center: near + DVec3::splat(1e3),
+            displacement: DVec3::X,
+            radius: 0.5,
+        },
+    ];
+    let edited = p.edit_reporting(base + 50, &handles, &filter).unwrap();
+    assert_eq!(edited.mesh, p.edit(base + 50, &handles, &filter).unwrap());
+    assert_eq!(edited.warnings, filtered.warnings);
+    assert!(edited.reach[0].points > 0);
+    assert_eq!(edited.reach[1].points, 0);
 }
 
 /// The file's sections as the container holds them.

@@ -346,7 +346,7 @@ fn format_2_0_files_still_load() {
         let (pyramid, from) = d.clone().into_pyramid_with(None, &NoProgress).unwrap();
         assert_eq!(
             from,
-            format::DetailSource::Recomputed(format::NO_STORED_DETAILS.into())
+            meshpyr::pyramid::DetailSource::Recomputed(meshpyr::pyramid::NO_STORED_DETAILS.into())
         );
         let op = d.info.relaxation.operator();
         let fresh = DetailPyramid::analyze(&d.pm, op.as_ref(), &NoProgress).unwrap();

@@ -42,10 +42,8 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
     let start = Instant::now();
     // Without details the file needs the hierarchy only: the analysis would be wasted.
     let (bytes, sizes, pm) = if args.no_details {
-        let built = meshpyr::mesh::Mesh::from_polygons(&input)
-            .with_context(|| format!("cannot build the mesh of {}", args.input.display()))?;
         let bar = global.progress("build");
-        let pm = ProgressiveMesh::build(&built.mesh, &options.pm, &BarProgress(&bar))
+        let (pm, _) = ProgressiveMesh::from_polygons(&input, &options.pm, &BarProgress(&bar))
             .with_context(|| {
                 format!(
                     "cannot build the progressive mesh of {}",

@@ -3,7 +3,7 @@
 //! the finer details follow.
 
 use super::Global;
-use super::filter::{FilterOptions, resolve_reporting};
+use super::filter::{FilterOptions, say_band_warnings};
 use super::input::load_pyramid;
 use anyhow::Context;
 use glam::DVec3;
@@ -94,13 +94,13 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
         anyhow::bail!("--radius must be a positive number, got {}", args.radius);
     }
     let scan = load_pyramid(&args.input, args.relax, global)?;
-    let p = &scan.pyramid;
-    if args.level < p.n_base_vertices() || args.level > p.n_vertices() {
+    let levels = scan.levels();
+    if !levels.contains(&args.level) {
         anyhow::bail!(
             "--level {} is outside this mesh's levels {}..={}",
             args.level,
-            p.n_base_vertices(),
-            p.n_vertices()
+            levels.start(),
+            levels.end()
         );
     }
     let handles: Vec<MoveHandle> = args
@@ -112,11 +112,11 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
             radius: args.radius,
         })
         .collect();
-    let gains = resolve_reporting(&args.filters.filter(), p, &args.input.display().to_string());
-    let (out, reach) = p.edit_reporting(args.level, &handles, &gains)?;
-    warn_unreached(&args, &reach);
+    let edited = scan.edit_reporting(args.level, &handles, &args.filters.filter())?;
+    say_band_warnings(&edited.warnings, &args.input.display().to_string());
+    warn_unreached(&args, &edited.reach);
     if writes_pyr {
-        let positions = scan.to_input_positions(&out);
+        let positions = edited.mesh.positions;
         let content = if args.no_details {
             PyrContent::HierarchyOnly
         } else {
@@ -124,7 +124,7 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
         };
         save_edited(&scan, positions, content, &args.output)?;
     } else {
-        io::write_mesh(&args.output, &scan.output_mesh(&out))?;
+        io::write_mesh(&args.output, &edited.mesh)?;
     }
     global.say(format_args!("wrote {}", args.output.display()));
     Ok(())

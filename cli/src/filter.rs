@@ -6,7 +6,7 @@
 use super::Global;
 use super::input::load_pyramid;
 use meshpyr::io;
-use meshpyr::pyramid::{DetailPyramid, Filter, GainBand, GainParseError, LevelGains, LevelSpec};
+use meshpyr::pyramid::{Filter, GainBand, GainParseError, LevelSpec};
 use meshpyr::relax::RelaxKind;
 use meshpyr::wording::Count;
 use std::path::PathBuf;
@@ -68,18 +68,11 @@ impl FilterOptions {
     }
 }
 
-/// `filter` resolved on `pyramid`, with a warning on standard error for every band that
-/// changes nothing or less than it says ([`DetailPyramid::band_warnings`]). `name` is the
-/// input, for the message.
-pub(crate) fn resolve_reporting(
-    filter: &Filter,
-    pyramid: &DetailPyramid,
-    name: &str,
-) -> LevelGains {
-    for warning in pyramid.band_warnings(filter) {
+/// Every warning of a filter's bands on standard error; `name` is the input, for the message.
+pub(crate) fn say_band_warnings(warnings: &[String], name: &str) {
+    for warning in warnings {
         eprintln!("warning: {name}: {warning}");
     }
-    filter.resolve(pyramid.surface_area())
 }
 
 /// Arguments of `meshpyr filter`.
@@ -109,15 +102,15 @@ pub(crate) fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
     }
     let scan = load_pyramid(&args.input, args.relax, global)?;
     let start = Instant::now();
-    let gains = resolve_reporting(&filter, &scan.pyramid, &args.input.display().to_string());
-    let out = scan.pyramid.synthesize(&gains);
-    let mesh = scan.output_mesh(&out);
+    let levels = scan.levels();
+    let filtered = scan.into_filtered(&filter);
+    say_band_warnings(&filtered.warnings, &args.input.display().to_string());
     global.say(format_args!(
         "synthesised {} in {:.3} s",
-        Count(scan.pyramid.n_splits(), "level", "levels"),
+        Count(levels.end() - levels.start(), "level", "levels"),
         start.elapsed().as_secs_f64()
     ));
-    io::write_mesh(&args.output, &mesh)?;
+    io::write_mesh(&args.output, &filtered.mesh)?;
     global.say(format_args!("wrote {}", args.output.display()));
     Ok(())
 }

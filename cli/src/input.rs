@@ -3,10 +3,10 @@
 
 use super::{BarProgress, Global};
 use anyhow::Context;
-use meshpyr::format::{self, DetailSource};
+use meshpyr::format;
 use meshpyr::io;
 use meshpyr::mesh::{MissingSurface, PolygonMesh};
-use meshpyr::pyramid::{Pyramid, PyramidOptions};
+use meshpyr::pyramid::{self, DetailSource, Pyramid, PyramidOptions};
 use meshpyr::relax::{RelaxKind, RelaxationSpec};
 use meshpyr::wording::Count;
 use std::path::Path;
@@ -117,7 +117,7 @@ fn pyramid_of_pyr(
     let path_taken = match &from {
         DetailSource::Stored => format!("stored details, weights and fans computed in {took:.2} s"),
         // A file without details says what it always said.
-        DetailSource::Recomputed(why) if why == format::NO_STORED_DETAILS => {
+        DetailSource::Recomputed(why) if why == pyramid::NO_STORED_DETAILS => {
             format!("details recomputed in {took:.2} s")
         }
         DetailSource::Recomputed(why) => format!("details recomputed in {took:.2} s: {why}"),

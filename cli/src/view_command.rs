@@ -1,9 +1,10 @@
-//! `meshpyr view IN [--port N] [--no-browser]`: the interactive editor in the browser (see the
+//! `meshpyr view IN [--port N] [--no-browser] [--budget TRIANGLES]`: the interactive editor in the browser (see the
 //! library's `view` module for the page, the API and what the server exposes).
 
 use super::Global;
 use super::input::load_pyramid;
 use crate::view::ViewServer;
+use crate::view::limits::BUDGET;
 use std::path::PathBuf;
 
 /// Arguments of `meshpyr view`.
@@ -17,6 +18,13 @@ pub(crate) struct ViewArgs {
     /// Print the address but do not open a browser.
     #[arg(long)]
     pub(crate) no_browser: bool,
+    /// Display budget in triangles: a larger scan is shown as the finest level of its
+    /// hierarchy within the budget, with the exact result computed in the background
+    /// (changeable in the page).
+    #[arg(long, default_value_t = crate::view::DEFAULT_BUDGET as u64,
+          value_parser = clap::value_parser!(u64).range(
+              *BUDGET.start() as u64..=*BUDGET.end() as u64))]
+    pub(crate) budget: u64,
 }
 
 /// Runs `meshpyr view` until the process is interrupted (Ctrl-C): the server writes no file,
@@ -28,7 +36,9 @@ pub(crate) fn run(args: ViewArgs, global: &Global) -> anyhow::Result<()> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let server = ViewServer::bind(scan, args.port)?.with_name(&name);
+    let server = ViewServer::bind(scan, args.port)?
+        .with_name(&name)
+        .with_budget(args.budget as usize);
     let url = server.url();
     outln!("serving {url}");
     if !args.no_browser {

@@ -5,9 +5,8 @@
 
 mod common;
 
-use common::{data_arg as data, meshpyr};
+use common::{data_arg as data, fails_alone_with, meshpyr, ok, stderr};
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 /// A fresh folder for one test.
 fn folder(test: &str) -> PathBuf {
@@ -19,25 +18,6 @@ fn folder(test: &str) -> PathBuf {
 
 fn path(dir: &Path, name: &str) -> String {
     dir.join(name).display().to_string()
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-/// Fails with exit code 1 and a one-line error holding every needle.
-fn fails_with(out: &Output, needles: &[&str]) {
-    let err = stderr(out);
-    assert_eq!(out.status.code(), Some(1), "{err}");
-    assert_eq!(err.lines().count(), 1, "{err}");
-    for needle in needles {
-        assert!(err.contains(needle), "{needle:?} not in {err}");
-    }
-}
-
-fn succeeds(out: &Output) -> String {
-    assert!(out.status.success(), "{}", stderr(out));
-    stderr(out)
 }
 
 /// The files in `dir`, hidden ones included.
@@ -89,10 +69,6 @@ fn every_command(input: &str, dir: &Path) -> Vec<Vec<String>> {
         .collect()
 }
 
-fn run(args: &[String]) -> Output {
-    meshpyr(&args.iter().map(String::as_str).collect::<Vec<_>>())
-}
-
 #[test]
 fn a_file_without_a_mesh_is_an_error_for_every_command() {
     let dir = folder("nomesh");
@@ -105,8 +81,8 @@ fn a_file_without_a_mesh_is_an_error_for_every_command() {
         commands.push(vec!["info".into(), input.clone()]);
         commands.push(vec!["convert".into(), input.clone(), path(&dir, "c.ply")]);
         for args in commands {
-            let out = run(&args);
-            fails_with(
+            let out = meshpyr(&args);
+            fails_alone_with(
                 &out,
                 &[input.as_str(), "no mesh in it: no vertices and no faces"],
             );
@@ -121,8 +97,8 @@ fn a_point_cloud_is_an_error_for_every_command_that_needs_a_surface() {
     let cloud = path(&dir, "cloud.ply");
     std::fs::write(&cloud, POINT_CLOUD).unwrap();
     for args in every_command(&cloud, &dir) {
-        let out = run(&args);
-        fails_with(
+        let out = meshpyr(&args);
+        fails_alone_with(
             &out,
             &[cloud.as_str(), "3 vertices and no faces (a point cloud)"],
         );
@@ -136,12 +112,12 @@ fn info_and_convert_take_a_point_cloud() {
     let cloud = path(&dir, "cloud.ply");
     std::fs::write(&cloud, POINT_CLOUD).unwrap();
     let info = meshpyr(&["info", &cloud]);
-    succeeds(&info);
+    ok(&info);
     let text = String::from_utf8_lossy(&info.stdout);
     assert!(text.contains("vertices 3  faces 0"), "{text}");
     assert!(text.contains("no faces: a point cloud"), "{text}");
     let converted = path(&dir, "cloud.obj");
-    let said = succeeds(&meshpyr(&["convert", &cloud, &converted]));
+    let said = ok(&meshpyr(&["convert", &cloud, &converted]));
     assert!(said.contains("(3 vertices, 0 faces)"), "{said}");
     assert_eq!(meshpyr::read_mesh(&converted).unwrap().n_vertices(), 3);
 }
@@ -174,7 +150,7 @@ fn a_directory_as_input_says_so() {
             "9",
         ],
     ] {
-        fails_with(&meshpyr(&args), &[&name, "is a directory, not a mesh file"]);
+        fails_alone_with(&meshpyr(&args), &[&name, "is a directory, not a mesh file"]);
     }
 }
 
@@ -190,15 +166,15 @@ fn an_output_folder_that_is_missing_or_a_file_fails_before_the_work() {
         vec!["spectrum", &tet, "-o", &path(&dir, "nodir/x.png")],
     ] {
         let out = meshpyr(&args);
-        fails_with(&out, &["cannot write", "nodir", "does not exist"]);
+        fails_alone_with(&out, &["cannot write", "nodir", "does not exist"]);
     }
     // The input itself in place of the folder: not a folder.
     let under_file = format!("{tet}/x.ply");
-    fails_with(
+    fails_alone_with(
         &meshpyr(&["convert", &tet, &under_file]),
         &["cannot write", "is not a folder"],
     );
-    fails_with(
+    fails_alone_with(
         &meshpyr(&["convert", &tet, &dir.display().to_string()]),
         &["cannot write", "it is a directory"],
     );
@@ -214,7 +190,7 @@ fn pyr_outputs_of_mesh_commands_point_to_build() {
         vec!["convert", tet.as_str(), &pyr],
         vec!["filter", &tet, "-o", &pyr, "--lowpass", "3"],
     ] {
-        fails_with(&meshpyr(&args), &["y.pyr", "`meshpyr build IN -o"]);
+        fails_alone_with(&meshpyr(&args), &["y.pyr", "`meshpyr build IN -o"]);
     }
 }
 
@@ -222,7 +198,7 @@ fn pyr_outputs_of_mesh_commands_point_to_build() {
 fn spectrum_charts_must_be_named_png() {
     let dir = folder("svg");
     let svg = path(&dir, "spec.svg");
-    fails_with(
+    fails_alone_with(
         &meshpyr(&["spectrum", &data("tetrahedron.off"), "-o", &svg]),
         &["spec.svg", "PNG only"],
     );
@@ -266,7 +242,7 @@ fn a_move_that_reaches_no_vertex_is_a_warning() {
         "--radius",
         "0.5",
     ]);
-    let err = succeeds(&out);
+    let err = ok(&out);
     assert!(
         err.contains("warning:") && err.contains("the move at 5,5,5 reaches no vertex of level 4"),
         "{err}"
@@ -284,7 +260,7 @@ fn a_move_that_reaches_no_vertex_is_a_warning() {
         "--radius",
         "0.5",
     ]);
-    assert!(!succeeds(&near).contains("reaches no vertex"));
+    assert!(!ok(&near).contains("reaches no vertex"));
 }
 
 #[test]
@@ -298,7 +274,7 @@ fn subdivision_beyond_the_face_limit_names_the_limit_without_overflow() {
         "--levels",
         "50",
     ]);
-    fails_with(
+    fails_alone_with(
         &out,
         &[
             "50 levels would make more than 1.8e19 faces",
@@ -314,7 +290,7 @@ fn levels_above_the_vertex_count_are_explained() {
     // Two solids sharing an edge: the repair copies vertices, so there are more levels than
     // vertices in the file.
     let stl = data("back_to_back_scad.stl");
-    let said = succeeds(&meshpyr(&["build", &stl, "-o", &path(&dir, "b.pyr")]));
+    let said = ok(&meshpyr(&["build", &stl, "-o", &path(&dir, "b.pyr")]));
     assert!(
         said.contains("levels above 6 count the 7 vertex copies"),
         "{said}"
@@ -336,7 +312,7 @@ fn compare_reports_zero_for_identical_files_and_explains_zero_e_v() {
     );
     let dir = folder("compare");
     let coarse = path(&dir, "coarse.ply");
-    succeeds(&meshpyr(&[
+    ok(&meshpyr(&[
         "simplify", &bunny, "-o", &coarse, "--ratio", "0.1",
     ]));
     let text = meshpyr(&["compare", &coarse, &bunny]);

@@ -2,15 +2,8 @@
 
 mod common;
 
-use common::{data_arg as data, meshpyr};
-use std::path::PathBuf;
+use common::{data_arg as data, meshpyr, scratch};
 use std::process::Command;
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("meshpyr-cli-info-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
 
 fn info_json(path: &str) -> serde_json::Value {
     let out = meshpyr(&["info", path, "--json"]);
@@ -53,7 +46,7 @@ fn info_text_mentions_counts() {
 fn convert_keeps_counts_in_every_format() {
     let reference = info_json(&data("bunny.ply"));
     for ext in ["obj", "off", "stl", "ply"] {
-        let out_path = scratch(&format!("bunny.{ext}"));
+        let out_path = scratch("cli-info", &format!("bunny.{ext}"));
         let out = meshpyr(&["convert", &data("bunny.ply"), out_path.to_str().unwrap()]);
         assert!(
             out.status.success(),
@@ -76,10 +69,10 @@ fn convert_keeps_counts_in_every_format() {
 
 #[test]
 fn errors_are_one_line_and_non_zero() {
-    let missing = scratch("does-not-exist.ply");
-    let bad_ext = scratch("mesh.xyz");
+    let missing = scratch("cli-info", "does-not-exist.ply");
+    let bad_ext = scratch("cli-info", "mesh.xyz");
     std::fs::write(&bad_ext, b"1 2 3").unwrap();
-    let truncated = scratch("truncated.ply");
+    let truncated = scratch("cli-info", "truncated.ply");
     let bunny = std::fs::read(data("bunny.ply")).unwrap();
     std::fs::write(&truncated, &bunny[..bunny.len() / 2]).unwrap();
     for path in [&missing, &bad_ext, &truncated] {
@@ -96,7 +89,7 @@ fn output_errors_name_the_output_once_and_come_before_the_work() {
     let input = data("joint.ply");
     // A missing directory: the message names the requested file, not a temporary one, and
     // says the reason once, before any work.
-    let target = scratch("no-such-dir").join("out.ply");
+    let target = scratch("cli-info", "no-such-dir").join("out.ply");
     let out = meshpyr(&[
         "simplify",
         input.as_str(),
@@ -117,7 +110,7 @@ fn output_errors_name_the_output_once_and_come_before_the_work() {
         "filter",
         input.as_str(),
         "-o",
-        scratch("out.xyz").to_str().unwrap(),
+        scratch("cli-info", "out.xyz").to_str().unwrap(),
         "--lowpass",
         "50",
     ]);
@@ -129,9 +122,9 @@ fn output_errors_name_the_output_once_and_come_before_the_work() {
 
 #[test]
 fn failed_convert_leaves_existing_output_alone() {
-    let target = scratch("keep-me.ply");
+    let target = scratch("cli-info", "keep-me.ply");
     std::fs::write(&target, b"precious").unwrap();
-    let truncated = scratch("half.ply");
+    let truncated = scratch("cli-info", "half.ply");
     let bunny = std::fs::read(data("bunny.ply")).unwrap();
     std::fs::write(&truncated, &bunny[..1000]).unwrap();
     let out = meshpyr(&[
@@ -145,7 +138,7 @@ fn failed_convert_leaves_existing_output_alone() {
 
 #[test]
 fn demo_writes_its_outputs() {
-    let dir = scratch("demo");
+    let dir = scratch("cli-info", "demo");
     let out = meshpyr(&["demo", "--out", dir.to_str().unwrap(), "--quiet"]);
     assert!(
         out.status.success(),
@@ -163,7 +156,7 @@ fn demo_writes_its_outputs() {
 
 #[test]
 fn gzip_meshes_convert_and_read_by_extension() {
-    let gz = scratch("bunny.ply.gz");
+    let gz = scratch("cli-info", "bunny.ply.gz");
     let out = meshpyr(&["convert", &data("bunny.ply"), gz.to_str().unwrap()]);
     assert!(
         out.status.success(),

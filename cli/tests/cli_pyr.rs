@@ -3,10 +3,10 @@
 
 mod common;
 
-use common::{data_arg as data, meshpyr};
+use common::{data_arg as data, fails_with, meshpyr, ok, scratch_arg};
 
 use meshpyr::io;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Output;
 
 /// The two mesh files have the same vertices within 1e-9 of the bounding-box diagonal plus
@@ -48,29 +48,6 @@ fn assert_same_spectrum(a: &str, b: &str) {
     }
 }
 
-fn scratch(name: &str) -> String {
-    let dir: PathBuf = std::env::temp_dir().join(format!("meshpyr-cli-pyr-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name).display().to_string()
-}
-
-fn ok(out: &Output) -> String {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-fn fails_with(out: &Output, needle: &str) {
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error: ")).collect();
-    assert_eq!(errors.len(), 1, "{err}");
-    assert!(errors[0].contains(needle), "{err}");
-}
-
 #[test]
 fn build_then_extract_gives_back_the_file_byte_for_byte() {
     for name in [
@@ -79,8 +56,8 @@ fn build_then_extract_gives_back_the_file_byte_for_byte() {
         "spider_assimp.ply",
         "tetrahedron.off",
     ] {
-        let pyr = scratch(&format!("{name}.pyr"));
-        let back = scratch(&format!("back-{name}"));
+        let pyr = scratch_arg("cli-pyr", &format!("{name}.pyr"));
+        let back = scratch_arg("cli-pyr", &format!("back-{name}"));
         let msg = ok(&meshpyr(&["build", &data(name), "-o", &pyr]));
         assert!(msg.contains("bytes/vertex"), "{msg}");
         ok(&meshpyr(&["extract", &pyr, "-o", &back]));
@@ -106,8 +83,8 @@ fn build_then_extract_gives_back_the_file_byte_for_byte() {
 fn dirty_scans_build_and_extract_exactly() {
     // Non-manifold edges whose repair needs vertices detached (multi-edges).
     for name in ["snowden_lo.ply", "back_to_back_scad.stl"] {
-        let pyr = scratch(&format!("{name}.pyr"));
-        let back = scratch(&format!("back-{name}"));
+        let pyr = scratch_arg("cli-pyr", &format!("{name}.pyr"));
+        let back = scratch_arg("cli-pyr", &format!("back-{name}"));
         ok(&meshpyr(&["build", &data(name), "-o", &pyr]));
         ok(&meshpyr(&["extract", &pyr, "-o", &back]));
         let a = io::read_mesh(Path::new(&data(name))).unwrap();
@@ -123,7 +100,7 @@ fn dirty_scans_build_and_extract_exactly() {
             "filter",
             &pyr,
             "-o",
-            &scratch(&format!("f-{name}")),
+            &scratch_arg("cli-pyr", &format!("f-{name}")),
             "--lowpass",
             "100",
         ]));
@@ -132,10 +109,10 @@ fn dirty_scans_build_and_extract_exactly() {
 
 #[test]
 fn attributes_survive_build_and_extract() {
-    let src = scratch("rich.ply");
+    let src = scratch_arg("cli-pyr", "rich.ply");
     io::write_mesh(Path::new(&src), &common::rich_mesh()).unwrap();
-    let pyr = scratch("rich.pyr");
-    let back = scratch("rich-back.ply");
+    let pyr = scratch_arg("cli-pyr", "rich.pyr");
+    let back = scratch_arg("cli-pyr", "rich-back.ply");
     ok(&meshpyr(&["build", &src, "-o", &pyr]));
     ok(&meshpyr(&["extract", &pyr, "-o", &back]));
     assert!(std::fs::read(&src).unwrap() == std::fs::read(&back).unwrap());
@@ -143,9 +120,9 @@ fn attributes_survive_build_and_extract() {
 
 #[test]
 fn extract_level_and_truncated_files() {
-    let pyr = scratch("joint-levels.pyr");
+    let pyr = scratch_arg("cli-pyr", "joint-levels.pyr");
     ok(&meshpyr(&["-q", "build", &data("joint.ply"), "-o", &pyr]));
-    let out = scratch("joint-60.ply");
+    let out = scratch_arg("cli-pyr", "joint-60.ply");
     ok(&meshpyr(&[
         "-q", "extract", &pyr, "-o", &out, "--level", "60",
     ]));
@@ -157,7 +134,7 @@ fn extract_level_and_truncated_files() {
 
     let bytes = std::fs::read(&pyr).unwrap();
     // Cut inside the split blocks: the last complete level, with a warning.
-    let cut = scratch("joint-cut.pyr");
+    let cut = scratch_arg("cli-pyr", "joint-cut.pyr");
     let splits = meshpyr::format::container::Container::parse(&bytes)
         .unwrap()
         .entry(*b"SPLT")
@@ -187,7 +164,7 @@ fn extract_level_and_truncated_files() {
 
 #[test]
 fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
-    let pyr = scratch("elephant.pyr");
+    let pyr = scratch_arg("cli-pyr", "elephant.pyr");
     ok(&meshpyr(&[
         "-q",
         "build",
@@ -195,7 +172,10 @@ fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
         "-o",
         &pyr,
     ]));
-    let (a, b) = (scratch("el-a.ply"), scratch("el-b.ply"));
+    let (a, b) = (
+        scratch_arg("cli-pyr", "el-a.ply"),
+        scratch_arg("cli-pyr", "el-b.ply"),
+    );
     ok(&meshpyr(&[
         "-q",
         "filter",
@@ -216,7 +196,7 @@ fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
     ]));
     assert_same_within_bound(&a, &b);
     // Without stored details the file is analysed again: the very bytes of the mesh's filter.
-    let plain = scratch("elephant-plain.pyr");
+    let plain = scratch_arg("cli-pyr", "elephant-plain.pyr");
     ok(&meshpyr(&[
         "-q",
         "build",
@@ -237,8 +217,11 @@ fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
     ]));
     assert!(std::fs::read(&a).unwrap() == std::fs::read(&b).unwrap());
 
-    let (ca, cb) = (scratch("sa.csv"), scratch("sb.csv"));
-    let png = scratch("s.png");
+    let (ca, cb) = (
+        scratch_arg("cli-pyr", "sa.csv"),
+        scratch_arg("cli-pyr", "sb.csv"),
+    );
+    let png = scratch_arg("cli-pyr", "s.png");
     ok(&meshpyr(&[
         "-q",
         "spectrum",
@@ -268,10 +251,10 @@ fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
         ]))
     };
     let (ea, eb, ep, ex) = (
-        scratch("ea.ply"),
-        scratch("eb.ply"),
-        scratch("e.pyr"),
-        scratch("ex.ply"),
+        scratch_arg("cli-pyr", "ea.ply"),
+        scratch_arg("cli-pyr", "eb.ply"),
+        scratch_arg("cli-pyr", "e.pyr"),
+        scratch_arg("cli-pyr", "ex.ply"),
     );
     edit(&data("elephant_holes.ply"), &ea);
     edit(&pyr, &eb);
@@ -299,15 +282,15 @@ fn filter_spectrum_and_edit_read_pyr_like_the_mesh() {
 #[test]
 fn the_relaxation_is_recorded_and_another_one_is_analysed_afresh() {
     let mesh = data("joint.ply");
-    let pyr = scratch("joint-mcm.pyr");
+    let pyr = scratch_arg("cli-pyr", "joint-mcm.pyr");
     ok(&meshpyr(&[
         "-q", "build", &mesh, "-o", &pyr, "--relax", "mcm",
     ]));
     // The file's operator is used without being asked for, like the mesh with --relax mcm.
     let (a, b, c) = (
-        scratch("jm-a.ply"),
-        scratch("jm-b.ply"),
-        scratch("jm-c.ply"),
+        scratch_arg("cli-pyr", "jm-a.ply"),
+        scratch_arg("cli-pyr", "jm-b.ply"),
+        scratch_arg("cli-pyr", "jm-c.ply"),
     );
     let filter = |input: &str, out: &str, relax: &[&str]| {
         let mut args = vec!["-q", "filter", input, "-o", out, "--enhance", "30:221=2"];
@@ -323,7 +306,7 @@ fn the_relaxation_is_recorded_and_another_one_is_analysed_afresh() {
         "mcm and second-difference differ"
     );
     // Another operator than the stored details': analysed afresh, and said so.
-    let d = scratch("jm-d.ply");
+    let d = scratch_arg("cli-pyr", "jm-d.ply");
     let out = meshpyr(&[
         "filter",
         &pyr,
@@ -350,7 +333,7 @@ fn the_relaxation_is_recorded_and_another_one_is_analysed_afresh() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let png = scratch("jm.png");
+    let png = scratch_arg("cli-pyr", "jm.png");
     let out = meshpyr(&["spectrum", &pyr, "-o", &png]);
     ok(&out);
     let said = String::from_utf8_lossy(&out.stderr);
@@ -369,7 +352,7 @@ fn the_relaxation_is_recorded_and_another_one_is_analysed_afresh() {
 #[test]
 fn mesh_commands_take_pyr_files() {
     let mesh = data("joint.ply");
-    let pyr = scratch("joint-as-input.pyr");
+    let pyr = scratch_arg("cli-pyr", "joint-as-input.pyr");
     ok(&meshpyr(&["build", &mesh, "-o", &pyr]));
     let stdout = |out: Output| {
         ok(&out);
@@ -390,8 +373,8 @@ fn mesh_commands_take_pyr_files() {
         ("smooth", vec!["smooth", "--method", "taubin"]),
         ("subdivide", vec!["subdivide", "--levels", "1"]),
     ] {
-        let from_pyr = scratch(&format!("{name}-from-pyr.ply"));
-        let from_mesh = scratch(&format!("{name}-from-mesh.ply"));
+        let from_pyr = scratch_arg("cli-pyr", &format!("{name}-from-pyr.ply"));
+        let from_mesh = scratch_arg("cli-pyr", &format!("{name}-from-mesh.ply"));
         let run = |input: &str, out: &str| {
             let mut a = vec!["-q", args[0], input];
             if args[0] == "convert" {
@@ -409,7 +392,7 @@ fn mesh_commands_take_pyr_files() {
             "{name}: output from the .pyr differs"
         );
     }
-    let again = scratch("joint-rebuilt.pyr");
+    let again = scratch_arg("cli-pyr", "joint-rebuilt.pyr");
     ok(&meshpyr(&["build", &pyr, "-o", &again]));
     assert!(std::fs::read(&again).unwrap() == std::fs::read(&pyr).unwrap());
     let report = String::from_utf8(stdout(meshpyr(&["compare", &pyr, &mesh, "--json"]))).unwrap();
@@ -418,7 +401,7 @@ fn mesh_commands_take_pyr_files() {
     let mut bytes = std::fs::read(&pyr).unwrap();
     let n = bytes.len();
     bytes[n - 10] ^= 0x40;
-    let damaged = scratch("joint-damaged.pyr");
+    let damaged = scratch_arg("cli-pyr", "joint-damaged.pyr");
     std::fs::write(&damaged, &bytes).unwrap();
     fails_with(&meshpyr(&["info", &damaged]), "cannot load");
 }

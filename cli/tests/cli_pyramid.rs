@@ -2,42 +2,14 @@
 
 mod common;
 
-use common::{data_arg as data, meshpyr};
+use common::{data_arg as data, fails_with, meshpyr, ok, scratch};
 use meshpyr::io;
-use std::path::{Path, PathBuf};
-use std::process::Output;
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("meshpyr-cli-pyramid-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-fn ok(out: &Output) {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-fn fails_with(out: &Output, needle: &str) {
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    // Status lines may come first; the error is one line of its own.
-    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error: ")).collect();
-    assert_eq!(errors.len(), 1, "{err}");
-    assert!(errors[0].contains(needle), "{err}");
-    assert!(
-        err.trim_end().ends_with(errors[0]),
-        "the error comes last: {err}"
-    );
-}
+use std::path::Path;
 
 #[test]
 fn filter_keeps_the_input_layout_and_changes_positions() {
     let input = data("elephant_holes.ply");
-    let out = scratch("elephant-low.ply");
+    let out = scratch("cli-pyramid", "elephant-low.ply");
     let o = meshpyr(&[
         "filter",
         &input,
@@ -55,8 +27,8 @@ fn filter_keeps_the_input_layout_and_changes_positions() {
     assert_ne!(a.positions, b.positions);
 
     // Several bands, sizes in model units, normal-only, all accepted; deterministic output.
-    let out2 = scratch("elephant-bands.ply");
-    let out3 = scratch("elephant-bands-again.ply");
+    let out2 = scratch("cli-pyramid", "elephant-bands.ply");
+    let out3 = scratch("cli-pyramid", "elephant-bands-again.ply");
     for o in [&out2, &out3] {
         ok(&meshpyr(&[
             "filter",
@@ -79,7 +51,10 @@ fn filter_keeps_the_input_layout_and_changes_positions() {
 #[test]
 fn filter_with_the_mcm_relaxation_keeps_the_layout_and_differs_from_second_difference() {
     let input = data("elephant_holes.ply");
-    let (mcm, sd) = (scratch("elephant-mcm.ply"), scratch("elephant-sd.ply"));
+    let (mcm, sd) = (
+        scratch("cli-pyramid", "elephant-mcm.ply"),
+        scratch("cli-pyramid", "elephant-sd.ply"),
+    );
     for (out, relax) in [(&mcm, "mcm"), (&sd, "second-difference")] {
         ok(&meshpyr(&[
             "filter",
@@ -104,7 +79,7 @@ fn filter_with_the_mcm_relaxation_keeps_the_layout_and_differs_from_second_diffe
 #[test]
 fn filter_rejects_missing_or_bad_filters() {
     let input = data("teapot.ply");
-    let out = scratch("never.ply");
+    let out = scratch("cli-pyramid", "never.ply");
     let o = out.to_str().unwrap();
     fails_with(&meshpyr(&["filter", &input, "-o", o]), "no filter given");
     let bad = meshpyr(&["filter", &input, "-o", o, "--enhance", "1000:2000"]);
@@ -122,7 +97,7 @@ fn filter_rejects_missing_or_bad_filters() {
 #[test]
 fn bands_outside_the_pyramid_are_reported() {
     let input = data("teapot.ply");
-    let out = scratch("teapot-band.ply");
+    let out = scratch("cli-pyramid", "teapot-band.ply");
     let o = out.to_str().unwrap();
     let run = |band: &[&str]| {
         let mut args = vec!["-q", "filter", &input, "-o", o];
@@ -154,8 +129,8 @@ fn bands_outside_the_pyramid_are_reported() {
 
 #[test]
 fn spectrum_writes_a_png_and_a_csv() {
-    let png = scratch("spider.png");
-    let csv = scratch("spider.csv");
+    let png = scratch("cli-pyramid", "spider.png");
+    let csv = scratch("cli-pyramid", "spider.csv");
     ok(&meshpyr(&[
         "spectrum",
         &data("spider_assimp.ply"),
@@ -196,7 +171,7 @@ fn edit_moves_the_surface_near_the_handle_only() {
         .copied()
         .max_by(|p, q| p.y.total_cmp(&q.y))
         .unwrap();
-    let out = scratch("elephant-edit.ply");
+    let out = scratch("cli-pyramid", "elephant-edit.ply");
     let handle = format!("{},{},{}:0,0.1,0", top.x, top.y, top.z);
     ok(&meshpyr(&[
         "edit",
@@ -253,7 +228,7 @@ fn edit_moves_the_surface_near_the_handle_only() {
 
 #[test]
 fn demo_writes_filtered_versions_spectrum_and_previews() {
-    let dir = scratch("demo");
+    let dir = scratch("cli-pyramid", "demo");
     let out = meshpyr(&["demo", "--out", dir.to_str().unwrap()]);
     ok(&out);
     let log = String::from_utf8_lossy(&out.stderr);
@@ -285,7 +260,7 @@ fn demo_writes_filtered_versions_spectrum_and_previews() {
 #[test]
 fn edit_accepts_negative_coordinates_in_a_move() {
     let input = data("teapot.ply");
-    let out = scratch("teapot-negative-move.ply");
+    let out = scratch("cli-pyramid", "teapot-negative-move.ply");
     let o = out.to_str().unwrap();
     ok(&meshpyr(&[
         "-q",
@@ -310,7 +285,7 @@ fn edit_accepts_negative_coordinates_in_a_move() {
 #[test]
 fn lowpass_rejects_zero_and_negative_levels() {
     let input = data("teapot.ply");
-    let out = scratch("never-lowpass.ply");
+    let out = scratch("cli-pyramid", "never-lowpass.ply");
     let o = out.to_str().unwrap();
     for (level, why) in [("0", "must be at least 1"), ("-1", "not a negative number")] {
         let r = meshpyr(&["filter", &input, "-o", o, "--lowpass", level]);

@@ -2,30 +2,15 @@
 
 mod common;
 
-use common::{data_arg as data, meshpyr};
+use common::{data_arg as data, meshpyr, ok, scratch};
 use meshpyr::io::read_mesh;
 use meshpyr::mesh::{Attribute, AttributeData, Mesh};
-use std::path::{Path, PathBuf};
-use std::process::Output;
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("meshpyr-cli-simplify-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir.join(name)
-}
-
-fn ok(out: &Output) {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
+use std::path::Path;
 
 #[test]
 fn faces_ratio_and_error_targets() {
     let input = read_mesh(Path::new(&data("bunny.ply"))).unwrap();
-    let out = scratch("bunny-1000.ply");
+    let out = scratch("cli-simplify", "bunny-1000.ply");
     ok(&meshpyr(&[
         "-q",
         "simplify",
@@ -57,7 +42,7 @@ fn faces_ratio_and_error_targets() {
             .all(|p| inputs.contains(&p.to_array().map(f64::to_bits)))
     );
 
-    let out = scratch("bunny-ratio.obj");
+    let out = scratch("cli-simplify", "bunny-ratio.obj");
     ok(&meshpyr(&[
         "simplify",
         &data("bunny.ply"),
@@ -70,8 +55,8 @@ fn faces_ratio_and_error_targets() {
     let want = (0.1 * input.n_faces() as f64).round() as usize;
     assert!(m.n_faces() <= want && m.n_faces() + 2 >= want);
 
-    let coarse = scratch("bunny-err-coarse.ply");
-    let fine = scratch("bunny-err-fine.ply");
+    let coarse = scratch("cli-simplify", "bunny-err-coarse.ply");
+    let fine = scratch("cli-simplify", "bunny-err-fine.ply");
     ok(&meshpyr(&[
         "-q",
         "simplify",
@@ -104,9 +89,9 @@ fn attributes_are_carried_along() {
         name: "quality".into(),
         data: AttributeData::F64((0..n).map(|i| i as f64).collect()),
     });
-    let src = scratch("nefertiti-attr.ply");
+    let src = scratch("cli-simplify", "nefertiti-attr.ply");
     meshpyr::io::write_mesh(&src, &input).unwrap();
-    let out = scratch("nefertiti-attr-out.ply");
+    let out = scratch("cli-simplify", "nefertiti-attr-out.ply");
     ok(&meshpyr(&[
         "-q",
         "simplify",
@@ -127,7 +112,7 @@ fn attributes_are_carried_along() {
 
 #[test]
 fn dirty_input_simplifies() {
-    let out = scratch("spider.ply");
+    let out = scratch("cli-simplify", "spider.ply");
     ok(&meshpyr(&[
         "-q",
         "simplify",
@@ -144,7 +129,7 @@ fn dirty_input_simplifies() {
 
 #[test]
 fn errors_exit_non_zero_with_one_line() {
-    let out = scratch("never.ply");
+    let out = scratch("cli-simplify", "never.ply");
     let o = out.to_str().unwrap();
     for args in [
         vec!["simplify", data("joint.ply").leak() as &str, "-o", o],
@@ -192,7 +177,7 @@ fn errors_exit_non_zero_with_one_line() {
 /// result and says in one warning line where it stopped and why; a reachable target is quiet.
 #[test]
 fn a_target_below_the_topology_floor_warns_once() {
-    let out = scratch("elephant-10.ply");
+    let out = scratch("cli-simplify", "elephant-10.ply");
     let run = meshpyr(&[
         "simplify",
         &data("elephant_holes.ply"),
@@ -233,7 +218,7 @@ fn a_target_below_the_topology_floor_warns_once() {
 /// Closed genus-0 scans go down to a tetrahedron.
 #[test]
 fn a_marching_cubes_scan_simplifies_to_a_tetrahedron() {
-    let out = scratch("mc-4.ply");
+    let out = scratch("cli-simplify", "mc-4.ply");
     let run = meshpyr(&[
         "simplify",
         &data("mc/mc_bunny_quant36.ply"),
@@ -254,7 +239,7 @@ fn a_marching_cubes_scan_simplifies_to_a_tetrahedron() {
 fn prune_drops_small_pieces_on_request_only() {
     let input = data("mc/mc_implicit_n56.ply");
     let faces = read_mesh(Path::new(&input)).unwrap().n_triangles();
-    let out = scratch("implicit-pruned.ply");
+    let out = scratch("cli-simplify", "implicit-pruned.ply");
     let run = |extra: &[&str]| {
         let mut args = vec![
             "simplify",

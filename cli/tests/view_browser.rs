@@ -15,7 +15,7 @@ use serde_json::{Value, json};
 use std::path::PathBuf;
 use std::time::Instant;
 use view_support::webdriver::{Driver, ELEMENT, driver_or_skip};
-use view_support::{Running, base64_decode, bits, f32_bits, serve};
+use view_support::{Running, base64_decode, bits, f32_bits, serve, serve_with_budget};
 
 /// Share of pixels that differ by more than a little in some channel.
 fn changed_share(a: &[u8], b: &[u8]) -> f64 {
@@ -199,8 +199,106 @@ fn page_needs_the_token(driver: &Driver, server: &Running) {
     driver.wait_for("window.meshpyr && window.meshpyr.ready");
 }
 
+/// Over its display budget (the bunny with a budget of 20,000 triangles), the page shows the
+/// shown level, previews each move, then shows the exact result, which equals the library's
+/// synthesis at the shown vertices; the preview lies near it; export equals `meshpyr filter`.
+#[test]
+fn over_the_budget_the_page_previews_then_shows_the_exact_result() {
+    let Some(driver) =
+        driver_or_skip("over_the_budget_the_page_previews_then_shows_the_exact_result")
+    else {
+        return;
+    };
+    let start = Instant::now();
+    let server = serve_with_budget("bunny.ply", 20_000);
+    let input = meshpyr::read_mesh(view_support::data("bunny.ply")).unwrap();
+    let reference = Pyramid::build(&input).unwrap();
+    driver.navigate(&server.url);
+    driver.wait_for("window.meshpyr && window.meshpyr.ready && window.meshpyr.settled()");
+    println!(
+        "first picture {:.1} s after the server started",
+        start.elapsed().as_secs_f64()
+    );
+    let info = driver.script("return window.meshpyr.info;");
+    let shown = info["display"]["shown"].as_u64().unwrap() as usize;
+    assert!(shown < *reference.levels().end());
+    assert_eq!(
+        driver.script("return window.meshpyr.shownLevel;"),
+        json!(shown)
+    );
+    page_draws_the_mesh(&driver);
+    let octaves = reference.pyramid.levels_of_octaves();
+    let diagonal = reference.pyramid.bbox_diagonal();
+    let mut gains = vec![1.0; octaves.len()];
+    for (band, gain) in [(2, 2.5), (octaves.len() - 1, 0.0)] {
+        gains[band] = gain;
+        driver.slide(&format!("#bands input[data-band='{band}']"), gain);
+        let last = driver.script("return window.meshpyr.latencies.at(-1);");
+        for part in ["ms", "synthesisMs", "combineMs", "transferMs", "drawMs"] {
+            assert!(
+                last[part].as_f64().is_some_and(|x| x >= 0.0),
+                "{part}: {last}"
+            );
+        }
+        driver.wait_for("window.meshpyr.settled() && window.meshpyr.exact");
+        let mut filter = Filter::new();
+        for (&(lo, hi), &g) in octaves.iter().zip(&gains) {
+            if g != 1.0 {
+                filter = filter.gain(lo, hi, g);
+            }
+        }
+        let expected = reference
+            .pyramid
+            .synthesize(&filter.resolve(reference.pyramid.surface_area()));
+        let exact = driver.positions();
+        assert_eq!(bits(&exact), f32_bits(&expected[..shown]));
+        let preview = driver.script("return Array.from(window.meshpyr.preview);");
+        let off = preview
+            .as_array()
+            .unwrap()
+            .chunks_exact(3)
+            .zip(exact.chunks_exact(3))
+            .map(|(p, q)| {
+                let d = |k: usize| p[k].as_f64().unwrap() - f64::from(q[k]);
+                (d(0) * d(0) + d(1) * d(1) + d(2) * d(2)).sqrt()
+            })
+            .fold(0.0, f64::max);
+        println!(
+            "octave {band} gain {gain}: {:.1} ms to drawn, preview within {:.4} % of the diagonal",
+            last["ms"].as_f64().unwrap(),
+            100.0 * off / diagonal
+        );
+        assert!(off < 0.02 * diagonal, "{off}");
+        let latest = driver.script("return window.meshpyr.exactLatencies.at(-1);");
+        assert!(latest["drawMs"].as_f64().is_some(), "{latest}");
+        let result = driver.async_script(
+            "window.meshpyr.exportBytes('ply').then(({bytes}) => {
+                let s = '';
+                for (let i = 0; i < bytes.length; i += 32768) {
+                    s += String.fromCharCode.apply(null, bytes.subarray(i, i + 32768));
+                }
+                done({data: btoa(s)});
+            }).catch((e) => done({error: String(e)}));",
+        );
+        assert!(result["error"].is_null(), "{}", result["error"]);
+        let bytes = base64_decode(result["data"].as_str().unwrap());
+        let mesh = meshpyr::io::read_mesh_bytes(&bytes, MeshFormat::Ply).unwrap();
+        let exported: Vec<f32> = mesh
+            .positions
+            .iter()
+            .flat_map(|p| p.to_array().map(|x| x as f32))
+            .collect();
+        assert_eq!(
+            bits(&exported),
+            f32_bits(&reference.filter(&filter).positions)
+        );
+    }
+    drag_moves_the_surface_near_the_pick(&driver);
+}
+
 /// End-to-end latency of equalizer moves on a large scan: `MESHPYR_VIEW_LATENCY_MESH=scan.ply
-/// cargo test --release --test view_browser -- --ignored --nocapture` (docs/performance.md).
+/// cargo test --release --test view_browser -- --ignored --nocapture` (docs/performance.md;
+/// `MESHPYR_VIEW_BUDGET` sets the display budget in triangles).
 #[test]
 #[ignore = "needs a large scan named by MESHPYR_VIEW_LATENCY_MESH; run by hand"]
 fn equalizer_latency_on_a_large_scan() {
@@ -219,7 +317,13 @@ fn equalizer_latency_on_a_large_scan() {
         input.n_vertices(),
         start.elapsed().as_secs_f64()
     );
-    let server = meshpyr_cli::view::ViewServer::bind(pyramid, 0).unwrap();
+    let budget = std::env::var("MESHPYR_VIEW_BUDGET")
+        .ok()
+        .and_then(|b| b.parse().ok())
+        .unwrap_or(meshpyr_cli::view::DEFAULT_BUDGET);
+    let server = meshpyr_cli::view::ViewServer::bind(pyramid, 0)
+        .unwrap()
+        .with_budget(budget);
     let url = server.url();
     std::thread::spawn(move || server.run());
     driver.navigate(&url);
@@ -229,10 +333,11 @@ fn equalizer_latency_on_a_large_scan() {
         .as_u64()
         .unwrap() as usize;
     let mut all = Vec::new();
-    let mut by_part = vec![Vec::new(); 7];
+    let mut by_part = vec![Vec::new(); 8];
     let parts = [
         "synthesisMs",
         "reorderMs",
+        "combineMs",
         "encodeMs",
         "transferMs",
         "normalsMs",
@@ -240,23 +345,34 @@ fn equalizer_latency_on_a_large_scan() {
         "drawMs",
     ];
     println!(
-        "octave  gain  end-to-end  synthesis  reorder  encode  transfer  normals  upload     draw  (ms)"
+        "display: {}",
+        driver.script("return window.meshpyr.info.display;")
+    );
+    println!(
+        "octave  gain  end-to-end  synthesis  reorder  combine  encode  transfer  normals  upload     draw  (ms)"
     );
     for band in (0..n).rev() {
         for gain in [1.5, 1.0] {
             driver.slide(&format!("#bands input[data-band='{band}']"), gain);
             let last = driver.script("return window.meshpyr.latencies.at(-1);");
             let ms = last["ms"].as_f64().unwrap();
-            let [synth, reorder, encode, transfer, normals, upload, draw] =
-                parts.map(|k| last[k].as_f64().unwrap());
+            let [
+                synth,
+                reorder,
+                combine,
+                encode,
+                transfer,
+                normals,
+                upload,
+                draw,
+            ] = parts.map(|k| last[k].as_f64().unwrap());
             println!(
-                "{band:>6}  {gain:>4}  {ms:>10.1}  {synth:>9.1}  {reorder:>7.1}  {encode:>6.1}  {transfer:>8.1}  {normals:>7.1}  {upload:>6.1}  {draw:>7.1}"
+                "{band:>6}  {gain:>4}  {ms:>10.1}  {synth:>9.1}  {reorder:>7.1}  {combine:>7.1}  {encode:>6.1}  {transfer:>8.1}  {normals:>7.1}  {upload:>6.1}  {draw:>7.1}"
             );
             all.push(ms);
-            for (values, x) in by_part
-                .iter_mut()
-                .zip([synth, reorder, encode, transfer, normals, upload, draw])
-            {
+            for (values, x) in by_part.iter_mut().zip([
+                synth, reorder, combine, encode, transfer, normals, upload, draw,
+            ]) {
                 values.push(x);
             }
         }

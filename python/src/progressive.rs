@@ -4,7 +4,6 @@ use crate::arrays::{self, index_array, positions_array, triangles_array};
 use crate::errors::{input_error, value_error};
 use crate::functions::MeshPair;
 use meshpyr::NoProgress;
-use meshpyr::mesh::Mesh;
 use meshpyr::pm::PmOptions;
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -32,16 +31,15 @@ impl ProgressiveMesh {
     fn new(py: Python<'_>, v: &Bound<'_, PyAny>, f: &Bound<'_, PyAny>) -> PyResult<Self> {
         let mesh = arrays::mesh(v, f)?;
         py.detach(|| {
-            let built = Mesh::from_polygons(&mesh).map_err(input_error)?;
-            let pm =
-                meshpyr::ProgressiveMesh::build(&built.mesh, &PmOptions::default(), &NoProgress)
+            let (pm, source) =
+                meshpyr::ProgressiveMesh::from_polygons(&mesh, &PmOptions::default(), &NoProgress)
                     .map_err(input_error)?;
             // PM vertex -> mesh slot -> input row (copies made by the builder's repairs map to
             // the vertex they copy).
             let rows = pm
                 .pm_to_mesh()
                 .iter()
-                .map(|&slot| built.source.vertex_source[slot as usize])
+                .map(|&slot| source.vertex_source[slot as usize])
                 .collect();
             Ok(ProgressiveMesh { pm, rows })
         })

@@ -5,7 +5,6 @@ use crate::arrays::{self, mesh_arrays, positions_array, triangles_array};
 use crate::errors::{input_error, pyr_error, pyramid_error, value_error};
 use crate::filters::FilterArgs;
 use glam::DVec3;
-use meshpyr::pyramid::PyramidError;
 use meshpyr::relax::RelaxKind;
 use meshpyr::{MoveHandle, NoProgress, PyramidOptions};
 use numpy::{PyArray1, PyArray2};
@@ -71,16 +70,6 @@ fn move_handles(moves: &Bound<'_, PyAny>, radius: f64) -> PyResult<Vec<MoveHandl
         ));
     }
     Ok(handles)
-}
-
-impl Pyramid {
-    /// `filter`'s warnings (bands that change nothing, or less than they say) as UserWarnings.
-    fn warn_bands(&self, py: Python<'_>, filter: &meshpyr::Filter) -> PyResult<()> {
-        for warning in self.inner.pyramid.band_warnings(filter) {
-            crate::warn(py, &warning)?;
-        }
-        Ok(())
-    }
 }
 
 #[pymethods]
@@ -167,9 +156,11 @@ impl Pyramid {
                  gains=[(a, b, g)]",
             ));
         }
-        self.warn_bands(py, &filter)?;
-        let mesh = py.detach(|| self.inner.filter(&filter));
-        Ok(positions_array(py, &mesh.positions))
+        let filtered = py.detach(|| self.inner.filter_reporting(&filter));
+        for warning in &filtered.warnings {
+            crate::warn(py, warning)?;
+        }
+        Ok(positions_array(py, &filtered.mesh.positions))
     }
 
     /// A multiresolution edit, as ``meshpyr edit``: moves the vertices of level ``level`` (a
@@ -215,16 +206,14 @@ impl Pyramid {
             normal_only,
         }
         .filter()?;
-        self.warn_bands(py, &filter)?;
-        let (mesh, reach) = py
-            .detach(|| {
-                let gains = filter.resolve(self.inner.pyramid.surface_area());
-                let (signal, reach) = self.inner.pyramid.edit_reporting(level, &handles, &gains)?;
-                Ok::<_, PyramidError>((self.inner.output_mesh(&signal), reach))
-            })
+        let edited = py
+            .detach(|| self.inner.edit_reporting(level, &handles, &filter))
             .map_err(pyramid_error)?;
+        for warning in &edited.warnings {
+            crate::warn(py, warning)?;
+        }
         // A move that reaches no vertex of the level changes nothing: say so, as the CLI does.
-        for (handle, reach) in handles.iter().zip(&reach) {
+        for (handle, reach) in handles.iter().zip(&edited.reach) {
             if reach.points == 0 {
                 let c = handle.center;
                 crate::warn(
@@ -237,7 +226,7 @@ impl Pyramid {
                 )?;
             }
         }
-        Ok(positions_array(py, &mesh.positions))
+        Ok(positions_array(py, &edited.mesh.positions))
     }
 
     /// The detail energy per band of levels (octaves of vertex counts), as ``meshpyr spectrum

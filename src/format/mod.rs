@@ -1,12 +1,17 @@
 //! The `.pyr` file: the progressive hierarchy with its per-vertex details in a compact,
 //! versioned, checksummed binary container (specified in `formats/pyr.md`).
+//!
+//! The codec reads and writes plain records of its own ([`PyrData`], [`PyramidOptions`],
+//! [`StoredDetails`]) and knows nothing of the detail pyramid: turning a decoded file into a
+//! [`Pyramid`](crate::pyramid::Pyramid), and a pyramid into the records it saves, lives in
+//! [`crate::pyramid`].
 
 pub mod container;
 pub(crate) mod pyr;
 pub mod varint;
 
 pub use pyr::is_pyr;
-pub use pyr::{DetailSource, FileDetails, LevelMesh, NO_STORED_DETAILS, PyrData, SizeReport};
+pub use pyr::{FileDetails, LevelMesh, PyrData, PyramidOptions, SizeReport, StoredDetails};
 pub use pyr::{MAJOR, MINOR, OLDEST_MAJOR, decode, encode, encode_with_details, read_level};
 pub(crate) use pyr::{fix_checksums, fuzz_read_pyr, with_positions};
 

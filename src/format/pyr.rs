@@ -19,9 +19,9 @@
 use super::FormatError;
 use super::container::{Container, REQUIRED, Section, write_container};
 use super::varint::ByteReader;
+use crate::mesh::geometry::BoundingBox;
 use crate::mesh::{Built, PolygonMesh, ScalarType};
-use crate::pm::{PmParts, ProgressiveMesh};
-use crate::pyramid::{PyramidOptions, StoredDetails};
+use crate::pm::{PmOptions, PmParts, ProgressiveMesh};
 use crate::relax::RelaxationSpec;
 use glam::DVec3;
 use serde::{Deserialize, Serialize};
@@ -39,11 +39,12 @@ mod positions;
 mod rice;
 mod split_block;
 
+pub use details::StoredDetails;
 pub(crate) use edit::with_positions;
 pub(crate) use fuzz::{fix_checksums, fuzz_read_pyr};
 pub use hierarchy::read_level;
+pub use loaded::FileDetails;
 use loaded::file_details;
-pub use loaded::{DetailSource, FileDetails, NO_STORED_DETAILS};
 
 use attributes::encode_attributes;
 use details::{decode_details, encode_details, step_exponent};
@@ -99,6 +100,17 @@ struct Meta {
     min_quality: f64,
     max_valence: u64,
     boundary_weight: f64,
+}
+
+/// How a pyramid is built (`crate::pyramid::Pyramid::build_with`): what a `.pyr` file records
+/// in its header, so that loading it rebuilds the very same pyramid.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PyramidOptions {
+    /// How the progressive mesh is built (defaults: collapse as far as legal).
+    pub pm: PmOptions,
+    /// The relaxation operator that predicts each level from the coarser one (default: Guskov's
+    /// second differences).
+    pub relaxation: RelaxationSpec,
 }
 
 /// A fully decoded `.pyr` file.
@@ -266,7 +278,8 @@ pub fn encode_with_details(
 
 /// The bounding-box diagonal of the finest level, as the analysis computes it.
 fn bbox_diagonal(pm: &ProgressiveMesh) -> f64 {
-    crate::pyramid::analysis::surface_stats(&pm.original_positions()[..pm.n_vertices()], &[]).1
+    let finest = &pm.original_positions()[..pm.n_vertices()];
+    BoundingBox::of(finest.iter().copied()).map_or(0.0, |b| b.diagonal())
 }
 
 /// The input positions are restored from the PM positions through the vertex order, so check

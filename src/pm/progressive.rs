@@ -2,8 +2,8 @@
 //! that walks the levels one split at a time.
 
 use super::collapse::{half_edge_collapse, vertex_split};
-use super::decimate::{DecimateParams, FlatMesh, Stop, decimate};
-use crate::mesh::{Mesh, SlotIndex, VertexId};
+use super::decimate::{Collapse, DecimateParams, FlatMesh, Outcome, Stop, decimate};
+use crate::mesh::{BoundingBox, CornerTable, Mesh, PolygonMesh, SlotIndex, SourceMap, VertexId};
 use crate::progress::Progress;
 use glam::DVec3;
 
@@ -61,6 +61,9 @@ pub enum PmError {
     /// An option is out of range.
     #[error("invalid option: {0}")]
     InvalidOption(String),
+    /// The input polygons cannot be made into a mesh ([`ProgressiveMesh::from_polygons`]).
+    #[error("cannot build the mesh: {0}")]
+    Mesh(#[from] crate::mesh::BuildError),
     /// A broken internal invariant; please report.
     #[error("internal error in the progressive mesh (please report): {0}")]
     Internal(String),
@@ -117,6 +120,18 @@ pub struct ProgressiveMesh {
     stop: Option<Stop>,
 }
 
+/// A corner table's vertex list as triangles, reusing its allocation when its capacity is a
+/// whole number of triangles (else copied).
+fn triangles_of(corner_vertex: Vec<u32>) -> Vec<[u32; 3]> {
+    match bytemuck::allocation::try_cast_vec(corner_vertex) {
+        Ok(triangles) => triangles,
+        Err((_, corner_vertex)) => corner_vertex
+            .chunks_exact(3)
+            .map(|t| [t[0], t[1], t[2]])
+            .collect(),
+    }
+}
+
 const NONE: u32 = u32::MAX;
 
 impl ProgressiveMesh {
@@ -128,13 +143,108 @@ impl ProgressiveMesh {
         progress: &dyn Progress,
     ) -> Result<ProgressiveMesh, PmError> {
         let params = decimate_params(opts, mesh.bbox_diagonal())?;
-        let (collapses, coarse, outcome) = decimate(FlatMesh::from_mesh(mesh), &params, progress);
-
-        // PM order: surviving referenced vertices (slot order), removed vertices in reverse
-        // collapse order, then isolated vertices (slot order).
+        let decimated = decimate(FlatMesh::from_mesh(mesh), &params, progress);
         let n_slots = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
+        let isolated: Vec<u32> = mesh
+            .vertices()
+            .filter(|&v| mesh.is_isolated(v))
+            .map(|v| v.slot() as u32)
+            .collect();
+        let mut positions = vec![DVec3::ZERO; n_slots];
+        for v in mesh.vertices() {
+            positions[v.slot()] = mesh.position(v);
+        }
+        let faces = |mesh_to_pm: &[u32]| {
+            mesh.faces()
+                .map(|f| mesh.face_vertices(f).map(|v| mesh_to_pm[v.slot()]))
+                .collect()
+        };
+        let position = |v: u32| positions[v as usize];
+        Self::from_decimation(
+            decimated,
+            (n_slots, mesh.n_vertices()),
+            &isolated,
+            position,
+            faces,
+        )
+    }
+
+    /// The hierarchy of `input` after the mesh builder's repairs ([`Mesh::from_polygons`]),
+    /// with the map from its vertices back onto `input`'s: the same hierarchy as
+    /// [`Self::build`] on the built mesh, without ever making the half-edge mesh (whose
+    /// records take several times the memory of the hierarchy itself).
+    pub fn from_polygons(
+        input: &PolygonMesh,
+        opts: &PmOptions,
+        progress: &dyn Progress,
+    ) -> Result<(ProgressiveMesh, SourceMap), PmError> {
+        let repaired = CornerTable::from_polygons(input)?;
+        let pm = Self::from_corners(input, repaired.corners, &repaired.source, opts, progress)?;
+        Ok((pm, repaired.source))
+    }
+
+    /// [`Self::from_polygons`] on the builder's corner table of `input`.
+    pub(crate) fn from_corners(
+        input: &PolygonMesh,
+        corners: CornerTable,
+        source: &SourceMap,
+        opts: &PmOptions,
+        progress: &dyn Progress,
+    ) -> Result<ProgressiveMesh, PmError> {
+        let source = &source.vertex_source;
+        let positions: Vec<DVec3> = source
+            .iter()
+            .map(|&s| input.positions[s as usize])
+            .collect();
+        let diagonal = BoundingBox::of(positions.iter().copied()).map_or(0.0, |b| b.diagonal());
+        let params = decimate_params(opts, diagonal)?;
+        // Vertex slot `i` is vertex `i` and face slot `t` triangle `t` (`CornerTable` docs).
+        let mut referenced = vec![false; source.len()];
+        for &v in &corners.corner_vertex {
+            referenced[v as usize] = true;
+        }
+        let isolated: Vec<u32> = (0..source.len() as u32)
+            .filter(|&v| !referenced[v as usize])
+            .collect();
+        drop(referenced);
+        // The working mesh copies the table; of the table only the corners' vertices are read
+        // again (they become the finest faces, in place), so the twins go before the
+        // decimation's peak.
+        let flat = FlatMesh::from_corners(positions, &corners);
+        let CornerTable {
+            mut corner_vertex, ..
+        } = corners;
+        let decimated = decimate(flat, &params, progress);
+        let faces = move |mesh_to_pm: &[u32]| {
+            for v in &mut corner_vertex {
+                *v = mesh_to_pm[*v as usize];
+            }
+            triangles_of(corner_vertex)
+        };
+        let position = |v: u32| input.positions[source[v as usize] as usize];
+        Self::from_decimation(
+            decimated,
+            (source.len(), source.len()),
+            &isolated,
+            position,
+            faces,
+        )
+    }
+
+    /// Puts a decimation of a mesh with `n_vertices` vertices in slots `0..n_slots` into PM
+    /// order: surviving referenced vertices (slot order), removed vertices in reverse collapse
+    /// order, then the `isolated` vertices (slot order). `position` gives each slot's original
+    /// position (the working mesh holds them recentred), `faces` the finest faces in face slot
+    /// order, their vertices mapped by the slot → PM index map it is given.
+    fn from_decimation(
+        (collapses, coarse, outcome): (Vec<Collapse>, FlatMesh, Outcome),
+        (n_slots, n_vertices): (usize, usize),
+        isolated: &[u32],
+        position: impl Fn(u32) -> DVec3,
+        faces: impl FnOnce(&[u32]) -> Vec<[u32; 3]>,
+    ) -> Result<ProgressiveMesh, PmError> {
         let mut mesh_to_pm = vec![NONE; n_slots];
-        let mut pm_to_mesh: Vec<u32> = Vec::with_capacity(mesh.n_vertices());
+        let mut pm_to_mesh: Vec<u32> = Vec::with_capacity(n_vertices);
         for v in coarse.survivors() {
             mesh_to_pm[v as usize] = pm_to_mesh.len() as u32;
             pm_to_mesh.push(v);
@@ -144,13 +254,11 @@ impl ProgressiveMesh {
             mesh_to_pm[c.from as usize] = pm_to_mesh.len() as u32;
             pm_to_mesh.push(c.from);
         }
-        for v in mesh.vertices() {
-            if mesh.is_isolated(v) {
-                mesh_to_pm[v.slot()] = pm_to_mesh.len() as u32;
-                pm_to_mesh.push(v.slot() as u32);
-            }
+        for &v in isolated {
+            mesh_to_pm[v as usize] = pm_to_mesh.len() as u32;
+            pm_to_mesh.push(v);
         }
-        if pm_to_mesh.len() != mesh.n_vertices() {
+        if pm_to_mesh.len() != n_vertices {
             return Err(PmError::Internal("vertex permutation is incomplete".into()));
         }
         let map = |s: u32| {
@@ -175,14 +283,9 @@ impl ProgressiveMesh {
             .rev()
             .map(|c| c.error_sq.sqrt() as f32)
             .collect();
-        let mut positions = vec![DVec3::ZERO; pm_to_mesh.len()];
-        for v in mesh.vertices() {
-            positions[mesh_to_pm[v.slot()] as usize] = mesh.position(v);
-        }
-        let faces: Vec<[u32; 3]> = mesh
-            .faces()
-            .map(|f| mesh.face_vertices(f).map(|v| mesh_to_pm[v.slot()]))
-            .collect();
+        drop(collapses);
+        let positions = pm_to_mesh.iter().map(|&v| position(v)).collect();
+        let faces = faces(&mesh_to_pm);
         Ok(ProgressiveMesh {
             n_base,
             positions,

@@ -4,8 +4,9 @@
 //!
 //! Why it exists: the `.pyr` format codes a split's wings as indices into the survivor's ring
 //! *as `Mesh::outgoing` lists it* after replaying the earlier splits, so reading and writing a
-//! file replay every split. On the slotmap mesh each split cost about 6 µs (seven pointer-chasing
-//! walks around the survivor), which capped `.pyr` input/output near 20 MB/s. Here every vertex
+//! file replay every split. On the slotmap mesh each split walks around the survivor through
+//! pointer-chasing records several times, which bounded `.pyr` input and output (figures in
+//! `docs/performance.md`, ".pyr files: sizes and speed"). Here every vertex
 //! keeps its ring as one contiguous list of `(neighbour, out-going half-edge slot, face on its
 //! left)` in `outgoing` order, so listing a ring is one read and a split rewrites a handful of
 //! short lists (survivor, new vertex, the two wings, the fan's vertices) instead of walking

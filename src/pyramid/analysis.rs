@@ -27,10 +27,11 @@
 //! coarsest first; like synthesis, both run the splits of a wave (see `waves`) at once.
 
 use super::frames::LocalIndex;
-use super::quantise::{detail_step, signal_diagonal};
+use super::quantise::{Targets, detail_step, signal_diagonal};
+use super::spill::{Placement, Stream, Writer};
 use super::synthesis::{Scratch, decode, prefetch_next_split, presmooth_local};
 use super::waves::{SharedSignal, Waves, run_waves};
-use super::{CodeWidth, Codes, DetailPyramid, PyramidError, SplitOffsets};
+use super::{CodeWidth, Codes, CodesWriter, DetailPyramid, PyramidError, SplitOffsets};
 use crate::mesh::geometry::morton_codes;
 use crate::mesh::{SlotIndex, VertexId};
 use crate::pm::{FlatReplay, PmCursor, ProgressiveMesh};
@@ -70,18 +71,20 @@ impl DetailPyramid {
         // order, runs every split after the splits it depends on.
         let mut f = signal.to_vec();
         let slotted = &layout.slotted;
-        let mut targets = vec![DVec3::ZERO; slotted.offsets.last().map_or(0, |o| o.details)];
+        let mut targets = vec![[0; 3]; slotted.offsets.last().map_or(0, |o| o.details)];
         with_codes!(&slotted.codes, c => {
-            slotted.downsample(c, &layout.waves, &mut f, &mut targets, progress)
+            slotted.downsample(c, &layout.waves, signal, &mut f, &mut targets, progress)
         });
+        slotted.release_all();
         let base = f[..layout.n_base].to_vec();
         drop(f);
         // Steps 4–5 in synthesis order, quantised in the closed loop.
         let step = detail_step(signal_diagonal(signal));
         let mut pyramid = layout.into_pyramid(relaxation, signal, base, Vec::new(), step);
         let done = RECORDS_SHARE + DOWNSAMPLE_SHARE;
-        pyramid.details =
-            pyramid.quantise_details(targets, |x| progress.update(done + (1.0 - done) * x));
+        pyramid.details = pyramid.quantise_details(signal, targets, |x| {
+            progress.update(done + (1.0 - done) * x)
+        });
         progress.update(1.0);
         Ok(pyramid)
     }
@@ -112,12 +115,14 @@ impl Layout {
         let n_splits = n_finest - n_base;
         let (surface_area, bbox_diagonal) = surface_stats(&geometry[..n_finest], pm.finest_faces());
         let ranges = split_ranges(n_splits, rayon::current_num_threads());
+        let placement = Placement::for_layout(n_splits.saturating_mul(LAYOUT_BYTES_PER_SPLIT));
         let cursor = relaxation.as_ring_stencils().is_none().then(|| pm.cursor());
-        let mut records = record_ranges(pm, relaxation, cursor, &ranges, progress)?;
+        let mut records = record_ranges(pm, relaxation, cursor, &ranges, placement, progress)?;
         // One code width for the pyramid: the widest range's.
         let widest = records.iter().map(|r| r.widest).max().unwrap_or(0);
         for r in &mut records {
-            r.codes.widen_to(widest);
+            let codes = std::mem::replace(&mut r.codes, Codes::Byte(Stream::default()));
+            r.codes = codes.widened(widest, placement)?;
         }
         // Waves store their splits by the place of the new vertex (see `run_waves`).
         let morton = morton_codes(&geometry[n_base..n_finest]);
@@ -131,7 +136,9 @@ impl Layout {
             },
             |k| morton.as_ref().map_or(0, |m| m[k]),
         );
-        let slotted = Slotted::new(records, &waves);
+        drop(morton);
+        records.iter().for_each(|r| r.locals.release_all());
+        let slotted = Slotted::new(records, &waves, placement)?;
         Ok(Layout {
             n_base,
             n_finest,
@@ -195,6 +202,10 @@ impl Layout {
     }
 }
 
+/// About the bytes of a split's layout records on scans (75 weights, 32 local-table entries, 131
+/// codes, the offsets), to decide early where the layout goes (module `spill`).
+const LAYOUT_BYTES_PER_SPLIT: usize = 4 * 75 + 4 * 32 + 131 + 32;
+
 /// The share of the analysis' time the records take (the progress bar's split between the
 /// three phases; about two thirds with Guskov's operator).
 pub(crate) const RECORDS_SHARE: f64 = 0.7;
@@ -226,6 +237,7 @@ fn record_ranges(
     relaxation: &dyn Relaxation,
     cursor: Option<PmCursor<'_>>,
     ranges: &[std::ops::Range<usize>],
+    placement: Placement,
     progress: &dyn Progress,
 ) -> Result<Vec<Records>, PyramidError> {
     use rayon::prelude::*;
@@ -237,7 +249,7 @@ fn record_ranges(
             .enumerate()
             .map(|(r, range)| {
                 let report: &dyn Progress = if r == 0 { progress } else { &quiet };
-                record_range_on_rings(pm, rings, range.clone(), report)
+                record_range_on_rings(pm, rings, range.clone(), placement, report)
             })
             .collect();
     }
@@ -251,7 +263,7 @@ fn record_ranges(
             let mut cursor = cursor.unwrap_or_else(|| pm.cursor());
             cursor.seek(pm.n_base_vertices() + range.end);
             let report: &dyn Progress = if r == finest { progress } else { &quiet };
-            record_range(pm, relaxation, cursor, range.clone(), report)
+            record_range(pm, relaxation, cursor, range.clone(), placement, report)
         })
         .collect()
 }
@@ -265,6 +277,7 @@ fn record_range_on_rings(
     pm: &ProgressiveMesh,
     rings: &dyn RingStencils,
     range: std::ops::Range<usize>,
+    placement: Placement,
     progress: &dyn Progress,
 ) -> Result<Records, PyramidError> {
     let geometry = pm.original_positions();
@@ -285,7 +298,7 @@ fn record_range_on_rings(
         replay.prefetch_upcoming(k, survivor);
         replay.apply(s).map_err(internal)?;
     }
-    let mut recorder = Recorder::new(range.clone(), geometry.len(), false);
+    let mut recorder = Recorder::new(range.clone(), geometry.len(), false, placement)?;
     let mut touched: Vec<u32> = Vec::new();
     let report_every = (range.len() / 200).max(1);
     for (done, k) in range.clone().enumerate() {
@@ -310,7 +323,7 @@ fn record_range_on_rings(
             boundary && !ring.is_empty()
         })?;
     }
-    Ok(recorder.finish())
+    recorder.finish()
 }
 
 /// Step 1 for splits `range` (walked finest first, `cursor` at level `n0 + range.end`).
@@ -319,12 +332,13 @@ fn record_range(
     relaxation: &dyn Relaxation,
     mut cursor: PmCursor<'_>,
     range: std::ops::Range<usize>,
+    placement: Placement,
     progress: &dyn Progress,
 ) -> Result<Records, PyramidError> {
     let geometry = pm.original_positions();
     let n_base = pm.n_base_vertices();
     let n = range.len();
-    let mut recorder = Recorder::new(range.clone(), geometry.len(), true);
+    let mut recorder = Recorder::new(range.clone(), geometry.len(), true, placement)?;
     let mut stencils = Vec::new();
     let mut touched_handles: Vec<VertexId> = Vec::new();
     let mut touched: Vec<u32> = Vec::new();
@@ -382,13 +396,21 @@ fn record_range(
             )));
         }
     }
-    Ok(recorder.finish())
+    recorder.finish()
 }
 
 /// Writes the records of one range of splits, split by split.
 struct Recorder {
-    rec: Records,
+    offsets: Writer<SplitOffsets>,
+    locals: Writer<u32>,
+    codes: CodesWriter,
+    weights: Writer<f32>,
+    range: std::ops::Range<usize>,
+    reversed: bool,
+    widest: u32,
     n_touched: usize,
+    /// The current split's local table.
+    split_locals: Vec<u32>,
     /// The current split's stencils (PM indices) and their lengths, filled by the walk.
     stencils: Vec<(u32, f64)>,
     stencil_lens: Vec<usize>,
@@ -401,28 +423,32 @@ struct Recorder {
 }
 
 impl Recorder {
-    fn new(range: std::ops::Range<usize>, n_vertices: usize, reversed: bool) -> Recorder {
+    fn new(
+        range: std::ops::Range<usize>,
+        n_vertices: usize,
+        reversed: bool,
+        placement: Placement,
+    ) -> Result<Recorder, PyramidError> {
         let n = range.len();
-        Recorder {
-            rec: Records {
-                offsets: Vec::with_capacity(n + 1),
-                // Reserves above the usual sizes (on scans about 32 locals, 127–135 codes
-                // and 74–80 weights per split): untouched capacity costs no memory, a
-                // doubling copies the stream.
-                locals: Vec::with_capacity(40 * n),
-                codes: Codes::Byte(Vec::with_capacity(160 * n)),
-                weights: Chunked::default(),
-                range,
-                reversed,
-                widest: 0,
-            },
+        Ok(Recorder {
+            offsets: Writer::new(placement, n + 1)?,
+            // Reserves above the usual sizes (on scans about 32 locals, 127–135 codes and
+            // 74–80 weights per split): untouched capacity costs no memory, a doubling copies
+            // the stream.
+            locals: Writer::new(placement, 40 * n)?,
+            codes: CodesWriter::new(placement, 160 * n)?,
+            weights: Writer::new(placement, 90 * n)?,
+            range,
+            reversed,
+            widest: 0,
             n_touched: 0,
+            split_locals: Vec::new(),
             stencils: Vec::new(),
             stencil_lens: Vec::new(),
             fan: Vec::new(),
             split_codes: Vec::new(),
             local_of: vec![u32::MAX; n_vertices],
-        }
+        })
     }
 
     /// Records split `k` at its level: the touched vertices (the new vertex, then its ring
@@ -436,22 +462,22 @@ impl Recorder {
         survivor: u32,
         mut fan: impl FnMut(u32, &mut Vec<u32>) -> bool,
     ) -> Result<(), PyramidError> {
-        let rec = &mut self.rec;
-        let (locals, weights) = (&mut rec.locals, &mut rec.weights);
-        rec.offsets.push(SplitOffsets {
-            locals: locals.len(),
-            codes: rec.codes.len(),
+        let weights = &mut self.weights;
+        self.offsets.push(SplitOffsets {
+            locals: self.locals.len(),
+            codes: self.codes.len(),
             weights: weights.len(),
             details: self.n_touched,
-        });
+        })?;
         let codes = &mut self.split_codes;
         codes.clear();
-        let l0 = locals.len();
+        let locals = &mut self.split_locals;
+        locals.clear();
         let local_of = &mut self.local_of;
         let mut local = |u: u32, locals: &mut Vec<u32>| {
             let x = &mut local_of[u as usize];
             if *x == u32::MAX {
-                *x = (locals.len() - l0) as u32;
+                *x = locals.len() as u32;
                 locals.push(u);
             }
             *x
@@ -481,7 +507,7 @@ impl Recorder {
                 // f32 is enough: synthesis anchors every stencil at its first vertex (see
                 // `relax_local`), so rounding a weight moves a prediction by a fraction 1e-7 of
                 // the local edge length, wherever the scan sits.
-                weights.push(w as f32);
+                weights.push(w as f32)?;
             }
             next_stencil += len;
             self.fan.clear();
@@ -493,127 +519,49 @@ impl Recorder {
             codes[len_at] = (fan_at - len_at - 2) as u32;
             codes[len_at + 1] = ((codes.len() - fan_at) as u32) << 1 | open as u32;
         }
-        for &u in &locals[l0..] {
+        for &u in locals.iter() {
             local_of[u as usize] = u32::MAX;
         }
-        rec.widest = codes.iter().fold(rec.widest, |m, &c| m.max(c));
-        rec.codes.extend_widening(codes, rec.widest);
+        self.locals.extend_from_slice(locals)?;
+        self.widest = codes.iter().fold(self.widest, |m, &c| m.max(c));
+        self.codes.extend_widening(codes, self.widest)?;
         self.n_touched += touched.len();
         Ok(())
     }
 
-    fn finish(mut self) -> Records {
-        self.rec.offsets.push(SplitOffsets {
-            locals: self.rec.locals.len(),
-            codes: self.rec.codes.len(),
-            weights: self.rec.weights.len(),
+    fn finish(mut self) -> Result<Records, PyramidError> {
+        self.offsets.push(SplitOffsets {
+            locals: self.locals.len(),
+            codes: self.codes.len(),
+            weights: self.weights.len(),
             details: self.n_touched,
-        });
-        self.rec
+        })?;
+        Ok(Records {
+            offsets: self.offsets.finish()?,
+            locals: self.locals.finish()?,
+            codes: self.codes.finish()?,
+            weights: self.weights.finish()?,
+            range: self.range,
+            reversed: self.reversed,
+            widest: self.widest,
+        })
     }
 }
 
-/// The signal-independent per-split streams of a pyramid being built; the `details` offsets
-/// count the touched vertices, whose details come later. Codes are recorded as narrow as the
-/// range's largest code so far allows (a byte on most meshes), not as 32-bit values narrowed
-/// later: the 32-bit stream would be 4 bytes × ~130 codes per split at the analysis' peak.
+/// The signal-independent per-split streams of one range of splits, as recorded; the
+/// `details` offsets count the touched vertices, whose details come later. Codes are recorded
+/// as narrow as the range's largest code so far allows (a byte on most meshes), not as 32-bit
+/// values narrowed later: the 32-bit stream would be 4 bytes × ~130 codes per split.
 struct Records {
-    offsets: Vec<SplitOffsets>,
-    locals: Vec<u32>,
+    offsets: Stream<SplitOffsets>,
+    locals: Stream<u32>,
     codes: Codes,
-    /// In chunks, so that joining the ranges' weights frees them as it goes.
-    weights: Chunked,
+    weights: Stream<f32>,
     /// The splits recorded, in the order given by `reversed` (finest first when set).
     range: std::ops::Range<usize>,
     reversed: bool,
     /// The largest code.
     widest: u32,
-}
-
-/// Weights in chunks of [`Chunked::CHUNK`] entries: the largest stream (about 300 bytes per split), so
-/// that turning the ranges' streams into the pyramid's one holds a chunk twice, not a range.
-#[derive(Default)]
-struct Chunked {
-    chunks: Vec<Vec<f32>>,
-    len: usize,
-    /// Chunks freed by [`Chunked::free_before`].
-    freed: usize,
-}
-
-impl Chunked {
-    /// 64 MiB chunks: small against a large scan's weights, and above glibc's largest mmap
-    /// threshold (32 MiB), so that a freed chunk goes back to the system instead of staying in
-    /// the allocator's heap, where the joined stream could not reuse it (it is mapped anew).
-    /// An untouched chunk costs address space only.
-    const CHUNK: usize = 1 << 24;
-
-    fn push(&mut self, w: f32) {
-        match self.chunks.last_mut() {
-            Some(last) if last.len() < Self::CHUNK => last.push(w),
-            _ => {
-                let mut chunk = Vec::with_capacity(Self::CHUNK);
-                chunk.push(w);
-                self.chunks.push(chunk);
-            }
-        }
-        self.len += 1;
-    }
-
-    fn len(&self) -> usize {
-        self.len
-    }
-
-    /// Appends entries `from..to` to `out`.
-    fn copy_to(&self, from: usize, to: usize, out: &mut Vec<f32>) {
-        let mut at = from;
-        while at < to {
-            let (c, i) = (at / Self::CHUNK, at % Self::CHUNK);
-            let n = (Self::CHUNK - i).min(to - at);
-            out.extend_from_slice(&self.chunks[c][i..i + n]);
-            at += n;
-        }
-    }
-
-    /// Frees the chunks wholly at or after entry `from` (a walk back to front).
-    fn free_from(&mut self, from: usize) {
-        while self.chunks.len() > from.div_ceil(Self::CHUNK) {
-            self.chunks.pop();
-        }
-    }
-
-    /// Frees the chunks wholly before entry `to` (a walk front to back).
-    fn free_before(&mut self, to: usize) {
-        while self.freed < to / Self::CHUNK {
-            self.chunks[self.freed] = Vec::new();
-            self.freed += 1;
-        }
-    }
-}
-
-/// The weights of all splits in split order (a range recorded finest first is read back to
-/// front), each chunk of the ranges' streams freed once copied; and where each split's
-/// weights start.
-fn join_weights(ranges: &mut [Records]) -> (Vec<f32>, Vec<usize>) {
-    let total = ranges.iter().map(|r| r.weights.len()).sum();
-    let n_splits: usize = ranges.iter().map(|r| r.offsets.len() - 1).sum();
-    let mut weights = Vec::with_capacity(total);
-    let mut starts = Vec::with_capacity(n_splits);
-    for r in ranges {
-        let n = r.offsets.len() - 1;
-        for j in 0..n {
-            let i = if r.reversed { n - 1 - j } else { j };
-            let (from, to) = (r.offsets[i].weights, r.offsets[i + 1].weights);
-            starts.push(weights.len());
-            r.weights.copy_to(from, to, &mut weights);
-            if r.reversed {
-                r.weights.free_from(from);
-            } else {
-                r.weights.free_before(to);
-            }
-        }
-        r.weights = Chunked::default();
-    }
-    (weights, starts)
 }
 
 /// The range record holding split `k` (ranges are contiguous and in split order), and the
@@ -632,71 +580,111 @@ fn record_of(records: &[Records], k: usize) -> (&Records, usize) {
 /// The records of all splits in slot order (see `waves`), codes as narrow as the widest
 /// allows: the layout of the finished pyramid, which steps 2–5 already read.
 struct Slotted {
-    offsets: Vec<SplitOffsets>,
-    locals: Vec<u32>,
+    offsets: Stream<SplitOffsets>,
+    locals: Stream<u32>,
     codes: Codes,
-    weights: Vec<f32>,
+    weights: Stream<f32>,
 }
 
 impl Slotted {
     /// The records of all ranges copied into the slots `waves` assigns them (every range's
-    /// codes already in one width), but for the weights: they are only ever read from a
-    /// split's start, so they stay in split order, joined chunk by chunk, which never holds
-    /// the largest stream twice. The other streams are copied one at a time and each range
-    /// stream is freed once copied. Each is copied by all threads at once (the reads are
-    /// scattered, so one thread would mostly wait for memory).
-    fn new(mut ranges: Vec<Records>, waves: &Waves) -> Slotted {
+    /// codes already in one width), one stream at a time, each range stream dropped once
+    /// copied; the copies are written at `placement`.
+    fn new(
+        mut ranges: Vec<Records>,
+        waves: &Waves,
+        placement: Placement,
+    ) -> Result<Slotted, PyramidError> {
         let n_splits: usize = ranges.iter().map(|r| r.offsets.len() - 1).sum();
-        let (weights, weights_start) = join_weights(&mut ranges);
         let at = |slot: usize| record_of(&ranges, waves.split_at(slot));
         let mut next = SplitOffsets::default();
         let mut offsets = Vec::with_capacity(n_splits + 1);
         for slot in 0..n_splits {
             let (r, i) = at(slot);
             let (o, end) = (r.offsets[i], r.offsets[i + 1]);
-            next.weights = weights_start[waves.split_at(slot)];
             offsets.push(next);
             next.locals += end.locals - o.locals;
             next.codes += end.codes - o.codes;
+            next.weights += end.weights - o.weights;
             next.details += end.details - o.details;
         }
-        drop(weights_start);
-        next.weights = weights.len();
         offsets.push(next);
-        let chunks = 4 * rayon::current_num_threads();
-        let cuts: Vec<usize> = (0..=chunks).map(|c| n_splits * c / chunks).collect();
-        let locals = stream(&cuts, &offsets, &at, |r| &r.locals, |o| o.locals);
+        let locals = gather_stream(
+            &ranges,
+            waves,
+            &offsets,
+            placement,
+            |r| &r.locals,
+            |r| r.locals.release_all(),
+            |o| o.locals,
+        )?;
         for r in &mut ranges {
-            r.locals = Vec::new();
+            r.locals = Stream::default();
         }
-        let at = |slot: usize| record_of(&ranges, waves.split_at(slot));
+        let weights = gather_stream(
+            &ranges,
+            waves,
+            &offsets,
+            placement,
+            |r| &r.weights,
+            |r| r.weights.release_all(),
+            |o| o.weights,
+        )?;
+        for r in &mut ranges {
+            r.weights = Stream::default();
+        }
         // Every range was widened to the widest code of all (see `Self::new`'s caller), so
         // all have the same width.
         let codes = match ranges.first().map(|r| &r.codes) {
-            None | Some(Codes::Byte(_)) => slotted_codes::<u8>(&cuts, &offsets, &at),
-            Some(Codes::Narrow(_)) => slotted_codes::<u16>(&cuts, &offsets, &at),
-            Some(Codes::Wide(_)) => slotted_codes::<u32>(&cuts, &offsets, &at),
+            None | Some(Codes::Byte(_)) => {
+                slotted_codes::<u8>(&ranges, waves, &offsets, placement)?
+            }
+            Some(Codes::Narrow(_)) => slotted_codes::<u16>(&ranges, waves, &offsets, placement)?,
+            Some(Codes::Wide(_)) => slotted_codes::<u32>(&ranges, waves, &offsets, placement)?,
         };
-        for r in &mut ranges {
-            r.codes = Codes::Byte(Vec::new());
-        }
-        Slotted {
-            offsets,
+        drop(ranges);
+        let mut stored = Writer::new(placement, offsets.len())?;
+        stored.extend_from_slice(&offsets)?;
+        drop(offsets);
+        Ok(Slotted {
+            offsets: stored.finish()?,
             locals,
             codes,
             weights,
+        })
+    }
+
+    /// Hands back the resident pages of every stream (see [`Stream::release`]).
+    fn release_all(&self) {
+        self.offsets.release_all();
+        self.locals.release_all();
+        with_codes!(&self.codes, c => c.release_all());
+        self.weights.release_all();
+    }
+
+    /// Hands back the resident pages of the records of slots `slots`.
+    fn release_slots(&self, slots: std::ops::Range<usize>) {
+        if !self.weights.is_mapped() || slots.is_empty() {
+            return;
         }
+        let (o, end) = (self.offsets[slots.start], self.offsets[slots.end]);
+        self.locals.release(o.locals..end.locals);
+        with_codes!(&self.codes, c => c.release(o.codes..end.codes));
+        self.weights.release(o.weights..end.weights);
+        self.offsets.release(slots);
     }
 
     /// Steps 2–3 of the split stored at `slot`, reading `f = f^(n)`: writes the presmoothed
     /// values of its 1-ring (`f^(n−1)` there) into `f`, and the values `f^(n)` of its touched
-    /// vertices, which synthesis must reach, into their places in `targets`.
+    /// vertices, which synthesis must reach, into their places in `targets` (as displacements
+    /// from the analysed `signal`).
     fn split_targets<I: LocalIndex>(
         &self,
         codes: &[I],
         slot: usize,
+        signal: &[DVec3],
         f: &SharedSignal,
-        targets: &SharedSignal,
+        targets: &Targets,
         scratch: &mut Scratch,
     ) {
         let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
@@ -707,8 +695,8 @@ impl Slotted {
         let g = &mut scratch.g;
         g.clear();
         g.extend(table.iter().map(|&x| f.get(x as usize)));
-        for (i, &value) in g[..t].iter().enumerate() {
-            targets.set(o.details + i, value);
+        for (i, (&value, &x)) in g[..t].iter().zip(table).enumerate() {
+            targets.set_displacement(o.details + i, value - signal[x as usize]);
         }
         presmooth_local(
             codes,
@@ -731,61 +719,106 @@ impl Slotted {
         &self,
         codes: &[I],
         waves: &Waves,
+        signal: &[DVec3],
         f: &mut [DVec3],
-        targets: &mut [DVec3],
+        targets: &mut [[i32; 3]],
         progress: &dyn Progress,
     ) {
-        let (f, targets) = (SharedSignal::new(f), SharedSignal::new(targets));
+        let (f, targets) = (SharedSignal::new(f), Targets::new(targets));
         run_waves(
             (0..waves.len()).rev().map(|w| waves.wave(w)),
             |done| progress.update(RECORDS_SHARE + DOWNSAMPLE_SHARE * done),
-            |slot, scratch: &mut Scratch| self.split_targets(codes, slot, &f, &targets, scratch),
+            |slot, scratch: &mut Scratch| {
+                self.split_targets(codes, slot, signal, &f, &targets, scratch)
+            },
+            |slots| self.release_slots(slots),
         );
     }
 }
 
 /// The code stream in slot order, every range's codes being `T`s (a range in another width
 /// contributes nothing, which `gather`'s length check turns into a panic).
-fn slotted_codes<'a, T: CodeWidth + Send + Sync + 'a>(
-    cuts: &[usize],
+fn slotted_codes<T: CodeWidth + Send + Sync>(
+    ranges: &[Records],
+    waves: &Waves,
     offsets: &[SplitOffsets],
-    at: &(dyn Fn(usize) -> (&'a Records, usize) + Sync),
-) -> Codes {
-    T::wrap(stream(cuts, offsets, at, |r| T::of(&r.codes), |o| o.codes))
+    placement: Placement,
+) -> Result<Codes, PyramidError> {
+    let stream = gather_stream(
+        ranges,
+        waves,
+        offsets,
+        placement,
+        |r| T::of(&r.codes),
+        |r| with_codes!(&r.codes, c => c.release_all()),
+        |o| o.codes,
+    )?;
+    Ok(T::wrap(stream))
 }
 
-/// One stream of the records in slot order ([`Slotted::new`]): `data` of the range
-/// record `at(slot)` names, each split's part found at `pos` of its offsets, copied with
-/// [`gather`] to `pos` of the slot's new `offsets`.
-fn stream<'a, T: Copy + Send + Sync + 'a>(
-    cuts: &[usize],
+/// Elements [`gather_stream`] copies per batch: a batch is gathered in memory, then written.
+const GATHER_BATCH: usize = 1 << 22;
+
+/// One stream of the records in slot order ([`Slotted::new`]): `data` of the range record
+/// holding each slot's split, its part found at `pos` of the range's offsets, copied to `pos`
+/// of the slot's new `offsets`. Batch by batch: the slots of a batch are gathered on rayon's
+/// threads into a buffer (the reads are scattered, so one thread would mostly wait for
+/// memory), which is then appended to the output; after each batch the ranges' pages are
+/// handed back (`release`), since read out of order they would otherwise all stay resident.
+fn gather_stream<T: bytemuck::Pod + Send + Sync>(
+    ranges: &[Records],
+    waves: &Waves,
     offsets: &[SplitOffsets],
-    at: &(dyn Fn(usize) -> (&'a Records, usize) + Sync),
-    data: fn(&'a Records) -> &'a [T],
+    placement: Placement,
+    data: impl Fn(&Records) -> &[T] + Sync,
+    release: impl Fn(&Records),
     pos: fn(&SplitOffsets) -> usize,
-) -> Vec<T> {
-    gather(
-        cuts,
-        |slot| pos(&offsets[slot]),
-        |slot| {
-            let (r, i) = at(slot);
-            &data(r)[pos(&r.offsets[i])..pos(&r.offsets[i + 1])]
-        },
-    )
+) -> Result<Stream<T>, PyramidError> {
+    let n_slots = offsets.len() - 1;
+    let mut out = Writer::new(placement, pos(&offsets[n_slots]))?;
+    let chunks = 4 * rayon::current_num_threads();
+    let mut buffer: Vec<T> = Vec::new();
+    let mut first = 0;
+    while first < n_slots {
+        // The slots whose records fit in a batch (at least one).
+        let limit = pos(&offsets[first]) + GATHER_BATCH;
+        let last = first + 1 + offsets[first + 1..n_slots].partition_point(|o| pos(o) <= limit);
+        let cuts: Vec<usize> = (0..=chunks)
+            .map(|c| first + (last - first) * c / chunks)
+            .collect();
+        gather(
+            &cuts,
+            |slot| pos(&offsets[slot]),
+            |slot| {
+                let (r, i) = record_of(ranges, waves.split_at(slot));
+                &data(r)[pos(&r.offsets[i])..pos(&r.offsets[i + 1])]
+            },
+            &mut buffer,
+        );
+        out.extend_from_slice(&buffer)?;
+        for r in ranges {
+            release(r);
+            r.offsets.release_all();
+        }
+        first = last;
+    }
+    Ok(out.finish()?)
 }
 
-/// The slices `record(slot)` of all slots `cuts[0]..cuts[last]`, concatenated; slot `s` lands
-/// at `start(s)` (`start(cuts[last])` is the total length). The chunks `cuts[c]..cuts[c + 1]`
-/// are copied on rayon's threads, each into its own part of the output.
+/// The slices `record(slot)` of all slots `cuts[0]..cuts[last]`, concatenated into `to`
+/// (replacing its contents); slot `s` lands at `start(s) − start(cuts[0])`. The chunks
+/// `cuts[c]..cuts[c + 1]` are copied on rayon's threads, each into its own part of the output.
 fn gather<'r, T: Copy + Send + Sync + 'r>(
     cuts: &[usize],
     start: impl Fn(usize) -> usize,
     record: impl Fn(usize) -> &'r [T] + Sync,
-) -> Vec<T> {
+    to: &mut Vec<T>,
+) {
     use rayon::prelude::*;
     let (first, last) = (cuts[0], cuts[cuts.len() - 1]);
     let total = start(last) - start(first);
-    let mut to: Vec<T> = Vec::with_capacity(total);
+    to.clear();
+    to.reserve(total);
     let mut rest = &mut to.spare_capacity_mut()[..total];
     let mut parts = Vec::with_capacity(cuts.len());
     for w in cuts.windows(2) {
@@ -805,9 +838,8 @@ fn gather<'r, T: Copy + Send + Sync + 'r>(
         assert_eq!(at, part.len(), "record lengths disagree with their offsets");
     });
     // SAFETY: the parts tile `to`'s first `total` elements, and each part was written in full
-    // (asserted above; a failed assertion unwinds before this line and drops `to` empty).
+    // (asserted above; a failed assertion unwinds before this line and leaves `to` empty).
     unsafe { to.set_len(total) };
-    to
 }
 
 /// Total area and bounding-box diagonal of a mesh.

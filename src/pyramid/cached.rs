@@ -46,6 +46,8 @@ pub struct SynthesisCache {
     gains: Option<LevelGains>,
     signal: Vec<DVec3>,
     resumed_from: usize,
+    /// The level synthesis stops at ([`SynthesisCache::up_to`]); `None`: the finest.
+    top: Option<usize>,
 }
 
 impl SynthesisCache {
@@ -78,6 +80,34 @@ impl SynthesisCache {
         SynthesisCache::new(pyramid, &starts)
     }
 
+    /// A cache that synthesises only up to level `top` (clamped to the pyramid's levels), with
+    /// checkpoints at the octave starts below it: [`SynthesisCache::synthesize`] then returns
+    /// `f^(top)` on PM vertices `0..top`, bit-identical to the first `top` values of
+    /// [`DetailPyramid::signal_at_level`] with the same gains, and costs at most the splits up to
+    /// `top` (an editor's preview of a coarse level of a large scan). Gains of finer levels
+    /// cannot change it, so changing only those recomputes nothing.
+    pub fn up_to(pyramid: &DetailPyramid, top: usize) -> Self {
+        let top = top.clamp(pyramid.n_base, pyramid.n_finest);
+        let starts: Vec<usize> = pyramid
+            .levels_of_octaves()
+            .iter()
+            .map(|b| b.0)
+            .filter(|&c| c < top)
+            .collect();
+        SynthesisCache {
+            top: Some(top),
+            ..SynthesisCache::new(pyramid, &starts)
+        }
+    }
+
+    /// The level synthesis runs to and the length of the signal it returns.
+    fn top_and_len(&self, pyramid: &DetailPyramid) -> (usize, usize) {
+        match self.top {
+            Some(top) => (top, top),
+            None => (pyramid.n_finest, pyramid.signal_len()),
+        }
+    }
+
     /// The level the last [`SynthesisCache::synthesize`] resumed from: the base level after a
     /// full synthesis, the finest when nothing changed.
     pub fn resumed_from(&self) -> usize {
@@ -87,13 +117,14 @@ impl SynthesisCache {
     /// The finest signal with `gains` (PM order, as [`DetailPyramid::synthesize`] returns it),
     /// re-running only the levels from the last checkpoint below the first changed gain.
     pub fn synthesize(&mut self, pyramid: &DetailPyramid, gains: &LevelGains) -> &[DVec3] {
-        let fits = self.signal.len() == pyramid.signal_len();
+        let (top, len) = self.top_and_len(pyramid);
+        let fits = self.signal.len() == len;
         let changed = match (&self.gains, fits) {
             (Some(old), true) => first_changed_level(pyramid, old, gains),
             _ => Some(pyramid.n_base + 1),
         };
-        let Some(changed) = changed else {
-            self.resumed_from = pyramid.n_finest;
+        let Some(changed) = changed.filter(|&c| c <= top) else {
+            self.resumed_from = top;
             return &self.signal;
         };
         let start = self.restore_below(pyramid, changed);
@@ -105,8 +136,15 @@ impl SynthesisCache {
     /// Sets the signal to the last checkpoint at or below `changed − 1` (the base signal when
     /// there is none) and returns that checkpoint's level.
     fn restore_below(&mut self, pyramid: &DetailPyramid, changed: usize) -> usize {
-        if self.signal.len() != pyramid.signal_len() {
-            self.signal = pyramid.base_signal();
+        let (top, len) = self.top_and_len(pyramid);
+        if self.signal.len() != len {
+            self.signal = if self.top.is_some() {
+                let mut f = vec![DVec3::ZERO; len];
+                f[..pyramid.n_base].copy_from_slice(pyramid.base());
+                f
+            } else {
+                pyramid.base_signal()
+            };
             for c in &mut self.checkpoints {
                 c.prefix.clear();
             }
@@ -129,7 +167,7 @@ impl SynthesisCache {
         };
         // The vertices synthesis will create hold the base signal's zeros again, as in a
         // synthesis from the base; those without faces (after `n_finest`) never change.
-        self.signal[start..pyramid.n_finest].fill(DVec3::ZERO);
+        self.signal[start..top].fill(DVec3::ZERO);
         start
     }
 
@@ -143,7 +181,8 @@ impl SynthesisCache {
             c.prefix.extend_from_slice(&self.signal[..c.level]);
             level = c.level;
         }
-        pyramid.synthesize_range(&mut self.signal, level, pyramid.n_finest, gains);
+        let (top, _) = self.top_and_len(pyramid);
+        pyramid.synthesize_range(&mut self.signal, level, top, gains);
     }
 }
 
@@ -246,6 +285,25 @@ mod tests {
         // Normal-only changes every level whose gain is not one: here the finest band only.
         cache.synthesize(&p, &equalizer(&p, &gains, true));
         assert_eq!(cache.resumed_from(), bands[last].0);
+    }
+
+    #[test]
+    fn a_cache_up_to_a_level_gives_the_bits_of_that_level_and_ignores_finer_gains() {
+        let p = bumpy_torus_pyramid();
+        let bands = p.levels_of_octaves();
+        let top = bands[bands.len() - 2].0 + 7;
+        let mut cache = SynthesisCache::up_to(&p, top);
+        let mut gains = vec![1.0; bands.len()];
+        for (band, g) in [(1, 2.5), (bands.len() - 3, 0.0), (bands.len() - 1, 3.0)] {
+            gains[band] = g;
+            let level_gains = equalizer(&p, &gains, false);
+            let mut full = p.base_signal();
+            p.synthesize_range(&mut full, p.n_base_vertices(), top, &level_gains);
+            let cached = cache.synthesize(&p, &level_gains).to_vec();
+            assert_eq!(bits(&cached), bits(&full[..top]));
+        }
+        // The last move was above `top`: nothing was recomputed.
+        assert_eq!(cache.resumed_from(), top);
     }
 
     #[test]

@@ -25,11 +25,11 @@
 //! of the splits after it.
 
 use super::{DetailPyramid, Filter, LevelSpec, analyze_with};
+use crate::fairing::SmoothError;
 use crate::mesh::Mesh;
 use crate::pm::{PmOptions, ProgressiveMesh};
 use crate::progress::{NoProgress, Progress};
 use crate::relax::RelaxKind;
-use crate::smooth::SmoothError;
 use glam::DVec3;
 
 /// Options of [`pyramid_denoise`].

@@ -135,3 +135,13 @@ pub(crate) fn fuzz_pyramid(data: &[u8]) {
     assert_eq!(out.positions.len(), input.positions.len());
     assert!(out.face_starts == input.face_starts && out.face_indices == input.face_indices);
 }
+
+/// The pyramid's side of the `read_pyr` target, on a decoded file whose stored details fit
+/// it: the spectrum and a pyramid from the stored details, and a filter.
+pub(crate) fn fuzz_loaded_pyr(d: crate::format::PyrData) {
+    let _ = d.stored_spectrum(None);
+    if let Ok(p) = d.into_pyramid(&NoProgress) {
+        let _ = p.filter(&Filter::new().gain(p.pyramid.n_base_vertices(), usize::MAX, 1.5));
+        let _ = p.spectrum();
+    }
+}

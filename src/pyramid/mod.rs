@@ -16,7 +16,10 @@
 //!   details ride along in their frames.
 //! * `spectrum`: detail energy per level band, as a table and a chart.
 //! * `pipeline`: file-level glue — polygon mesh in, polygon mesh out in the input's exact
-//!   vertex and face order.
+//!   vertex and face order; `.pyr` bytes out through the codec (`crate::format`).
+//! * `loaded`, `stored`: a decoded `.pyr` file's records turned into a pyramid, with the
+//!   stored details when they fit.
+//! * `reported`: the front door's results that carry their warnings and what was reached.
 //! * `fuzz`: the body of the `pyramid_ops` fuzz target (`meshpyr::fuzzing::fuzz_pyramid`).
 //!
 //! Levels are vertex counts, as in the paper: level `n` is the mesh of the first `n` PM
@@ -48,27 +51,33 @@ pub(crate) mod edit;
 pub(crate) mod frames;
 mod fuzz;
 pub(crate) mod gains;
+mod loaded;
 pub(crate) mod pipeline;
 mod quantise;
+mod reported;
 pub(crate) mod spectrum;
+mod spill;
 mod stored;
 pub(crate) mod synthesis;
 pub(crate) mod waves;
 
+pub use crate::format::{PyramidOptions, StoredDetails};
 pub use cached::SynthesisCache;
 pub use denoise::{PyramidDenoise, PyramidDenoised, pyramid_denoise};
 pub use edit::{HandleReach, LevelMove, MoveHandle};
-pub(crate) use fuzz::fuzz_pyramid;
+pub(crate) use fuzz::{fuzz_loaded_pyr, fuzz_pyramid};
 pub use gains::{Filter, LevelGains, LevelSpec};
 pub use gains::{GainBand, GainParseError};
-pub use pipeline::{PyrContent, PyrFileError, Pyramid, PyramidOptions};
+pub use loaded::{DetailSource, NO_STORED_DETAILS};
+pub use pipeline::{PyrContent, PyrFileError, Pyramid};
 pub(crate) use pipeline::{analyze_with, guide_share, relaxation_for};
+pub use reported::{Edited, Filtered};
 pub use spectrum::BandEnergy;
 pub use spectrum::Spectrum;
-pub use stored::StoredDetails;
 
 use crate::pm::PmError;
 use glam::DVec3;
+use spill::{Placement, Stream, Writer};
 
 /// Why a pyramid could not be built or used.
 #[derive(Debug, thiserror::Error)]
@@ -85,6 +94,10 @@ pub enum PyramidError {
     /// A signal or edit does not fit the pyramid.
     #[error("{0}")]
     Invalid(String),
+    /// The temporary file that holds a large pyramid's layout could not be made, written or
+    /// mapped (module `spill`; `TMPDIR` names the directory).
+    #[error("cannot use a temporary file for the pyramid's layout: {0}")]
+    TempFile(#[from] std::io::Error),
     /// A broken internal invariant; please report.
     #[error("internal error in the detail pyramid (please report): {0}")]
     Internal(String),
@@ -112,6 +125,9 @@ pub enum PyramidError {
 /// * `details`: per touched entry its detail in the local frame `(t1, t2, n)`, in whole
 ///   `detail_step`s (module `quantise`: quantised in a closed loop, so that the rounding does
 ///   not add up across levels).
+///
+/// The first four streams and the offsets do not depend on the signal; a large pyramid keeps
+/// them in a temporary file (module `spill`), the details always in memory.
 #[derive(Clone, Debug)]
 pub struct DetailPyramid {
     pub(crate) n_base: usize,
@@ -121,10 +137,10 @@ pub struct DetailPyramid {
     /// The base signal `f^(n0)` on PM vertices `0..n_base`.
     pub(crate) base: Vec<DVec3>,
     /// Per slot (plus an end sentinel): where its records start in each stream.
-    pub(crate) offsets: Vec<SplitOffsets>,
-    pub(crate) locals: Vec<u32>,
+    pub(crate) offsets: Stream<SplitOffsets>,
+    pub(crate) locals: Stream<u32>,
     pub(crate) codes: Codes,
-    pub(crate) weights: Vec<f32>,
+    pub(crate) weights: Stream<f32>,
     pub(crate) details: Vec<[i32; 3]>,
     /// The splits grouped into waves of independent splits (parallel synthesis).
     pub(crate) waves: waves::Waves,
@@ -136,7 +152,8 @@ pub struct DetailPyramid {
 }
 
 /// Start of one split's records in each stream of a [`DetailPyramid`].
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub(crate) struct SplitOffsets {
     pub locals: usize,
     pub codes: usize,
@@ -147,17 +164,24 @@ pub(crate) struct SplitOffsets {
 /// The code stream, as narrow as the largest local index allows.
 #[derive(Clone, Debug)]
 pub(crate) enum Codes {
-    Byte(Vec<u8>),
-    Narrow(Vec<u16>),
-    Wide(Vec<u32>),
+    Byte(Stream<u8>),
+    Narrow(Stream<u16>),
+    Wide(Stream<u32>),
+}
+
+/// A code stream being recorded, as narrow as the largest code so far allows.
+pub(crate) enum CodesWriter {
+    Byte(Writer<u8>),
+    Narrow(Writer<u16>),
+    Wide(Writer<u32>),
 }
 
 /// The element types of [`Codes`]: their slice in a stream of their width, and the stream.
-pub(crate) trait CodeWidth: Copy + Sized {
+pub(crate) trait CodeWidth: bytemuck::Pod + Sized {
     /// The codes if `codes` has this width, else an empty slice.
     fn of(codes: &Codes) -> &[Self];
     /// The stream of these codes.
-    fn wrap(codes: Vec<Self>) -> Codes;
+    fn wrap(codes: Stream<Self>) -> Codes;
 }
 
 macro_rules! code_width {
@@ -169,7 +193,7 @@ macro_rules! code_width {
                     _ => &[],
                 }
             }
-            fn wrap(codes: Vec<$t>) -> Codes {
+            fn wrap(codes: Stream<$t>) -> Codes {
                 Codes::$variant(codes)
             }
         }
@@ -181,12 +205,7 @@ code_width!(u32, Wide);
 
 impl Codes {
     fn bytes(&self) -> usize {
-        with_codes!(self, c => std::mem::size_of_val(c.as_slice()))
-    }
-
-    /// Number of codes.
-    pub(crate) fn len(&self) -> usize {
-        with_codes!(self, c => c.len())
+        with_codes!(self, c => c.bytes())
     }
 
     /// Largest code the current width holds.
@@ -198,30 +217,117 @@ impl Codes {
         }
     }
 
-    /// Rewrites the stream in the narrowest width that holds `max` (never narrower than now).
-    pub(crate) fn widen_to(&mut self, max: u32) {
+    /// The stream in the narrowest width that holds `max` (never narrower than now), written
+    /// anew at `placement` when it must widen.
+    pub(crate) fn widened(self, max: u32, placement: Placement) -> std::io::Result<Codes> {
         if max <= self.capacity_max() {
-            return;
+            return Ok(self);
         }
-        use frames::LocalIndex;
-        // Codes fit in u32 (they were recorded from u32 values).
-        let wide: Vec<u32> = with_codes!(&*self, c => c.iter().map(|&x| x.at() as u32).collect());
-        *self = if max <= u16::MAX.into() {
-            Codes::Narrow(wide.into_iter().map(|x| x as u16).collect())
+        let mut wide = CodesWriter::of_width(placement, max)?;
+        wide.copy_from(&self, max)?;
+        wide.finish()
+    }
+
+    /// Where the stream lives.
+    fn placement(&self) -> Placement {
+        if with_codes!(self, c => c.is_mapped()) {
+            Placement::TempFile
         } else {
-            Codes::Wide(wide)
-        };
+            Placement::Memory
+        }
+    }
+
+    /// Hands the resident pages of codes `range` back (see [`Stream::release`]).
+    fn release(&self, range: std::ops::Range<usize>) {
+        with_codes!(self, c => c.release(range))
+    }
+}
+
+impl CodesWriter {
+    /// An empty 8-bit stream at `placement` with room for `capacity` codes.
+    pub(crate) fn new(placement: Placement, capacity: usize) -> std::io::Result<CodesWriter> {
+        Ok(CodesWriter::Byte(Writer::new(placement, capacity)?))
+    }
+
+    /// Number of codes.
+    pub(crate) fn len(&self) -> usize {
+        match self {
+            CodesWriter::Byte(c) => c.len(),
+            CodesWriter::Narrow(c) => c.len(),
+            CodesWriter::Wide(c) => c.len(),
+        }
+    }
+
+    /// Largest code the current width holds.
+    fn capacity_max(&self) -> u32 {
+        match self {
+            CodesWriter::Byte(_) => u8::MAX.into(),
+            CodesWriter::Narrow(_) => u16::MAX.into(),
+            CodesWriter::Wide(_) => u32::MAX,
+        }
+    }
+
+    /// An empty stream at `placement` in the narrowest width that holds `max`.
+    fn of_width(placement: Placement, max: u32) -> std::io::Result<CodesWriter> {
+        Ok(if max <= u8::MAX.into() {
+            CodesWriter::Byte(Writer::new(placement, 0)?)
+        } else if max <= u16::MAX.into() {
+            CodesWriter::Narrow(Writer::new(placement, 0)?)
+        } else {
+            CodesWriter::Wide(Writer::new(placement, 0)?)
+        })
+    }
+
+    /// Appends all of `codes`, whose largest code is `max`, a slice at a time (a stream in a
+    /// file is never read into memory whole).
+    fn copy_from(&mut self, codes: &Codes, max: u32) -> std::io::Result<()> {
+        use frames::LocalIndex;
+        const SLICE: usize = 1 << 16;
+        let mut wide: Vec<u32> = Vec::with_capacity(SLICE);
+        with_codes!(codes, c => {
+            for (i, slice) in c.chunks(SLICE).enumerate() {
+                wide.clear();
+                // Codes fit in u32 (they were recorded from u32 values).
+                wide.extend(slice.iter().map(|&x| x.at() as u32));
+                self.extend_widening(&wide, max)?;
+                c.release(i * SLICE..(i + 1) * SLICE);
+            }
+        });
+        Ok(())
+    }
+
+    /// Rewrites the stream in the narrowest width that holds `max` (never narrower than now),
+    /// at the same placement.
+    fn widen_to(&mut self, max: u32) -> std::io::Result<()> {
+        if max <= self.capacity_max() {
+            return Ok(());
+        }
+        let placeholder = CodesWriter::Byte(Writer::new(Placement::Memory, 0)?);
+        let old = std::mem::replace(self, placeholder).finish()?;
+        let mut wide = CodesWriter::of_width(old.placement(), max)?;
+        wide.copy_from(&old, max)?;
+        *self = wide;
+        Ok(())
     }
 
     /// Appends `src`, whose largest code is `max`, widening the stream first if needed.
-    pub(crate) fn extend_widening(&mut self, src: &[u32], max: u32) {
-        self.widen_to(max);
+    pub(crate) fn extend_widening(&mut self, src: &[u32], max: u32) -> std::io::Result<()> {
+        self.widen_to(max)?;
         match self {
             // `max` fits the width (widened above), so the casts keep every value.
-            Codes::Byte(c) => c.extend(src.iter().map(|&x| x as u8)),
-            Codes::Narrow(c) => c.extend(src.iter().map(|&x| x as u16)),
-            Codes::Wide(c) => c.extend_from_slice(src),
+            CodesWriter::Byte(c) => src.iter().try_for_each(|&x| c.push(x as u8)),
+            CodesWriter::Narrow(c) => src.iter().try_for_each(|&x| c.push(x as u16)),
+            CodesWriter::Wide(c) => c.extend_from_slice(src),
         }
+    }
+
+    /// The finished stream.
+    pub(crate) fn finish(self) -> std::io::Result<Codes> {
+        Ok(match self {
+            CodesWriter::Byte(c) => Codes::Byte(c.finish()?),
+            CodesWriter::Narrow(c) => Codes::Narrow(c.finish()?),
+            CodesWriter::Wide(c) => Codes::Wide(c.finish()?),
+        })
     }
 }
 
@@ -303,6 +409,27 @@ impl DetailPyramid {
         )
     }
 
+    /// Whether the signal-independent layout (weights, local tables, codes: most of a large
+    /// pyramid) lives in a temporary file mapped into memory rather than on the heap; decided
+    /// by its size and `MESHPYR_SPILL_MIB` (docs/performance.md, "Scans of millions of
+    /// vertices"). Results are the same bits either way.
+    pub fn layout_in_file(&self) -> bool {
+        self.weights.is_mapped()
+    }
+
+    /// Hands back the resident pages of the layout records of slots `slots` (a pass is done
+    /// with them; see [`Stream::release`]).
+    pub(crate) fn release_slots(&self, slots: std::ops::Range<usize>) {
+        if !self.weights.is_mapped() || slots.is_empty() {
+            return;
+        }
+        let (o, end) = (self.offsets[slots.start], self.offsets[slots.end]);
+        self.locals.release(o.locals..end.locals);
+        self.codes.release(o.codes..end.codes);
+        self.weights.release(o.weights..end.weights);
+        self.offsets.release(slots);
+    }
+
     /// The step every detail component is a whole multiple of (a power of two near 2^-21 of
     /// the signal's bounding-box diagonal): unit gains reproduce the analysed signal within
     /// `√3/2` of it.
@@ -310,12 +437,13 @@ impl DetailPyramid {
         self.detail_step
     }
 
-    /// Heap memory of the pyramid in bytes (weights, indices, fans, details, base signal).
+    /// Size of the pyramid in bytes (weights, indices, fans, details, base signal), counting
+    /// the layout a large pyramid keeps in a temporary file ([`Self::layout_in_file`]).
     pub fn memory_bytes(&self) -> usize {
-        std::mem::size_of::<SplitOffsets>() * self.offsets.len()
-            + 4 * self.locals.len()
+        self.offsets.bytes()
+            + self.locals.bytes()
             + self.codes.bytes()
-            + 4 * self.weights.len()
+            + self.weights.bytes()
             + 12 * self.details.len()
             + 24 * (self.base.len() + self.passthrough.len())
             + self.waves.memory_bytes()
@@ -352,9 +480,9 @@ mod tests {
             panic!("a small mesh should get 8-bit codes");
         };
         let mut wide = narrow.clone();
-        wide.codes = Codes::Wide(c.iter().map(|&x| x as u32).collect());
+        wide.codes = Codes::Wide(c.iter().map(|&x| x as u32).collect::<Vec<_>>().into());
         let mut middle = narrow.clone();
-        middle.codes = Codes::Narrow(c.iter().map(|&x| x as u16).collect());
+        middle.codes = Codes::Narrow(c.iter().map(|&x| x as u16).collect::<Vec<_>>().into());
         assert_eq!(
             middle.synthesize(&LevelGains::unit()),
             wide.synthesize(&LevelGains::unit())
@@ -415,8 +543,8 @@ mod tests {
         );
         let codes = |p: &DetailPyramid| with_codes!(&p.codes, c => c.iter().map(|&x| frames::LocalIndex::at(x)).collect::<Vec<usize>>());
         assert_eq!(codes(&one), codes(&two));
-        assert_eq!(one.locals, two.locals);
-        assert_eq!(one.offsets, two.offsets);
+        assert_eq!(*one.locals, *two.locals);
+        assert_eq!(*one.offsets, *two.offsets);
         assert_eq!(one.details, two.details);
         assert_eq!(
             one.weights.iter().map(|w| w.to_bits()).collect::<Vec<_>>(),

@@ -4,28 +4,17 @@
 //! lines up after filtering.
 
 use super::{DetailPyramid, MoveHandle, PyramidError, Spectrum, StoredDetails};
-use crate::format::{self, FormatError, PyrData, SizeReport};
+use crate::fairing::{DenoiseOptions, denoise};
+use crate::format::{self, FormatError, PyramidOptions, SizeReport};
 use crate::io::IoError;
-use crate::mesh::{Mesh, PolygonMesh, SourceMap};
-use crate::pm::{PmOptions, ProgressiveMesh};
+use crate::mesh::{CornerTable, Mesh, PolygonMesh, SourceMap};
+use crate::pm::ProgressiveMesh;
 use crate::progress::{NoProgress, Progress};
 use crate::pyramid::Filter;
 use crate::relax::{NormalAdaptive, Relaxation, RelaxationSpec};
-use crate::smooth::{SmoothMethod, smooth_positions};
 use glam::DVec3;
 use std::ops::RangeInclusive;
 use std::path::{Path, PathBuf};
-
-/// How a [`Pyramid`] is built: what a `.pyr` file records in its header, so that loading it
-/// rebuilds the very same pyramid.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct PyramidOptions {
-    /// How the progressive mesh is built (defaults: collapse as far as legal).
-    pub pm: PmOptions,
-    /// The relaxation operator that predicts each level from the coarser one (default: Guskov's
-    /// second differences).
-    pub relaxation: RelaxationSpec,
-}
 
 /// What a `.pyr` file keeps besides the hierarchy and the exact input.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -47,13 +36,17 @@ pub enum PyrContent {
 pub struct Pyramid {
     /// The mesh as read.
     pub input: PolygonMesh,
-    /// Where each vertex of the repaired mesh came from in the input. The repaired half-edge
-    /// mesh itself is dropped once the hierarchy is built: filters never read it, and it is
-    /// about 430 B per vertex, which would sit through the analysis' memory peak.
+    /// Where each vertex of the repaired mesh came from in the input. The hierarchy is built
+    /// from the builder's corner table: a half-edge mesh of the input is never made (filters
+    /// never read it, and it is about 430 B per vertex).
     pub source: SourceMap,
     /// The hierarchy.
     pub pm: ProgressiveMesh,
-    /// The pyramid of the input's positions.
+    /// The pyramid of the input's positions. Filters, edits, spectra and saving go through
+    /// the methods of `Pyramid` (with [`Pyramid::filter_reporting`] and
+    /// [`Pyramid::edit_reporting`] for their warnings); the field is public for callers that
+    /// work on the detail pyramid itself, such as the editor's server (a [`SynthesisCache`](super::SynthesisCache)
+    /// over it, signals of intermediate levels).
     pub pyramid: DetailPyramid,
     /// What it was built with.
     pub options: PyramidOptions,
@@ -91,7 +84,7 @@ fn file_prefix(path: &Option<PathBuf>) -> String {
 }
 
 impl PyrFileError {
-    fn in_file(self, file: &Path) -> PyrFileError {
+    pub(super) fn in_file(self, file: &Path) -> PyrFileError {
         match self {
             PyrFileError::Format { error, .. } => PyrFileError::Format {
                 path: Some(file.to_path_buf()),
@@ -133,11 +126,15 @@ impl Pyramid {
         progress: &dyn Progress,
     ) -> Result<Pyramid, PyramidError> {
         input.check_surface()?;
-        let built = Mesh::from_polygons(&input)?;
-        let pm =
-            ProgressiveMesh::build(&built.mesh, &options.pm, &|x: f64| progress.update(0.5 * x))?;
-        let source = built.source;
-        drop(built.mesh);
+        let repaired = CornerTable::from_polygons(&input)?;
+        let source = repaired.source;
+        let pm = ProgressiveMesh::from_corners(
+            &input,
+            repaired.corners,
+            &source,
+            &options.pm,
+            &|x: f64| progress.update(0.5 * x),
+        )?;
         let (_, pyramid) = analyze_with(&options.relaxation, &pm, &|x: f64| {
             progress.update(0.5 + 0.5 * x)
         })?;
@@ -176,9 +173,7 @@ impl Pyramid {
         handles: &[MoveHandle],
         filter: &Filter,
     ) -> Result<PolygonMesh, PyramidError> {
-        let gains = filter.resolve(self.pyramid.surface_area());
-        let signal = self.pyramid.edit(level, handles, &gains)?;
-        Ok(self.output_mesh(&signal))
+        Ok(self.edit_reporting(level, handles, filter)?.mesh)
     }
 
     /// The detail energy per band of levels.
@@ -239,8 +234,7 @@ impl Pyramid {
     /// details (only the relaxation weights and fans computed) or, for a file without usable
     /// ones, recomputed bit-identical to the one that was saved.
     pub fn from_pyr_bytes(bytes: &[u8], progress: &dyn Progress) -> Result<Self, PyrFileError> {
-        let data: PyrData = format::decode(bytes)?;
-        Ok(data.into_pyramid(progress)?)
+        Ok(Self::from_pyr_bytes_with(bytes, None, progress)?.0)
     }
 
     /// Saves [`Self::to_pyr_bytes`] to `path`, atomically (an existing file is replaced only
@@ -259,31 +253,17 @@ impl Pyramid {
         Ok(())
     }
 
-    /// Opens the `.pyr` file at `path` ([`Self::from_pyr_bytes`]).
+    /// Opens the `.pyr` file at `path` ([`Self::from_pyr_bytes`]; [`Self::load_with`] chooses
+    /// the relaxation and says whether the stored details were used).
     pub fn load(path: impl AsRef<Path>) -> Result<Self, PyrFileError> {
-        let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|error| IoError::Io {
-            path: path.to_path_buf(),
-            error,
-        })?;
-        Self::from_pyr_bytes(&bytes, &NoProgress).map_err(|e| e.in_file(path))
+        Ok(Self::load_with(path, None, &NoProgress)?.0)
     }
 
     /// Maps a signal in PM order onto the input's vertices (split copies averaged, vertices
     /// outside the hierarchy keep their input positions): the positions [`Pyramid::filter`]
     /// writes, without copying the rest of the mesh.
     pub fn to_input_positions(&self, pm_signal: &[DVec3]) -> Vec<DVec3> {
-        // The PM covers every vertex of the repaired mesh (`pm_to_mesh` is a permutation of its
-        // slots), and its original positions are the mesh's; entries `pm_signal` lacks keep them.
-        let original = self.pm.original_positions();
-        let mut mesh_values = vec![DVec3::ZERO; self.source.vertex_source.len()];
-        for (i, &slot) in self.pm.pm_to_mesh().iter().enumerate() {
-            if let Some(m) = mesh_values.get_mut(slot as usize) {
-                *m = pm_signal.get(i).copied().unwrap_or(original[i]);
-            }
-        }
-        self.source
-            .to_input_positions(&mesh_values, &self.input.positions)
+        input_positions(&self.pm, &self.source, pm_signal, &self.input.positions)
     }
 
     /// The input mesh with its positions replaced by `pm_signal` (PM order).
@@ -293,6 +273,22 @@ impl Pyramid {
         out
     }
 
+    /// [`Self::output_mesh`], consuming the pyramid: the input's arrays become the output's,
+    /// and the hierarchy and details are freed before the positions are mapped, so the peak
+    /// of a one-shot filter does not hold a copy of the input beside them.
+    pub fn into_output_mesh(self, pm_signal: &[DVec3]) -> PolygonMesh {
+        let Pyramid {
+            mut input,
+            source,
+            pm,
+            pyramid,
+            ..
+        } = self;
+        drop(pyramid);
+        input.positions = input_positions(&pm, &source, pm_signal, &input.positions);
+        input
+    }
+
     /// The input's positions and triangles (the repaired mesh) for previews and metrics.
     pub fn triangles(&self, pm_signal: &[DVec3]) -> (Vec<DVec3>, Vec<[u32; 3]>) {
         let n = pm_signal.len().min(self.pm.original_positions().len());
@@ -300,9 +296,29 @@ impl Pyramid {
     }
 }
 
+/// [`Pyramid::to_input_positions`] from the parts it reads.
+fn input_positions(
+    pm: &ProgressiveMesh,
+    source: &SourceMap,
+    pm_signal: &[DVec3],
+    input: &[DVec3],
+) -> Vec<DVec3> {
+    // The PM covers every vertex of the repaired mesh (`pm_to_mesh` is a permutation of its
+    // slots), and its original positions are the mesh's; entries `pm_signal` lacks keep them.
+    let original = pm.original_positions();
+    let mut mesh_values = vec![DVec3::ZERO; source.vertex_source.len()];
+    for (i, &slot) in pm.pm_to_mesh().iter().enumerate() {
+        if let Some(m) = mesh_values.get_mut(slot as usize) {
+            *m = pm_signal.get(i).copied().unwrap_or(original[i]);
+        }
+    }
+    source.to_input_positions(&mesh_values, input)
+}
+
 /// The operator `spec` names, ready to analyse `pm`: the normal-adaptive operator takes its
-/// normals from the finest level denoised by `smooth --method auto` (Ohtake's filter keeps
-/// creases and removes the noise that would steer it at random; `relax::normal_adaptive`).
+/// normals from the finest level denoised by Ohtake's filter with its automatic preset (what
+/// `smooth --method auto` runs today; it keeps creases and removes the noise that would steer
+/// the operator at random; `relax::normal_adaptive`).
 /// Deterministic, so a `.pyr` loader rebuilds the same operator from the stored input.
 /// `progress` goes 0 → 1 while the guide is made (see [`guide_share`]).
 pub(crate) fn relaxation_for(
@@ -354,15 +370,15 @@ pub(crate) fn guide_share(spec: &RelaxationSpec) -> f64 {
     }
 }
 
-/// The PM's vertices (in PM order) at their positions after `smooth --method auto` on the
-/// finest level; vertices without faces keep theirs. `None` when the smoother refuses the
+/// The PM's vertices (in PM order) at their positions after Ohtake's filter with its
+/// automatic preset ([`DenoiseOptions::automatic`]) on the finest level; vertices without faces keep theirs. `None` when the smoother refuses the
 /// mesh, and the operator then reads the normals of the positions themselves.
 fn denoised_guide(pm: &ProgressiveMesh, progress: &dyn Progress) -> Option<Vec<DVec3>> {
     let positions = pm.original_positions();
     let built = Mesh::from_triangles(positions, pm.finest_faces()).ok()?;
-    let (smoothed, _) = smooth_positions(&built.mesh, &SmoothMethod::Auto, progress).ok()?;
+    let smoothed = denoise(&built.mesh, &DenoiseOptions::automatic(), progress).ok()?;
     let mut guide = positions.to_vec();
-    for (&source, &p) in built.source.vertex_source.iter().zip(&smoothed) {
+    for (&source, &p) in built.source.vertex_source.iter().zip(&smoothed.positions) {
         if let Some(g) = guide.get_mut(source as usize) {
             *g = p;
         }

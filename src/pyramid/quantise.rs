@@ -13,6 +13,7 @@
 //! `√3/2 · step`.
 
 use glam::DVec3;
+use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
 /// Bits of the step below the signal's bounding-box diagonal: the step is
 /// `2^(⌊log2 diagonal⌋ − DETAIL_STEP_BITS)`, at most 2^-21 of the diagonal, so unit gains
@@ -53,6 +54,59 @@ pub(crate) fn dequantised(q: [i32; 3], step: f64) -> DVec3 {
 /// a noise signal is quantised relative to the noise).
 pub(crate) fn signal_diagonal(signal: &[DVec3]) -> f64 {
     crate::mesh::geometry::BoundingBox::of(signal.iter().copied()).map_or(0.0, |b| b.diagonal())
+}
+
+/// The closed loop's per-detail buffer, shared by the threads running a wave: first each
+/// touched vertex's target as an f32 displacement from the vertex's value in the analysed
+/// signal (set by the walk down), then, in place, its quantised detail (set by the walk up).
+///
+/// A displacement rather than the target itself: the last split that touches a vertex targets
+/// exactly its analysed value (displacement zero, exact in any precision), and the other
+/// targets are presmoothed values a fraction of an edge away, whose f32 rounding (1e-7 of that)
+/// finer splits correct like any other prediction error. Half the memory of f64 targets, and
+/// the details take their place without a second array.
+pub(crate) struct Targets<'a> {
+    cells: &'a [[AtomicU32; 3]],
+}
+
+impl<'a> Targets<'a> {
+    /// Shares `buffer` for as long as the view lives.
+    pub(crate) fn new(buffer: &'a mut [[i32; 3]]) -> Self {
+        // SAFETY: `[i32; 3]` and `[AtomicU32; 3]` have the same size and alignment; the
+        // exclusive borrow lasts as long as the view, so nothing else reads or writes the
+        // memory meanwhile, and every access through the view is atomic.
+        let cells = unsafe {
+            std::slice::from_raw_parts(buffer.as_mut_ptr().cast::<[AtomicU32; 3]>(), buffer.len())
+        };
+        Targets { cells }
+    }
+
+    /// Sets entry `i`'s displacement.
+    #[inline]
+    pub(crate) fn set_displacement(&self, i: usize, d: DVec3) {
+        let c = &self.cells[i];
+        for (cell, x) in c.iter().zip(d.to_array()) {
+            cell.store((x as f32).to_bits(), Relaxed);
+        }
+    }
+
+    /// Entry `i`'s displacement.
+    #[inline]
+    pub(crate) fn displacement(&self, i: usize) -> DVec3 {
+        let c = &self.cells[i];
+        DVec3::from_array(
+            c.each_ref()
+                .map(|x| f64::from(f32::from_bits(x.load(Relaxed)))),
+        )
+    }
+
+    /// Replaces entry `i` by its quantised detail.
+    #[inline]
+    pub(crate) fn set_detail(&self, i: usize, q: [i32; 3]) {
+        for (cell, x) in self.cells[i].iter().zip(q) {
+            cell.store(x as u32, Relaxed);
+        }
+    }
 }
 
 #[cfg(test)]

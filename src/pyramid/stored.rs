@@ -1,32 +1,16 @@
-//! A pyramid whose details come from a `.pyr` file's `DETL` section: synthesis still needs the
-//! relaxation weights and fans (step 1 of the analysis, [`Layout::record`]), but not the
-//! detail passes (steps 2–5), and the spectrum needs neither.
+//! A pyramid whose details come from a `.pyr` file's `DETL` section (the codec's record
+//! [`StoredDetails`]): synthesis still needs the relaxation weights and fans (step 1 of the
+//! analysis, [`Layout::record`]), but not the detail passes (steps 2–5), and the spectrum needs
+//! neither.
 
 use super::analysis::{Layout, surface_stats};
 use super::quantise::{dequantised, quantised};
 use super::spectrum::octave_spectrum;
 use super::{DetailPyramid, PyramidError, Spectrum};
+use crate::format::StoredDetails;
 use crate::pm::ProgressiveMesh;
 use crate::progress::Progress;
 use crate::relax::RelaxationSpec;
-use glam::DVec3;
-
-/// The details of a pyramid in split order, as a `.pyr` file stores them (`formats/pyr.md`,
-/// section `DETL`), with what they were computed with.
-#[derive(Clone, Debug, PartialEq)]
-pub struct StoredDetails {
-    /// The relaxation operator, with its options, the details were analysed with.
-    pub relaxation: RelaxationSpec,
-    /// The base signal `f^(n0)` (exact).
-    pub base: Vec<DVec3>,
-    /// Per split, how many details it carries (the new vertex and its ring).
-    pub counts: Vec<u32>,
-    /// All details in split order, each in its local frame `(t1, t2, n)`.
-    pub details: Vec<DVec3>,
-    /// The quantisation step of every detail component (model units; 0 for exact values):
-    /// each component is within half of it of the analysed one.
-    pub step: f64,
-}
 
 impl StoredDetails {
     /// The details of `pyramid`, analysed with `relaxation`, in split order, with the step

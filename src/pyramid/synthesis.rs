@@ -14,7 +14,7 @@
 
 use super::frames::{Frame, LocalIndex, frame_min_length, vertex_frame};
 use super::gains::LevelGains;
-use super::quantise::{dequantised, quantised};
+use super::quantise::{Targets, dequantised, quantised};
 use super::waves::{SharedSignal, run_waves};
 use super::{Codes, DetailPyramid, PyramidError, SplitOffsets};
 use glam::DVec3;
@@ -287,8 +287,9 @@ impl DetailPyramid {
         &self,
         codes: &[I],
         slot: usize,
+        signal: &[DVec3],
         f: &SharedSignal,
-        targets: &SharedSignal,
+        targets: &Targets,
         scratch: &mut Scratch,
     ) {
         let (o, next) = (self.offsets[slot], self.offsets[slot + 1]);
@@ -302,9 +303,10 @@ impl DetailPyramid {
             .zip(&scratch.frames)
             .enumerate()
         {
-            let target = targets.get(o.details + i);
-            let d = dequantised(quantised(frame.to_local(target - q), step), step);
-            targets.set(o.details + i, d);
+            let target = signal[x as usize] + targets.displacement(o.details + i);
+            let detail = quantised(frame.to_local(target - q), step);
+            targets.set_detail(o.details + i, detail);
+            let d = dequantised(detail, step);
             // The very expression synthesis evaluates with unit gains, so that it computes
             // these bits.
             f.set(x as usize, q + frame.to_world_scaled(d, 1.0, 1.0));
@@ -312,31 +314,30 @@ impl DetailPyramid {
     }
 
     /// Turns `targets` (storage order: per touched entry, the value the analysis had there
-    /// before its split's presmoothing) into the pyramid's quantised details, synthesising
-    /// from the base with unit gains as it goes (the closed loop of module `quantise`).
-    /// `progress` hears the share of splits done.
+    /// before its split's presmoothing, as a displacement from `signal`; see
+    /// [`Targets`]) into the pyramid's quantised details, in place, synthesising from the base
+    /// with unit gains as it goes (the closed loop of module `quantise`). `progress` hears the
+    /// share of splits done.
     pub(crate) fn quantise_details(
         &self,
-        mut targets: Vec<DVec3>,
+        signal: &[DVec3],
+        mut targets: Vec<[i32; 3]>,
         progress: impl Fn(f64) + Sync,
     ) -> Vec<[i32; 3]> {
         let mut f = self.base_signal();
         {
             let f = SharedSignal::new(&mut f);
-            let targets = SharedSignal::new(&mut targets);
+            let targets = Targets::new(&mut targets);
             with_codes!(&self.codes, c => run_waves(
                 (0..self.waves.len()).map(|w| self.waves.wave(w)),
                 &progress,
-                |slot, scratch: &mut Scratch| self.quantise_split(c, slot, &f, &targets, scratch),
+                |slot, scratch: &mut Scratch| {
+                    self.quantise_split(c, slot, signal, &f, &targets, scratch)
+                },
+                |slots| self.release_slots(slots),
             ));
         }
-        drop(f);
-        // The targets now hold whole multiples of the step: their integers are exact, and
-        // collecting in place reuses the allocation instead of holding both arrays.
-        let step = self.detail_step;
-        let mut details: Vec<[i32; 3]> = targets.into_iter().map(|d| quantised(d, step)).collect();
-        details.shrink_to_fit();
-        details
+        targets
     }
 
     /// Synthesis of the splits `splits` on `f`: wave after wave, in storage order, large waves
@@ -374,6 +375,13 @@ impl DetailPyramid {
             |i, scratch: &mut Scratch| {
                 let slot = listed.as_ref().map_or(i, |slots| slots[i] as usize);
                 self.synthesize_split(codes, slot, &f, gains, scratch)
+            },
+            |run: std::ops::Range<usize>| match &listed {
+                None => self.release_slots(run),
+                // The listed slots are increasing: these runs span the slots between.
+                Some(slots) => {
+                    self.release_slots(slots[run.start] as usize..slots[run.end - 1] as usize + 1)
+                }
             },
         );
     }

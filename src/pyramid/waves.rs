@@ -212,6 +212,7 @@ pub(crate) fn run_waves<B: Default + Send>(
     waves: impl Iterator<Item = Range<usize>>,
     progress: impl Fn(f64) + Sync,
     run: impl Fn(usize, &mut B) + Sync,
+    release: impl Fn(Range<usize>) + Sync,
 ) {
     let threads = rayon::current_num_threads();
     // Blocks (slot ranges), and the stages that group them: a large wave's blocks, or the
@@ -260,7 +261,7 @@ pub(crate) fn run_waves<B: Default + Send>(
                 // Small waves stay on the calling thread: their splits depend on each other.
                 if thread == 0 {
                     for slots in &blocks[ids.clone()] {
-                        slots.clone().for_each(|slot| run(slot, &mut scratch));
+                        run_block(slots.clone(), &run, &release, &mut scratch);
                     }
                     done.fetch_add(ids.len(), Release);
                 }
@@ -268,7 +269,7 @@ pub(crate) fn run_waves<B: Default + Send>(
                 let own = ids.start + ids.len() * thread / threads;
                 for i in (own..ids.end).chain(ids.start..own) {
                     if !claimed[i].swap(true, Relaxed) {
-                        blocks[i].clone().for_each(|slot| run(slot, &mut scratch));
+                        run_block(blocks[i].clone(), &run, &release, &mut scratch);
                         // Release: whoever sees the count sees the block's writes.
                         done.fetch_add(1, Release);
                     }
@@ -291,6 +292,27 @@ pub(crate) fn run_waves<B: Default + Send>(
             }
             work(0);
         });
+    }
+}
+
+/// Splits [`run_block`] runs before it hands their records back.
+const RELEASE_EVERY: usize = 1 << 12;
+
+/// Runs the splits `slots` of one block, telling `release` after every [`RELEASE_EVERY`] of
+/// them that their records are done with (a layout in a file then keeps only the pages in use
+/// resident).
+fn run_block<B>(
+    slots: Range<usize>,
+    run: &impl Fn(usize, &mut B),
+    release: &impl Fn(Range<usize>),
+    scratch: &mut B,
+) {
+    let mut start = slots.start;
+    while start < slots.end {
+        let end = (start + RELEASE_EVERY).min(slots.end);
+        (start..end).for_each(|slot| run(slot, scratch));
+        release(start..end);
+        start = end;
     }
 }
 
@@ -440,6 +462,7 @@ mod tests {
             .build()
             .expect("a thread pool");
         let reported = std::sync::Mutex::new(Vec::new());
+        let released = std::sync::Mutex::new(Vec::new());
         pool.install(|| {
             let shared = SharedSignal::new(&mut f);
             run_waves(
@@ -452,8 +475,17 @@ mod tests {
                     let v = scratch[0] * 0.5 + scratch[1].cross(DVec3::X) + scratch[2] * 0.25;
                     shared.set(r[0] as usize, v + DVec3::ONE);
                 },
+                |slots| released.lock().expect("not poisoned").push(slots),
             );
         });
+        // Every split's records are handed back once, after it ran.
+        let mut released = released.into_inner().expect("not poisoned");
+        released.sort_by_key(|r| r.start);
+        assert!(released.windows(2).all(|r| r[0].end == r[1].start));
+        assert_eq!(
+            released.first().map(|r| r.start)..released.last().map(|r| r.end),
+            Some(0)..Some(records.len())
+        );
         let reported = reported.into_inner().expect("not poisoned");
         assert!(
             reported.windows(2).all(|p| p[0] <= p[1]),
@@ -516,6 +548,7 @@ mod tests {
                         (0..waves.len()).map(|w| waves.wave(w)),
                         |_| {},
                         |slot, _: &mut ()| assert_ne!(slot, bad, "split at slot {slot} fails"),
+                        |_| {},
                     )
                 })
             }));

@@ -28,12 +28,18 @@
 //!   then cancels catastrophically — a coarse level of a holed grid had weights summing to
 //!   1e15, and an identity filter moved vertices by 0.8 % of the diagonal. Weights summing to
 //!   a few hundred do the same more slowly, level after level (`docs/algorithms.md` §1b).
+//!
+//! The memos that compute each edge flap once per batch of stencils are in `memo`; the tests
+//! in `tests`, beside this file.
 
 use super::{Relaxation, RingStencils};
 use crate::mesh::{HalfedgeId, Mesh, SlotIndex, VertexId};
 use crate::pm::FlatReplay;
 use glam::DVec3;
+use memo::{FlapCache, RING_FLAPS, RingFlap, RingFlapCache, canonical_halfedge, orient_flap};
 use smallvec::SmallVec;
+
+mod memo;
 
 /// Weights of one vertex: `(neighbour, w)` pairs in a fixed, deterministic order (first
 /// appearance while circulating the vertex counter-clockwise).
@@ -281,102 +287,6 @@ fn normalize_stencil<T>(entries: &mut [(T, f64)], den: f64) -> bool {
         gain += w.abs();
     }
     !(gain.is_nan() || gain > MAX_WEIGHT_SUM)
-}
-
-/// A small direct-mapped memo of edge flaps for one batch of stencils (an edge enters the
-/// stencils of up to four vertices of a 1-ring). Keys are whole (a slot, a vertex pair), so
-/// a collision just recomputes. [`Self::clear`] starts a new batch by bumping a generation
-/// rather than rewriting the 7 KB of entries.
-struct BatchMemo<K, V> {
-    tags: [K; BATCH_MEMO_SIZE],
-    /// The batch each entry was computed in; entries of older batches are empty.
-    generations: [u32; BATCH_MEMO_SIZE],
-    generation: u32,
-    values: [Option<V>; BATCH_MEMO_SIZE],
-}
-
-const BATCH_MEMO_SIZE: usize = 128;
-
-impl<K: Copy + PartialEq, V: Copy> BatchMemo<K, V> {
-    /// An empty memo (every entry is of generation 0, which no batch has, so the initial
-    /// tag `unused` can be any key).
-    fn new(unused: K) -> Self {
-        Self {
-            tags: [unused; BATCH_MEMO_SIZE],
-            generations: [0; BATCH_MEMO_SIZE],
-            generation: 1,
-            values: [None; BATCH_MEMO_SIZE],
-        }
-    }
-
-    /// Empties the memo for a new batch.
-    fn clear(&mut self) {
-        self.generation = self.generation.wrapping_add(1);
-        if self.generation == 0 {
-            self.generations = [0; BATCH_MEMO_SIZE];
-            self.generation = 1;
-        }
-    }
-
-    /// The value of `key` (whose hash is `hash`), computed by `compute` unless the memo holds
-    /// it.
-    #[inline]
-    fn get(&mut self, key: K, hash: u64, compute: impl FnOnce() -> Option<V>) -> Option<&V> {
-        // Fibonacci hashing: neighbouring keys spread over the table.
-        let at = (hash.wrapping_mul(0x9E37_79B9_7F4A_7C15)
-            >> (64 - BATCH_MEMO_SIZE.trailing_zeros())) as usize;
-        if self.tags[at] != key || self.generations[at] != self.generation {
-            self.tags[at] = key;
-            self.generations[at] = self.generation;
-            self.values[at] = compute();
-        }
-        self.values[at].as_ref()
-    }
-}
-
-/// Flaps on the half-edge mesh, keyed by the slot of the edge's canonical half-edge.
-type FlapCache = BatchMemo<u32, ([VertexId; 4], [f64; 4])>;
-
-impl FlapCache {
-    /// The flap of `h`, from the memo when its edge was seen in this batch.
-    #[inline]
-    fn flap(
-        &mut self,
-        op: &SecondDifference,
-        mesh: &Mesh,
-        geometry: &[DVec3],
-        h: HalfedgeId,
-        steering: Option<&Steering>,
-    ) -> Option<([VertexId; 4], [f64; 4])> {
-        let (canonical, flipped) = canonical_halfedge(mesh, h);
-        let key = canonical.slot() as u32;
-        let flap = self.get(key, key.into(), || {
-            op.canonical_flap(mesh, geometry, canonical, steering)
-        })?;
-        Some(orient_flap(*flap, flipped))
-    }
-}
-
-/// The half-edge of `h`'s edge with the smaller slot, and whether it runs against `h`.
-#[inline]
-fn canonical_halfedge(mesh: &Mesh, h: HalfedgeId) -> (HalfedgeId, bool) {
-    let t = mesh.twin(h);
-    if t.slot() < h.slot() {
-        (t, true)
-    } else {
-        (h, false)
-    }
-}
-
-/// A flap computed along the canonical half-edge, seen from its twin when `flipped`: `j1, j2`
-/// and `l1, l2` swap, with their coefficients.
-#[inline]
-fn orient_flap((v, c): ([VertexId; 4], [f64; 4]), flipped: bool) -> ([VertexId; 4], [f64; 4]) {
-    if flipped {
-        ([v[1], v[0], v[3], v[2]], [c[1], c[0], c[3], c[2]])
-    } else {
-        (v, c)
-    }
 }
 
 impl Relaxation for SecondDifference {
@@ -644,46 +554,6 @@ fn add_ring_entry(entries: &mut Vec<(u32, f64)>, start: usize, v: u32, x: f64) -
             entries.push((v, x));
             entries.len() - 1 - start
         }
-    }
-}
-
-/// A flap on rings along its canonical half-edge: `[j1, j2, l1, l2]` and their coefficients.
-/// Seen from the other half-edge, `j1, j2` and `l1, l2` swap: position `p` there is position
-/// `p ^ 1` here.
-#[derive(Clone, Copy, Debug, Default)]
-struct RingFlap {
-    v: [u32; 4],
-    c: [f64; 4],
-}
-
-/// Flaps on rings, keyed by the edge's two vertices.
-type RingFlapCache = BatchMemo<u64, RingFlap>;
-
-thread_local! {
-    /// Each thread's flap memo for [`RingStencils::ring_stencils`], kept between batches (one
-    /// per split in the analysis) so that starting a batch costs a generation bump, not a
-    /// fresh 7 KB memo.
-    static RING_FLAPS: std::cell::RefCell<RingFlapCache> =
-        std::cell::RefCell::new(RingFlapCache::new(u64::MAX));
-}
-
-impl RingFlapCache {
-    /// The flap of edge `a`–`b` and 1 when it is seen flipped along `a → b` (`ka`: where `b`
-    /// is in `a`'s ring, when known).
-    #[inline(always)]
-    fn flap(
-        &mut self,
-        op: &SecondDifference,
-        replay: &FlatReplay,
-        geometry: &[DVec3],
-        (a, b, ka): (u32, u32, Option<usize>),
-        steering: Option<&Steering>,
-    ) -> Option<(&RingFlap, usize)> {
-        let key = (a.min(b) as u64) << 32 | a.max(b) as u64;
-        let f = self.get(key, key, || {
-            op.ring_flap(replay, geometry, a, b, ka, steering)
-        })?;
-        Some((f, (f.v[0] != a) as usize))
     }
 }
 

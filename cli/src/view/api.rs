@@ -20,6 +20,15 @@ pub mod limits {
     pub const MAX_MOVES: usize = 256;
     /// Largest edit radius and displacement, in bounding-box diagonals.
     pub const MAX_REACH: f64 = 10.0;
+    /// The display budget's range, in triangles.
+    pub const BUDGET: std::ops::RangeInclusive<usize> = 1_000..=100_000_000;
+}
+
+/// The JSON of `POST /api/budget`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BudgetRequest {
+    triangles: usize,
 }
 
 /// The JSON of `POST /api/filter`, `/api/edit` and `/api/export`.
@@ -59,6 +68,29 @@ pub(crate) fn dispatch(
         ("GET", "/api/info") => Ok(Reply::json(&session.info())),
         ("GET", "/api/faces") => Ok(Reply::binary(session.faces())),
         ("GET", "/api/level") => level(session, param("n")),
+        ("GET", "/api/display") => session
+            .display()
+            .map(Reply::binary)
+            .ok_or_else(within_budget),
+        ("POST", "/api/preview") => {
+            parse_state(session, body, true).and_then(|state| preview(session, state))
+        }
+        ("GET", "/api/status") => Ok(Reply::json(&session.status())),
+        ("POST", "/api/budget") => serde_json::from_slice::<BudgetRequest>(body)
+            .map_err(|e| bad(format!("bad JSON body: {e}")))
+            .and_then(|b| {
+                if !limits::BUDGET.contains(&b.triangles) {
+                    return Err(bad(format!(
+                        "budget {} is outside {}..={} triangles",
+                        b.triangles,
+                        limits::BUDGET.start(),
+                        limits::BUDGET.end()
+                    )));
+                }
+                session.set_budget(b.triangles);
+                Ok(Reply::json(&session.info()))
+            }),
+        ("GET", "/api/exact") => exact(session, param("version")),
         ("POST", "/api/filter") => {
             parse_state(session, body, false).and_then(|state| positions(session, state))
         }
@@ -72,7 +104,8 @@ pub(crate) fn dispatch(
         ("POST", "/api/export") => parse_state(session, body, true)
             .and_then(|state| export(session, state, param("format"))),
         (_, "/api/info" | "/api/faces" | "/api/level" | "/api/filter" | "/api/edit")
-        | (_, "/api/export") => Err(Reply::error(405, format!("{method} not allowed on {path}"))),
+        | (_, "/api/export" | "/api/display" | "/api/preview" | "/api/status" | "/api/exact")
+        | (_, "/api/budget") => Err(Reply::error(405, format!("{method} not allowed on {path}"))),
         _ => Err(Reply::error(404, format!("no endpoint {path}"))),
     };
     result.unwrap_or_else(|refused| refused)
@@ -169,6 +202,58 @@ fn positions(session: &mut Session, state: EditorState) -> Result<Reply, Reply> 
                 "synthesis;dur={synthesis:.1}, reorder;dur={reorder:.1}, encode;dur={encode:.1}"
             ),
         ))
+}
+
+fn within_budget() -> Reply {
+    Reply::error(
+        409,
+        "the scan is within the display budget: the page shows it whole (/api/filter, /api/edit)",
+    )
+}
+
+/// f32 positions of the shown vertices (PM order) for `state`'s preview, its number
+/// (`X-Meshpyr-Version`), whether it is complete (`X-Meshpyr-Preview`) and the server's time.
+fn preview(session: &mut Session, state: EditorState) -> Result<Reply, Reply> {
+    let previewed = session.preview(state).ok_or_else(within_budget)?;
+    let start = Instant::now();
+    let mut body = Vec::new();
+    push_f32_bytes(&mut body, &previewed.positions);
+    let encode = ms_between(start, Instant::now());
+    let (synthesis, combine) = (previewed.timing.synthesis, previewed.timing.combine);
+    let complete = if previewed.complete {
+        "complete"
+    } else {
+        "partial"
+    };
+    Ok(Reply::binary(body)
+        .with_header("X-Meshpyr-Version", previewed.version.to_string())
+        .with_header("X-Meshpyr-Preview", complete.to_string())
+        .with_header(
+            "Server-Timing",
+            format!(
+                "synthesis;dur={synthesis:.1}, combine;dur={combine:.1}, encode;dur={encode:.1}"
+            ),
+        ))
+}
+
+/// The exact result at the shown vertices (f32, PM order) for state number `version`, or 409
+/// while it is not ready (`/api/status` says when it is).
+fn exact(session: &mut Session, version: Option<&str>) -> Result<Reply, Reply> {
+    let version: u64 = version
+        .and_then(|v| v.parse().ok())
+        .ok_or_else(|| bad("exact needs version=N (the X-Meshpyr-Version of a preview)"))?;
+    if !session.over_budget() {
+        return Err(within_budget());
+    }
+    let positions = session.exact_shown(version).ok_or_else(|| {
+        Reply::error(
+            409,
+            format!("the exact result of state {version} is not ready"),
+        )
+    })?;
+    let mut body = Vec::new();
+    push_f32_bytes(&mut body, &positions);
+    Ok(Reply::binary(body).with_header("X-Meshpyr-Version", version.to_string()))
 }
 
 fn level(session: &Session, n: Option<&str>) -> Result<Reply, Reply> {

@@ -1,7 +1,10 @@
 //! The browser editor behind `meshpyr view`: a small HTTP server on
 //! 127.0.0.1 that serves one embedded page (WebGL2, no external assets) and the `/api` it
 //! uses — the spectrum as an equalizer, progressive-mesh levels, multiresolution edits and
-//! exports, all computed by [`Pyramid`].
+//! exports, all computed by [`Pyramid`]. A scan over the display budget
+//! ([`ViewServer::with_budget`]) is shown as a level of its progressive mesh: moves get a
+//! preview at the shown vertices at once and the exact result from a background thread, which
+//! exports use (`docs/view-api.md`).
 //!
 //! What it exposes and to whom (see also the README): the server listens on the loopback
 //! interface only and answers only requests whose `Host` is `127.0.0.1:PORT` or
@@ -19,8 +22,10 @@
 //! ```
 
 mod api;
+mod background;
 mod guard;
 mod http;
+mod preview;
 mod reply;
 mod session;
 
@@ -34,6 +39,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender};
 
 pub use api::limits;
+pub use preview::DEFAULT_BUDGET;
 
 /// Why the editor's server could not start.
 #[derive(Debug, thiserror::Error)]
@@ -109,6 +115,14 @@ impl ViewServer {
         self
     }
 
+    /// Sets the display budget in triangles (default [`DEFAULT_BUDGET`]): a scan with more
+    /// triangles is shown as the finest level of its progressive mesh within the budget, its
+    /// previews computed at those vertices only and the exact result in the background.
+    pub fn with_budget(mut self, triangles: usize) -> ViewServer {
+        self.session.budget = triangles;
+        self
+    }
+
     /// The port it listens on.
     pub fn port(&self) -> u16 {
         self.port
@@ -139,6 +153,8 @@ impl ViewServer {
             return;
         };
         std::thread::spawn(move || http::accept(listener, worker, stopped));
+        // Over the budget, the level of detail is made now and its background work starts.
+        self.session.lod();
         while let Ok(Message::Request(request, answer)) = self.requests.recv() {
             let _ = answer.send(self.answer(request));
         }

@@ -1,11 +1,15 @@
-//! The editor's state on the server: the pyramid, the synthesis cache behind the equalizer, and
+//! The editor's state on the server: the pyramid, the synthesis cache behind the equalizer, the
+//! level of detail of a scan larger than the display budget (with its background work), and
 //! the last result a client asked for (what a bare `GET /api/export` exports).
 
+use super::background::{Background, StateKey};
+use super::preview::{self, Preview, PreviewTiming};
 use glam::DVec3;
 use meshpyr::io::{MeshFormat, WriteOptions};
 use meshpyr::mesh::PolygonMesh;
 use meshpyr::pyramid::{Filter, LevelGains, LevelMove, Pyramid, SynthesisCache};
 use serde_json::json;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// What the page shows: one gain per octave, the normal-only switch, the edits so far.
@@ -25,13 +29,34 @@ pub(crate) struct Timing {
     pub reorder: f64,
 }
 
+/// The level of detail of a scan over the display budget: the preview and the background work.
+pub(crate) struct Lod {
+    pub preview: Preview,
+    background: Background,
+    /// Number of the latest previewed state.
+    version: u64,
+}
+
+/// A preview: positions of the shown vertices, the state's number, where the time went, and
+/// whether every octave away from gain 1 is in it.
+pub(crate) struct Previewed {
+    pub positions: Vec<DVec3>,
+    pub version: u64,
+    pub timing: PreviewTiming,
+    pub complete: bool,
+}
+
 pub(crate) struct Session {
-    pub pyramid: Pyramid,
+    pub pyramid: Arc<Pyramid>,
     pub name: String,
     /// The octave bands `(lo, hi]`, one slider each.
     pub octaves: Vec<(usize, usize)>,
     cache: SynthesisCache,
     pub last: EditorState,
+    /// The display budget in triangles.
+    pub budget: usize,
+    /// The level of detail, once made (only for scans over the budget).
+    lod: Option<Lod>,
 }
 
 impl Session {
@@ -43,12 +68,123 @@ impl Session {
             ..Default::default()
         };
         Session {
-            pyramid,
+            pyramid: Arc::new(pyramid),
             name: "mesh".into(),
             octaves,
             cache,
             last,
+            budget: preview::DEFAULT_BUDGET,
+            lod: None,
         }
+    }
+
+    /// True when the finest level has more triangles than the budget: the page then shows a
+    /// level of detail.
+    pub fn over_budget(&self) -> bool {
+        self.pyramid.pm.finest_faces().len() > self.budget
+    }
+
+    /// Changes the display budget; the level of detail is made again on next use (its
+    /// background work stops).
+    pub fn set_budget(&mut self, triangles: usize) {
+        if triangles != self.budget {
+            self.budget = triangles;
+            self.lod = None;
+        }
+    }
+
+    /// The level of detail (made on first use), or `None` for a scan within the budget.
+    pub fn lod(&mut self) -> Option<&mut Lod> {
+        if self.lod.is_none() && self.over_budget() {
+            let shown = preview::shown_level(&self.pyramid, self.budget);
+            let preview = Preview::new(&self.pyramid, &self.octaves, shown);
+            let octaves = preview
+                .missing_octaves()
+                .into_iter()
+                .map(|i| (i, self.octaves[i].0, self.octaves[i].1))
+                .collect();
+            let background = Background::start(Arc::clone(&self.pyramid), octaves, shown);
+            self.lod = Some(Lod {
+                preview,
+                background,
+                version: 0,
+            });
+        }
+        let lod = self.lod.as_mut()?;
+        for (octave, d) in lod.background.take_measured() {
+            lod.preview.set_displacement(octave, d);
+        }
+        Some(lod)
+    }
+
+    /// The preview of `state` at the shown vertices; asks the background for its exact result
+    /// and remembers `state` as the last result. `None` for a scan within the budget.
+    pub fn preview(&mut self, state: EditorState) -> Option<Previewed> {
+        let gains = self.gains_of(&state);
+        let pyramid = Arc::clone(&self.pyramid);
+        let lod = self.lod()?;
+        let (positions, timing, complete) = lod.preview.positions(&pyramid, &state, &gains);
+        lod.version += 1;
+        let version = lod.version;
+        lod.background.want(
+            version,
+            StateKey {
+                gains,
+                moves: state.moves.clone(),
+            },
+        );
+        self.last = state;
+        Some(Previewed {
+            positions,
+            version,
+            timing,
+            complete,
+        })
+    }
+
+    /// The exact result's positions at the shown vertices (PM order) when the background has
+    /// it for state number `version`.
+    pub fn exact_shown(&mut self, version: u64) -> Option<Vec<DVec3>> {
+        let lod = self.lod()?;
+        let exact = lod.background.exact().filter(|e| e.version == version)?;
+        Some(exact.signal[..lod.preview.shown].to_vec())
+    }
+
+    /// `/api/status`: the latest state's number, the exact result's, the fine octaves measured.
+    pub fn status(&mut self) -> serde_json::Value {
+        let Some(lod) = self.lod() else {
+            return json!({"lod": false});
+        };
+        let (measured, total, busy) = lod.background.progress();
+        let exact = lod.background.exact().map(|e| e.version);
+        json!({
+            "lod": true,
+            "version": lod.version,
+            "exact": exact,
+            "octaves": {"measured": measured, "total": total, "missing": lod.preview.missing_octaves()},
+            "busy": busy,
+        })
+    }
+
+    /// The finest signal of `state` (PM order): the background's exact result when it has this
+    /// state, else synthesised here, without the equalizer's cache.
+    fn exact_signal(&mut self, state: &EditorState) -> Result<Arc<Vec<DVec3>>, String> {
+        let gains = self.gains_of(state);
+        if let Some(lod) = self.lod.as_ref()
+            && let Some(exact) = lod.background.exact()
+            && exact.key.gains == gains
+            && exact.key.moves == state.moves
+        {
+            return Ok(exact.signal);
+        }
+        let p = &self.pyramid.pyramid;
+        let signal = if state.moves.is_empty() {
+            p.synthesize(&gains)
+        } else {
+            p.edit_levels(&state.moves, &gains)
+                .map_err(|e| e.to_string())?
+        };
+        Ok(Arc::new(signal))
     }
 
     /// The filter the equalizer's gains stand for (bands at gain 1 left out).
@@ -99,7 +235,8 @@ impl Session {
     }
 
     /// `/api/info`: counts, levels, octaves with feature sizes and energies, bounds.
-    pub fn info(&self) -> serde_json::Value {
+    pub fn info(&mut self) -> serde_json::Value {
+        self.lod();
         let spectrum = self.pyramid.spectrum();
         let octaves: Vec<_> = spectrum
             .bands
@@ -112,6 +249,13 @@ impl Session {
             |(lo, hi), &p| (lo.min(p), hi.max(p)),
         );
         let levels = self.pyramid.levels();
+        let display = match &self.lod {
+            Some(lod) => json!({
+                "budget": self.budget, "lod": true, "shown": lod.preview.shown,
+                "exact": lod.preview.exact, "triangles": lod.preview.triangles.len(),
+            }),
+            None => json!({"budget": self.budget, "lod": false, "shown": levels.end()}),
+        };
         json!({
             "name": self.name,
             "vertices": input.n_vertices(),
@@ -123,6 +267,7 @@ impl Session {
             "area": self.pyramid.pyramid.surface_area(),
             "max_gain": super::limits::MAX_GAIN,
             "max_moves": super::limits::MAX_MOVES,
+            "display": display,
         })
     }
 
@@ -157,6 +302,22 @@ impl Session {
         out
     }
 
+    /// `/api/display`: u32 vertex and triangle counts of the shown level, then its triangles
+    /// (u32 triples, PM indices); `None` for a scan within the budget.
+    pub fn display(&mut self) -> Option<Vec<u8>> {
+        let preview = &self.lod()?.preview;
+        let (shown, triangles) = (preview.shown, &preview.triangles);
+        let mut out = Vec::with_capacity(8 + 12 * triangles.len());
+        out.extend_from_slice(&(shown as u32).to_le_bytes());
+        out.extend_from_slice(&(triangles.len() as u32).to_le_bytes());
+        for t in triangles {
+            for i in t {
+                out.extend_from_slice(&i.to_le_bytes());
+            }
+        }
+        Some(out)
+    }
+
     /// A download of `state`'s result: `format` is `ply`, `obj` or `pyr`; returns the bytes and
     /// a file name.
     pub fn export(
@@ -164,7 +325,13 @@ impl Session {
         state: EditorState,
         format: &str,
     ) -> Result<(Vec<u8>, String), String> {
-        let positions = self.positions(state)?;
+        let positions = if self.over_budget() {
+            let signal = self.exact_signal(&state)?;
+            self.last = state;
+            self.pyramid.to_input_positions(&signal)
+        } else {
+            self.positions(state)?
+        };
         let bytes = match format {
             "pyr" => {
                 self.pyramid

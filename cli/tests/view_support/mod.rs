@@ -27,10 +27,16 @@ pub struct Running {
 
 /// Starts the editor on `mesh` (a file in `tests/data`) on a free port.
 pub fn serve(mesh: &str) -> Running {
+    serve_with_budget(mesh, meshpyr_cli::view::DEFAULT_BUDGET)
+}
+
+/// [`serve`] with a display budget of `triangles`.
+pub fn serve_with_budget(mesh: &str, triangles: usize) -> Running {
     let input = meshpyr::read_mesh(data(mesh)).expect("test mesh");
     let server = ViewServer::bind(Pyramid::build(&input).expect("pyramid"), 0)
         .expect("bind")
-        .with_name(mesh);
+        .with_name(mesh)
+        .with_budget(triangles);
     let running = Running {
         port: server.port(),
         token: server.token().to_string(),

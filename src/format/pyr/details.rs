@@ -8,13 +8,12 @@
 use super::rice::{BitReader, BitWriter, Context};
 use super::{FormatError, corrupt};
 use crate::format::varint::{ByteReader, put_uvarint};
-use crate::pyramid::StoredDetails;
 use crate::relax::RelaxationSpec;
 use glam::DVec3;
 
 /// The version of the analysis the stored details come from: bumped whenever the analysis
 /// changes its output, so that details of an older analysis are recomputed, not used.
-pub(crate) const ANALYSIS_VERSION: u8 = 2;
+pub(crate) const ANALYSIS_VERSION: u8 = 3;
 
 /// Details given without a step (exact) are quantised with `2^(⌊log2 diagonal⌋ − STEP_BITS)`:
 /// at most 2^-STEP_BITS of the diagonal, at least half that.
@@ -34,6 +33,23 @@ const MAX_RELAXATION: usize = 64;
 
 /// Coding contexts: the split's detail count, then (new vertex, ring vertex) × (t1, t2, n).
 const N_CONTEXTS: usize = 7;
+
+/// The details of a pyramid in split order, as a `.pyr` file stores them (`formats/pyr.md`,
+/// section `DETL`), with what they were computed with.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StoredDetails {
+    /// The relaxation operator, with its options, the details were analysed with.
+    pub relaxation: RelaxationSpec,
+    /// The base signal `f^(n0)` (exact).
+    pub base: Vec<DVec3>,
+    /// Per split, how many details it carries (the new vertex and its ring).
+    pub counts: Vec<u32>,
+    /// All details in split order, each in its local frame `(t1, t2, n)`.
+    pub details: Vec<DVec3>,
+    /// The quantisation step of every detail component (model units; 0 for exact values):
+    /// each component is within half of it of the analysed one.
+    pub step: f64,
+}
 
 /// A decoded `DETL` section.
 #[derive(Clone, Debug)]

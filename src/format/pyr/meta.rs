@@ -2,11 +2,11 @@
 //! options) every reader starts from, and the checks on a file's header (version, required
 //! sections) that come before it.
 
+use super::PyramidOptions;
 use crate::format::FormatError;
 use crate::format::container::Container;
 use crate::mesh::PolygonMesh;
 use crate::pm::{PmOptions, ProgressiveMesh};
-use crate::pyramid::PyramidOptions;
 use glam::DVec3;
 
 use super::{

@@ -1,6 +1,8 @@
 // meshpyr view: the page. Plain WebGL2, no libraries. It keeps the editor's state (gains,
 // normal-only switch, edits) and asks the server for positions; the server holds the pyramid.
-// `window.meshpyr` exposes the state and timings for scripts and the browser test.
+// A scan over the display budget is shown as a level of its progressive mesh: each move gets
+// a preview at the shown vertices at once, then the exact result from the server's background
+// work. `window.meshpyr` exposes the state and timings for scripts and the browser test.
 'use strict';
 
 const token = new URLSearchParams(location.search).get('token') || '';
@@ -36,9 +38,15 @@ const M = window.meshpyr = {
   normalOnly: false,
   moves: [],          // committed edits: {level, center, displacement, radius}
   pending: null,      // the edit being dragged
-  positions: null,    // Float32Array of the finest result, input vertex order
-  faces: null,        // Uint32Array of the input's triangles
+  positions: null,    // Float32Array of the result on screen: the finest in input vertex
+                      // order, or over the budget the shown level's vertices in PM order
+  faces: null,        // Uint32Array of the triangles on screen (the input's, or the level's)
   shownLevel: null,   // vertex count of the level on screen, null for the finest
+  lod: false,         // true when the scan is over the display budget (see info.display)
+  version: 0,         // over the budget: number of the state on screen (server's count)
+  exact: true,        // whether the result on screen is exact (false: a preview)
+  exactLatencies: [], // over the budget: per exact result, {ms: input to drawn, drawMs}
+  preview: null,      // over the budget: the last preview's positions (shown vertices)
   updates: 0,         // results received and drawn
   latencies: [],      // per result: {ms: input to drawn, its parts (see requestResult), kind}
   renderer: null,     // {name, software, cullsBackFaces}: the WebGL renderer, whether it
@@ -313,7 +321,7 @@ function draw() {
   gl.viewport(0, 0, w, h);
   gl.clearColor(0.07, 0.08, 0.1, 1);
   gl.clear(gl.COLOR_BUFFER_BIT | gl.DEPTH_BUFFER_BIT);
-  const mesh = M.shownLevel === null ? finest : level;
+  const mesh = M.showingResult ? finest : level;
   if (!M.info || !mesh.vertexCount) return;
   const { view, proj } = matrices(w / h);
   gl.enable(gl.DEPTH_TEST);
@@ -340,6 +348,8 @@ function draw() {
 
 // ---- results from the server ------------------------------------------------------------------
 const request = { busy: false, dirty: false, since: null };
+// Over the budget: the exact result awaited, {version, since} (null: none).
+let awaited = null;
 
 function stateBody() {
   const moves = M.pending ? M.moves.concat([M.pending]) : M.moves;
@@ -369,12 +379,20 @@ function requestResult() {
   const since = request.since;
   request.since = null;
   const editing = M.moves.length > 0 || M.pending !== null;
-  const kind = editing ? 'edit' : 'filter';
+  const kind = M.lod ? 'preview' : editing ? 'edit' : 'filter';
   api('/api/' + kind, { method: 'POST', body: stateBody(), headers: { 'Content-Type': 'application/json' } })
     .then(async (response) => {
       const positions = new Float32Array(await response.arrayBuffer());
       const received = performance.now();
       M.positions = positions;
+      M.exact = !M.lod;
+      if (M.lod) {
+        M.preview = positions;
+        M.version = Number(response.headers.get('X-Meshpyr-Version'));
+        M.complete = response.headers.get('X-Meshpyr-Preview') === 'complete';
+        awaited = { version: M.version, since };
+        pollExact();
+      }
       const normalsDone = finest.setPositions(positions);
       const uploaded = performance.now();
       showFinest();
@@ -383,7 +401,8 @@ function requestResult() {
       const drawn = performance.now();
       const ms = drawn - since;
       const server = serverTiming(response);
-      const serverMs = (server.synthesis || 0) + (server.reorder || 0) + (server.encode || 0);
+      const serverMs = (server.synthesis || 0) + (server.reorder || 0) + (server.combine || 0)
+        + (server.encode || 0);
       const answered = Math.min(since + serverMs, received);
       const parts = [['server', since, answered], ['transfer', answered, received],
         ['normals', received, normalsDone], ['upload', normalsDone, uploaded], ['draw', uploaded, drawn]];
@@ -393,12 +412,15 @@ function requestResult() {
       }
       M.latencies.push({
         ms, kind, synthesisMs: server.synthesis ?? Number(response.headers.get('X-Meshpyr-Synthesis-Ms')),
-        reorderMs: server.reorder || 0, encodeMs: server.encode || 0, receivedMs: received - since,
+        reorderMs: server.reorder || 0, combineMs: server.combine || 0, encodeMs: server.encode || 0,
+        receivedMs: received - since,
         transferMs: received - since - serverMs, normalsMs: normalsDone - received,
         uploadMs: uploaded - normalsDone, drawMs: drawn - uploaded,
       });
       M.updates += 1;
-      setStatus(`${kind}: ${ms.toFixed(0)} ms (synthesis ${response.headers.get('X-Meshpyr-Synthesis-Ms')} ms)`);
+      setStatus(M.lod
+        ? `preview: ${ms.toFixed(0)} ms (server ${serverMs.toFixed(0)} ms)${M.complete ? '' : ', fine octaves pending'}`
+        : `${kind}: ${ms.toFixed(0)} ms (synthesis ${response.headers.get('X-Meshpyr-Synthesis-Ms')} ms)`);
       showError(null);
     })
     .catch(showError)
@@ -411,6 +433,58 @@ function requestResult() {
 function setStatus(text) {
   const shown = M.shownLevel === null ? M.info.vertices : M.shownLevel;
   $('status').textContent = `${shown.toLocaleString()} vertices · ${text}`;
+}
+
+// Over the budget: asks the server how its background work goes, every 100 ms while an exact
+// result is awaited or fine octaves are being measured, and shows the exact result of the
+// state on screen when it is ready.
+const poll = { timer: null };
+M.exactPending = () => awaited !== null;
+M.settled = () => M.idle() && !M.exactPending();
+
+function pollExact() {
+  if (poll.timer === null) poll.timer = setTimeout(checkStatus, 100);
+}
+
+async function checkStatus() {
+  poll.timer = null;
+  try {
+    const status = await (await api('/api/status')).json();
+    showProgress(status);
+    if (awaited && status.exact === awaited.version && !request.busy && !request.dirty) {
+      const { version, since } = awaited;
+      const r = await api('/api/exact?version=' + version);
+      const positions = new Float32Array(await r.arrayBuffer());
+      if (awaited && awaited.version === version && !request.busy && !request.dirty) {
+        awaited = null;
+        M.positions = positions;
+        finest.setPositions(positions);
+        const uploaded = performance.now();
+        showFinest();
+        draw();
+        gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4));
+        const drawn = performance.now();
+        M.exact = true;
+        M.exactLatencies.push({ ms: drawn - since, drawMs: drawn - uploaded });
+        setStatus(`exact: ${(drawn - since).toFixed(0)} ms after the move`);
+        showProgress(status);
+      }
+    }
+    if (awaited || status.octaves.measured < status.octaves.total) pollExact();
+  } catch (e) {
+    showError(e);
+  }
+}
+
+function showProgress(status) {
+  M.status = status;
+  const { measured, total, missing } = status.octaves;
+  const d = M.info.display;
+  $('display-label').textContent = `level ${d.shown.toLocaleString()} of ${M.info.levels.max.toLocaleString()}` +
+    ` vertices (${d.triangles.toLocaleString()} triangles) · ${M.exact ? 'exact result' : 'preview'}` +
+    (measured < total ? ` · measuring fine octaves ${measured}/${total}` : '');
+  document.querySelectorAll('#bands .band').forEach((row, i) =>
+    row.classList.toggle('pending', missing.includes(i)));
 }
 
 // ---- equalizer ------------------------------------------------------------------------------
@@ -465,8 +539,9 @@ function preset(name) {
 
 // ---- level scrubber -------------------------------------------------------------------------
 // Sliders run on a log scale of vertex counts: each octave gets the same travel.
-function levelOf(slider) {
-  const { min, max } = M.info.levels;
+function levelOf(slider, top) {
+  const { min } = M.info.levels;
+  const max = top || M.info.levels.max;
   const t = Number(slider.value) / Number(slider.max);
   return Math.round(Math.exp(Math.log(min) + t * (Math.log(max) - Math.log(min))));
 }
@@ -476,12 +551,21 @@ const scrub = { busy: false, again: false };
 // True when no answer is awaited (scripts and the browser test wait for it).
 M.idle = () => !request.busy && !request.dirty && !scrub.busy && !scrub.again;
 
+// The level the result is shown at: the finest, or over the budget the shown level.
+const resultLevel = () => (M.lod ? M.info.display.shown : M.info.levels.max);
+
+function resultLabel() {
+  return M.lod
+    ? `level ${resultLevel().toLocaleString()} of ${M.info.levels.max.toLocaleString()} vertices (the result, within the budget)`
+    : `finest: ${M.info.vertices.toLocaleString()} vertices (the result)`;
+}
+
 function showLevel() {
-  const n = levelOf($('level'));
-  $('level-label').textContent = n >= M.info.levels.max
-    ? `finest: ${M.info.vertices.toLocaleString()} vertices (the result)`
+  const n = levelOf($('level'), resultLevel());
+  $('level-label').textContent = n >= resultLevel()
+    ? resultLabel()
     : `${n.toLocaleString()} of ${M.info.levels.max.toLocaleString()} vertices (progressive mesh)`;
-  if (n >= M.info.levels.max) { showFinest(); requestDraw(); return; }
+  if (n >= resultLevel()) { showFinest(); requestDraw(); return; }
   if (scrub.busy) { scrub.again = true; return; }
   scrub.busy = true;
   api('/api/level?n=' + n)
@@ -491,6 +575,7 @@ function showLevel() {
       level.setTriangles(new Uint32Array(bytes, 8 + 12 * nv, 3 * nt).slice());
       level.setPositions(new Float32Array(bytes, 8, 3 * nv).slice());
       M.shownLevel = nv;
+      M.showingResult = false;
       setStatus(`level ${nv}`);
       requestDraw();
       showError(null);
@@ -500,10 +585,12 @@ function showLevel() {
 }
 
 function showFinest() {
-  if (M.shownLevel !== null) {
-    M.shownLevel = null;
+  const result = M.lod ? M.info.display.shown : null;
+  if (M.shownLevel !== result || !M.showingResult) {
+    M.shownLevel = result;
+    M.showingResult = true;
     $('level').value = $('level').max;
-    $('level-label').textContent = `finest: ${M.info.vertices.toLocaleString()} vertices (the result)`;
+    $('level-label').textContent = resultLabel();
   }
 }
 
@@ -662,6 +749,7 @@ function installControls() {
   document.querySelectorAll('[data-preset]').forEach((b) =>
     b.addEventListener('click', () => preset(b.dataset.preset)));
   $('level').addEventListener('input', showLevel);
+  $('budget').addEventListener('change', setBudget);
   for (const id of ['edit-level', 'radius']) $(id).addEventListener('input', updateEditLabels);
   $('edit-mode').addEventListener('change', (e) => $('canvas').classList.toggle('editing', e.target.checked));
   $('undo').addEventListener('click', undo);
@@ -680,21 +768,54 @@ async function start() {
   lineProgram = compile(VERTEX, LINE);
   finest = new GpuMesh(M.renderer.software);
   level = new GpuMesh(false);
+  await openScan();
+  buildEqualizer();
+  installControls();
+  updateEditLabels();
+  resetView();
+  requestResult();
+  const waitFirst = () => (M.updates > 0 ? (M.ready = true) : setTimeout(waitFirst, 20));
+  waitFirst();
+}
+
+// Reads the scan's description and the triangles of the result: the input's, or over the
+// budget those of the shown level.
+async function openScan() {
   M.info = await (await api('/api/info')).json();
   const i = M.info;
   document.title = `${i.name} · meshpyr view`;
   $('meta').textContent = `${i.name}: ${i.vertices.toLocaleString()} vertices, ` +
     `${i.triangles.toLocaleString()} triangles, levels ${i.levels.min}–${i.levels.max}`;
-  M.gains = i.octaves.map(() => 1);
-  buildEqualizer();
-  installControls();
-  updateEditLabels();
-  M.faces = new Uint32Array(await (await api('/api/faces')).arrayBuffer());
+  if (M.gains.length !== i.octaves.length) M.gains = i.octaves.map(() => 1);
+  M.lod = i.display.lod;
+  $('budget').value = i.display.budget;
+  if (M.lod) {
+    const bytes = await (await api('/api/display')).arrayBuffer();
+    const [, nt] = new Uint32Array(bytes, 0, 2);
+    M.faces = new Uint32Array(bytes, 8, 3 * nt).slice();
+    M.exact = false;
+  } else {
+    M.faces = new Uint32Array(await (await api('/api/faces')).arrayBuffer());
+    $('display-label').textContent = `the whole scan: ${i.triangles.toLocaleString()} triangles`;
+  }
   finest.setTriangles(M.faces);
-  resetView();
-  requestResult();
-  const waitFirst = () => (M.updates > 0 ? (M.ready = true) : setTimeout(waitFirst, 20));
-  waitFirst();
+  M.showingResult = false;
+  showFinest();
+}
+
+// A new display budget: the server makes the level of detail again and the page redraws.
+async function setBudget() {
+  try {
+    await api('/api/budget', {
+      method: 'POST', body: JSON.stringify({ triangles: Number($('budget').value) }),
+      headers: { 'Content-Type': 'application/json' },
+    });
+    awaited = null;
+    await openScan();
+    requestResult();
+  } catch (e) {
+    showError(e);
+  }
 }
 
 start().catch((e) => { showError(e); $('status').textContent = 'failed to start'; });

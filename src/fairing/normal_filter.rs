@@ -236,9 +236,9 @@ impl Drop for Lease<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fairing::surface::FlatSurface;
     use crate::mesh::Mesh;
     use crate::progress::NoProgress;
-    use crate::smooth::surface::FlatSurface;
 
     fn grid_mesh(n: usize, height: impl Fn(f64, f64) -> f64) -> Mesh {
         let (p, t) = crate::mesh::shapes::grid(n, |i, j| {

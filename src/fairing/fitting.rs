@@ -521,7 +521,8 @@ mod tests {
 
     /// A noisy plane with the plane's normal as every face's target.
     fn noisy_plane(scale: f64) -> (FlatSurface, Vec<DVec3>) {
-        let mesh = crate::smooth::testutil::noisy(&crate::smooth::testutil::grid(12, 0.0), 0.02, 7);
+        let mesh =
+            crate::fairing::testutil::noisy(&crate::fairing::testutil::grid(12, 0.0), 0.02, 7);
         let p: Vec<DVec3> = mesh.positions().iter().map(|&x| x * scale).collect();
         (FlatSurface::new(&mesh), p)
     }
