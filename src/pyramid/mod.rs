@@ -118,10 +118,9 @@ pub enum PyramidError {
 ///   `s` stencil and `m` fan indices — all indices into the split's local table, so they are
 ///   stored in 8 bits when every neighbourhood has fewer than 256 vertices and every valence is
 ///   below 128 (typical scans), else in 16 bits, and in 32 bits only for extreme valences.
-/// * `weights`: per touched entry its `s` stencil weights, in f32 and in split order (they are
-///   only read from a split's start). Synthesis applies them anchored at the stencil's first
-///   vertex, so their rounding costs a fraction 1e-7 of a stencil's extent, not of the
-///   coordinates.
+/// * `weights`: per touched entry its `s` stencil weights, in f32. Synthesis applies them
+///   anchored at the stencil's first vertex, so their rounding costs a fraction 1e-7 of a
+///   stencil's extent, not of the coordinates.
 /// * `details`: per touched entry its detail in the local frame `(t1, t2, n)`, in whole
 ///   `detail_step`s (module `quantise`: quantised in a closed loop, so that the rounding does
 ///   not add up across levels).

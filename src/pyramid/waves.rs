@@ -8,14 +8,13 @@
 //! or at once, and every split sees exactly the values it sees in the sequential order. Waves
 //! run one after the other.
 //!
-//! On a scan most splits of the fine levels fall in large waves (the bunny's 37.7k splits in
-//! about 550 waves, 86 % of the splits in waves of 64 or more); the first coarse splits form a
+//! On a scan most splits of the fine levels fall in large waves; the first coarse splits form a
 //! chain of waves of one.
 //!
 //! Within a wave the splits are stored by a spatial key (the Morton code of the new vertex), and
 //! [`run_waves`] gives each thread the same stretch of every wave, so a thread keeps working on
 //! one region of the surface and finds the values it reads in its own cache instead of the
-//! other core's (bunny synthesis on two threads: 12.2–12.9 → 10.5–10.8 ms).
+//! other core's (docs/performance.md, "Detail pyramid: parallelism, speed and memory").
 
 use glam::DVec3;
 use std::ops::Range;
