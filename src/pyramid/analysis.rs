@@ -58,6 +58,18 @@ impl DetailPyramid {
         signal: &[DVec3],
         progress: &dyn Progress,
     ) -> Result<DetailPyramid, PyramidError> {
+        Self::analyze_signal_at(pm, relaxation, signal, progress, None)
+    }
+
+    /// [`Self::analyze_signal`] with the layout at `placement` (`None`: by its size, see
+    /// module `spill`).
+    pub(crate) fn analyze_signal_at(
+        pm: &ProgressiveMesh,
+        relaxation: &dyn Relaxation,
+        signal: &[DVec3],
+        progress: &dyn Progress,
+        placement: Option<Placement>,
+    ) -> Result<DetailPyramid, PyramidError> {
         let geometry = pm.original_positions();
         if signal.len() != geometry.len() {
             return Err(PyramidError::Invalid(format!(
@@ -66,7 +78,7 @@ impl DetailPyramid {
                 geometry.len()
             )));
         }
-        let layout = Layout::record(pm, relaxation, progress)?;
+        let layout = Layout::record(pm, relaxation, progress, placement)?;
         // Steps 2–3, finest split first: waves in reverse storage order, which, like split
         // order, runs every split after the splits it depends on.
         let mut f = signal.to_vec();
@@ -102,12 +114,14 @@ pub(crate) struct Layout {
 }
 
 impl Layout {
-    /// Step 1 for every split of `pm`, then the storage order: wave by wave (see `waves`).
+    /// Step 1 for every split of `pm`, then the storage order: wave by wave (see `waves`),
+    /// the streams at `placement` (`None`: by their expected size, see module `spill`).
     /// Reports progress from 0 to [`RECORDS_SHARE`].
     pub(crate) fn record(
         pm: &ProgressiveMesh,
         relaxation: &dyn Relaxation,
         progress: &dyn Progress,
+        placement: Option<Placement>,
     ) -> Result<Layout, PyramidError> {
         let geometry = pm.original_positions();
         let n_base = pm.n_base_vertices();
@@ -115,7 +129,9 @@ impl Layout {
         let n_splits = n_finest - n_base;
         let (surface_area, bbox_diagonal) = surface_stats(&geometry[..n_finest], pm.finest_faces());
         let ranges = split_ranges(n_splits, rayon::current_num_threads());
-        let placement = Placement::for_layout(n_splits.saturating_mul(LAYOUT_BYTES_PER_SPLIT));
+        let placement = placement.unwrap_or_else(|| {
+            Placement::for_layout(n_splits.saturating_mul(LAYOUT_BYTES_PER_SPLIT))
+        });
         let cursor = relaxation.as_ring_stencils().is_none().then(|| pm.cursor());
         let mut records = record_ranges(pm, relaxation, cursor, &ranges, placement, progress)?;
         // One code width for the pyramid: the widest range's.
@@ -756,8 +772,9 @@ fn slotted_codes<T: CodeWidth + Send + Sync>(
     Ok(T::wrap(stream))
 }
 
-/// Elements [`gather_stream`] copies per batch: a batch is gathered in memory, then written.
-const GATHER_BATCH: usize = 1 << 22;
+/// Elements [`gather_stream`] copies per batch: a batch is gathered in memory, then written
+/// (small in unit tests, so that their meshes take several batches).
+const GATHER_BATCH: usize = if cfg!(test) { 1 << 12 } else { 1 << 22 };
 
 /// One stream of the records in slot order ([`Slotted::new`]): `data` of the range record
 /// holding each slot's split, its part found at `pos` of the range's offsets, copied to `pos`

@@ -557,4 +557,57 @@ mod tests {
             .fold(0.0, f64::max);
         assert!(err <= closed_loop_bound(&two), "{err:e}");
     }
+
+    /// A layout in a temporary file is the layout in memory: same streams, same details, same
+    /// synthesis bits, on any thread count (the ranges are recorded into separate files and
+    /// gathered into slot order batch by batch). Scans above the threshold take this path; the
+    /// test meshes are below it, so it is forced here.
+    #[test]
+    fn a_layout_in_a_temporary_file_synthesizes_the_bits_of_one_in_memory() {
+        let (p, t) = crate::mesh::shapes::torus(90, 60, |u, v| {
+            let r = 2.0 + (1.0 + 0.15 * (5.0 * u).sin() * (3.0 * v).cos()) * v.cos();
+            DVec3::new(r * u.cos(), r * u.sin(), v.sin())
+        });
+        let mesh = Mesh::from_triangles(&p, &t).unwrap().mesh;
+        let pm = ProgressiveMesh::build(&mesh, &PmOptions::default(), &NoProgress).unwrap();
+        let signal = pm.original_positions();
+        let relax = SecondDifference::default();
+        let at = |placement: Placement, threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| {
+                    DetailPyramid::analyze_signal_at(
+                        &pm,
+                        &relax,
+                        signal,
+                        &NoProgress,
+                        Some(placement),
+                    )
+                })
+                .unwrap()
+        };
+        let memory = at(Placement::Memory, 1);
+        assert!(!memory.layout_in_file());
+        let gains = gains::Filter::default()
+            .gain(LevelSpec::Vertices(200), LevelSpec::Vertices(2000), 2.5)
+            .resolve(memory.surface_area());
+        let expected = memory.synthesize(&gains);
+        for threads in [1, 2, 3] {
+            let file = at(Placement::TempFile, threads);
+            assert!(file.layout_in_file());
+            assert_eq!(*file.offsets, *memory.offsets);
+            assert_eq!(*file.locals, *memory.locals);
+            let codes = |p: &DetailPyramid| with_codes!(&p.codes, c => c.iter().map(|&x| frames::LocalIndex::at(x)).collect::<Vec<usize>>());
+            assert_eq!(codes(&file), codes(&memory));
+            let bits =
+                |p: &DetailPyramid| p.weights.iter().map(|w| w.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&file), bits(&memory));
+            assert_eq!(file.details, memory.details);
+            assert_eq!(file.synthesize(&gains), expected, "{threads} threads");
+            // A clone shares the mapping and reads the same.
+            assert_eq!(file.clone().synthesize(&gains), expected);
+        }
+    }
 }

@@ -93,7 +93,7 @@ impl DetailPyramid {
         progress: &dyn Progress,
     ) -> Result<DetailPyramid, PyramidError> {
         stored.check_counts_sum(pm)?;
-        let layout = Layout::record(pm, relaxation, progress)?;
+        let layout = Layout::record(pm, relaxation, progress, None)?;
         if layout.n_details() != stored.details.len() {
             return Err(mismatch(format!(
                 "{} details where the hierarchy has {}",
