@@ -31,7 +31,9 @@ use super::quantise::{Targets, detail_step, signal_diagonal};
 use super::spill::{Placement, Stream, Writer};
 use super::synthesis::{Scratch, decode, prefetch_next_split, presmooth_local};
 use super::waves::{SharedSignal, Waves, run_waves};
-use super::{CodeWidth, Codes, CodesWriter, DetailPyramid, PyramidError, SplitOffsets};
+use super::{
+    CodeWidth, Codes, CodesWriter, DetailPyramid, PyramidError, SplitOffsets, release_records,
+};
 use crate::mesh::geometry::morton_codes;
 use crate::mesh::{SlotIndex, VertexId};
 use crate::pm::{FlatReplay, PmCursor, ProgressiveMesh};
@@ -672,22 +674,15 @@ impl Slotted {
 
     /// Hands back the resident pages of every stream (see [`Stream::release`]).
     fn release_all(&self) {
-        self.offsets.release_all();
-        self.locals.release_all();
-        with_codes!(&self.codes, c => c.release_all());
-        self.weights.release_all();
+        self.release_slots(0..self.offsets.len().saturating_sub(1));
     }
 
     /// Hands back the resident pages of the records of slots `slots`.
     fn release_slots(&self, slots: std::ops::Range<usize>) {
-        if !self.weights.is_mapped() || slots.is_empty() {
-            return;
-        }
-        let (o, end) = (self.offsets[slots.start], self.offsets[slots.end]);
-        self.locals.release(o.locals..end.locals);
-        with_codes!(&self.codes, c => c.release(o.codes..end.codes));
-        self.weights.release(o.weights..end.weights);
-        self.offsets.release(slots);
+        release_records(
+            (&self.offsets, &self.locals, &self.codes, &self.weights),
+            slots,
+        );
     }
 
     /// Steps 2–3 of the split stored at `slot`, reading `f = f^(n)`: writes the presmoothed

@@ -242,6 +242,22 @@ impl Codes {
     }
 }
 
+/// Hands back the resident pages of the records of slots `slots` in a layout's streams
+/// (offsets, local tables, codes, weights; see [`Stream::release`]); a no-op in memory.
+pub(crate) fn release_records(
+    (offsets, locals, codes, weights): (&Stream<SplitOffsets>, &Stream<u32>, &Codes, &Stream<f32>),
+    slots: std::ops::Range<usize>,
+) {
+    if !weights.is_mapped() || slots.is_empty() {
+        return;
+    }
+    let (o, end) = (offsets[slots.start], offsets[slots.end]);
+    locals.release(o.locals..end.locals);
+    codes.release(o.codes..end.codes);
+    weights.release(o.weights..end.weights);
+    offsets.release(slots);
+}
+
 impl CodesWriter {
     /// An empty 8-bit stream at `placement` with room for `capacity` codes.
     pub(crate) fn new(placement: Placement, capacity: usize) -> std::io::Result<CodesWriter> {
@@ -419,14 +435,10 @@ impl DetailPyramid {
     /// Hands back the resident pages of the layout records of slots `slots` (a pass is done
     /// with them; see [`Stream::release`]).
     pub(crate) fn release_slots(&self, slots: std::ops::Range<usize>) {
-        if !self.weights.is_mapped() || slots.is_empty() {
-            return;
-        }
-        let (o, end) = (self.offsets[slots.start], self.offsets[slots.end]);
-        self.locals.release(o.locals..end.locals);
-        self.codes.release(o.codes..end.codes);
-        self.weights.release(o.weights..end.weights);
-        self.offsets.release(slots);
+        release_records(
+            (&self.offsets, &self.locals, &self.codes, &self.weights),
+            slots,
+        );
     }
 
     /// The step every detail component is a whole multiple of (a power of two near 2^-21 of
