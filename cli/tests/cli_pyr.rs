@@ -149,7 +149,11 @@ fn extract_level_and_truncated_files() {
     // `view` says so before it serves anything.
     let o = meshpyr(&["-q", "view", &cut, "--no-browser"]);
     fails_with(&o, "truncated");
-    assert!(o.stdout.is_empty(), "{}", String::from_utf8_lossy(&o.stdout));
+    assert!(
+        o.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
     // Cut inside the header: a clean error.
     std::fs::write(&cut, &bytes[..30]).unwrap();
     fails_with(&meshpyr(&["-q", "extract", &cut, "-o", &out]), "truncated");
