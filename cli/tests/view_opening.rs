@@ -110,3 +110,16 @@ fn a_loader_that_fails_ends_the_server_with_its_reason() {
         other => panic!("expected the loader's failure, got {other:?}"),
     }
 }
+
+#[test]
+fn a_loader_that_panics_ends_the_server_instead_of_leaving_the_page_waiting() {
+    let input = meshpyr::read_mesh(data(MESH)).unwrap();
+    let load = |_: &meshpyr_cli::view::Opening| -> Result<Pyramid, String> {
+        panic!("a bug in the loader")
+    };
+    let server = ViewServer::opening(first_picture(&input, 1000), load, 0).unwrap();
+    match server.run() {
+        Err(ViewError::Open(why)) => assert!(why.contains("internal error"), "{why}"),
+        other => panic!("expected an internal error, got {other:?}"),
+    }
+}

@@ -19,7 +19,7 @@
 //! let scan = meshpyr::read_mesh("scan.ply")?;
 //! let server = meshpyr_cli::view::ViewServer::bind(meshpyr::Pyramid::build(&scan)?, 0)?;
 //! println!("serving {}", server.url());
-//! server.run(); // until `server.stopper().stop()` is called from another thread
+//! server.run()?; // until `server.stopper().stop()` is called from another thread
 //! # Ok(()) }
 //! ```
 
@@ -212,14 +212,21 @@ impl ViewServer {
                 let (opening, worker) = (opening.clone(), self.stopper.worker.clone());
                 let (name, budget) = (self.name.clone(), self.budget);
                 std::thread::spawn(move || {
-                    let opened = load(&opening).map(|pyramid| {
-                        opening.stage("making the level of detail");
-                        let mut session = Session::new(pyramid);
-                        session.name = name;
-                        session.budget = budget;
-                        session.lod();
-                        Box::new(session)
-                    });
+                    let open = || {
+                        load(&opening).map(|pyramid| {
+                            opening.stage("making the level of detail");
+                            let mut session = Session::new(pyramid);
+                            session.name = name;
+                            session.budget = budget;
+                            session.lod();
+                            Box::new(session)
+                        })
+                    };
+                    // A bug while opening must end the server, not leave the page waiting.
+                    let opened = std::panic::catch_unwind(std::panic::AssertUnwindSafe(open))
+                        .unwrap_or_else(|_| {
+                            Err("internal error while opening (please report)".into())
+                        });
                     let _ = worker.send(Message::Opened(opened));
                 });
             }
