@@ -23,6 +23,7 @@
 
 mod api;
 mod background;
+mod editor;
 mod guard;
 mod http;
 mod preview;
@@ -39,6 +40,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender};
 
 pub use api::limits;
+pub use editor::{Answer, Editor, page_html};
 pub use preview::DEFAULT_BUDGET;
 
 /// Why the editor's server could not start.
@@ -87,9 +89,9 @@ impl Stopper {
 }
 
 impl ViewServer {
-    /// Listens on `127.0.0.1:port` (`0`: a free port) for the editor of `pyramid`, with a
-    /// fresh random token.
-    pub fn bind(pyramid: Pyramid, port: u16) -> Result<ViewServer, ViewError> {
+    /// Listens on `127.0.0.1:port` (`0`: a free port) for the editor of `pyramid` (owned or
+    /// shared), with a fresh random token.
+    pub fn bind(pyramid: impl Into<Arc<Pyramid>>, port: u16) -> Result<ViewServer, ViewError> {
         let token = guard::random_token().map_err(ViewError::Token)?;
         let bind_error = |error| ViewError::Bind { port, error };
         let listener = TcpListener::bind(("127.0.0.1", port)).map_err(bind_error)?;
@@ -164,14 +166,13 @@ impl ViewServer {
         match guard::check(&request, self.port, &self.token) {
             Err(refused) => refused,
             Ok(guard::Route::Page(path)) => assets(&path),
-            Ok(guard::Route::Api { path, query }) => {
-                // A bug in a handler must not take the editor down with the user's work.
-                let session = &mut self.session;
-                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                    api::dispatch(session, &request.method, &path, &query, &request.body)
-                }))
-                .unwrap_or_else(|_| Reply::error(500, "internal error (please report)"))
-            }
+            Ok(guard::Route::Api { path, query }) => editor::answer_api(
+                &mut self.session,
+                &request.method,
+                &path,
+                &query,
+                &request.body,
+            ),
         }
     }
 }
