@@ -529,10 +529,12 @@ function setGains(gains) {
 
 // For a host that keeps the state elsewhere too (the notebook widget): sets the gains, the
 // normal-only switch and the committed edits, moving the controls, and asks for the result;
-// a state equal to the page's changes nothing.
+// a state equal to the page's (with the edit being dragged) changes nothing.
 M.setState = function ({ gains = M.gains, normalOnly = M.normalOnly, moves = M.moves }) {
-  const same = JSON.stringify([gains, normalOnly, moves]) === JSON.stringify([M.gains, M.normalOnly, M.moves]);
+  const current = M.pending ? M.moves.concat([M.pending]) : M.moves;
+  const same = JSON.stringify([gains, normalOnly, moves]) === JSON.stringify([M.gains, M.normalOnly, current]);
   if (same || !M.info) return;
+  M.pending = null;
   M.normalOnly = normalOnly;
   $('normal-only').checked = normalOnly;
   M.moves = moves.slice();
