@@ -8,6 +8,7 @@ sandboxed frame and carries its requests to the kernel as widget messages, where
 from __future__ import annotations
 
 import json
+import math
 import os
 import pathlib
 import tempfile
@@ -47,6 +48,25 @@ def _pyramid_of(x: Any) -> tuple[Pyramid, str]:
     )
 
 
+class _ValueErrors:
+    """A trait whose wrong-typed values raise ValueError, as the rest of meshpyr's bad values
+    do (traitlets' TraitError is no ValueError)."""
+
+    def validate(self, obj: Any, value: Any) -> Any:
+        try:
+            return super().validate(obj, value)  # type: ignore[misc]
+        except traitlets.TraitError as e:
+            raise ValueError(str(e)) from None
+
+
+class _List(_ValueErrors, traitlets.List):
+    pass
+
+
+class _Bool(_ValueErrors, traitlets.Bool):
+    pass
+
+
 class Viewer(anywidget.AnyWidget):
     """The editor of ``meshpyr view`` in a notebook cell: orbit, shading, the equalizer (one
     slider per octave of levels), normal-only, presets, the level scrubber, drag edits with undo.
@@ -70,9 +90,9 @@ class Viewer(anywidget.AnyWidget):
     _css = _HERE / "_widget.css"
     _page = traitlets.Unicode("").tag(sync=True)
     octaves = traitlets.List(read_only=True).tag(sync=True)
-    gains = traitlets.List(traitlets.Float()).tag(sync=True)
-    normal_only = traitlets.Bool(False).tag(sync=True)
-    moves = traitlets.List(traitlets.Dict()).tag(sync=True)
+    gains = _List(traitlets.Float()).tag(sync=True)
+    normal_only = _Bool(False).tag(sync=True)
+    moves = _List(traitlets.Dict()).tag(sync=True)
     height = traitlets.Int(560, help="The widget's height in pixels.").tag(sync=True)
 
     def __init__(
@@ -109,6 +129,8 @@ class Viewer(anywidget.AnyWidget):
     @traitlets.validate("gains")
     def _check_gains(self, proposal: Any) -> list:
         value = [float(g) for g in proposal["value"]]
+        if not all(math.isfinite(g) for g in value):
+            raise ValueError(f"gains must be finite, got {value}")
         self._editor.check_state(self._state(gains=value))
         return value
 
