@@ -57,7 +57,7 @@ def show(x: Any, **options: Any) -> "Viewer":
     """The editor of ``meshpyr view`` on ``x`` (a :class:`Pyramid`, a ``(V, F)`` pair, or the
     path of a mesh or .pyr file), as a :class:`Viewer`: in a notebook (Jupyter, VS Code) it
     shows in the cell when displayed (the last expression of a cell, or ``display(viewer)``);
-    elsewhere it also serves the page on 127.0.0.1 and opens the browser (``Viewer.open``).
+    elsewhere it also serves the page on 127.0.0.1 and opens the browser (``Viewer.serve``).
 
     Options: ``name`` (shown on the page), ``budget`` (display budget in triangles: larger
     scans are shown as a level of their progressive mesh), ``height`` (pixels),

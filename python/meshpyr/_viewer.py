@@ -82,7 +82,7 @@ class Viewer(anywidget.AnyWidget):
       (an edit being dragged included).
 
     Bad values raise ValueError. :attr:`positions` is the exact full-resolution result of the
-    current state; :meth:`save_html` saves it as a page that needs no server; :meth:`open`
+    current state; :meth:`save_html` saves it as a page that needs no server; :meth:`serve`
     serves the editor to a browser tab, as ``meshpyr view`` does.
     """
 
@@ -202,12 +202,13 @@ class Viewer(anywidget.AnyWidget):
             pathlib.Path(temporary).unlink(missing_ok=True)
             raise
 
-    def open(self, *, port: int = 0, browser: bool = True) -> str:
+    # Not `open`: ipywidgets' Widget.open opens the widget's comm.
+    def serve(self, *, port: int = 0, browser: bool = True) -> str:
         """Serves the editor on 127.0.0.1 (``meshpyr view``'s server, with its Host check and
         token) on a background thread and opens it in the browser unless ``browser=False``;
         returns the page's URL. The served page starts from gains 1 and keeps its own state.
-        :meth:`close` stops it."""
-        self.close_server()
+        :meth:`stop` stops it."""
+        self.stop()
         self._server = _Server(self._pyramid, name=self._name, budget=self._budget, port=port)
         if browser:
             webbrowser.open(self._server.url)
@@ -215,18 +216,18 @@ class Viewer(anywidget.AnyWidget):
 
     @property
     def url(self) -> str | None:
-        """The served page's URL while :meth:`open` serves it, else None."""
+        """The served page's URL while :meth:`serve` serves it, else None."""
         return self._server.url if self._server is not None and self._server.running else None
 
-    def close_server(self) -> None:
-        """Stops the server :meth:`open` started, if any."""
+    def stop(self) -> None:
+        """Stops the server :meth:`serve` started, if any."""
         if self._server is not None:
             self._server.stop()
             self._server = None
 
     def close(self) -> None:
-        """Closes the widget and stops the server :meth:`open` started."""
-        self.close_server()
+        """Closes the widget and stops the server :meth:`serve` started."""
+        self.stop()
         super().close()
 
 
@@ -244,7 +245,7 @@ def show(
     if open_browser is None:
         open_browser = not _in_notebook()
     if open_browser:
-        viewer.open()
+        viewer.serve()
     return viewer
 
 

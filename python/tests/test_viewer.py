@@ -1,6 +1,6 @@
 """meshpyr.Viewer (the notebook editor) from Python: its state, validated by the editor; its
 positions, the very bits of Pyramid.filter / Pyramid.edit; observers; the page's requests
-answered in-process within a notebook message's size; save_html; open() serving the editor
+answered in-process within a notebook message's size; save_html; serve() serving the editor
 with meshpyr view's guard; and meshpyr without the notebook extra."""
 
 import json
@@ -34,6 +34,7 @@ def viewer(bunny):
 
 
 def test_octaves_are_the_spectrum_bands_and_gains_start_at_one(viewer, bunny):
+    assert viewer.comm is not None, "the widget opened no comm"
     spectrum = bunny.spectrum()
     assert viewer.octaves == list(zip(spectrum["lo"].tolist(), spectrum["hi"].tolist()))
     assert viewer.gains == [1.0] * len(viewer.octaves)
@@ -196,8 +197,8 @@ def test_show_takes_a_pyramid_a_pair_or_a_path(bunny, tmp_path):
         meshpyr.show(bunny, budget=10, open_browser=False)
 
 
-def test_open_serves_the_editor_with_its_guard(viewer):
-    url = viewer.open(browser=False)
+def test_serve_opens_the_editor_with_its_guard(viewer):
+    url = viewer.serve(browser=False)
     assert viewer.url == url and url.startswith("http://127.0.0.1:")
     base, token = url.split("/?token=")
     with urllib.request.urlopen(base + "/") as page:
@@ -212,7 +213,7 @@ def test_open_serves_the_editor_with_its_guard(viewer):
     with pytest.raises(urllib.error.HTTPError) as refused:
         urllib.request.urlopen(foreign)
     assert refused.value.code == 403
-    viewer.close_server()
+    viewer.stop()
     assert viewer.url is None
     # Refused, or reset by the acceptor as it winds down.
     with pytest.raises((urllib.error.URLError, ConnectionError)):
@@ -239,3 +240,17 @@ for attempt in (lambda: meshpyr.show((v, f)), lambda: meshpyr.Viewer):
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     assert len(lines) == 2 and all("meshpyr[notebook]" in line for line in lines)
+
+
+def test_the_example_notebook_runs(tmp_path, monkeypatch):
+    # Its code cells in order, as a kernel would run them (outside one, without a browser).
+    notebook = json.loads((data("bunny.ply").parents[2] / "examples" / "notebook.ipynb").read_text())
+    source = "\n".join("".join(c["source"]) for c in notebook["cells"] if c["cell_type"] == "code")
+    source = source.replace('"../tests/data/bunny.ply"', repr(str(data("bunny.ply"))))
+    monkeypatch.setattr("webbrowser.open", lambda url: pytest.fail(f"opened {url}"))
+    monkeypatch.chdir(tmp_path)
+    opened = []
+    monkeypatch.setattr(meshpyr._viewer.Viewer, "serve", lambda self, **_: opened.append(self))
+    exec(compile(source, "notebook.ipynb", "exec"), {})
+    assert len(opened) == 1
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bunny-enhanced.html", "bunny-enhanced.ply"]
