@@ -169,23 +169,60 @@ fn levels_match_the_progressive_mesh() {
         assert_eq!(l.level, level);
         assert!(!l.truncated);
         assert_eq!(l.positions, pm.original_positions()[..level]);
-        let canon = |t: &[[u32; 3]]| {
-            let mut v: Vec<[u32; 3]> = t
-                .iter()
-                .map(|t| {
-                    let k = (0..3).min_by_key(|&i| t[i]).unwrap();
-                    [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
-                })
-                .collect();
-            v.sort();
-            v
-        };
         assert_eq!(
-            canon(&l.triangles),
-            canon(&pm.level_triangles(level)),
+            canonical(&l.triangles),
+            canonical(&pm.level_triangles(level)),
             "level {level}"
         );
     }
+}
+
+#[test]
+fn the_level_within_a_triangle_budget_is_the_progressive_meshs_and_read_from_the_prefix() {
+    let input = io::read_mesh(data("joint.ply")).unwrap();
+    let (pm, bytes) = build(&input);
+    let finest = pm.finest_faces().len();
+    for budget in [
+        0,
+        pm.n_base_faces(),
+        101,
+        400,
+        finest - 1,
+        finest,
+        10 * finest,
+    ] {
+        let l = format::read_level_within(&bytes, budget).unwrap();
+        let level = pm.level_for_faces(budget);
+        assert_eq!(l.level, level, "budget {budget}");
+        assert_eq!(l.finest, pm.n_vertices());
+        assert_eq!(l.positions, pm.original_positions()[..level]);
+        assert_eq!(
+            canonical(&l.triangles),
+            canonical(&pm.level_triangles(level))
+        );
+        assert!(
+            l.triangles.len() <= budget.max(pm.n_base_faces()),
+            "budget {budget}"
+        );
+    }
+    // A truncated file gives at most the level it still holds, within the budget.
+    let l = format::read_level_within(&bytes[..bytes.len() / 2], 400).unwrap();
+    assert!(l.truncated && l.level <= pm.level_for_faces(400));
+    assert_eq!(l.positions, pm.original_positions()[..l.level]);
+    assert!(l.triangles.len() <= 400);
+}
+
+/// Triangles as a sorted list, each turned to start at its smallest index.
+fn canonical(t: &[[u32; 3]]) -> Vec<[u32; 3]> {
+    let mut v: Vec<[u32; 3]> = t
+        .iter()
+        .map(|t| {
+            let k = (0..3).min_by_key(|&i| t[i]).unwrap();
+            [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+        })
+        .collect();
+    v.sort();
+    v
 }
 
 #[test]

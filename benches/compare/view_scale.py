@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""`meshpyr view` on a large scan, server side: time to `serving` and to the first preview,
+"""`meshpyr view` on a large scan, server side: time to `serving`, to each picture of the
+opening (ready to draw) and to the editor, then to the first preview,
 slider-to-positions-ready latency per octave (preview and the old exact path), and how far each
 preview lies from the exact result at the shown vertices (worst and 99th percentile, in % of
 the bounding-box diagonal), per octave and gain.
@@ -20,6 +21,7 @@ import struct
 import subprocess
 import sys
 import time
+import urllib.error
 import urllib.request
 
 
@@ -69,7 +71,30 @@ def f32s(data):
     return [v[i : i + 3] for i in range(0, n, 3)]
 
 
+def wait_opening(port, token, t0):
+    """Follows the opening: when each picture was ready to draw (fetched), and when the editor
+    was; times from the command's start."""
+    shown = 0
+    while True:
+        status = json.loads(call(port, token, "GET", "/api/status")[0])
+        opening = status.get("opening")
+        if opening is None:
+            print(f"editor ready after {time.monotonic() - t0:.1f} s")
+            return
+        if opening["picture"] != shown:
+            try:
+                data, headers = call(port, token, "GET", "/api/opening")
+            except urllib.error.HTTPError:
+                continue  # opened meanwhile
+            shown = int(headers["X-Meshpyr-Picture"])
+            nt = struct.unpack("<I", data[4:8])[0]
+            print(f"picture {shown} ready after {time.monotonic() - t0:.1f} s: {opening['what']} "
+                  f"({nt} triangles, {len(data) / 1e6:.1f} MB); stage {opening['stage']}")
+        time.sleep(0.05)
+
+
 def run(args, port, token, serving, t0):
+    wait_opening(port, token, t0)
     info = json.loads(call(port, token, "GET", "/api/info")[0])
     disp = info["display"]
     octaves = info["octaves"]

@@ -6,6 +6,8 @@ use anyhow::Context;
 use meshpyr::format;
 use meshpyr::io;
 use meshpyr::mesh::{MissingSurface, PolygonMesh};
+use meshpyr::pm::ProgressiveMesh;
+use meshpyr::progress::{NoProgress, Progress};
 use meshpyr::pyramid::{self, DetailSource, Pyramid, PyramidOptions};
 use meshpyr::relax::{RelaxKind, RelaxationSpec};
 use meshpyr::wording::Count;
@@ -94,22 +96,36 @@ fn load_pyr_scan(
 ) -> anyhow::Result<Pyramid> {
     let start = Instant::now();
     let data = load_pyr(path)?;
-    pyramid_of_pyr(path, data, relaxation, start, global)
+    pyramid_of_pyr(path, data, relaxation, start, global, &NoProgress)
+}
+
+/// The pyramid of the `.pyr` file `path` whose bytes are `bytes` (with its relaxation and
+/// stored details), its progress also reported to `also`.
+pub(crate) fn pyramid_of_pyr_bytes(
+    path: &Path,
+    bytes: &[u8],
+    global: &Global,
+    also: &dyn Progress,
+) -> anyhow::Result<Pyramid> {
+    let start = Instant::now();
+    let data = format::decode(bytes).with_context(|| format!("cannot load {}", path.display()))?;
+    pyramid_of_pyr(path, data, None, start, global, also)
 }
 
 /// The pyramid of a loaded `.pyr` file (`start`: when loading began), saying which path it
-/// took: the stored details, or the analysis and why.
+/// took: the stored details, or the analysis and why. Progress goes to a bar and to `also`.
 fn pyramid_of_pyr(
     path: &Path,
     data: format::PyrData,
     relaxation: Option<RelaxationSpec>,
     start: Instant,
     global: &Global,
+    also: &dyn Progress,
 ) -> anyhow::Result<Pyramid> {
     let loaded = start.elapsed().as_secs_f64();
     let bar = global.progress("analysis");
     let (scan, from) = data
-        .into_pyramid_with(relaxation, &BarProgress(&bar))
+        .into_pyramid_with(relaxation, &Both(&BarProgress(&bar), also))
         .with_context(|| format!("cannot analyse {}", path.display()))?;
     bar.finish_and_clear();
     let p = &scan.pyramid;
@@ -149,7 +165,7 @@ pub(crate) fn load_spectrum(
     let start = Instant::now();
     let data = load_pyr(path)?;
     let Ok(spectrum) = data.stored_spectrum(relaxation) else {
-        return Ok(pyramid_of_pyr(path, data, relaxation, start, global)?.spectrum());
+        return Ok(pyramid_of_pyr(path, data, relaxation, start, global, &NoProgress)?.spectrum());
     };
     global.say(format_args!(
         "{}: {} vertices, levels {}..={} (loaded with its stored details in {:.2} s, no analysis){}",
@@ -170,13 +186,27 @@ pub(crate) fn build_pyramid(
     name: &str,
     global: &Global,
 ) -> anyhow::Result<Pyramid> {
+    build_pyramid_watched(input, relaxation, name, global, &NoProgress, &mut |_| {})
+}
+
+/// [`build_pyramid`], its progress also reported to `also` and its progressive mesh handed to
+/// `hierarchy_built` before the analysis (the editor shows it while the scan opens).
+pub(crate) fn build_pyramid_watched(
+    input: PolygonMesh,
+    relaxation: RelaxationSpec,
+    name: &str,
+    global: &Global,
+    also: &dyn Progress,
+    hierarchy_built: &mut dyn FnMut(&ProgressiveMesh),
+) -> anyhow::Result<Pyramid> {
     let start = Instant::now();
     let bar = global.progress("pyramid");
     let options = PyramidOptions {
         relaxation,
         ..PyramidOptions::default()
     };
-    let scan = Pyramid::build_with(input, &options, &BarProgress(&bar))
+    let progress = Both(&BarProgress(&bar), also);
+    let scan = Pyramid::build_staged(input, &options, &progress, hierarchy_built)
         .with_context(|| format!("cannot build the detail pyramid of {name}"))?;
     bar.finish_and_clear();
     let p = &scan.pyramid;
@@ -191,6 +221,16 @@ pub(crate) fn build_pyramid(
         extra_vertices_note(scan.input.n_vertices(), p.n_vertices()),
     ));
     Ok(scan)
+}
+
+/// Progress shown in two places.
+struct Both<'a>(&'a dyn Progress, &'a dyn Progress);
+
+impl Progress for Both<'_> {
+    fn update(&self, fraction: f64) {
+        self.0.update(fraction);
+        self.1.update(fraction);
+    }
 }
 
 /// Levels are vertex counts of the repaired mesh, so they can run past the file's vertex

@@ -2,10 +2,14 @@
 //! library's `view` module for the page, the API and what the server exposes).
 
 use super::Global;
-use super::input::load_pyramid;
-use crate::view::ViewServer;
+use super::input::{build_pyramid_watched, is_pyr_file, pyramid_of_pyr_bytes, require};
 use crate::view::limits::BUDGET;
-use std::path::PathBuf;
+use crate::view::{Loader, Opening, Picture, ViewServer, first_picture};
+use anyhow::Context;
+use meshpyr::pm::ProgressiveMesh;
+use meshpyr::relax::RelaxationSpec;
+use meshpyr::{format, io};
+use std::path::{Path, PathBuf};
 
 /// Arguments of `meshpyr view`.
 #[derive(clap::Args, Debug)]
@@ -28,25 +32,80 @@ pub(crate) struct ViewArgs {
 }
 
 /// Runs `meshpyr view` until the process is interrupted (Ctrl-C): the server writes no file,
-/// so stopping it at any moment loses nothing but the page's unsaved state.
+/// so stopping it at any moment loses nothing but the page's unsaved state. The file is read
+/// before serving (its errors end the command), then the page shows a first picture while the
+/// pyramid is made on another thread.
 pub(crate) fn run(args: ViewArgs, global: &Global) -> anyhow::Result<()> {
-    let scan = load_pyramid(&args.input, None, global)?;
     let name = args
         .input
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let server = ViewServer::bind(scan, args.port)?
+    let budget = args.budget as usize;
+    let (first, load) = open_in_stages(&args.input, budget, global)?;
+    let server = ViewServer::opening(first, load, args.port)?
         .with_name(&name)
-        .with_budget(args.budget as usize);
+        .with_budget(budget);
     let url = server.url();
     outln!("serving {url}");
     if !args.no_browser {
         open_browser(&url, global);
     }
     global.say("press Ctrl-C to stop");
-    server.run();
+    server.run()?;
     Ok(())
+}
+
+/// Reads `path` and returns the first picture of it within `budget` triangles (a `.pyr`
+/// file's level read from its start, or the mesh clustered) and the loader of its pyramid,
+/// which shows the hierarchy's level as soon as a mesh file's progressive mesh is built.
+fn open_in_stages(
+    path: &Path,
+    budget: usize,
+    global: &Global,
+) -> anyhow::Result<(Picture, Loader)> {
+    let (path, global) = (path.to_path_buf(), global.clone());
+    if is_pyr_file(&path) {
+        let bytes =
+            std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
+        let cannot_load = || format!("cannot load {}", path.display());
+        let level = format::read_level_within(&bytes, budget).with_context(cannot_load)?;
+        if level.truncated {
+            // Said now, with the decoder's words, rather than after the page has opened.
+            format::decode(&bytes).with_context(cannot_load)?;
+        }
+        let what = format!(
+            "level {} of {} vertices, read from the start of the file",
+            level.level, level.finest
+        );
+        let first = Picture::new(what, &level.positions, level.triangles);
+        let load: Loader = Box::new(move |opening: &Opening| {
+            opening.stage("reading the hierarchy and its details");
+            pyramid_of_pyr_bytes(&path, &bytes, &global, opening).map_err(|e| format!("{e:#}"))
+        });
+        return Ok((first, load));
+    }
+    let input = io::read_mesh(&path)?;
+    require(&path, input.check_surface())?;
+    let first = first_picture(&input, budget);
+    let load: Loader = Box::new(move |opening: &Opening| {
+        opening.stage("building the hierarchy");
+        let mut show_level = |pm: &ProgressiveMesh| {
+            let level = pm.level_for_faces(budget);
+            let what = format!(
+                "level {level} of {} vertices of the hierarchy, at the input's positions",
+                pm.n_vertices()
+            );
+            let positions = &pm.original_positions()[..level];
+            opening.show(Picture::new(what, positions, pm.level_triangles(level)));
+            opening.stage("analysing the details");
+        };
+        let name = path.display().to_string();
+        let relaxation = RelaxationSpec::default();
+        build_pyramid_watched(input, relaxation, &name, &global, opening, &mut show_level)
+            .map_err(|e| format!("{e:#}"))
+    });
+    Ok((first, load))
 }
 
 /// Asks the desktop to open `url`; failing that, the user has the printed address.

@@ -146,6 +146,14 @@ fn extract_level_and_truncated_files() {
     assert_eq!(w.lines().count(), 1, "{w}");
     let m = io::read_mesh(Path::new(&out)).unwrap();
     assert!(m.n_vertices() < 221 && m.n_faces() > 0);
+    // `view` says so before it serves anything.
+    let o = meshpyr(&["-q", "view", &cut, "--no-browser"]);
+    fails_with(&o, "truncated");
+    assert!(
+        o.stdout.is_empty(),
+        "{}",
+        String::from_utf8_lossy(&o.stdout)
+    );
     // Cut inside the header: a clean error.
     std::fs::write(&cut, &bytes[..30]).unwrap();
     fails_with(&meshpyr(&["-q", "extract", &cut, "-o", &out]), "truncated");

@@ -304,5 +304,5 @@ fn stop_ends_run() {
     let stopper = server.stopper();
     let running = std::thread::spawn(move || server.run());
     stopper.stop();
-    running.join().unwrap();
+    running.join().unwrap().unwrap();
 }

@@ -296,6 +296,49 @@ fn over_the_budget_the_page_previews_then_shows_the_exact_result() {
     drag_moves_the_surface_near_the_pick(&driver);
 }
 
+#[test]
+fn while_a_scan_opens_the_page_draws_its_picture_then_becomes_the_editor() {
+    let Some(driver) =
+        driver_or_skip("while_a_scan_opens_the_page_draws_its_picture_then_becomes_the_editor")
+    else {
+        return;
+    };
+    let input = meshpyr::read_mesh(view_support::data("bunny.ply")).unwrap();
+    let (gate, wait) = std::sync::mpsc::channel::<()>();
+    let scan = input.clone();
+    let load = move |_: &meshpyr_cli::view::Opening| {
+        wait.recv().map_err(|e| e.to_string())?;
+        Pyramid::build(&scan).map_err(|e| e.to_string())
+    };
+    let first = meshpyr_cli::view::first_picture(&input, 5000);
+    let server = meshpyr_cli::view::ViewServer::opening(first, load, 0).unwrap();
+    let url = server.url();
+    std::thread::spawn(move || server.run());
+    driver.navigate(&url);
+    driver.wait_for("window.meshpyr && window.meshpyr.pictures.length === 1");
+    page_draws_the_mesh(&driver);
+    let opening = driver.script(
+        "return [window.meshpyr.ready, document.getElementById('panel').inert, \
+         document.getElementById('status').textContent];",
+    );
+    assert_eq!(opening[0], json!(false));
+    assert_eq!(opening[1], json!(true), "the panel waits for the editor");
+    assert!(
+        opening[2].as_str().unwrap().contains("opening"),
+        "{opening}"
+    );
+    gate.send(()).unwrap();
+    driver.wait_for("window.meshpyr.ready && window.meshpyr.idle()");
+    let ready = driver.script(
+        "return [document.getElementById('panel').inert, window.meshpyr.gains.length, \
+         window.meshpyr.firstPictureMs <= window.meshpyr.pictures[0].ms];",
+    );
+    assert_eq!(ready[0], json!(false));
+    assert!(ready[1].as_u64().unwrap() > 0);
+    assert_eq!(ready[2], json!(true));
+    page_draws_the_mesh(&driver);
+}
+
 /// End-to-end latency of equalizer moves on a large scan: `MESHPYR_VIEW_LATENCY_MESH=scan.ply
 /// cargo test --release --test view_browser -- --ignored --nocapture` (docs/performance.md;
 /// `MESHPYR_VIEW_BUDGET` sets the display budget in triangles).

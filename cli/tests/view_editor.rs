@@ -46,7 +46,10 @@ fn the_editor_answers_as_the_server_does() {
         let theirs = request(server.port, method, path, &token, body.as_bytes());
         assert_eq!(ours.status, theirs.status, "{method} {path}");
         assert_eq!(ours.body, theirs.body, "{method} {path}");
-        assert_eq!(Some(ours.content_type.as_str()), theirs.header("Content-Type"));
+        assert_eq!(
+            Some(ours.content_type.as_str()),
+            theirs.header("Content-Type")
+        );
     }
 }
 
@@ -78,11 +81,17 @@ fn positions_are_the_bits_of_filter_and_bad_states_are_refused() {
     for (bad, says) in [
         (json!({"gains": [1.0]}), "expected"),
         (json!({"gains": vec![9.0; octaves.len()]}), "outside"),
-        (json!({"gains": vec![1.0; octaves.len()], "moves": [{"level": 1}]}), "bad JSON"),
+        (
+            json!({"gains": vec![1.0; octaves.len()], "moves": [{"level": 1}]}),
+            "bad JSON",
+        ),
     ] {
         let error = editor.check_state(bad.to_string().as_bytes()).unwrap_err();
         assert!(error.contains(says), "{error}");
-        assert_eq!(editor.positions(bad.to_string().as_bytes()).unwrap_err(), error);
+        assert_eq!(
+            editor.positions(bad.to_string().as_bytes()).unwrap_err(),
+            error
+        );
     }
 }
 
@@ -128,7 +137,10 @@ fn snapshots_carry_the_result_whole_or_at_the_shown_level() {
     let (info, faces, positions) = snapshot_of(&html);
     let display = small.request("GET", "/api/display", b"").body;
     let shown = u32::from_le_bytes(display[..4].try_into().unwrap()) as usize;
-    assert_eq!(info["display"], json!({"budget": 5000, "lod": false, "shown": shown}));
+    assert_eq!(
+        info["display"],
+        json!({"budget": 5000, "lod": false, "shown": shown})
+    );
     assert!(shown < info["vertices"].as_u64().unwrap() as usize);
     assert_eq!(faces, display[8..]);
     assert_eq!(positions.len(), 12 * shown);

@@ -106,7 +106,7 @@ pub(crate) fn _page_html(script: &str) -> PyResult<String> {
 pub(crate) struct Server {
     url: String,
     stopper: Stopper,
-    thread: Mutex<Option<JoinHandle<()>>>,
+    thread: Mutex<Option<JoinHandle<Result<(), view::ViewError>>>>,
 }
 
 #[pymethods]

@@ -12,7 +12,9 @@ pub mod varint;
 
 pub use pyr::is_pyr;
 pub use pyr::{FileDetails, LevelMesh, PyrData, PyramidOptions, SizeReport, StoredDetails};
-pub use pyr::{MAJOR, MINOR, OLDEST_MAJOR, decode, encode, encode_with_details, read_level};
+pub use pyr::{
+    MAJOR, MINOR, OLDEST_MAJOR, decode, encode, encode_with_details, read_level, read_level_within,
+};
 pub(crate) use pyr::{fix_checksums, fuzz_read_pyr, with_positions};
 
 /// What can go wrong reading a `.pyr` file. Every variant says where.

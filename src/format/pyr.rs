@@ -42,7 +42,7 @@ mod split_block;
 pub use details::StoredDetails;
 pub(crate) use edit::with_positions;
 pub(crate) use fuzz::{fix_checksums, fuzz_read_pyr};
-pub use hierarchy::read_level;
+pub use hierarchy::{read_level, read_level_within};
 pub use loaded::FileDetails;
 use loaded::file_details;
 

@@ -385,8 +385,9 @@ impl ProgressiveMesh {
                 .sum::<usize>()
     }
 
-    /// The finest level with at most `faces` faces (the base level if even that has more).
-    pub(crate) fn level_for_faces(&self, faces: usize) -> usize {
+    /// The finest level with at most `faces` faces (the base level if even that has more):
+    /// the most detailed level that fits a display budget.
+    pub fn level_for_faces(&self, faces: usize) -> usize {
         let mut count = self.n_base_faces;
         let mut level = self.n_base;
         for s in &self.splits {

@@ -125,6 +125,18 @@ impl Pyramid {
         options: &PyramidOptions,
         progress: &dyn Progress,
     ) -> Result<Pyramid, PyramidError> {
+        Pyramid::build_staged(input, options, progress, &mut |_| {})
+    }
+
+    /// [`Self::build_with`], handing the progressive mesh to `hierarchy_built` as soon as it
+    /// is made, before the analysis that takes most of the rest: a viewer can show the
+    /// hierarchy's levels (at the input's positions) while the details are computed.
+    pub fn build_staged(
+        input: PolygonMesh,
+        options: &PyramidOptions,
+        progress: &dyn Progress,
+        hierarchy_built: &mut dyn FnMut(&ProgressiveMesh),
+    ) -> Result<Pyramid, PyramidError> {
         input.check_surface()?;
         let repaired = CornerTable::from_polygons(&input)?;
         let source = repaired.source;
@@ -135,6 +147,7 @@ impl Pyramid {
             &options.pm,
             &|x: f64| progress.update(0.5 * x),
         )?;
+        hierarchy_built(&pm);
         let (_, pyramid) = analyze_with(&options.relaxation, &pm, &|x: f64| {
             progress.update(0.5 + 0.5 * x)
         })?;

@@ -1,6 +1,7 @@
 //! The `/api` endpoints: request parsing with caps on every size and number, and dispatch to
 //! the [`Session`]. Every refusal is a 4xx with `{"error": …}`.
 
+use super::opening::Opening;
 use super::reply::Reply;
 use super::session::{EditorState, Session, ms_between, push_f32_bytes};
 use glam::DVec3;
@@ -76,6 +77,9 @@ pub(crate) fn dispatch(
             parse_state(session, body, true).and_then(|state| preview(session, state))
         }
         ("GET", "/api/status") => Ok(Reply::json(&session.status())),
+        ("GET", "/api/opening") => {
+            Err(Reply::error(409, "the scan is open: its pictures are gone"))
+        }
         ("POST", "/api/budget") => serde_json::from_slice::<BudgetRequest>(body)
             .map_err(|e| bad(format!("bad JSON body: {e}")))
             .and_then(|b| {
@@ -105,10 +109,31 @@ pub(crate) fn dispatch(
             .and_then(|state| export(session, state, param("format"))),
         (_, "/api/info" | "/api/faces" | "/api/level" | "/api/filter" | "/api/edit")
         | (_, "/api/export" | "/api/display" | "/api/preview" | "/api/status" | "/api/exact")
-        | (_, "/api/budget") => Err(Reply::error(405, format!("{method} not allowed on {path}"))),
+        | (_, "/api/budget" | "/api/opening") => {
+            Err(Reply::error(405, format!("{method} not allowed on {path}")))
+        }
         _ => Err(Reply::error(404, format!("no endpoint {path}"))),
     };
     result.unwrap_or_else(|refused| refused)
+}
+
+/// The answers while the scan opens ([`Opening`]): its status and picture; every other call
+/// waits for the editor (503).
+pub(crate) fn while_opening(opening: &Opening, method: &str, path: &str) -> Reply {
+    match (method, path) {
+        ("GET", "/api/status") => Reply::json(&opening.status()),
+        ("GET", "/api/opening") => {
+            let (bytes, number) = opening.picture_bytes();
+            Reply::binary(bytes).with_header("X-Meshpyr-Picture", number.to_string())
+        }
+        (_, "/api/status" | "/api/opening") => {
+            Reply::error(405, format!("{method} not allowed on {path}"))
+        }
+        _ => Reply::error(
+            503,
+            format!("the scan is still opening ({})", opening.stage_name()),
+        ),
+    }
 }
 
 fn bad(message: impl std::fmt::Display) -> Reply {

@@ -46,6 +46,8 @@ impl HttpRequest {
 /// What connection threads send the worker.
 pub(crate) enum Message {
     Request(HttpRequest, Sender<Reply>),
+    /// The loader of a scan opening in stages is done: the editor's session, or why not.
+    Opened(Result<Box<super::session::Session>, String>),
     Stop,
 }
 

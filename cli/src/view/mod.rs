@@ -23,9 +23,11 @@
 
 mod api;
 mod background;
+mod clustered;
 mod editor;
 mod guard;
 mod http;
+mod opening;
 mod preview;
 mod reply;
 mod session;
@@ -40,7 +42,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, Sender};
 
 pub use api::limits;
+pub use clustered::first_picture;
 pub use editor::{Answer, Editor, page_html};
+pub use opening::{Opening, Picture};
 pub use preview::DEFAULT_BUDGET;
 
 /// Why the editor's server could not start.
@@ -57,6 +61,9 @@ pub enum ViewError {
     /// No randomness for the access token.
     #[error("cannot draw a random access token: {0}")]
     Token(std::io::Error),
+    /// The scan being opened ([`ViewServer::opening`]) could not be: what its loader said.
+    #[error("{0}")]
+    Open(String),
 }
 
 /// The editor's HTTP server, bound and ready: [`ViewServer::run`] serves until stopped.
@@ -64,9 +71,22 @@ pub struct ViewServer {
     listener: TcpListener,
     port: u16,
     token: String,
-    session: Session,
+    stage: Stage,
+    /// Makes the pyramid of a scan still opening; taken when [`ViewServer::run`] starts it.
+    loader: Option<Loader>,
+    name: String,
+    budget: usize,
     requests: Receiver<Message>,
     stopper: Stopper,
+}
+
+/// What the loader of a scan opening in stages runs: the pyramid, or one line saying why not.
+pub type Loader = Box<dyn FnOnce(&Opening) -> Result<Pyramid, String> + Send>;
+
+/// A scan still opening (its pictures and progress), or the editor's session.
+enum Stage {
+    Opening(Opening),
+    Ready(Box<Session>),
 }
 
 /// Stops a running [`ViewServer`] from another thread.
@@ -92,6 +112,27 @@ impl ViewServer {
     /// Listens on `127.0.0.1:port` (`0`: a free port) for the editor of `pyramid` (owned or
     /// shared), with a fresh random token.
     pub fn bind(pyramid: impl Into<Arc<Pyramid>>, port: u16) -> Result<ViewServer, ViewError> {
+        ViewServer::bind_stage(Stage::Ready(Box::new(Session::new(pyramid))), None, port)
+    }
+
+    /// Listens on `127.0.0.1:port` for the editor of a scan whose pyramid `load` makes: until
+    /// it returns, the page shows `first` (and what `load` shows through its [`Opening`]) with
+    /// the stage and its progress. [`ViewServer::run`] starts `load` on its own thread and
+    /// returns [`ViewError::Open`] when it fails.
+    pub fn opening(
+        first: Picture,
+        load: impl FnOnce(&Opening) -> Result<Pyramid, String> + Send + 'static,
+        port: u16,
+    ) -> Result<ViewServer, ViewError> {
+        let stage = Stage::Opening(Opening::new(first));
+        ViewServer::bind_stage(stage, Some(Box::new(load)), port)
+    }
+
+    fn bind_stage(
+        stage: Stage,
+        loader: Option<Loader>,
+        port: u16,
+    ) -> Result<ViewServer, ViewError> {
         let token = guard::random_token().map_err(ViewError::Token)?;
         let bind_error = |error| ViewError::Bind { port, error };
         let listener = TcpListener::bind(("127.0.0.1", port)).map_err(bind_error)?;
@@ -101,7 +142,10 @@ impl ViewServer {
             listener,
             port: bound,
             token,
-            session: Session::new(pyramid),
+            stage,
+            loader,
+            name: "mesh".into(),
+            budget: preview::DEFAULT_BUDGET,
             requests,
             stopper: Stopper {
                 port: bound,
@@ -113,7 +157,10 @@ impl ViewServer {
 
     /// Names the mesh (shown on the page and in export file names; default "mesh").
     pub fn with_name(mut self, name: &str) -> ViewServer {
-        self.session.name = name.to_string();
+        self.name = name.to_string();
+        if let Stage::Ready(session) = &mut self.stage {
+            session.name = self.name.clone();
+        }
         self
     }
 
@@ -121,7 +168,10 @@ impl ViewServer {
     /// triangles is shown as the finest level of its progressive mesh within the budget, its
     /// previews computed at those vertices only and the exact result in the background.
     pub fn with_budget(mut self, triangles: usize) -> ViewServer {
-        self.session.budget = triangles;
+        self.budget = triangles;
+        if let Stage::Ready(session) = &mut self.stage {
+            session.budget = triangles;
+        }
         self
     }
 
@@ -147,32 +197,61 @@ impl ViewServer {
 
     /// Serves until [`Stopper::stop`]: connections are read on their own threads, requests
     /// answered here one at a time (synthesis uses every core already, so a second request
-    /// would only wait for the first).
-    pub fn run(mut self) {
+    /// would only wait for the first). A scan opening in stages is loaded on another thread
+    /// meanwhile; its failure ends the serving with [`ViewError::Open`].
+    pub fn run(mut self) -> Result<(), ViewError> {
         let worker = self.stopper.worker.clone();
         let stopped = Arc::clone(&self.stopper.stopped);
-        let Ok(listener) = self.listener.try_clone() else {
-            return;
-        };
+        let listener = self.listener.try_clone().map_err(|error| ViewError::Bind {
+            port: self.port,
+            error,
+        })?;
         std::thread::spawn(move || http::accept(listener, worker, stopped));
-        // Over the budget, the level of detail is made now and its background work starts.
-        self.session.lod();
-        while let Ok(Message::Request(request, answer)) = self.requests.recv() {
-            let _ = answer.send(self.answer(request));
+        match (&mut self.stage, self.loader.take()) {
+            (Stage::Opening(opening), Some(load)) => {
+                let (opening, worker) = (opening.clone(), self.stopper.worker.clone());
+                let (name, budget) = (self.name.clone(), self.budget);
+                std::thread::spawn(move || {
+                    let opened = load(&opening).map(|pyramid| {
+                        opening.stage("making the level of detail");
+                        let mut session = Session::new(pyramid);
+                        session.name = name;
+                        session.budget = budget;
+                        session.lod();
+                        Box::new(session)
+                    });
+                    let _ = worker.send(Message::Opened(opened));
+                });
+            }
+            // Over the budget, the level of detail is made now and its background work starts.
+            (Stage::Ready(session), _) => {
+                session.lod();
+            }
+            (Stage::Opening(_), None) => {}
         }
+        while let Ok(message) = self.requests.recv() {
+            match message {
+                Message::Request(request, answer) => {
+                    let _ = answer.send(self.answer(request));
+                }
+                Message::Opened(Ok(session)) => self.stage = Stage::Ready(session),
+                Message::Opened(Err(why)) => return Err(ViewError::Open(why)),
+                Message::Stop => break,
+            }
+        }
+        Ok(())
     }
 
     fn answer(&mut self, request: HttpRequest) -> Reply {
         match guard::check(&request, self.port, &self.token) {
             Err(refused) => refused,
             Ok(guard::Route::Page(path)) => assets(&path),
-            Ok(guard::Route::Api { path, query }) => editor::answer_api(
-                &mut self.session,
-                &request.method,
-                &path,
-                &query,
-                &request.body,
-            ),
+            Ok(guard::Route::Api { path, query }) => match &mut self.stage {
+                Stage::Opening(opening) => api::while_opening(opening, &request.method, &path),
+                Stage::Ready(session) => {
+                    editor::answer_api(session, &request.method, &path, &query, &request.body)
+                }
+            },
         }
     }
 }

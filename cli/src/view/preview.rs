@@ -75,17 +75,10 @@ pub(crate) struct PreviewTiming {
 
 /// The most vertices whose level has at most `budget` triangles (at least the base level).
 pub(crate) fn shown_level(pyramid: &Pyramid, budget: usize) -> usize {
-    let pm = &pyramid.pm;
-    let mut faces = pm.n_base_faces();
-    let mut level = pm.n_base_vertices();
-    for s in pm.splits() {
-        faces += usize::from(s.left.is_some()) + usize::from(s.right.is_some());
-        if faces > budget {
-            break;
-        }
-        level += 1;
-    }
-    level.min(*pyramid.levels().end())
+    pyramid
+        .pm
+        .level_for_faces(budget)
+        .min(*pyramid.levels().end())
 }
 
 impl Preview {

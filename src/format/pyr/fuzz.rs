@@ -3,7 +3,9 @@
 
 use crate::format::container::Container;
 
-use super::{FileDetails, PyrData, SPLT, decode, encode, encode_with_details, read_level};
+use super::{
+    FileDetails, PyrData, SPLT, decode, encode, encode_with_details, read_level, read_level_within,
+};
 
 /// `bytes` with every checksum (header, sections, `SPLT` blocks) recomputed, where the
 /// structure can be followed. Lets the fuzzer reach the decoders behind the checksums, which
@@ -59,6 +61,7 @@ pub(crate) fn fuzz_read_pyr(data: &[u8], loaded: &dyn Fn(PyrData)) {
 fn fuzz_one(data: &[u8], loaded: &dyn Fn(PyrData)) {
     let _ = read_level(data, None);
     let _ = read_level(data, Some(5));
+    let _ = read_level_within(data, 20);
     if let Ok(d) = decode(data)
         && let Ok((again, _)) = encode(&d.input, &d.pm, &d.info)
     {

@@ -243,6 +243,56 @@ pub(super) fn read_isolated(
     Ok(())
 }
 
+/// The finest level with at most `max_triangles` triangles (the base level if even that has
+/// more), read from the progressive part's prefix only: the level
+/// [`ProgressiveMesh::level_for_faces`](crate::pm::ProgressiveMesh::level_for_faces) picks,
+/// for a viewer's first picture of a large file. A truncated file yields at most its last
+/// complete level (`truncated` set).
+pub fn read_level_within(bytes: &[u8], max_triangles: usize) -> Result<LevelMesh, FormatError> {
+    let c = Container::parse(bytes)?;
+    check_version(&c)?;
+    let meta = read_meta(&c)?;
+    let n_base = meta.n_base as usize;
+    // A split adds one or two triangles, so the level sought is at most `max_triangles`
+    // splits past the base; one past it tells whether the prefix's last level still fits.
+    let upto = n_base.saturating_add(max_triangles).saturating_add(1);
+    let (_, p, ()) = read_progressive(bytes, Some(upto), |_, _| ())?;
+    let replayed = p.replay.triangles();
+    let added: usize = p.splits.iter().map(VertexSplit::n_new_faces).sum();
+    let mut faces = replayed.len() - added;
+    let mut kept = 0;
+    for s in &p.splits {
+        faces += s.n_new_faces();
+        if faces > max_triangles {
+            break;
+        }
+        kept += 1;
+    }
+    let level = n_base + kept;
+    // Splits past `level` are undone by mapping their vertices to their survivors, which
+    // drops exactly the triangles they made.
+    let mut ancestor: Vec<u32> = (0..(n_base + p.splits.len()) as u32).collect();
+    for (k, s) in p.splits.iter().enumerate().skip(kept) {
+        ancestor[n_base + k] = ancestor[s.survivor as usize];
+    }
+    let triangles = replayed
+        .into_iter()
+        .map(|t| t.map(|x| ancestor[x as usize]))
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        .collect();
+    let mut positions = p.positions;
+    positions.truncate(level);
+    Ok(LevelMesh {
+        level,
+        finest: n_base + meta.n_splits as usize,
+        base: n_base,
+        truncated: p.truncated,
+        positions,
+        triangles,
+        f32_positions: meta.position_bits == 32,
+    })
+}
+
 /// Reads level `level` (default: the finest in the file) from the progressive part only. A
 /// truncated file yields its last complete level (`truncated` set); the caller warns.
 pub fn read_level(bytes: &[u8], level: Option<usize>) -> Result<LevelMesh, FormatError> {

@@ -56,7 +56,10 @@ const M = window.meshpyr = {
   latencies: [],      // per result: {ms: input to drawn, its parts (see requestResult), kind}
   renderer: null,     // {name, software, cullsBackFaces}: the WebGL renderer, whether it
                       // rasterises on the CPU, and whether the result is drawn front faces only
-  ready: false,
+  ready: false,       // the editor's first result is drawn
+  opening: null,      // while the scan opens: the server's stage, progress and picture
+  firstPictureMs: null, // performance.now() when the first picture (of the opening) was drawn
+  pictures: [],       // the opening's pictures drawn: {what, triangles, ms}
 };
 
 // ---- camera ---------------------------------------------------------------------------------
@@ -779,7 +782,6 @@ function installControls() {
   document.querySelectorAll('[data-export]').forEach((b) =>
     b.addEventListener('click', () => download(b.dataset.export)));
   window.addEventListener('resize', requestDraw);
-  installMouse();
 }
 
 async function start() {
@@ -788,14 +790,65 @@ async function start() {
   lineProgram = compile(VERTEX, LINE);
   finest = new GpuMesh(M.renderer.software);
   level = new GpuMesh(false);
+  installMouse();
+  const framed = await showOpening();
   await openScan();
   buildEqualizer();
   installControls();
   updateEditLabels();
-  resetView();
+  if (!framed) resetView();
   requestResult();
-  const waitFirst = () => (M.updates > 0 ? (M.ready = true) : setTimeout(waitFirst, 20));
+  const waitFirst = () => {
+    if (M.updates === 0) { setTimeout(waitFirst, 20); return; }
+    if (M.firstPictureMs === null) M.firstPictureMs = performance.now();
+    M.ready = true;
+  };
   waitFirst();
+}
+
+// While the server opens the scan (builds its hierarchy and details), draws each picture it
+// offers (the input clustered to the budget, or a level read from the start of a .pyr file;
+// then the hierarchy's level) under the stage and its progress, the panel inert. Returns when
+// the editor is ready: true if a picture was drawn (the camera is set, and stays as the user
+// left it).
+async function showOpening() {
+  let shown = 0;
+  $('panel').inert = true;
+  try {
+    for (;;) {
+      const o = (await (await api('/api/status')).json()).opening;
+      if (!o) return shown > 0;
+      M.opening = o;
+      if (o.picture !== shown) shown = await drawOpeningPicture(o) || shown;
+      $('status').textContent = `opening: ${o.stage} · ${(100 * o.done).toFixed(0)} % · ` +
+        `${o.seconds.toFixed(0)} s · showing ${o.what}`;
+      await new Promise((resolve) => setTimeout(resolve, 250));
+    }
+  } finally {
+    $('panel').inert = false;
+  }
+}
+
+// Draws the opening picture described by status `o`; returns its number (0: the scan opened
+// meanwhile, so there is none).
+async function drawOpeningPicture(o) {
+  let r;
+  try { r = await api('/api/opening'); } catch (_) { return 0; }
+  const bytes = await r.arrayBuffer();
+  const [nv, nt] = new Uint32Array(bytes, 0, 2);
+  level.setTriangles(new Uint32Array(bytes, 8 + 12 * nv, 3 * nt).slice());
+  level.setPositions(new Float32Array(bytes, 8, 3 * nv).slice());
+  if (!M.info) {
+    M.info = { bbox: o.bbox, diagonal: o.diagonal };
+    resetView();
+  }
+  M.showingResult = false;
+  draw();
+  gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4)); // wait until drawn
+  const ms = performance.now();
+  if (M.firstPictureMs === null) M.firstPictureMs = ms;
+  M.pictures.push({ what: o.what, triangles: nt, ms });
+  return Number(r.headers.get('X-Meshpyr-Picture'));
 }
 
 // Reads the scan's description and the triangles of the result: the input's, or over the

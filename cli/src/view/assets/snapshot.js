@@ -11,6 +11,7 @@
   const reply = (body, type) => new Response(body, { status: 200, headers: { 'Content-Type': type } });
   window.meshpyrTransport = async function (path) {
     if (path === '/api/info') return reply(JSON.stringify(data.info), 'application/json');
+    if (path === '/api/status') return reply(JSON.stringify({ lod: false }), 'application/json');
     if (path === '/api/faces') return reply(faces.slice(0), 'application/octet-stream');
     if (path === '/api/filter' || path === '/api/edit') return reply(positions.slice(0), 'application/octet-stream');
     return new Response(JSON.stringify({ error: 'a saved page has no server' }),
