@@ -100,7 +100,7 @@ fn snapshot_of(html: &str) -> (Value, Vec<u8>, Vec<u8>) {
     let start = html.find("const MESHPYR_SNAPSHOT = {info: ").unwrap() + 32;
     let rest = &html[start..];
     let end = rest.find(", faces: '").unwrap();
-    let info = json_of(rest[..end].as_bytes());
+    let info = json_of(&rest.as_bytes()[..end]);
     let field = |name: &str| {
         let from = rest.find(&format!("{name}: '")).unwrap() + name.len() + 3;
         let to = from + rest[from..].find('\'').unwrap();
