@@ -73,8 +73,8 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module 'meshpyr' has no attribute {name!r}")
 
 
+# Viewer stays out: `from meshpyr import *` must work without the notebook extra.
 __all__ = [
-    "Viewer",
     "show",
     "FormatError",
     "ProgressiveMesh",

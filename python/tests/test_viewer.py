@@ -35,6 +35,7 @@ def viewer(bunny):
 
 def test_octaves_are_the_spectrum_bands_and_gains_start_at_one(viewer, bunny):
     assert viewer.comm is not None, "the widget opened no comm"
+    assert len(meshpyr.Viewer.__doc__) > 40 and len(meshpyr.show.__doc__) > 40
     spectrum = bunny.spectrum()
     assert viewer.octaves == list(zip(spectrum["lo"].tolist(), spectrum["hi"].tolist()))
     assert viewer.gains == [1.0] * len(viewer.octaves)
@@ -226,6 +227,7 @@ def test_meshpyr_works_without_the_notebook_extra():
 import sys
 sys.modules["anywidget"] = None
 import meshpyr
+from meshpyr import *
 v, f = meshpyr.read(sys.argv[1])
 assert meshpyr.Pyramid(v, f).levels
 for attempt in (lambda: meshpyr.show((v, f)), lambda: meshpyr.Viewer):

@@ -2,8 +2,8 @@
 anywidget's model interface: a test page imports the module and renders it with a model whose
 ``send`` and ``save_changes`` reach a real ``meshpyr.Viewer`` over a small local HTTP bridge
 (what the Jupyter comm does in a notebook). The editor's page draws in its frame, a slider
-changes the picture and Python's state and positions, gains set from Python move the page, and
-a ``save_html`` file draws on its own.
+changes the picture and Python's state and positions, gains and edits set from Python show on
+the page, undo on the page reaches Python, and a ``save_html`` file draws on its own.
 
 MESHPYR_WIDGET_SCREENSHOT=path.png saves the widget after the slider moved (the picture of
 python/README.md). Needs chromium and chromedriver (.ci/run installs them); skipped without them unless
@@ -208,6 +208,26 @@ def test_the_widget_draws_and_syncs_with_python(driver, tmp_path):
         assert page.tobytes() == viewer.positions.astype(np.float32).ravel().tobytes()
         driver.leave_frame()
         assert driver.script("return window.modelState().gains;") == viewer.gains
+
+        # An edit set from Python shows on the page; undo on the page reaches Python.
+        v = pyramid.vertices
+        diagonal = float(np.linalg.norm(v.max(0) - v.min(0)))
+        move = {"level": 2000, "center": v[100].tolist(), "displacement": [0.0, 0.05 * diagonal, 0.0],
+                "radius": 0.2 * diagonal}
+        viewer.moves = [move]
+        driver.script("window.fromKernel(arguments[0]);", {"moves": viewer.moves})
+        settle(driver)
+        driver.enter_frame("iframe.meshpyr-frame")
+        assert driver.script("return window.meshpyr.moves;") == [move]
+        page = np.array(driver.script("return Array.from(window.meshpyr.positions);"), np.float32)
+        edited = pyramid.edit(2000, [(move["center"], move["displacement"])], move["radius"],
+                              gains=viewer.filter_bands())
+        assert page.tobytes() == edited.astype(np.float32).ravel().tobytes()
+        driver.script("document.getElementById('undo').click();")
+        driver.leave_frame()
+        settle(driver)
+        assert viewer.moves == []
+        assert np.array_equal(viewer.positions, pyramid.filter(gains=viewer.filter_bands()))
 
         # The saved page draws the same result on its own, from a file.
         path = tmp_path / "bunny.html"
