@@ -5,15 +5,13 @@ anywidget's model interface: a test page imports the module and renders it with 
 changes the picture and Python's state and positions, gains and edits set from Python show on
 the page, undo on the page reaches Python, and a ``save_html`` file draws on its own.
 
-MESHPYR_WIDGET_SCREENSHOT=path.png saves the widget after the slider moved (the picture of
-python/README.md). Needs chromium and chromedriver (.ci/run installs them); skipped without them unless
+Needs chromium and chromedriver (.ci/run installs them); skipped without them unless
 MESHPYR_REQUIRE_BROWSER=1.
 """
 
 import base64
 import http.server
 import json
-import os
 import pathlib
 import threading
 
@@ -192,10 +190,6 @@ def test_the_widget_draws_and_syncs_with_python(driver, tmp_path):
         after = driver.screenshot("#canvas")
         assert changed_share(before, after) > 0.003, "the picture hardly changed"
         driver.leave_frame()
-        # The picture in python/README.md: MESHPYR_WIDGET_SCREENSHOT=path.png.
-        if os.environ.get("MESHPYR_WIDGET_SCREENSHOT"):
-            shot = driver.screenshot_png("#root")
-            pathlib.Path(os.environ["MESHPYR_WIDGET_SCREENSHOT"]).write_bytes(shot)
 
         # Gains set from Python move the page's sliders and its result.
         viewer.gains = [1.0] * (len(viewer.octaves) - 2) + [0.0, 0.0]

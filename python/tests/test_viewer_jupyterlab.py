@@ -3,12 +3,14 @@ renders in the cell's output (anywidget's extension, the comm, the page's frame)
 slider on the page reaches the kernel (its observer sees the new gains, and the positions equal
 Pyramid.filter's), and gains set in the kernel move the sliders.
 
-Needs jupyterlab (.ci/run installs it), chromium and chromedriver; skipped without them unless
+MESHPYR_WIDGET_SCREENSHOT=path.png saves the window after the slider moved (the picture of
+python/README.md). Needs jupyterlab (.ci/run installs it), chromium and chromedriver; skipped without them unless
 MESHPYR_REQUIRE_BROWSER=1.
 """
 
 import json
 import os
+import pathlib
 import subprocess
 import sys
 import time
@@ -122,6 +124,14 @@ def test_show_works_in_jupyterlab(lab):
         after = driver.screenshot("#canvas")
         assert np.mean(np.any(np.abs(after.astype(int) - before.astype(int)) > 8, axis=2)) > 0.003
         driver.leave_frame()
+        # The picture in python/README.md: MESHPYR_WIDGET_SCREENSHOT=path.png.
+        if os.environ.get("MESHPYR_WIDGET_SCREENSHOT"):
+            driver.script(
+                "document.querySelectorAll('.Toastify button').forEach((b) => {"
+                " if (b.textContent.trim() === 'No' || b.classList.contains('Toastify__close-button')) b.click(); });"
+            )
+            time.sleep(0.5)
+            pathlib.Path(os.environ["MESHPYR_WIDGET_SCREENSHOT"]).write_bytes(driver.window_png())
         expected = [1.0] * n
         expected[band] = 2.5
         deadline = time.monotonic() + 60
