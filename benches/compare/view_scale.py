@@ -48,7 +48,8 @@ def main():
         if not m:
             sys.exit(f"no address in {line!r}")
         port, token = m.group(1), m.group(2)
-        run(args, port, token, serving, t0)
+        vertices = run(args, port, token, serving, t0)
+        print_peak_memory(server.pid, vertices)
     finally:
         server.terminate()
         server.wait()
@@ -69,6 +70,16 @@ def f32s(data):
     n = len(data) // 4
     v = struct.unpack(f"<{n}f", data)
     return [v[i : i + 3] for i in range(0, n, 3)]
+
+
+def print_peak_memory(pid, vertices):
+    """The server's peak resident size so far (Linux), whole and per input vertex."""
+    try:
+        with open(f"/proc/{pid}/status") as f:
+            kb = next(int(line.split()[1]) for line in f if line.startswith("VmHWM:"))
+    except (OSError, StopIteration):
+        return
+    print(f"server peak resident size: {kb / 1e6:.2f} GB = {kb * 1e3 / vertices:.0f} B/vertex")
 
 
 def wait_opening(port, token, t0):
@@ -139,7 +150,7 @@ def run(args, port, token, serving, t0):
     call(port, token, "POST", "/api/preview", {"gains": unit})
 
     if args.no_distance:
-        return
+        return info["vertices"]
     print("\npreview to exact at the shown vertices, % of the diagonal (worst, 99th percentile)")
     gain_list = [float(g) for g in args.gains.split(",")]
     print("octave  levels              " + "".join(f"   gain {g:<14}" for g in gain_list))
@@ -158,6 +169,7 @@ def run(args, port, token, serving, t0):
             )
             row.append(f"{100 * d[-1] / diag:8.4f} {100 * d[int(0.99 * (len(d) - 1))] / diag:8.4f}  ")
         print(f"{b:>6}  {o['from']:>8}..{o['to']:<8}  " + "".join(row), flush=True)
+    return info["vertices"]
 
 
 def octave_class(b, n):

@@ -100,15 +100,16 @@ fn load_pyr_scan(
 }
 
 /// The pyramid of the `.pyr` file `path` whose bytes are `bytes` (with its relaxation and
-/// stored details), its progress also reported to `also`.
+/// stored details), its progress also reported to `also`. The bytes are freed once decoded.
 pub(crate) fn pyramid_of_pyr_bytes(
     path: &Path,
-    bytes: &[u8],
+    bytes: Vec<u8>,
     global: &Global,
     also: &dyn Progress,
 ) -> anyhow::Result<Pyramid> {
     let start = Instant::now();
-    let data = format::decode(bytes).with_context(|| format!("cannot load {}", path.display()))?;
+    let data = format::decode(&bytes).with_context(|| format!("cannot load {}", path.display()))?;
+    drop(bytes);
     pyramid_of_pyr(path, data, None, start, global, also)
 }
 

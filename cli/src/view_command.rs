@@ -81,7 +81,7 @@ fn open_in_stages(
         let first = Picture::new(what, &level.positions, level.triangles);
         let load: Loader = Box::new(move |opening: &Opening| {
             opening.stage("reading the hierarchy and its details");
-            pyramid_of_pyr_bytes(&path, &bytes, &global, opening).map_err(|e| format!("{e:#}"))
+            pyramid_of_pyr_bytes(&path, bytes, &global, opening).map_err(|e| format!("{e:#}"))
         });
         return Ok((first, load));
     }

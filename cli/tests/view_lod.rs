@@ -246,3 +246,34 @@ fn the_budget_can_change_and_bad_calls_get_4xx() {
         409
     );
 }
+
+/// The worker never waits for the background: a preview is answered while the background is
+/// in the middle of a task, which the statuses before and after the preview prove (the same
+/// task still running: busy with the same kind of work and no new result). Each try makes new
+/// work, so this needs only one preview to be shorter than one background task.
+#[test]
+fn previews_are_answered_while_the_background_synthesises() {
+    let server = serve_with_budget("bunny.ply", 20_000);
+    let info = server.api("GET", "/api/info", b"").json();
+    let n = octaves(&info).len();
+    for attempt in 0..500 {
+        let mut gains = vec![1.0; n];
+        gains[attempt % n] = 0.5 + (attempt % 7) as f64 / 4.0;
+        let before = server.api("GET", "/api/status", b"").json();
+        let (answer, _) = preview(&server, &json!({ "gains": gains }));
+        let after = server.api("GET", "/api/status", b"").json();
+        assert_eq!(answer.status, 200);
+        let same_task = !before["busy"].is_null()
+            && before["busy"] == after["busy"]
+            && before["exact"] == after["exact"]
+            && before["octaves"]["measured"] == after["octaves"]["measured"];
+        if same_task {
+            return;
+        }
+        if before["busy"].is_null() {
+            // Let the state settle so that the next try finds its exact synthesis running.
+            std::thread::sleep(std::time::Duration::from_millis(160));
+        }
+    }
+    panic!("no preview was answered while the background worked");
+}

@@ -4,7 +4,9 @@
 //! exports, all computed by [`Pyramid`]. A scan over the display budget
 //! ([`ViewServer::with_budget`]) is shown as a level of its progressive mesh: moves get a
 //! preview at the shown vertices at once and the exact result from a background thread, which
-//! exports use (`docs/view-api.md`).
+//! exports use (`docs/view-api.md`). A scan whose pyramid takes long to make opens in stages
+//! ([`ViewServer::opening`]): the page shows pictures of it, with the stage and progress, while
+//! the pyramid is made on another thread.
 //!
 //! What it exposes and to whom (see also the README): the server listens on the loopback
 //! interface only and answers only requests whose `Host` is `127.0.0.1:PORT` or
