@@ -103,6 +103,7 @@ class Viewer(anywidget.AnyWidget):
         budget: int = DEFAULT_BUDGET,
         height: int = 560,
     ) -> None:
+        self._server: _Server | None = None
         if not isinstance(pyramid, Pyramid):
             raise TypeError(f"Viewer takes a meshpyr.Pyramid, not {type(pyramid).__name__}")
         editor = _Editor(pyramid, name=name, budget=budget)
@@ -111,7 +112,6 @@ class Viewer(anywidget.AnyWidget):
         self._pyramid = pyramid
         self._name = name
         self._budget = budget
-        self._server: _Server | None = None
         super().__init__(
             _page=_page_html((_HERE / "_frame.js").read_text(encoding="utf-8")),
             gains=[1.0] * len(octaves),
