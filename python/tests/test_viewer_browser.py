@@ -3,7 +3,8 @@ anywidget's model interface: a test page imports the module and renders it with 
 ``send`` and ``save_changes`` reach a real ``meshpyr.Viewer`` over a small local HTTP bridge
 (what the Jupyter comm does in a notebook). The editor's page draws in its frame, a slider
 changes the picture and Python's state and positions, gains and edits set from Python show on
-the page, undo on the page reaches Python, and a ``save_html`` file draws on its own.
+the page, undo and a drag edit on the page reach Python, and a ``save_html`` file draws on its
+own.
 
 Needs chromium and chromedriver (.ci/run installs them); skipped without them unless
 MESHPYR_REQUIRE_BROWSER=1.
@@ -21,7 +22,7 @@ import pytest
 import meshpyr
 
 from conftest import data
-from webdriver import driver_or_skip
+from webdriver import ELEMENT, driver_or_skip
 
 pytest.importorskip("anywidget", reason="the notebook extra (anywidget) is not installed")
 
@@ -222,6 +223,28 @@ def test_the_widget_draws_and_syncs_with_python(driver, tmp_path):
         settle(driver)
         assert viewer.moves == []
         assert np.array_equal(viewer.positions, pyramid.filter(gains=viewer.filter_bands()))
+
+        # A drag edit on the page reaches Python: its moves, and positions with the bits of
+        # Pyramid.edit for that move.
+        driver.enter_frame("iframe.meshpyr-frame")
+        driver.script("document.getElementById('edit-mode').click();")
+        canvas = driver.element("#canvas")
+        mouse = [
+            {"type": "pointerMove", "duration": 0, "origin": {ELEMENT: canvas}, "x": 0, "y": 0},
+            {"type": "pointerDown", "button": 0},
+            {"type": "pointerMove", "duration": 300, "origin": "pointer", "x": 0, "y": -50},
+            {"type": "pointerUp", "button": 0},
+        ]
+        driver.call_session("POST", "/actions", {"actions": [
+            {"type": "pointer", "id": "mouse", "parameters": {"pointerType": "mouse"}, "actions": mouse}]})
+        driver.wait_for("window.meshpyr.moves.length === 1 && window.meshpyr.idle()", "the frame")
+        dragged = driver.script("return window.meshpyr.moves[0];")
+        driver.leave_frame()
+        settle(driver)
+        assert viewer.moves == [dragged] and np.linalg.norm(dragged["displacement"]) > 0
+        edited = pyramid.edit(dragged["level"], [(dragged["center"], dragged["displacement"])],
+                              dragged["radius"], gains=viewer.filter_bands())
+        assert np.array_equal(viewer.positions, edited)
 
         # The saved page draws the same result on its own, from a file.
         path = tmp_path / "bunny.html"
