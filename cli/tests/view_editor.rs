@@ -154,8 +154,16 @@ fn the_numbers_of_a_state_are_the_floats_sent() {
     // serde_json's default parser is off by an ulp for some decimals (this displacement's
     // x, for one); an edit sent as JSON must give the bits of the same edit made directly.
     let (mut editor, reference) = bunny_editor(meshpyr_cli::view::DEFAULT_BUDGET);
-    let text = ["0.14850905311294338", "0.09608984193591164", "0.21668232319013336"];
-    let push = ["-0.027887909780610842", "0.1353055633169925", "-0.04076364469879845"];
+    let text = [
+        "0.14850905311294338",
+        "0.09608984193591164",
+        "0.21668232319013336",
+    ];
+    let push = [
+        "-0.027887909780610842",
+        "0.1353055633169925",
+        "-0.04076364469879845",
+    ];
     let radius = "0.1602435900120939";
     let gains = vec![1.0; editor.octaves().len()];
     let state = format!(
@@ -171,5 +179,8 @@ fn the_numbers_of_a_state_are_the_floats_sent() {
         radius: radius.parse().unwrap(),
     };
     let expected = reference.edit(970, &[handle], &Filter::new()).unwrap();
-    assert_eq!(editor.positions(state.as_bytes()).unwrap(), expected.positions);
+    assert_eq!(
+        editor.positions(state.as_bytes()).unwrap(),
+        expected.positions
+    );
 }
