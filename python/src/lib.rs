@@ -3,6 +3,7 @@
 //! library's front door. Every heavy call releases the GIL.
 
 mod arrays;
+mod editor;
 mod errors;
 mod filters;
 mod functions;
@@ -33,5 +34,8 @@ fn _meshpyr(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(smooth::smooth, m)?)?;
     m.add_class::<progressive::ProgressiveMesh>()?;
     m.add_class::<pyramid::Pyramid>()?;
+    m.add_class::<editor::Editor>()?;
+    m.add_class::<editor::Server>()?;
+    m.add_function(wrap_pyfunction!(editor::_page_html, m)?)?;
     Ok(())
 }

@@ -11,6 +11,7 @@ use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyRange, PyTuple, PyType};
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// A mesh with its progressive mesh and Burt-Adelson detail pyramid (Guskov, Sweldens and
 /// Schröder 1999): every level of the hierarchy keeps the details that the relaxation operator
@@ -28,7 +29,14 @@ use std::path::PathBuf;
 /// multiprocessing, Ray and Dask can ship it).
 #[pyclass(module = "meshpyr", frozen)]
 pub(crate) struct Pyramid {
-    inner: meshpyr::Pyramid,
+    inner: Arc<meshpyr::Pyramid>,
+}
+
+impl Pyramid {
+    /// The library's pyramid, shared (the notebook editor keeps it).
+    pub(crate) fn shared(&self) -> Arc<meshpyr::Pyramid> {
+        Arc::clone(&self.inner)
+    }
 }
 
 /// Moves `[(point, delta), ...]` with one radius.
@@ -91,7 +99,9 @@ impl Pyramid {
         let inner = py
             .detach(|| meshpyr::Pyramid::build_with(mesh, &options, &NoProgress))
             .map_err(pyramid_error)?;
-        Ok(Pyramid { inner })
+        Ok(Pyramid {
+            inner: Arc::new(inner),
+        })
     }
 
     /// The levels as vertex counts, ``range(base, finest + 1)``: from the coarsest mesh's
@@ -274,7 +284,9 @@ impl Pyramid {
         let inner = py
             .detach(|| meshpyr::Pyramid::from_pyr_bytes(data, &NoProgress))
             .map_err(pyr_error)?;
-        Ok(Pyramid { inner })
+        Ok(Pyramid {
+            inner: Arc::new(inner),
+        })
     }
 
     /// Saves the .pyr file at ``path`` (``to_bytes``), atomically (an existing file is replaced
@@ -293,7 +305,9 @@ impl Pyramid {
         let inner = py
             .detach(|| meshpyr::Pyramid::load(&path))
             .map_err(pyr_error)?;
-        Ok(Pyramid { inner })
+        Ok(Pyramid {
+            inner: Arc::new(inner),
+        })
     }
 
     /// Pickles as ``Pyramid.from_bytes(self.to_bytes(details=False))``: the unpickled pyramid

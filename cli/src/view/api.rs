@@ -140,7 +140,11 @@ fn bad(message: impl std::fmt::Display) -> Reply {
     Reply::error(400, message)
 }
 
-fn parse_state(session: &Session, body: &[u8], moves_allowed: bool) -> Result<EditorState, Reply> {
+pub(crate) fn parse_state(
+    session: &Session,
+    body: &[u8],
+    moves_allowed: bool,
+) -> Result<EditorState, Reply> {
     let req: StateRequest =
         serde_json::from_slice(body).map_err(|e| bad(format!("bad JSON body: {e}")))?;
     let octaves = session.octaves.len();

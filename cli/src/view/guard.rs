@@ -83,7 +83,7 @@ fn same_secret(given: &str, token: &str) -> bool {
 
 /// `a=1&b=x` as pairs; values are used as they come (tokens, numbers and format names need
 /// no decoding).
-fn parse_query(query: &str) -> Vec<(String, String)> {
+pub(crate) fn parse_query(query: &str) -> Vec<(String, String)> {
     query
         .split('&')
         .filter(|p| !p.is_empty())

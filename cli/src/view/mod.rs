@@ -26,6 +26,7 @@
 mod api;
 mod background;
 mod clustered;
+mod editor;
 mod guard;
 mod http;
 mod opening;
@@ -44,6 +45,7 @@ use std::sync::mpsc::{Receiver, Sender};
 
 pub use api::limits;
 pub use clustered::first_picture;
+pub use editor::{Answer, Editor, page_html};
 pub use opening::{Opening, Picture};
 pub use preview::DEFAULT_BUDGET;
 
@@ -109,9 +111,9 @@ impl Stopper {
 }
 
 impl ViewServer {
-    /// Listens on `127.0.0.1:port` (`0`: a free port) for the editor of `pyramid`, with a
-    /// fresh random token.
-    pub fn bind(pyramid: Pyramid, port: u16) -> Result<ViewServer, ViewError> {
+    /// Listens on `127.0.0.1:port` (`0`: a free port) for the editor of `pyramid` (owned or
+    /// shared), with a fresh random token.
+    pub fn bind(pyramid: impl Into<Arc<Pyramid>>, port: u16) -> Result<ViewServer, ViewError> {
         ViewServer::bind_stage(Stage::Ready(Box::new(Session::new(pyramid))), None, port)
     }
 
@@ -256,11 +258,7 @@ impl ViewServer {
             Ok(guard::Route::Api { path, query }) => match &mut self.stage {
                 Stage::Opening(opening) => api::while_opening(opening, &request.method, &path),
                 Stage::Ready(session) => {
-                    // A bug in a handler must not take the editor down with the user's work.
-                    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                        api::dispatch(session, &request.method, &path, &query, &request.body)
-                    }))
-                    .unwrap_or_else(|_| Reply::error(500, "internal error (please report)"))
+                    editor::answer_api(session, &request.method, &path, &query, &request.body)
                 }
             },
         }

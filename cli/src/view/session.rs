@@ -60,7 +60,8 @@ pub(crate) struct Session {
 }
 
 impl Session {
-    pub fn new(pyramid: Pyramid) -> Session {
+    pub fn new(pyramid: impl Into<Arc<Pyramid>>) -> Session {
+        let pyramid = pyramid.into();
         let octaves = pyramid.pyramid.levels_of_octaves();
         let cache = SynthesisCache::octaves(&pyramid.pyramid);
         let last = EditorState {
@@ -68,7 +69,7 @@ impl Session {
             ..Default::default()
         };
         Session {
-            pyramid: Arc::new(pyramid),
+            pyramid,
             name: "mesh".into(),
             octaves,
             cache,

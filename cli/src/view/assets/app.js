@@ -8,9 +8,14 @@
 const token = new URLSearchParams(location.search).get('token') || '';
 const $ = (id) => document.getElementById(id);
 
+// How requests reach the server: fetch, unless the page's host installed another transport
+// before this script (the notebook widget, a saved page): a function like fetch that resolves
+// with a Response (docs/view-api.md).
+const transport = window.meshpyrTransport || ((path, options) => fetch(path, options));
+
 async function api(path, options = {}) {
   const headers = Object.assign({ 'X-Meshpyr-Token': token }, options.headers || {});
-  const response = await fetch(path, Object.assign({}, options, { headers }));
+  const response = await transport(path, Object.assign({}, options, { headers }));
   if (!response.ok) {
     let message = response.status + ' ' + response.statusText;
     try { message = (await response.json()).error; } catch (_) { /* not JSON */ }
@@ -524,6 +529,21 @@ function setGains(gains) {
   });
   requestResult();
 }
+
+// For a host that keeps the state elsewhere too (the notebook widget): sets the gains, the
+// normal-only switch and the committed edits, moving the controls, and asks for the result;
+// a state equal to the page's (with the edit being dragged) changes nothing.
+M.setState = function ({ gains = M.gains, normalOnly = M.normalOnly, moves = M.moves }) {
+  const current = M.pending ? M.moves.concat([M.pending]) : M.moves;
+  const same = JSON.stringify([gains, normalOnly, moves]) === JSON.stringify([M.gains, M.normalOnly, current]);
+  if (same || !M.info) return;
+  M.pending = null;
+  M.normalOnly = normalOnly;
+  $('normal-only').checked = normalOnly;
+  M.moves = moves.slice();
+  updateEditLabels();
+  setGains(gains);
+};
 
 // The paper's three experiments, scaled to this mesh: low-pass above n/50 vertices, and the
 // stop-band and ×2 enhancement of the levels from n/50 to 0.3·n.
