@@ -59,7 +59,12 @@ pub(crate) fn is_pyr_file(path: &Path) -> bool {
 /// Reads and decodes a whole `.pyr` file (validated), errors naming the file.
 pub(crate) fn load_pyr(path: &Path) -> anyhow::Result<format::PyrData> {
     let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-    format::decode(&bytes).with_context(|| format!("cannot load {}", path.display()))
+    decode_pyr(path, &bytes)
+}
+
+/// Decodes the bytes of the `.pyr` file `path` (validated), errors naming the file.
+pub(crate) fn decode_pyr(path: &Path, bytes: &[u8]) -> anyhow::Result<format::PyrData> {
+    format::decode(bytes).with_context(|| format!("cannot load {}", path.display()))
 }
 
 /// Reads `path` and builds its progressive mesh and pyramid, reporting progress and timing
@@ -108,7 +113,7 @@ pub(crate) fn pyramid_of_pyr_bytes(
     also: &dyn Progress,
 ) -> anyhow::Result<Pyramid> {
     let start = Instant::now();
-    let data = format::decode(&bytes).with_context(|| format!("cannot load {}", path.display()))?;
+    let data = decode_pyr(path, &bytes)?;
     drop(bytes);
     pyramid_of_pyr(path, data, None, start, global, also)
 }

@@ -2,7 +2,7 @@
 //! library's `view` module for the page, the API and what the server exposes).
 
 use super::Global;
-use super::input::{build_pyramid_watched, is_pyr_file, pyramid_of_pyr_bytes, require};
+use super::input::{build_pyramid_watched, decode_pyr, is_pyr_file, pyramid_of_pyr_bytes, require};
 use crate::view::limits::BUDGET;
 use crate::view::{Loader, Opening, Picture, ViewServer, first_picture};
 use anyhow::Context;
@@ -68,11 +68,11 @@ fn open_in_stages(
     if is_pyr_file(&path) {
         let bytes =
             std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
-        let cannot_load = || format!("cannot load {}", path.display());
-        let level = format::read_level_within(&bytes, budget).with_context(cannot_load)?;
+        let level = format::read_level_within(&bytes, budget)
+            .with_context(|| format!("cannot load {}", path.display()))?;
         if level.truncated {
             // Said now, with the decoder's words, rather than after the page has opened.
-            format::decode(&bytes).with_context(cannot_load)?;
+            decode_pyr(&path, &bytes)?;
         }
         let what = format!(
             "level {} of {} vertices, read from the start of the file",

@@ -14,15 +14,7 @@ use std::sync::{Mutex, MutexGuard};
 use std::thread::JoinHandle;
 
 fn check_budget(budget: usize) -> PyResult<()> {
-    if view::limits::BUDGET.contains(&budget) {
-        Ok(())
-    } else {
-        Err(value_error(format!(
-            "budget {budget} is outside {}..={} triangles",
-            view::limits::BUDGET.start(),
-            view::limits::BUDGET.end()
-        )))
-    }
+    view::limits::check_budget(budget).map_err(value_error)
 }
 
 /// The editor's state and handlers for one pyramid (see ``meshpyr.Viewer``). States are the

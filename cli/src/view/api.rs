@@ -23,6 +23,18 @@ pub mod limits {
     pub const MAX_REACH: f64 = 10.0;
     /// The display budget's range, in triangles.
     pub const BUDGET: std::ops::RangeInclusive<usize> = 1_000..=100_000_000;
+
+    /// `Err` with the refusal's words when `triangles` is outside [`BUDGET`].
+    pub fn check_budget(triangles: usize) -> Result<(), String> {
+        if BUDGET.contains(&triangles) {
+            return Ok(());
+        }
+        Err(format!(
+            "budget {triangles} is outside {}..={} triangles",
+            BUDGET.start(),
+            BUDGET.end()
+        ))
+    }
 }
 
 /// The JSON of `POST /api/budget`.
@@ -83,14 +95,7 @@ pub(crate) fn dispatch(
         ("POST", "/api/budget") => serde_json::from_slice::<BudgetRequest>(body)
             .map_err(|e| bad(format!("bad JSON body: {e}")))
             .and_then(|b| {
-                if !limits::BUDGET.contains(&b.triangles) {
-                    return Err(bad(format!(
-                        "budget {} is outside {}..={} triangles",
-                        b.triangles,
-                        limits::BUDGET.start(),
-                        limits::BUDGET.end()
-                    )));
-                }
+                limits::check_budget(b.triangles).map_err(bad)?;
                 session.set_budget(b.triangles);
                 Ok(Reply::json(&session.info()))
             }),

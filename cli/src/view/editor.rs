@@ -122,7 +122,7 @@ impl Editor {
             }
             Some(display) => {
                 let shown = u32::from_le_bytes(display[0..4].try_into().expect("4 bytes"));
-                let signal = self.exact_signal(&state)?;
+                let signal = self.session.exact_signal(&state)?;
                 info["display"] = serde_json::json!({
                     "budget": self.session.budget, "lod": false, "shown": shown,
                 });
@@ -147,18 +147,6 @@ impl Editor {
                 .and_then(|v| v["error"].as_str().map(str::to_string))
                 .unwrap_or_else(|| "bad editor state".into())
         })
-    }
-
-    /// The finest signal of `state` in progressive-mesh order.
-    fn exact_signal(&self, state: &EditorState) -> Result<Vec<DVec3>, String> {
-        let p = &self.session.pyramid.pyramid;
-        let gains = self.session.filter_of(state).resolve(p.surface_area());
-        if state.moves.is_empty() {
-            Ok(p.synthesize(&gains))
-        } else {
-            p.edit_levels(&state.moves, &gains)
-                .map_err(|e| e.to_string())
-        }
     }
 }
 

@@ -5,6 +5,7 @@
 //! progressive mesh is built, and the page draws each picture with the stage and its progress
 //! until the pyramid is ready and the editor takes over.
 
+use super::session::push_u32_triples;
 use glam::DVec3;
 use serde_json::json;
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -54,9 +55,7 @@ impl Picture {
         for x in self.positions.iter().flatten() {
             out.extend_from_slice(&x.to_le_bytes());
         }
-        for i in self.triangles.iter().flatten() {
-            out.extend_from_slice(&i.to_le_bytes());
-        }
+        push_u32_triples(&mut out, &self.triangles);
         out
     }
 

@@ -169,7 +169,7 @@ impl Session {
 
     /// The finest signal of `state` (PM order): the background's exact result when it has this
     /// state, else synthesised here, without the equalizer's cache.
-    fn exact_signal(&mut self, state: &EditorState) -> Result<Arc<Vec<DVec3>>, String> {
+    pub fn exact_signal(&mut self, state: &EditorState) -> Result<Arc<Vec<DVec3>>, String> {
         let gains = self.gains_of(state);
         if let Some(lod) = self.lod.as_ref()
             && let Some(exact) = lod.background.exact()
@@ -295,11 +295,7 @@ impl Session {
         out.extend_from_slice(&(n as u32).to_le_bytes());
         out.extend_from_slice(&(triangles.len() as u32).to_le_bytes());
         push_f32_bytes(&mut out, &signal[..n]);
-        for t in triangles {
-            for i in t {
-                out.extend_from_slice(&i.to_le_bytes());
-            }
-        }
+        push_u32_triples(&mut out, &triangles);
         out
     }
 
@@ -311,11 +307,7 @@ impl Session {
         let mut out = Vec::with_capacity(8 + 12 * triangles.len());
         out.extend_from_slice(&(shown as u32).to_le_bytes());
         out.extend_from_slice(&(triangles.len() as u32).to_le_bytes());
-        for t in triangles {
-            for i in t {
-                out.extend_from_slice(&i.to_le_bytes());
-            }
-        }
+        push_u32_triples(&mut out, triangles);
         Some(out)
     }
 
@@ -371,6 +363,14 @@ pub(crate) fn push_f32_bytes(out: &mut Vec<u8>, positions: &[DVec3]) {
         for x in p.to_array() {
             out.extend_from_slice(&(x as f32).to_le_bytes());
         }
+    }
+}
+
+/// Appends `triangles` to `out` as little-endian u32 triples.
+pub(crate) fn push_u32_triples(out: &mut Vec<u8>, triangles: &[[u32; 3]]) {
+    out.reserve(12 * triangles.len());
+    for i in triangles.iter().flatten() {
+        out.extend_from_slice(&i.to_le_bytes());
     }
 }
 

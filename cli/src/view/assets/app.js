@@ -594,9 +594,7 @@ function showLevel() {
   api('/api/level?n=' + n)
     .then((r) => r.arrayBuffer())
     .then((bytes) => {
-      const [nv, nt] = new Uint32Array(bytes, 0, 2);
-      level.setTriangles(new Uint32Array(bytes, 8 + 12 * nv, 3 * nt).slice());
-      level.setPositions(new Float32Array(bytes, 8, 3 * nv).slice());
+      const nv = setLevelMesh(bytes);
       M.shownLevel = nv;
       M.showingResult = false;
       setStatus(`level ${nv}`);
@@ -605,6 +603,15 @@ function showLevel() {
     })
     .catch(showError)
     .finally(() => { scrub.busy = false; if (scrub.again) { scrub.again = false; showLevel(); } });
+}
+
+// Puts a mesh laid out as `/api/level` answers (u32 vertex and triangle counts, f32
+// positions, u32 triangles) into the level's GPU mesh; returns its vertex count.
+function setLevelMesh(bytes) {
+  const [nv, nt] = new Uint32Array(bytes, 0, 2);
+  level.setTriangles(new Uint32Array(bytes, 8 + 12 * nv, 3 * nt).slice());
+  level.setPositions(new Float32Array(bytes, 8, 3 * nv).slice());
+  return nv;
 }
 
 function showFinest() {
@@ -834,10 +841,7 @@ async function showOpening() {
 async function drawOpeningPicture(o) {
   let r;
   try { r = await api('/api/opening'); } catch (_) { return 0; }
-  const bytes = await r.arrayBuffer();
-  const [nv, nt] = new Uint32Array(bytes, 0, 2);
-  level.setTriangles(new Uint32Array(bytes, 8 + 12 * nv, 3 * nt).slice());
-  level.setPositions(new Float32Array(bytes, 8, 3 * nv).slice());
+  setLevelMesh(await r.arrayBuffer());
   if (!M.info) {
     M.info = { bbox: o.bbox, diagonal: o.diagonal };
     resetView();
@@ -847,7 +851,7 @@ async function drawOpeningPicture(o) {
   gl.readPixels(0, 0, 1, 1, gl.RGBA, gl.UNSIGNED_BYTE, new Uint8Array(4)); // wait until drawn
   const ms = performance.now();
   if (M.firstPictureMs === null) M.firstPictureMs = ms;
-  M.pictures.push({ what: o.what, triangles: nt, ms });
+  M.pictures.push({ what: o.what, triangles: level.nTriangleIndices / 3, ms });
   return Number(r.headers.get('X-Meshpyr-Picture'));
 }
 
