@@ -7,7 +7,7 @@ use glam::DVec3;
 use meshpyr::io::MeshFormat;
 use meshpyr::{Filter, MoveHandle, Pyramid};
 use std::sync::OnceLock;
-use view_support::{Running, bits, f32_bits, raw, request, serve};
+use view_support::{Running, bits, f32_bits, octaves_of, raw, request, serve};
 
 const MESH: &str = "mc/mc_bunny_vox40.ply";
 
@@ -21,18 +21,7 @@ fn setup() -> &'static (Running, Pyramid) {
 }
 
 fn octaves(server: &Running) -> Vec<(usize, usize)> {
-    let info = server.api("GET", "/api/info", b"").json();
-    info["octaves"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|o| {
-            (
-                o["from"].as_u64().unwrap() as usize,
-                o["to"].as_u64().unwrap() as usize,
-            )
-        })
-        .collect()
+    octaves_of(&server.api("GET", "/api/info", b"").json())
 }
 
 #[test]

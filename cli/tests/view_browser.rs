@@ -9,13 +9,12 @@
 
 mod view_support;
 
-use meshpyr::io::MeshFormat;
 use meshpyr::{Filter, Pyramid};
 use serde_json::{Value, json};
 use std::path::PathBuf;
 use std::time::Instant;
 use view_support::webdriver::{Driver, ELEMENT, driver_or_skip};
-use view_support::{Running, base64_decode, bits, f32_bits, serve, serve_with_budget};
+use view_support::{Running, base64_decode, bits, f32_bits, ply_f32s, serve, serve_with_budget};
 
 /// Share of pixels that differ by more than a little in some channel.
 fn changed_share(a: &[u8], b: &[u8]) -> f64 {
@@ -163,6 +162,13 @@ fn drag_moves_the_surface_near_the_pick(driver: &Driver) -> Vec<f32> {
 }
 
 fn export_loads_as_a_mesh(driver: &Driver, shown: &[f32]) {
+    let (name, bytes) = exported_ply(driver);
+    assert_eq!(name, "bunny-view.ply");
+    assert_eq!(bits(&ply_f32s(&bytes)), bits(shown));
+}
+
+/// The page's PLY export of its current state: the file name and the bytes.
+fn exported_ply(driver: &Driver) -> (String, Vec<u8>) {
     let result = driver.async_script(
         "window.meshpyr.exportBytes('ply').then(({bytes, name}) => {
             let s = '';
@@ -173,15 +179,8 @@ fn export_loads_as_a_mesh(driver: &Driver, shown: &[f32]) {
         }).catch((e) => done({error: String(e)}));",
     );
     assert!(result["error"].is_null(), "{}", result["error"]);
-    assert_eq!(result["name"], "bunny-view.ply");
-    let bytes = base64_decode(result["data"].as_str().unwrap());
-    let mesh = meshpyr::io::read_mesh_bytes(&bytes, MeshFormat::Ply).unwrap();
-    let loaded: Vec<f32> = mesh
-        .positions
-        .iter()
-        .flat_map(|p| p.to_array().map(|x| x as f32))
-        .collect();
-    assert_eq!(bits(&loaded), bits(shown));
+    let name = result["name"].as_str().unwrap().to_string();
+    (name, base64_decode(result["data"].as_str().unwrap()))
 }
 
 fn take_screenshot(driver: &Driver, path: &std::path::Path) {
@@ -271,25 +270,9 @@ fn over_the_budget_the_page_previews_then_shows_the_exact_result() {
         assert!(off < 0.02 * diagonal, "{off}");
         let latest = driver.script("return window.meshpyr.exactLatencies.at(-1);");
         assert!(latest["drawMs"].as_f64().is_some(), "{latest}");
-        let result = driver.async_script(
-            "window.meshpyr.exportBytes('ply').then(({bytes}) => {
-                let s = '';
-                for (let i = 0; i < bytes.length; i += 32768) {
-                    s += String.fromCharCode.apply(null, bytes.subarray(i, i + 32768));
-                }
-                done({data: btoa(s)});
-            }).catch((e) => done({error: String(e)}));",
-        );
-        assert!(result["error"].is_null(), "{}", result["error"]);
-        let bytes = base64_decode(result["data"].as_str().unwrap());
-        let mesh = meshpyr::io::read_mesh_bytes(&bytes, MeshFormat::Ply).unwrap();
-        let exported: Vec<f32> = mesh
-            .positions
-            .iter()
-            .flat_map(|p| p.to_array().map(|x| x as f32))
-            .collect();
+        let (_, bytes) = exported_ply(&driver);
         assert_eq!(
-            bits(&exported),
+            bits(&ply_f32s(&bytes)),
             f32_bits(&reference.filter(&filter).positions)
         );
     }

@@ -6,10 +6,9 @@
 mod view_support;
 
 use glam::DVec3;
-use meshpyr::io::MeshFormat;
 use meshpyr::{Filter, LevelMove, MoveHandle, Pyramid};
 use serde_json::{Value, json};
-use view_support::{Response, Running, bits, f32_bits, serve_with_budget};
+use view_support::{Response, Running, bits, f32_bits, octaves_of, ply_f32s, serve_with_budget};
 
 const MESH: &str = "mc/mc_bunny_vox40.ply";
 const BUDGET: usize = 3000;
@@ -20,32 +19,6 @@ fn setup() -> (Running, Pyramid) {
         serve_with_budget(MESH, BUDGET),
         Pyramid::build(&input).unwrap(),
     )
-}
-
-fn octaves(info: &Value) -> Vec<(usize, usize)> {
-    info["octaves"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|o| {
-            (
-                o["from"].as_u64().unwrap() as usize,
-                o["to"].as_u64().unwrap() as usize,
-            )
-        })
-        .collect()
-}
-
-/// Polls `/api/status` until `done` holds (the background thread answers in bounded time on
-/// this small scan; the test's own timeout is the bound).
-fn wait_status(server: &Running, done: impl Fn(&Value) -> bool) -> Value {
-    loop {
-        let status = server.api("GET", "/api/status", b"").json();
-        if done(&status) {
-            return status;
-        }
-        std::thread::sleep(std::time::Duration::from_millis(20));
-    }
 }
 
 fn preview(server: &Running, body: &Value) -> (Response, u64) {
@@ -61,7 +34,7 @@ fn preview(server: &Running, body: &Value) -> (Response, u64) {
 }
 
 fn exact(server: &Running, version: u64) -> Vec<f32> {
-    wait_status(server, |s| s["exact"] == version);
+    server.wait_status(|s| s["exact"] == version);
     let answer = server.api("GET", &format!("/api/exact?version={version}"), b"");
     assert_eq!(answer.status, 200);
     answer.f32s()
@@ -103,7 +76,7 @@ fn the_shown_level_fits_the_budget_and_unit_gains_preview_the_input() {
         "the next level would not fit"
     );
     assert!(triangles.iter().all(|&i| (i as usize) < shown));
-    let unit = vec![1.0; octaves(&info).len()];
+    let unit = vec![1.0; octaves_of(&info).len()];
     let (answer, _) = preview(&server, &json!({ "gains": unit }));
     let positions = answer.f32s();
     assert_eq!(positions.len(), 3 * shown);
@@ -123,11 +96,10 @@ fn the_shown_level_fits_the_budget_and_unit_gains_preview_the_input() {
 fn previews_lie_near_the_exact_result_which_equals_the_library_and_exports_it() {
     let (server, reference) = setup();
     let info = server.api("GET", "/api/info", b"").json();
-    let bands = octaves(&info);
+    let bands = octaves_of(&info);
     let shown = info["display"]["shown"].as_u64().unwrap() as usize;
-    let status = wait_status(&server, |s| {
-        s["octaves"]["measured"] == s["octaves"]["total"] && s["busy"].is_null()
-    });
+    let status = server
+        .wait_status(|s| s["octaves"]["measured"] == s["octaves"]["total"] && s["busy"].is_null());
     assert!(status["octaves"]["total"].as_u64().unwrap() > 0, "{status}");
     let diagonal = reference.pyramid.bbox_diagonal();
     let area = reference.pyramid.surface_area();
@@ -148,14 +120,8 @@ fn previews_lie_near_the_exact_result_which_equals_the_library_and_exports_it() 
         );
         assert!(off < 0.02 * diagonal, "octave {band} gain {gain}: {off}");
         let export = server.api("GET", "/api/export?format=ply", b"");
-        let mesh = meshpyr::io::read_mesh_bytes(&export.body, MeshFormat::Ply).unwrap();
-        let exported: Vec<f32> = mesh
-            .positions
-            .iter()
-            .flat_map(|p| p.to_array().map(|x| x as f32))
-            .collect();
         assert_eq!(
-            bits(&exported),
+            bits(&ply_f32s(&export.body)),
             f32_bits(&reference.filter(&filter).positions)
         );
     }
@@ -165,7 +131,7 @@ fn previews_lie_near_the_exact_result_which_equals_the_library_and_exports_it() 
 fn edits_preview_and_export_the_library_s_edit() {
     let (server, reference) = setup();
     let info = server.api("GET", "/api/info", b"").json();
-    let bands = octaves(&info);
+    let bands = octaves_of(&info);
     let shown = info["display"]["shown"].as_u64().unwrap() as usize;
     let diagonal = reference.pyramid.bbox_diagonal();
     let center = reference.pm.original_positions()[shown / 2];
@@ -197,14 +163,8 @@ fn edits_preview_and_export_the_library_s_edit() {
             "/api/export?format=ply",
             body.to_string().as_bytes(),
         );
-        let mesh = meshpyr::io::read_mesh_bytes(&export.body, MeshFormat::Ply).unwrap();
-        let exported: Vec<f32> = mesh
-            .positions
-            .iter()
-            .flat_map(|p| p.to_array().map(|x| x as f32))
-            .collect();
         assert_eq!(
-            bits(&exported),
+            bits(&ply_f32s(&export.body)),
             f32_bits(&reference.output_mesh(&expected).positions)
         );
     }
@@ -238,7 +198,7 @@ fn the_budget_can_change_and_bad_calls_get_4xx() {
     );
     assert_eq!(whole.json()["display"]["lod"], false);
     assert_eq!(server.api("GET", "/api/display", b"").status, 409);
-    let unit = json!({"gains": vec![1.0; octaves(&whole.json()).len()]});
+    let unit = json!({"gains": vec![1.0; octaves_of(&whole.json()).len()]});
     assert_eq!(
         server
             .api("POST", "/api/preview", unit.to_string().as_bytes())
@@ -255,7 +215,7 @@ fn the_budget_can_change_and_bad_calls_get_4xx() {
 fn previews_are_answered_while_the_background_synthesises() {
     let server = serve_with_budget("bunny.ply", 20_000);
     let info = server.api("GET", "/api/info", b"").json();
-    let n = octaves(&info).len();
+    let n = octaves_of(&info).len();
     for attempt in 0..500 {
         let mut gains = vec![1.0; n];
         gains[attempt % n] = 0.5 + (attempt % 7) as f64 / 4.0;

@@ -7,22 +7,10 @@ mod view_support;
 
 use meshpyr::Pyramid;
 use meshpyr_cli::view::{Picture, ViewError, ViewServer, first_picture};
-use serde_json::Value;
 use std::sync::mpsc;
-use std::time::Duration;
 use view_support::{Running, data};
 
 const MESH: &str = "mc/mc_bunny_vox40.ply";
-
-fn wait_status(server: &Running, done: impl Fn(&Value) -> bool) -> Value {
-    loop {
-        let status = server.api("GET", "/api/status", b"").json();
-        if done(&status) {
-            return status;
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
 
 /// The opening picture as served: vertex count, triangles, and the picture's number.
 fn served_picture(server: &Running) -> (usize, Vec<[u32; 3]>, u32) {
@@ -65,7 +53,7 @@ fn an_opening_scan_shows_its_pictures_and_progress_then_the_editor() {
     };
     std::thread::spawn(move || server.run());
 
-    let status = wait_status(&running, |s| s["opening"]["done"] == 0.25);
+    let status = running.wait_status(|s| s["opening"]["done"] == 0.25);
     let opening = &status["opening"];
     assert_eq!(opening["stage"], "testing the stages");
     assert_eq!(opening["picture"], 1);
@@ -87,12 +75,12 @@ fn an_opening_scan_shows_its_pictures_and_progress_then_the_editor() {
     assert_eq!(running.api("POST", "/api/status", b"").status, 405);
 
     gate.send(()).unwrap();
-    wait_status(&running, |s| s["opening"]["picture"] == 2);
+    running.wait_status(|s| s["opening"]["picture"] == 2);
     let (nv, triangles, number) = served_picture(&running);
     assert_eq!((nv, triangles, number), (3, vec![[0, 1, 2]], 2));
 
     gate.send(()).unwrap();
-    wait_status(&running, |s| s.get("opening").is_none());
+    running.wait_status(|s| s.get("opening").is_none());
     let info = running.api("GET", "/api/info", b"").json();
     assert_eq!(info["name"], "opening.ply");
     assert_eq!(info["vertices"], input.n_vertices());

@@ -217,6 +217,42 @@ impl Running {
             body,
         )
     }
+
+    /// Polls `/api/status` until `done` holds (the server's work ends in bounded time on the
+    /// test meshes; the test's own timeout is the bound).
+    pub fn wait_status(&self, done: impl Fn(&serde_json::Value) -> bool) -> serde_json::Value {
+        loop {
+            let status = self.api("GET", "/api/status", b"").json();
+            if done(&status) {
+                return status;
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+}
+
+/// The octaves `(from, to)` of an `/api/info` answer.
+pub fn octaves_of(info: &serde_json::Value) -> Vec<(usize, usize)> {
+    info["octaves"]
+        .as_array()
+        .expect("octaves")
+        .iter()
+        .map(|o| {
+            (
+                o["from"].as_u64().unwrap() as usize,
+                o["to"].as_u64().unwrap() as usize,
+            )
+        })
+        .collect()
+}
+
+/// The positions of a PLY file's bytes (an export), as f32 values.
+pub fn ply_f32s(bytes: &[u8]) -> Vec<f32> {
+    let mesh = meshpyr::io::read_mesh_bytes(bytes, meshpyr::io::MeshFormat::Ply).expect("PLY");
+    mesh.positions
+        .iter()
+        .flat_map(|p| p.to_array().map(|x| x as f32))
+        .collect()
 }
 
 /// Decodes standard base64 (WebDriver screenshots, bytes returned by scripts).
