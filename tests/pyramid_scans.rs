@@ -322,3 +322,86 @@ fn lowpass_at_the_base_of_a_debris_scan_stays_near_the_input() {
         assert!(c.hausdorff_rel < 0.1, "{n}");
     }
 }
+
+/// [`debris_scan`] with slivers as scanners leave them: every third face of the body is split
+/// at a point next to the middle of one of its edges, which leaves a needle along that edge.
+fn sliver_scan(holes: usize, debris: usize) -> meshpyr::mesh::PolygonMesh {
+    let scan = debris_scan(holes, debris);
+    // The body comes first; its faces are those of a level-4 icosphere minus the holes.
+    let body_faces = scan.n_faces() - debris * 80 + debris / 2;
+    let mut positions = scan.positions.clone();
+    let mut triangles: Vec<[u32; 3]> = Vec::new();
+    for (i, face) in scan.faces().enumerate() {
+        let f = [face[0], face[1], face[2]];
+        if i % 3 != 0 || i >= body_faces {
+            triangles.push(f);
+            continue;
+        }
+        let [a, b, c] = f.map(|x| positions[x as usize]);
+        let p = positions.len() as u32;
+        positions.push(0.49 * a + 0.49 * b + 0.02 * c);
+        triangles.extend([[f[0], f[1], p], [f[1], f[2], p], [f[2], f[0], p]]);
+    }
+    meshpyr::mesh::PolygonMesh::from_triangles(positions, &triangles)
+}
+
+/// Quality `4√3·A / Σ l²` of the worst of `triangles`.
+fn worst_quality(p: &[DVec3], triangles: &[[u32; 3]]) -> f64 {
+    triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| p[i as usize]);
+            let s = (b - a).length_squared() + (c - b).length_squared() + (a - c).length_squared();
+            2.0 * 3f64.sqrt() * (b - a).cross(c - a).length() / s
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The coarse end of a scan full of slivers, pieces and holes: its levels stay close to the
+/// input (no flaps or spikes from collapses through thin triangles), and the low-pass at and
+/// above the base, predicted by the relaxation from those levels, adds no surface much farther
+/// from the input than the level itself.
+#[test]
+fn coarse_levels_of_a_sliver_scan_and_their_lowpasses_stay_near_the_input() {
+    use meshpyr::metrics::compare;
+    let input = sliver_scan(12, 40);
+    let s = Pyramid::build_with(input.clone(), &PyramidOptions::default(), &NoProgress).unwrap();
+    let reference = Mesh::from_polygons(&input).unwrap().mesh;
+    let (p, t) = reference.to_triangles();
+    assert!(worst_quality(&p, &t) < 0.02, "the scan has slivers");
+    let (lo, hi) = p
+        .iter()
+        .fold((p[0], p[0]), |(lo, hi), x| (lo.min(*x), hi.max(*x)));
+    let diagonal = (hi - lo).length();
+    let base = s.pyramid.n_base_vertices();
+    let original = s.pm.original_positions();
+    for n in [base, 2 * base, 4 * base, 8 * base] {
+        let level = Mesh::from_triangles(original, &s.pm.level_triangles(n))
+            .unwrap()
+            .mesh;
+        let coarse = compare(&level, &reference).unwrap();
+        let f = Filter::default().lowpass(V(n));
+        let low = s.output_mesh(&s.pyramid.synthesize(&f.resolve(s.pyramid.surface_area())));
+        let low = compare(&Mesh::from_polygons(&low).unwrap().mesh, &reference).unwrap();
+        eprintln!(
+            "level {n} (base {base}): the level's Hausdorff {:.4} (result to input {:.4}), \
+             its low-pass {:.4} (result to input {:.4})",
+            coarse.hausdorff_rel,
+            coarse.hausdorff_result_to_reference / diagonal,
+            low.hausdorff_rel,
+            low.hausdorff_result_to_reference / diagonal
+        );
+        // The base is the floor: a tetrahedron per piece and a few vertices around the holes;
+        // from twice that on, the body has its shape back.
+        if n > base {
+            assert!(coarse.hausdorff_rel < 0.05, "level {n}");
+        }
+        // Prediction smooths a level, it does not push it away from the input: no flap or
+        // spike reaches far past the level's own distance.
+        assert!(
+            low.hausdorff_result_to_reference <= 1.5 * coarse.hausdorff,
+            "low-pass to {n}"
+        );
+        assert!(low.hausdorff_rel < 0.1, "low-pass to {n}");
+    }
+}

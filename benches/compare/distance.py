@@ -122,6 +122,19 @@ def compare_arrays(rp, rt, sp, st, n=400000, seed=1):
     return h, rms, len(st)
 
 
+def compare_sides(rp, rt, sp, st, n=400000, seed=1):
+    """compare_arrays() plus the one-sided Hausdorff from the result to the reference (does the
+    result add surface where the reference has none?), all relative to the reference's
+    diagonal: (hausdorff, rms, result_to_reference, result faces)."""
+    diag = np.linalg.norm(rp.max(0) - rp.min(0))
+    rng = np.random.default_rng(seed)
+    d_rs = distances(sample(rp, rt, n, rng), sp, st)
+    d_sr = distances(sample(sp, st, n, rng), rp, rt)
+    h = max(d_rs.max(), d_sr.max()) / diag
+    rms = np.sqrt(0.5 * ((d_rs ** 2).mean() + (d_sr ** 2).mean())) / diag
+    return h, rms, d_sr.max() / diag, len(st)
+
+
 def compare(ref_path, res_path, n=400000, seed=1):
     rp, rt = read_ply(ref_path)
     sp, st = read_ply(res_path)

@@ -20,7 +20,9 @@ For each --lowpass fraction L (none with `--lowpass`): a row "lowpass L" where o
 `$MESHPYR filter MESH -o OUT --lowpass n -q` with n = round(L x V) (the input's connectivity,
 positions low-passed to the level of n vertices), and mo is meshoptimizer's simplification to 2n
 faces (about n vertices); both distances are measured against the input as above, and the time
-column is ours (process) against mo's call.
+column is ours (process) against mo's call. The row also gives "to input / mo H": the one-sided
+Hausdorff from our low-pass to the input over mo's Hausdorff, which is large when the low-pass
+grows flaps or spikes (json: ours_to_input, flaps_ratio).
 Prints a markdown table (ratios are ours / mo: < 1 means ours is smaller/faster); --json writes
 every number, including each run's time and the distance seconds. Inputs that are not binary
 little-endian PLY are converted once with trimesh into --workdir and both sides read that copy.
@@ -108,10 +110,10 @@ def lowpass_row(args, binary, workdir, mesh, name, stem, pos, tris, src, frac):
     res, dt, err = run_lowpass(binary, src, ours_out, n, args.timeout)
     r.update(ours_time=dt, ours_error=err, ours_faces=None if res is None else len(res[1]))
     if res is not None:
-        r["ours_hausdorff"], r["ours_rms"], _ = distance.compare_arrays(
+        r["ours_hausdorff"], r["ours_rms"], r["ours_to_input"], _ = distance.compare_sides(
             pos, tris, res[0], res[1], args.samples, args.seed)
     else:
-        r["ours_hausdorff"] = r["ours_rms"] = None
+        r["ours_hausdorff"] = r["ours_rms"] = r["ours_to_input"] = None
     try:
         mp, mt, mtimes, _ = meshopt_simplify.simplify(pos, tris, 3 * 2 * n, 1)
         write_ply(mo_out, mp, mt)
@@ -124,7 +126,12 @@ def lowpass_row(args, binary, workdir, mesh, name, stem, pos, tris, src, frac):
         for p in (ours_out, mo_out):
             if os.path.exists(p):
                 os.remove(p)
-    ours = f"filter --lowpass {n}" if err is None else f"FAILED ({err})"
+    # Flaps: how far our low-pass strays from the input, against meshoptimizer's Hausdorff at
+    # twice the faces (a low-pass may lose thin parts, it must not add surface).
+    flaps = ratio_of(r["ours_to_input"], r["mo_hausdorff"])
+    r["flaps_ratio"] = flaps
+    ours = (f"filter --lowpass {n} (to input / mo H: {fmt(flaps, '.2f')})" if err is None
+            else f"FAILED ({err})")
     print(f"| {name} | {len(pos)} | {len(tris)} | lowpass {frac:g} | {ours} | {fmt(r['mo_faces'], 'd')} | "
           f"{fmt(r['ours_hausdorff'], '.3e')} | {fmt(r['mo_hausdorff'], '.3e')} | "
           f"{fmt(ratio_of(r['ours_hausdorff'], r['mo_hausdorff']), '.2f')} | "

@@ -27,11 +27,13 @@ pub(crate) struct SimplifyArgs {
     /// bounding-box diagonal.
     #[arg(long)]
     pub(crate) error: Option<f64>,
-    /// Largest rotation of a face normal one collapse may cause, in degrees.
+    /// Largest rotation of a face normal one collapse may cause, in degrees, while at least 5 %
+    /// of the input's faces are left; it widens to about 75° at 1 % (docs/pm-legality.md).
     #[arg(long, default_value_t = PmOptions::default().max_normal_angle_degrees)]
     pub(crate) max_angle: f64,
-    /// Smallest triangle quality (4√3·area / Σ edge², 1 = equilateral) a collapse may leave
-    /// around the vertex it removes, unless it was already worse there (0 turns the rule off).
+    /// Triangle quality (4√3·area / Σ edge², 1 = equilateral) below which a face left around
+    /// the removed vertex is a sliver: a collapse that makes a worse one pays a penalty on top
+    /// of its error, so fine levels stay well shaped (0 turns the penalty off).
     #[arg(long, default_value_t = PmOptions::default().min_quality)]
     pub(crate) min_quality: f64,
     /// Before simplifying, drop the connected pieces whose bounding-box diagonal is below this

@@ -619,7 +619,7 @@ pub(crate) fn is_collapse_geometrically_legal(
     mesh: &Mesh,
     h: HalfedgeId,
     legality: &Legality,
-) -> bool {
+) -> Option<f64> {
     let o = mesh.twin(h);
     let u = mesh.to_vertex(o);
     let pu = mesh.position(u);
@@ -634,7 +634,7 @@ pub(crate) fn is_collapse_geometrically_legal(
             dies: Some(f) == fl || Some(f) == fr,
         });
     }
-    shape_check(pu, pv, &ring, legality).is_ok()
+    shape_check(pu, pv, &ring, legality).ok()
 }
 
 /// Topological and geometric legality together.
@@ -645,7 +645,7 @@ pub fn is_collapse_legal(
     marks: &mut Marks,
 ) -> bool {
     is_collapse_topologically_legal(mesh, h, legality.max_valence, marks).is_some()
-        && is_collapse_geometrically_legal(mesh, h, legality)
+        && is_collapse_geometrically_legal(mesh, h, legality).is_some()
 }
 
 /// A slot-level copy of every record of a mesh (handles as slot indices, positions as bits),

@@ -499,7 +499,7 @@ impl FlatMesh {
 
     /// The shape rules of [`super::Legality`] ([`shape_check`]) on the faces around `h`'s
     /// tail.
-    fn geometrically_legal(&self, h: u32, legality: &Legality) -> Result<(), Refusal> {
+    fn geometrically_legal(&self, h: u32, legality: &Legality) -> Result<f64, Refusal> {
         let o = self.twin(h);
         let (u, v) = (self.tail_vertex(h), self.head_vertex(h));
         let dead = |c: u32| {
@@ -517,11 +517,12 @@ impl FlatMesh {
         shape_check(self.position(u), self.position(v), &ring, legality)
     }
 
-    /// Whether collapsing `h` is legal: the survivor's valence, or the rule that refuses.
-    fn legal(&self, h: u32, legality: &Legality) -> Result<u32, Refusal> {
+    /// Whether collapsing `h` is legal: the survivor's valence and the sliver penalty, or the
+    /// rule that refuses.
+    fn legal(&self, h: u32, legality: &Legality) -> Result<(u32, f64), Refusal> {
         let valence = self.topologically_legal(h, legality.max_valence)?;
-        self.geometrically_legal(h, legality)?;
-        Ok(valence)
+        let penalty = self.geometrically_legal(h, legality)?;
+        Ok((valence, penalty))
     }
 
     /// Asks the cache for what testing and collapsing the edge of half-edge `h` reads first:
@@ -818,7 +819,9 @@ pub(crate) fn decimate(
         rank_candidates(&mut cands);
         let pass = Pass {
             error_cut,
-            legality: schedule.legality(params),
+            legality: schedule
+                .legality(params)
+                .at_level(mesh.n_faces, start_faces),
             budget: schedule.budget(mesh.n_faces),
         };
         let made = perform_collapses(&mut mesh, &mut state, &cands, &pass, params);
@@ -927,15 +930,22 @@ fn perform_collapses(
         if mesh.is_locked(a) || mesh.is_locked(b) {
             continue;
         }
-        let (h, cost, valence) = if let Ok(val) = mesh.legal(h0, &pass.legality) {
-            (h0, c.cost, val)
-        } else if c.alt_cost <= pass.error_cut
-            && let Ok(val) = mesh.legal(o0, &pass.legality)
-        {
-            (o0, c.alt_cost, val)
-        } else {
-            continue;
+        // A collapse that leaves a new sliver pays its penalty against this pass's cut: it
+        // waits for a pass whose errors have grown to its price.
+        let within_cut = |legal: Result<(u32, f64), Refusal>, cost: f64| match legal {
+            Ok((valence, penalty)) if cost + penalty <= pass.error_cut => Some(valence),
+            _ => None,
         };
+        let (h, cost, valence) =
+            if let Some(val) = within_cut(mesh.legal(h0, &pass.legality), c.cost) {
+                (h0, c.cost, val)
+            } else if c.alt_cost <= pass.error_cut
+                && let Some(val) = within_cut(mesh.legal(o0, &pass.legality), c.alt_cost)
+            {
+                (o0, c.alt_cost, val)
+            } else {
+                continue;
+            };
         let [u, v, left, right] = mesh.collapse(h, valence);
         let qu = quadric[u as usize];
         quadric[v as usize].add(&qu);
@@ -1167,11 +1177,18 @@ mod tests {
                 &params(0, f64::INFINITY, 100.0),
                 &NoProgress,
             );
-            relaxed += outcome.relaxed.iter().sum::<usize>();
             assert!(
                 matches!(&outcome.stop, Stop::NoLegalCollapse(r) if !r.is_empty()),
                 "{name}: {outcome:?}"
             );
+            // Slivers only cost, and the coarse end allows the fold bound: what still needs
+            // relaxing is a tight valence cap (and faces that would lose their normal).
+            let mut tight = params(0, f64::INFINITY, 100.0);
+            tight.legality.max_valence = 6;
+            assert_same_as_reference(&mesh, &tight);
+            let (_, _, outcome) = decimate(FlatMesh::from_mesh(&mesh), &tight, &NoProgress);
+            eprintln!("{name}: relaxed {:?}", outcome.relaxed);
+            relaxed += outcome.relaxed.iter().sum::<usize>();
         }
         assert!(relaxed > 0);
     }

@@ -150,7 +150,9 @@ pub(crate) fn decimate(
         let error_cut = cut_at_goal(&cands, mesh.n_faces(), &schedule, params);
         let pass = Pass {
             error_cut,
-            legality: schedule.legality(params),
+            legality: schedule
+                .legality(params)
+                .at_level(mesh.n_faces(), start_faces),
             budget: schedule.budget(mesh.n_faces()),
         };
         let made = perform_collapses(&mut mesh, &mut state, &mut edges, &cands, &hid, &pass, done);
@@ -290,13 +292,14 @@ fn perform_collapses(
         if state.locked[a.slot()] || state.locked[b.slot()] {
             continue;
         }
-        let legal = |mesh: &Mesh, marks: &mut Marks, h: HalfedgeId| {
+        let legal = |mesh: &Mesh, marks: &mut Marks, h: HalfedgeId, cost: f64| {
             is_collapse_topologically_legal(mesh, h, legality.max_valence, marks).is_some()
                 && is_collapse_geometrically_legal(mesh, h, legality)
+                    .is_some_and(|penalty| cost + penalty <= pass.error_cut)
         };
-        let (h, cost) = if legal(mesh, &mut state.marks, h0) {
+        let (h, cost) = if legal(mesh, &mut state.marks, h0, c.cost) {
             (h0, c.cost)
-        } else if c.alt_cost <= pass.error_cut && legal(mesh, &mut state.marks, o0) {
+        } else if c.alt_cost <= pass.error_cut && legal(mesh, &mut state.marks, o0, c.alt_cost) {
             (o0, c.alt_cost)
         } else {
             continue;

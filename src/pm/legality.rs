@@ -4,25 +4,29 @@
 //! A collapse `u → v` moves every face around `u` to `v`; the two faces on the edge die. The
 //! shape rules judge the faces that remain:
 //!
-//! 1. **No fold.** A surviving face may not rotate its normal by more than the bound. A face
-//!    whose normal is undefined (zero or near-zero area, as marching cubes and vrip emit by the
-//!    thousand) can neither block nor excuse: before the collapse it is measured against the
-//!    surface normal at `u` (the sum of the ring's area-weighted normals, to which degenerate
-//!    faces add nothing) with the fold bound; after it, a face without a normal is left to the
-//!    sliver rule.
-//! 2. **No new slivers.** The worst face quality around `u` may not fall below the threshold
-//!    unless it was already that bad, and the number of slivers there may not grow. So a
-//!    collapse that removes a sliver may leave a milder one behind, and a cluster of degenerate
-//!    faces (which costs nothing under the quadric) can be collapsed away, while a collapse that
-//!    makes a sliver out of a good face waits for another collapse to do its job.
+//! 1. **No fold.** A surviving face may not rotate its normal by more than the bound, which
+//!    widens from the configured angle at fine levels to the fold bound at the coarse end
+//!    ([`Legality::at_level`]): creases need the tight bound where faces are small, curved
+//!    surfaces need the wide one where faces are large. A face whose normal is undefined (zero
+//!    or near-zero area, as marching cubes and vrip emit by the thousand) can neither block nor
+//!    excuse: before the collapse it is measured against the surface normal at `u` (the sum of
+//!    the ring's area-weighted normals, to which degenerate faces add nothing) with the fold
+//!    bound; and no face may lose its normal through a collapse, since it would escape the rule.
+//! 2. **Slivers pay.** A collapse that leaves the worst face around `u` below the quality
+//!    threshold, and worse than before, is not refused: it pays a penalty on top of its quadric
+//!    error, in units of the ring's squared edge length, and waits for a pass whose cost cut
+//!    covers it. So the fine levels stay well shaped (their errors are far below an edge
+//!    length), while at the coarse end the collapses through thin triangles that keep the shape
+//!    are taken. Removing slivers is free, so a cluster of degenerate faces (which costs
+//!    nothing under the quadric) is collapsed away first.
 //! 3. **Valence cap.**
 //!
-//! These rules protect the hierarchy's shape, but on meshes full of degenerate clusters they
-//! can leave no legal collapse far above the topology's floor. The decimator then relaxes them
-//! one [`Relaxation`] step at a time (valence cap, then slivers, then normals down to the fold
-//! bound) for a limited number of collapses, and returns to the full rules as soon as any
-//! collapse went through. The topological rules (link condition, boundaries, no pillows) are
-//! never relaxed: they keep the surface a manifold and every collapse exactly invertible.
+//! On meshes full of degenerate clusters the rules can still leave no legal collapse above the
+//! topology's floor. The decimator then relaxes them one [`Relaxation`] step at a time (valence
+//! cap, then slivers, then normals down to the fold bound) for a limited number of collapses,
+//! and returns to the full rules as soon as any collapse went through. The topological rules
+//! (link condition, boundaries, no pillows) are never relaxed: they keep the surface a manifold
+//! and every collapse exactly invertible.
 
 use glam::DVec3;
 
@@ -34,9 +38,10 @@ pub struct Legality {
     /// Cosine of the largest allowed rotation of a face normal (`cos 60°` by default here;
     /// `PmOptions` defaults to 45°).
     pub min_normal_cos: f64,
-    /// Smallest triangle quality `4√3·A / (l1² + l2² + l3²)` (1 for equilateral) the faces
-    /// around the removed vertex may be left with, unless they were already worse (see the
-    /// module docs for the exact rule); 0 turns the rule off.
+    /// Triangle quality `4√3·A / (l1² + l2² + l3²)` (1 for equilateral) below which a face left
+    /// around the removed vertex counts as a sliver: a collapse that makes the worst face there
+    /// a worse sliver pays a penalty on top of its error (module docs); 0 turns the penalty
+    /// off.
     pub min_quality: f64,
 }
 
@@ -58,7 +63,7 @@ pub enum Relaxation {
     None,
     /// The valence cap is lifted.
     Valence,
-    /// New slivers are allowed.
+    /// New slivers are free, and faces may lose their normal.
     Slivers,
     /// Normals may rotate up to the fold bound (about 75°) instead of the configured angle.
     Normals,
@@ -81,11 +86,44 @@ impl Relaxation {
 /// each could still turn a face over.
 pub(crate) const FOLD_COS: f64 = 0.25;
 
+/// What a new sliver of quality 0 adds to a collapse's cost, as a fraction of the squared mean
+/// edge length around the removed vertex: as much as moving the surface a tenth of an edge
+/// length off its planes. Fine levels, where quadric errors are far below the edge length,
+/// keep their triangles well shaped; at the coarse end, where the errors that keep the shape
+/// reach that size, the penalty no longer outweighs them (`docs/pm-legality.md`).
+const SLIVER_PRICE: f64 = 0.01;
+
 /// Below this quality a face's normal is rounding noise (positions often come from 32-bit
 /// files, about 7 digits).
 const UNDEFINED_NORMAL_QUALITY: f64 = 1e-6;
 
+/// Between these fractions of the input's faces the normal bound widens from the configured
+/// angle to the fold bound, evenly in the logarithm of the face count. Above the first, faces are
+/// small against the surface's features and turning one far means sliding across a crease;
+/// below the second, faces span curved parts, and the collapses that spread the vertices evenly
+/// must turn them further than a crease rule allows (`docs/pm-legality.md`).
+const FINE_LEVELS: f64 = 0.05;
+const COARSE_LEVELS: f64 = 0.01;
+
 impl Legality {
+    /// The rules for a pass that starts with `faces` of the input's `input_faces` left: the
+    /// normal bound widens towards the coarse end (see `FINE_LEVELS`).
+    pub(crate) fn at_level(&self, faces: usize, input_faces: usize) -> Legality {
+        let left = faces as f64 / input_faces.max(1) as f64;
+        let t = if left >= FINE_LEVELS {
+            return *self;
+        } else if left <= COARSE_LEVELS {
+            1.0
+        } else {
+            (FINE_LEVELS / left).ln() / (FINE_LEVELS / COARSE_LEVELS).ln()
+        };
+        let mut l = *self;
+        if FOLD_COS < l.min_normal_cos {
+            l.min_normal_cos += t * (FOLD_COS - l.min_normal_cos);
+        }
+        l
+    }
+
     /// The rules with the relaxation steps up to `step` applied.
     pub(crate) fn relaxed(&self, step: Relaxation) -> Legality {
         let mut l = *self;
@@ -117,8 +155,8 @@ pub enum Refusal {
     Valence,
     /// A face would turn by more than the normal bound.
     Normal,
-    /// A new sliver.
-    Sliver,
+    /// A face would lose its normal (become degenerate).
+    Degenerate,
 }
 
 impl Refusal {
@@ -131,7 +169,7 @@ impl Refusal {
             Refusal::Link => "link condition",
             Refusal::Valence => "valence cap",
             Refusal::Normal => "normal would fold",
-            Refusal::Sliver => "new sliver",
+            Refusal::Degenerate => "face would degenerate",
         }
     }
 }
@@ -157,41 +195,38 @@ pub(crate) fn quality(n: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
 }
 
 /// The shape rules (module docs) for moving `u` from `pu` to `pv`, given every face around `u`.
+/// The shape rules (module docs) for moving `u` from `pu` to `pv`, given every face around `u`:
+/// the refusal, or the sliver penalty the collapse pays on top of its quadric error (a squared
+/// distance; 0 when it leaves no new sliver).
 pub(crate) fn shape_check(
     pu: DVec3,
     pv: DVec3,
     ring: &[RingFace],
     legality: &Legality,
-) -> Result<(), Refusal> {
-    let min_q = legality.min_quality;
+) -> Result<f64, Refusal> {
     let mut surface_normal = DVec3::ZERO;
     let mut ring_scale = 0.0;
     let mut worst_before = f64::INFINITY;
-    let mut slivers_before = 0;
     for f in ring {
         let n = (f.a - pu).cross(f.b - pu);
         surface_normal += n;
         ring_scale += (f.a - pu).length_squared()
             + (f.b - f.a).length_squared()
             + (pu - f.b).length_squared();
-        let q = quality(n, pu, f.a, f.b);
-        worst_before = worst_before.min(q);
-        slivers_before += (q < min_q) as usize;
+        worst_before = worst_before.min(quality(n, pu, f.a, f.b));
     }
     // The ring as one face: its normal is defined when the ring is not degenerate as a whole.
     let surface_defined =
         2.0 * 3f64.sqrt() * surface_normal.length() > UNDEFINED_NORMAL_QUALITY * ring_scale;
     let fold_cos = legality.min_normal_cos.min(FOLD_COS);
     let mut worst_after = f64::INFINITY;
-    let mut slivers_after = 0;
     for f in ring.iter().filter(|f| !f.dies) {
         let n_old = (f.a - pu).cross(f.b - pu);
         let n_new = (f.a - pv).cross(f.b - pv);
         let q_new = quality(n_new, pv, f.a, f.b);
         worst_after = worst_after.min(q_new);
-        slivers_after += (q_new < min_q) as usize;
         if q_new < UNDEFINED_NORMAL_QUALITY {
-            continue; // no normal after the collapse: the sliver rule judges it
+            continue; // no normal after the collapse: judged below
         }
         let (reference, cos) = if quality(n_old, pu, f.a, f.b) >= UNDEFINED_NORMAL_QUALITY {
             (n_old, legality.min_normal_cos)
@@ -204,10 +239,17 @@ pub(crate) fn shape_check(
             return Err(Refusal::Normal);
         }
     }
-    if worst_after < min_q && (worst_after < worst_before || slivers_after > slivers_before) {
-        return Err(Refusal::Sliver);
+    let min_q = legality.min_quality;
+    if min_q <= 0.0 || worst_after >= min_q || worst_after >= worst_before {
+        return Ok(0.0);
     }
-    Ok(())
+    // A face without a normal escapes the fold rule above, so none may be made where the ring
+    // had none; removing a cluster of them (worst before already that low) stays allowed.
+    if worst_after < UNDEFINED_NORMAL_QUALITY {
+        return Err(Refusal::Degenerate);
+    }
+    let mean_edge_sq = ring_scale / (3 * ring.len()) as f64;
+    Ok(SLIVER_PRICE * mean_edge_sq * (min_q - worst_after) / min_q)
 }
 
 #[cfg(test)]
@@ -241,12 +283,12 @@ mod tests {
         let pv = around[0];
         assert_eq!(
             shape_check(DVec3::ZERO, pv * 0.1, &r, &Legality::default()),
-            Ok(())
+            Ok(0.0)
         );
         // Onto a ring vertex: the faces on the edge die, the others stay well shaped.
         assert_eq!(
             shape_check(DVec3::ZERO, pv, &r, &Legality::default()),
-            Ok(())
+            Ok(0.0)
         );
     }
 
@@ -277,7 +319,7 @@ mod tests {
         // Up and away from the degenerate face along the surface: fine.
         assert_eq!(
             shape_check(DVec3::ZERO, DVec3::new(0.0, -0.1, 0.0), &r, &off),
-            Ok(())
+            Ok(0.0)
         );
         // Through it: its new normal points down, against the surface's.
         assert_eq!(
@@ -287,7 +329,7 @@ mod tests {
     }
 
     #[test]
-    fn removing_a_sliver_may_leave_a_milder_one_but_not_a_new_one() {
+    fn removing_a_sliver_is_free_and_a_new_one_pays_by_its_thinness_and_the_edge_length() {
         let l = Legality::default();
         let pu = DVec3::ZERO;
         // A needle: u and v almost coincide; the two faces on the edge are slivers and die.
@@ -301,14 +343,73 @@ mod tests {
             DVec3::new(0.5, -1.0, 0.0),
         ];
         let r = ring(&around, &[0, 5]);
-        assert_eq!(shape_check(pu, pv, &r, &l), Ok(()));
-        // Moving u of a regular ring next to an edge of it turns a good face into a sliver:
-        // refused while other collapses may do the job, allowed once slivers are relaxed.
-        let near_edge = DVec3::new(0.0, 0.85, 0.0);
+        assert_eq!(shape_check(pu, pv, &r, &l), Ok(0.0));
+        // Moving u of a regular ring next to an edge of it turns a good face into a sliver: the
+        // collapse is legal but pays; thinner pays more, and the price scales with the ring's
+        // squared edge length like the quadric error it is added to.
         let r = ring(&hexagon(0.0), &[]);
-        assert_eq!(shape_check(pu, near_edge, &r, &l), Err(Refusal::Sliver));
-        let relaxed = l.relaxed(Relaxation::Slivers);
-        assert_eq!(shape_check(pu, near_edge, &r, &relaxed), Ok(()));
+        let price = |y: f64, scale: f64, l: &Legality| {
+            let r: Vec<RingFace> = r
+                .iter()
+                .map(|f| RingFace {
+                    a: f.a * scale,
+                    b: f.b * scale,
+                    dies: f.dies,
+                })
+                .collect();
+            shape_check(pu, DVec3::new(0.0, y, 0.0) * scale, &r, l).unwrap()
+        };
+        let near = price(0.85, 1.0, &l);
+        assert!(near > 0.0);
+        assert!(price(0.86, 1.0, &l) > near);
+        assert!((price(0.85, 10.0, &l) / near - 100.0).abs() < 1e-9);
+        // Not past a tenth of an edge length squared: a sliver never outweighs a real error.
+        assert!(near < 0.01);
+        // The relaxed rules and `min_quality` 0 do not charge it.
+        assert_eq!(price(0.85, 1.0, &l.relaxed(Relaxation::Slivers)), 0.0);
+        let off = Legality {
+            min_quality: 0.0,
+            ..l
+        };
+        assert_eq!(price(0.85, 1.0, &off), 0.0);
+    }
+
+    #[test]
+    fn a_face_without_a_normal_is_never_made_where_the_ring_had_none() {
+        // u moved onto the edge between two ring vertices flattens the face between them: it
+        // would escape the fold rule, so the collapse is refused (until slivers are relaxed).
+        let r = ring(&hexagon(0.0), &[]);
+        let around = hexagon(0.0);
+        let on_edge = 0.5 * (around[1] + around[2]);
+        let l = Legality::default();
+        assert_eq!(
+            shape_check(DVec3::ZERO, on_edge, &r, &l),
+            Err(Refusal::Degenerate)
+        );
+        assert_eq!(
+            shape_check(DVec3::ZERO, on_edge, &r, &l.relaxed(Relaxation::Slivers)),
+            Ok(0.0)
+        );
+    }
+
+    #[test]
+    fn the_normal_bound_widens_to_the_fold_bound_towards_the_coarse_end() {
+        let l = Legality {
+            min_normal_cos: 45f64.to_radians().cos(),
+            ..Legality::default()
+        };
+        assert_eq!(l.at_level(1000, 1000), l);
+        assert_eq!(l.at_level(50, 1000), l);
+        assert_eq!(l.at_level(10, 1000).min_normal_cos, FOLD_COS);
+        assert_eq!(l.at_level(1, 1000).min_normal_cos, FOLD_COS);
+        let middle = l.at_level(22, 1000).min_normal_cos;
+        assert!(middle < l.min_normal_cos && middle > FOLD_COS);
+        // A bound already wider than the fold bound stays as it is.
+        let wide = Legality {
+            min_normal_cos: -0.5,
+            ..l
+        };
+        assert_eq!(wide.at_level(1, 1000), wide);
     }
 
     #[test]

@@ -27,11 +27,16 @@ pub struct PmOptions {
     /// planes around the merged vertices) exceeds this fraction of the bounding-box diagonal.
     /// Default `None` (no error bound).
     pub max_error: Option<f64>,
-    /// Largest rotation of any face normal a collapse may cause, in degrees. Default 45 (the
-    /// upper end of the 45–60° recommended for scans; measured slightly better Hausdorff).
+    /// Largest rotation of any face normal a collapse may cause, in degrees, while at least 5 %
+    /// of the input's faces are left. Default 45 (keeps creases at fine levels). Towards the
+    /// coarse end the bound widens to the fold bound, about 75°, reached at 1 % of the faces
+    /// (`docs/pm-legality.md`).
     pub max_normal_angle_degrees: f64,
-    /// Smallest triangle quality `4√3·A / Σl²` (1 = equilateral) a collapse may create, unless
-    /// the face was already worse. Default 0.05.
+    /// Triangle quality `4√3·A / Σl²` (1 = equilateral) below which a face is a sliver. A
+    /// collapse that leaves a worse sliver around the removed vertex than there was pays a
+    /// penalty on top of its quadric error (up to the error of moving the surface a tenth of an
+    /// edge length), so fine levels stay well shaped and coarse levels may take the collapses
+    /// through thin triangles that keep the shape. Default 0.05; 0 turns the penalty off.
     pub min_quality: f64,
     /// Largest valence a collapse may create. Default 32.
     pub max_valence: usize,
