@@ -9,7 +9,10 @@
 //! changed — so every cost used is exact. A pass stops at the target or once costs exceed
 //! 1.5× the cost of the candidate that would meet the pass's share of the target, which keeps
 //! the order close to a global heap's. Legality ([`super::Legality`]) is tested when an edge's
-//! turn comes; an illegal cheaper direction falls back to the other one. A pass that finds no
+//! turn comes; an illegal cheaper direction falls back to the other one. A collapse that leaves
+//! a new sliver adds its penalty to its cost and waits while that exceeds the pass's cut, and
+//! each pass's normal bound is the one for its level ([`super::Legality`]'s widening towards
+//! the coarse end; `docs/pm-legality.md`). A pass that finds no
 //! legal collapse is repeated without the cost cut, then with the shape rules relaxed step by
 //! step ([`Schedule`]; `docs/pm-legality.md`); the build ends when even that finds none, so "no
 //! legal collapse left" really means none, and [`Stop`] says which rules refused what is left.
