@@ -42,7 +42,8 @@ pub(crate) struct SimplifyArgs {
     /// triangles.
     #[arg(long, value_name = "FRACTION")]
     pub(crate) prune: Option<f64>,
-    /// Weight of the boundary-preserving planes (0 lets boundaries drift).
+    /// Weight of the boundary-preserving planes (0 lets boundaries drift); it falls to 0.3 of
+    /// this from 5 % to 1 % of the input's faces.
     #[arg(long, default_value_t = PmOptions::default().boundary_weight)]
     pub(crate) boundary_weight: f64,
 }

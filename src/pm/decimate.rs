@@ -35,7 +35,7 @@
 
 use super::legality::{Legality, Refusal, Relaxation, RingFace, shape_check};
 use super::prefetch::prefetch;
-use super::quadric::{POINT_REGULARISATION, Quadric};
+use super::quadric::{POINT_REGULARISATION, Quadric, Quadrics};
 use crate::mesh::build::{next_c, prev_c};
 use crate::mesh::{BoundingBox, CornerTable, Mesh, SlotIndex};
 use crate::progress::Progress;
@@ -402,10 +402,10 @@ impl FlatMesh {
     /// for a direction that is never allowed (a boundary vertex may only slide along its
     /// boundary).
     #[inline]
-    fn edge_costs(&self, quadric: &[Quadric], h: u32, o: u32) -> (Option<f64>, Option<f64>) {
+    fn edge_costs(&self, quadric: &Quadrics, h: u32, o: u32) -> (Option<f64>, Option<f64>) {
         let boundary_edge = self.is_boundary_halfedge(h) || self.is_boundary_halfedge(o);
         let (a, b) = (self.tail_vertex(h), self.head_vertex(h));
-        let q = quadric[a as usize].sum(&quadric[b as usize]);
+        let q = quadric.merged(a, b);
         let ab = (boundary_edge || !self.is_boundary_vertex(a)).then(|| q.error(self.position(b)));
         let ba = (boundary_edge || !self.is_boundary_vertex(b)).then(|| q.error(self.position(a)));
         (ab, ba)
@@ -415,7 +415,7 @@ impl FlatMesh {
     /// of the two half-edges, or its twin is a boundary half-edge, which has no corner to
     /// represent it) and some direction is allowed within `max_error_sq`.
     #[inline]
-    fn candidate(&self, quadric: &[Quadric], c: u32, max_error_sq: f64) -> Option<Candidate> {
+    fn candidate(&self, quadric: &Quadrics, c: u32, max_error_sq: f64) -> Option<Candidate> {
         let t = self.corners[c as usize].twin;
         let (sc, st) = (self.slot_of(c), self.slot_of(t));
         let (h, o) = if sc < st {
@@ -623,7 +623,7 @@ fn by_cost(a: &Candidate, b: &Candidate) -> std::cmp::Ordering {
     a.cost.total_cmp(&b.cost).then(a.key.cmp(&b.key))
 }
 
-fn initial_quadrics(mesh: &FlatMesh, boundary_weight: f64) -> Vec<Quadric> {
+fn initial_quadrics(mesh: &FlatMesh, boundary_weight: f64) -> Quadrics {
     let mut q = vec![Quadric::default(); mesh.vertices.len()];
     for t in mesh.corners.chunks_exact(3) {
         let [a, b, c] = [t[0].vertex, t[1].vertex, t[2].vertex];
@@ -640,6 +640,7 @@ fn initial_quadrics(mesh: &FlatMesh, boundary_weight: f64) -> Vec<Quadric> {
         let scale = POINT_REGULARISATION * qv.weight;
         qv.add(&Quadric::from_point(mesh.position(v as u32), scale));
     }
+    let mut rims = Vec::new();
     if boundary_weight > 0.0 {
         let nh = mesh.n_corners();
         for h in nh..nh + mesh.boundary_twin.len() as u32 {
@@ -657,11 +658,11 @@ fn initial_quadrics(mesh: &FlatMesh, boundary_weight: f64) -> Vec<Quadric> {
                 continue;
             }
             let cq = Quadric::from_plane(n, pa, boundary_weight * e.length_squared(), 0.0);
-            q[a as usize].add(&cq);
-            q[b as usize].add(&cq);
+            rims.push((a, cq));
+            rims.push((b, cq));
         }
     }
-    q
+    Quadrics::new(q, &rims)
 }
 
 /// Why a decimation ended.
@@ -778,7 +779,7 @@ pub(super) struct Pass {
 /// What the passes accumulate: the quadrics, the survivors locked in the current pass and the
 /// collapses made so far.
 struct Decimation {
-    quadric: Vec<Quadric>,
+    quadric: Quadrics,
     locked: Vec<u32>,
     collapses: Vec<Collapse>,
 }
@@ -803,6 +804,7 @@ pub(crate) fn decimate(
     let mut live = live_triangles(&mesh);
     while !is_done(&mesh, params) {
         drop_dead_triangles(&mesh, &mut live);
+        state.quadric.rim_scale = rim_scale_at_level(mesh.n_faces, start_faces);
         collect_candidates(
             &mesh,
             &live,
@@ -841,6 +843,17 @@ pub(crate) fn decimate(
     progress.update(1.0);
     (state.collapses, mesh, Outcome { stop, relaxed })
 }
+
+/// What the boundary planes count for in a pass starting with `faces` of the input's
+/// `input_faces`: their full weight at fine levels, where a rim that drifts inward is a visible
+/// loss, and `COARSE_RIM_SCALE` of it at the coarse end, where each hole's rim otherwise keeps
+/// the vertices the surface needs (`docs/pm-legality.md`).
+pub(super) fn rim_scale_at_level(faces: usize, input_faces: usize) -> f64 {
+    1.0 + super::legality::coarseness(faces, input_faces) * (COARSE_RIM_SCALE - 1.0)
+}
+
+/// The boundary planes' weight at the coarse end relative to the configured one.
+const COARSE_RIM_SCALE: f64 = 0.3;
 
 /// Whether the face or vertex target is met.
 #[inline]
@@ -910,7 +923,7 @@ fn perform_collapses(
 ) -> usize {
     let mut budget = pass.budget;
     let before = state.collapses.len();
-    let quadric: &mut [Quadric] = &mut state.quadric;
+    let quadric: &mut Quadrics = &mut state.quadric;
     for (i, c) in cands.iter().enumerate() {
         if is_done(mesh, params) || budget == 0 {
             break;
@@ -922,7 +935,7 @@ fn perform_collapses(
             prefetch(mesh.corners.as_ptr().wrapping_add(far.h as usize));
         }
         if let Some(near) = cands.get(i + 8) {
-            mesh.prefetch_edge(quadric, near.h);
+            mesh.prefetch_edge(&quadric.faces, near.h);
         }
         let h0 = c.h;
         if !mesh.is_live(h0) {
@@ -950,8 +963,7 @@ fn perform_collapses(
                 continue;
             };
         let [u, v, left, right] = mesh.collapse(h, valence);
-        let qu = quadric[u as usize];
-        quadric[v as usize].add(&qu);
+        quadric.absorb(u, v);
         mesh.set_locked(v, true);
         state.locked.push(v);
         state.collapses.push(Collapse {
@@ -983,7 +995,7 @@ const COLLECT_ROUNDS: usize = 16;
 fn collect_candidates(
     mesh: &FlatMesh,
     live: &[u32],
-    quadric: &[Quadric],
+    quadric: &Quadrics,
     max_error_sq: f64,
     cands: &mut Vec<Candidate>,
 ) {
@@ -992,7 +1004,7 @@ fn collect_candidates(
         // Triangles are read in order, their vertices' records at random.
         if let Some(&ahead) = live.get(i + 8) {
             for x in &mesh.corners[3 * ahead as usize..3 * ahead as usize + 3] {
-                prefetch(quadric.as_ptr().wrapping_add(x.vertex as usize));
+                prefetch(quadric.faces.as_ptr().wrapping_add(x.vertex as usize));
                 prefetch(mesh.vertices.as_ptr().wrapping_add(x.vertex as usize));
             }
         }
@@ -1036,7 +1048,7 @@ impl FlatMesh {
     /// For each rule, how many live edges within the error bound it refuses under the most
     /// relaxed rules (each edge counted once, in its cheaper allowed direction; an interior
     /// edge between two boundary vertices has none and counts as `Boundary`), most first.
-    fn refusals(&self, quadric: &[Quadric], params: &DecimateParams) -> Vec<(Refusal, usize)> {
+    fn refusals(&self, quadric: &Quadrics, params: &DecimateParams) -> Vec<(Refusal, usize)> {
         let legality = params.legality.relaxed(Relaxation::Normals);
         let mut counts = std::collections::BTreeMap::<Refusal, usize>::new();
         for c in 0..self.n_corners() {

@@ -6,7 +6,7 @@ use super::collapse::{
     Marks, half_edge_collapse, is_collapse_geometrically_legal, is_collapse_topologically_legal,
 };
 use super::decimate::{Collapse, DecimateParams, Pass, Schedule};
-use super::quadric::{POINT_REGULARISATION, Quadric};
+use super::quadric::{POINT_REGULARISATION, Quadric, Quadrics};
 use crate::mesh::{BoundingBox, HalfedgeId, Mesh, SlotIndex};
 use crate::progress::Progress;
 
@@ -26,19 +26,19 @@ struct Candidate {
 #[inline]
 fn edge_costs(
     mesh: &Mesh,
-    quadric: &[Quadric],
+    quadric: &Quadrics,
     h: HalfedgeId,
     o: HalfedgeId,
 ) -> (Option<f64>, Option<f64>) {
     let boundary_edge = mesh.is_boundary_halfedge(h) || mesh.is_boundary_halfedge(o);
     let (a, b) = (mesh.to_vertex(o), mesh.to_vertex(h));
-    let q = quadric[a.slot()].sum(&quadric[b.slot()]);
+    let q = quadric.merged(a.slot() as u32, b.slot() as u32);
     let ab = (boundary_edge || !mesh.is_boundary_vertex(a)).then(|| q.error(mesh.position(b)));
     let ba = (boundary_edge || !mesh.is_boundary_vertex(b)).then(|| q.error(mesh.position(a)));
     (ab, ba)
 }
 
-fn initial_quadrics(mesh: &Mesh, boundary_weight: f64) -> Vec<Quadric> {
+fn initial_quadrics(mesh: &Mesh, boundary_weight: f64) -> Quadrics {
     let n = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
     let mut q = vec![Quadric::default(); n];
     for f in mesh.faces() {
@@ -55,6 +55,7 @@ fn initial_quadrics(mesh: &Mesh, boundary_weight: f64) -> Vec<Quadric> {
         let scale = POINT_REGULARISATION * q[v.slot()].weight;
         q[v.slot()].add(&Quadric::from_point(mesh.position(v), scale));
     }
+    let mut rims = Vec::new();
     if boundary_weight > 0.0 {
         for h in mesh.halfedges() {
             if !mesh.is_boundary_halfedge(h) {
@@ -72,17 +73,17 @@ fn initial_quadrics(mesh: &Mesh, boundary_weight: f64) -> Vec<Quadric> {
                 continue;
             }
             let cq = Quadric::from_plane(n, pa, boundary_weight * e.length_squared(), 0.0);
-            q[a.slot()].add(&cq);
-            q[b.slot()].add(&cq);
+            rims.push((a.slot() as u32, cq));
+            rims.push((b.slot() as u32, cq));
         }
     }
-    q
+    Quadrics::new(q, &rims)
 }
 
 /// What the passes accumulate: the quadrics, the survivors locked in the current pass, the
 /// collapses made so far and the scratch of the legality tests.
 struct Decimation {
-    quadric: Vec<Quadric>,
+    quadric: Quadrics,
     marks: Marks,
     locked: Vec<bool>,
     locked_list: Vec<u32>,
@@ -134,6 +135,7 @@ pub(crate) fn decimate(
     let mut schedule = Schedule::new();
     while !done(&mesh) {
         drop_dead_edges(&mesh, &hid, &mut edges);
+        state.quadric.rim_scale = super::decimate::rim_scale_at_level(mesh.n_faces(), start_faces);
         collect_candidates(
             &mesh,
             &hid,
@@ -214,7 +216,7 @@ fn collect_candidates(
     mesh: &Mesh,
     hid: &[HalfedgeId],
     edges: &[u32],
-    quadric: &[Quadric],
+    quadric: &Quadrics,
     params: &DecimateParams,
     cands: &mut Vec<Candidate>,
 ) {
@@ -307,8 +309,7 @@ fn perform_collapses(
         let o = mesh.twin(h);
         let (u, v) = (mesh.to_vertex(o), mesh.to_vertex(h));
         let topo = half_edge_collapse(mesh, h);
-        let qu = state.quadric[u.slot()];
-        state.quadric[v.slot()].add(&qu);
+        state.quadric.absorb(u.slot() as u32, v.slot() as u32);
         state.locked[v.slot()] = true;
         state.locked_list.push(v.slot() as u32);
         // Glued edges may have lost their representative: re-list v's edges.

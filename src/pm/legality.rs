@@ -105,18 +105,25 @@ const UNDEFINED_NORMAL_QUALITY: f64 = 1e-6;
 const FINE_LEVELS: f64 = 0.05;
 const COARSE_LEVELS: f64 = 0.01;
 
+/// Where a level with `faces` of the input's `input_faces` lies between the fine levels (0, at
+/// `FINE_LEVELS` and above) and the coarse end (1, at `COARSE_LEVELS` and below), evenly in the
+/// logarithm of the face count.
+pub(crate) fn coarseness(faces: usize, input_faces: usize) -> f64 {
+    let left = faces as f64 / input_faces.max(1) as f64;
+    if left >= FINE_LEVELS {
+        0.0
+    } else if left <= COARSE_LEVELS {
+        1.0
+    } else {
+        (FINE_LEVELS / left).ln() / (FINE_LEVELS / COARSE_LEVELS).ln()
+    }
+}
+
 impl Legality {
     /// The rules for a pass that starts with `faces` of the input's `input_faces` left: the
     /// normal bound widens towards the coarse end (see `FINE_LEVELS`).
     pub(crate) fn at_level(&self, faces: usize, input_faces: usize) -> Legality {
-        let left = faces as f64 / input_faces.max(1) as f64;
-        let t = if left >= FINE_LEVELS {
-            return *self;
-        } else if left <= COARSE_LEVELS {
-            1.0
-        } else {
-            (FINE_LEVELS / left).ln() / (FINE_LEVELS / COARSE_LEVELS).ln()
-        };
+        let t = coarseness(faces, input_faces);
         let mut l = *self;
         if FOLD_COS < l.min_normal_cos {
             l.min_normal_cos += t * (FOLD_COS - l.min_normal_cos);
@@ -390,6 +397,18 @@ mod tests {
             shape_check(DVec3::ZERO, on_edge, &r, &l.relaxed(Relaxation::Slivers)),
             Ok(0.0)
         );
+    }
+
+    #[test]
+    fn coarseness_runs_from_the_fine_levels_to_the_coarse_end_in_log_faces() {
+        assert_eq!(coarseness(1000, 1000), 0.0);
+        assert_eq!(coarseness(50, 1000), 0.0);
+        assert_eq!(coarseness(10, 1000), 1.0);
+        assert_eq!(coarseness(0, 1000), 1.0);
+        // The geometric middle of 5 % and 1 % is half way.
+        let middle = coarseness(22_360_680, 1_000_000_000);
+        assert!((middle - 0.5).abs() < 1e-6, "{middle}");
+        assert_eq!(coarseness(0, 0), 1.0);
     }
 
     #[test]

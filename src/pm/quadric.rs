@@ -94,6 +94,19 @@ impl Quadric {
         self.weight += o.weight;
     }
 
+    /// Adds `s` times `o` (planes only: a rim's planes carry no face weight).
+    #[inline]
+    pub(crate) fn add_scaled(&mut self, o: &Quadric, s: f64) {
+        for k in 0..6 {
+            self.a[k] += s * o.a[k];
+        }
+        for k in 0..3 {
+            self.b[k] += s * o.b[k];
+        }
+        self.c += s * o.c;
+        self.weight += s * o.weight;
+    }
+
     /// The sum of two quadrics.
     #[inline]
     pub(crate) fn sum(&self, o: &Quadric) -> Quadric {
@@ -124,6 +137,81 @@ impl Quadric {
             r
         };
         if e.is_nan() { f64::MAX } else { e }
+    }
+}
+
+/// The quadrics of a decimation: per vertex its faces' planes (and regulariser), and apart from
+/// them the boundary constraint planes of the boundary vertices, so that each pass can weigh the
+/// rims for its level ([`Quadrics::rim_scale`]).
+#[derive(Clone, Debug)]
+pub(crate) struct Quadrics {
+    /// Face planes and point regulariser of every vertex.
+    pub faces: Vec<Quadric>,
+    /// Index into `rims` of every vertex, `NO_RIM` for interior ones.
+    rim_slot: Vec<u32>,
+    /// Boundary planes, one quadric per boundary vertex.
+    rims: Vec<Quadric>,
+    /// The factor the rims count with in this pass's costs.
+    pub rim_scale: f64,
+}
+
+const NO_RIM: u32 = u32::MAX;
+
+impl Quadrics {
+    /// `faces` per vertex, and the boundary planes `(vertex, plane)` added to their vertices.
+    pub(crate) fn new(faces: Vec<Quadric>, boundary_planes: &[(u32, Quadric)]) -> Quadrics {
+        let mut rim_slot = vec![NO_RIM; faces.len()];
+        let mut rims: Vec<Quadric> = Vec::new();
+        for (v, q) in boundary_planes {
+            let slot = &mut rim_slot[*v as usize];
+            if *slot == NO_RIM {
+                *slot = rims.len() as u32;
+                rims.push(Quadric::default());
+            }
+            rims[*slot as usize].add(q);
+        }
+        Quadrics {
+            faces,
+            rim_slot,
+            rims,
+            rim_scale: 1.0,
+        }
+    }
+
+    fn rim(&self, v: u32) -> Option<&Quadric> {
+        match self.rim_slot[v as usize] {
+            NO_RIM => None,
+            s => Some(&self.rims[s as usize]),
+        }
+    }
+
+    /// The merged quadric of `a` and `b` as this pass weighs it.
+    #[inline]
+    pub(crate) fn merged(&self, a: u32, b: u32) -> Quadric {
+        let mut q = self.faces[a as usize].sum(&self.faces[b as usize]);
+        for x in [a, b] {
+            if let Some(r) = self.rim(x) {
+                q.add_scaled(r, self.rim_scale);
+            }
+        }
+        q
+    }
+
+    /// After the collapse `u → v`: `v` carries `u`'s planes too.
+    #[inline]
+    pub(crate) fn absorb(&mut self, u: u32, v: u32) {
+        let qu = self.faces[u as usize];
+        self.faces[v as usize].add(&qu);
+        let Some(&ru) = self.rim(u) else { return };
+        // A boundary vertex only collapses onto a boundary vertex, but one whose rim edges
+        // were all degenerate has no planes of its own yet.
+        match self.rim_slot[v as usize] {
+            NO_RIM => {
+                self.rim_slot[v as usize] = self.rims.len() as u32;
+                self.rims.push(ru);
+            }
+            s => self.rims[s as usize].add(&ru),
+        }
     }
 }
 
@@ -160,5 +248,29 @@ mod tests {
         let p = DVec3::new(0.0, 1.0, 2.5);
         assert!((q.raw(p) - 3.0 * (p - c).length_squared()).abs() < 1e-12);
         assert!(q.raw(c).abs() < 1e-12);
+    }
+
+    #[test]
+    fn rims_count_with_the_pass_scale_and_follow_their_vertex() {
+        // Vertex 0 and 1 on a rim (a plane x = 0 each), vertex 2 interior; every vertex has the
+        // face plane z = 0 with unit weight.
+        let face = Quadric::from_plane(DVec3::Z, DVec3::ZERO, 1.0, 1.0);
+        let rim = Quadric::from_plane(DVec3::X, DVec3::ZERO, 10.0, 0.0);
+        let mut q = Quadrics::new(vec![face; 3], &[(0, rim), (1, rim)]);
+        let p = DVec3::new(1.0, 0.0, 0.0);
+        // Merged: two face planes (weight 2, distance 0) and two rims at distance 1.
+        assert!((q.merged(0, 1).error(p) - 10.0).abs() < 1e-12);
+        assert!((q.merged(0, 2).error(p) - 5.0).abs() < 1e-12);
+        q.rim_scale = 0.3;
+        assert!((q.merged(0, 1).error(p) - 3.0).abs() < 1e-12);
+        assert_eq!(q.merged(2, 2).error(p), 0.0);
+        // Along the rim, 0 → 1: vertex 1 carries both rims and both faces.
+        q.absorb(0, 1);
+        q.rim_scale = 1.0;
+        assert!((q.faces[1].weight - 2.0).abs() < 1e-12);
+        assert!((q.merged(1, 2).error(p) - 20.0 / 3.0).abs() < 1e-12);
+        // An interior vertex onto a rim one adds no rim.
+        q.absorb(2, 1);
+        assert!((q.merged(1, 1).error(p) - 2.0 * 20.0 / 6.0).abs() < 1e-12);
     }
 }
