@@ -54,7 +54,10 @@ pub(crate) struct SubdivideArgs {
 /// Runs `meshpyr subdivide`.
 pub(crate) fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
-    let input = super::input::read_input_mesh(&args.input)?;
+    let job = meshpyr::memory::Job::Subdivide {
+        levels: args.levels,
+    };
+    let input = super::input::read_input_mesh_for(&args.input, job)?;
     let built = Mesh::from_polygons(&input)
         .with_context(|| format!("building a mesh from {}", args.input.display()))?;
     if built.report.repaired_anything() {
