@@ -54,10 +54,7 @@ pub(crate) struct SubdivideArgs {
 /// Runs `meshpyr subdivide`.
 pub(crate) fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
-    let job = meshpyr::memory::Job::Subdivide {
-        levels: args.levels,
-    };
-    let input = super::input::read_input_mesh_for(&args.input, job)?;
+    let input = read_input(&args)?;
     let built = Mesh::from_polygons(&input)
         .with_context(|| format!("building a mesh from {}", args.input.display()))?;
     if built.report.repaired_anything() {
@@ -106,4 +103,24 @@ pub(crate) fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
         Count(output.n_faces(), "face", "faces")
     ));
     Ok(())
+}
+
+/// The input, first checked for memory ([`super::input::read_input_mesh_for`]) unless the
+/// output would exceed the library's own face limit, whose error says it better.
+fn read_input(args: &SubdivideArgs) -> anyhow::Result<PolygonMesh> {
+    let limit = meshpyr::SubdivOptions::default().max_output_faces as u64;
+    let growth = 4u64.saturating_pow(args.levels.min(32) as u32);
+    let beyond_limit = meshpyr::memory::input_size(&args.input).is_some_and(|s| {
+        s.faces
+            .max(s.vertices.saturating_mul(2))
+            .saturating_mul(growth)
+            > limit
+    });
+    if beyond_limit {
+        return super::input::read_input_mesh(&args.input);
+    }
+    let job = meshpyr::memory::Job::Subdivide {
+        levels: args.levels,
+    };
+    super::input::read_input_mesh_for(&args.input, job)
 }
