@@ -38,6 +38,7 @@ use std::path::{Path, PathBuf};
 
 use crate::format;
 use crate::io::{self, MeshFormat};
+use crate::subdiv::Refinement;
 
 /// The environment variable that turns the check off (`off`, `0` or `no`).
 pub const CHECK_ENV: &str = "MESHPYR_MEMORY_CHECK";
@@ -55,10 +56,15 @@ pub enum Job {
     Simplify,
     /// Denoising (`smooth`).
     Smooth,
-    /// Subdivision, `levels` times 1-to-4 (`subdivide`): the figure is per output vertex.
+    /// Subdivision (`subdivide`): the figure is per output vertex.
     Subdivide {
-        /// How many times every triangle is split in four.
+        /// Levels of refinement.
         levels: usize,
+        /// How each level splits the triangles (4× or 2× the vertices per level).
+        refinement: Refinement,
+        /// The per-level systems are solved by sparse Cholesky factorisation (which holds
+        /// the factor), not by an iterative solver.
+        exact_solver: bool,
     },
 }
 
@@ -69,10 +75,15 @@ impl fmt::Display for Job {
             Job::SavePyramid => f.write_str("the detail pyramid and its .pyr file"),
             Job::Simplify => f.write_str("simplification"),
             Job::Smooth => f.write_str("denoising"),
-            Job::Subdivide { levels } => write!(
+            Job::Subdivide {
+                levels,
+                exact_solver,
+                ..
+            } => write!(
                 f,
-                "subdivision, {}",
-                crate::wording::Count(*levels, "level", "levels")
+                "subdivision, {}{}",
+                crate::wording::Count(*levels, "level", "levels"),
+                if *exact_solver { ", exact solver" } else { "" }
             ),
         }
     }
@@ -129,10 +140,16 @@ pub const FIGURES: [(Job, Figure); 4] = [
 /// from the file, peaks there). Every job on a `.pyr` input needs at least this.
 pub const PYR_DECODE: Figure = figure(606, 1_220);
 
-/// Subdivision's figure per output vertex (the input's vertices times `4^levels`): the
-/// half-edge mesh of the finest level, the solver's arrays and the output. Measured with
-/// `subdivide --levels 2` on the bundled bunny (603k output vertices, default solver).
+/// Subdivision's figure per output vertex (the input's vertices times `4^levels`, or `2^levels`
+/// by bisection): the half-edge mesh of the finest level, the solver's arrays and the output.
+/// Measured with `subdivide --levels 2` on the bundled bunny (603k output vertices; `--solver
+/// auto` takes conjugate gradients at that size).
 pub const SUBDIVIDE_PER_OUTPUT_VERTEX: Figure = figure(340, 400);
+
+/// [`SUBDIVIDE_PER_OUTPUT_VERTEX`] with the exact solver (`--solver exact`, and `auto` up to
+/// 250k output vertices), whose Cholesky factor is most of it: `subdivide --levels 2 --solver
+/// exact` on the bundled bunny.
+pub const SUBDIVIDE_EXACT_PER_OUTPUT_VERTEX: Figure = figure(1_160, 1_130);
 
 const fn figure(resident: u64, address_space: u64) -> Figure {
     Figure {
@@ -187,9 +204,22 @@ pub struct Need {
 pub fn estimate(job: Job, size: &InputSize) -> Need {
     let input = size.scale();
     let (per_vertex, vertices) = match job {
-        Job::Subdivide { levels } => {
-            let growth = 4u64.saturating_pow(levels.min(32) as u32);
-            (SUBDIVIDE_PER_OUTPUT_VERTEX, input.saturating_mul(growth))
+        Job::Subdivide {
+            levels,
+            refinement,
+            exact_solver,
+        } => {
+            let base: u64 = match refinement {
+                Refinement::Quadrisection => 4,
+                Refinement::Bisection => 2,
+            };
+            let growth = base.saturating_pow(levels.min(64) as u32);
+            let per = if exact_solver {
+                SUBDIVIDE_EXACT_PER_OUTPUT_VERTEX
+            } else {
+                SUBDIVIDE_PER_OUTPUT_VERTEX
+            };
+            (per, input.saturating_mul(growth))
         }
         _ => (
             FIGURES
@@ -579,10 +609,23 @@ Max file locks            unlimited            unlimited            locks     \n
             ..InputSize::mesh(1_000_000, 2_000_000)
         };
         assert!(estimate(Job::Pyramid, &pyr).resident > big.resident);
-        let sub = estimate(Job::Subdivide { levels: 2 }, &InputSize::mesh(1000, 2000));
+        let subdivide = |levels, refinement, exact_solver| Job::Subdivide {
+            levels,
+            refinement,
+            exact_solver,
+        };
+        let small = InputSize::mesh(1000, 2000);
+        let sub = estimate(subdivide(2, Refinement::Quadrisection, false), &small);
         assert_eq!(sub.vertices, 16_000);
-        let absurd = estimate(Job::Subdivide { levels: 40 }, &InputSize::mesh(u64::MAX, 0));
-        assert_eq!(absurd.resident, u64::MAX);
+        let exact = estimate(subdivide(2, Refinement::Quadrisection, true), &small);
+        assert!(exact.resident > sub.resident);
+        let halves = estimate(subdivide(2, Refinement::Bisection, false), &small);
+        assert_eq!(halves.vertices, 4_000);
+        let absurd = subdivide(40, Refinement::Quadrisection, false);
+        assert_eq!(
+            estimate(absurd, &InputSize::mesh(u64::MAX, 0)).resident,
+            u64::MAX
+        );
     }
 
     #[test]
