@@ -372,6 +372,8 @@ fn cgroup_limit(self_cgroup: &str, root: &Path) -> Option<u64> {
 /// A job that fits, with its estimate.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Fit {
+    /// The input's size the estimate was made from.
+    pub size: InputSize,
     /// The estimate.
     pub need: Need,
     /// The memory available now, when the job needs more than that (a warning, not an
@@ -432,6 +434,7 @@ pub fn check(job: Job, size: &InputSize, allowance: &Allowance) -> Result<Fit, T
         }
     }
     Ok(Fit {
+        size: *size,
         need,
         short_of_available: allowance.available.filter(|&a| need.resident > a),
     })
@@ -458,6 +461,8 @@ pub fn check_file(path: &Path, job: Job) -> Result<Option<Fit>, TooLarge> {
 }
 
 /// [`check_file`] with counts already known (a mesh that was read, say): errors name `path`.
+/// Unlike [`check_file`] it does not look at [`CHECK_ENV`]: the caller decides whether to check
+/// ([`check_enabled`]).
 pub fn check_size(path: &Path, job: Job, size: &InputSize) -> Result<Fit, TooLarge> {
     check(job, size, &Allowance::of_this_process()).map_err(|e| TooLarge {
         path: Some(path.to_path_buf()),

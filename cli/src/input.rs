@@ -48,15 +48,11 @@ pub(crate) fn read_input_mesh_for(path: &Path, job: Job) -> anyhow::Result<Polyg
 /// whether the counts were only estimated from the file's size, so that the caller checks
 /// again once it has read them ([`recheck_memory`]).
 pub(crate) fn check_memory(path: &Path, job: Job) -> anyhow::Result<bool> {
-    if !memory::check_enabled() {
-        return Ok(false);
-    }
-    let Some(size) = memory::input_size(path) else {
+    let Some(fit) = memory::check_file(path, job)? else {
         return Ok(false);
     };
-    let fit = memory::check_size(path, job, &size)?;
     warn_short_of_available(path, job, &fit);
-    Ok(size.from_file_size)
+    Ok(fit.size.from_file_size)
 }
 
 /// [`check_memory`] with the counts of the mesh read from `path`.
