@@ -91,6 +91,7 @@
 //! | module | what it holds |
 //! |---|---|
 //! | [`choice`] | the named values of options, and the message for an unknown name |
+//! | [`memory`] | whether a job fits in the memory this process may use, told before the work |
 //! | [`mesh`] | the file-level [`PolygonMesh`], the half-edge [`mesh::Mesh`] and its repairs |
 //! | [`io`] | the mesh file formats |
 //! | [`pm`] | the progressive mesh and simplification |
@@ -117,6 +118,7 @@ pub mod format;
 #[doc(hidden)]
 pub mod fuzzing;
 pub mod io;
+pub mod memory;
 pub mod mesh;
 pub mod metrics;
 pub mod numerics;

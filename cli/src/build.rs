@@ -2,11 +2,12 @@
 //! its detail pyramid and save them with the exact input as a `.pyr` file (see
 //! `formats/pyr.md`).
 
-use super::input::read_input_mesh;
+use super::input::read_input_mesh_for;
 use super::{BarProgress, Global};
 use anyhow::Context;
 use meshpyr::format;
 use meshpyr::io;
+use meshpyr::memory::Job;
 use meshpyr::pm::ProgressiveMesh;
 use meshpyr::pyramid::{PyrContent, Pyramid, PyramidOptions};
 use meshpyr::relax::RelaxKind;
@@ -38,7 +39,13 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
         ..PyramidOptions::default()
     };
     super::output::check_output_folder(&args.output)?;
-    let input = read_input_mesh(&args.input)?;
+    // Without details: the progressive mesh only, a pyramid's worth of memory at most.
+    let job = if args.no_details {
+        Job::Pyramid
+    } else {
+        Job::SavePyramid
+    };
+    let input = read_input_mesh_for(&args.input, job)?;
     let start = Instant::now();
     // Without details the file needs the hierarchy only: the analysis would be wasted.
     let (bytes, sizes, pm) = if args.no_details {

@@ -5,6 +5,7 @@ use super::{BarProgress, Global};
 use anyhow::Context;
 use meshpyr::format;
 use meshpyr::io;
+use meshpyr::memory::{self, InputSize, Job};
 use meshpyr::mesh::{MissingSurface, PolygonMesh};
 use meshpyr::pm::ProgressiveMesh;
 use meshpyr::progress::{NoProgress, Progress};
@@ -26,6 +27,55 @@ pub(crate) fn read_input_mesh(path: &Path) -> anyhow::Result<PolygonMesh> {
     let mesh = read_any_input(path)?;
     require(path, mesh.check_surface())?;
     Ok(mesh)
+}
+
+/// [`read_input_mesh`] for a command that does `job` on the mesh: first refused in one line
+/// when its estimated memory exceeds what the process may use ([`check_memory`]), before the
+/// file is read; for a file whose counts were estimated from its size (OBJ, ASCII STL), again
+/// with the counts read.
+pub(crate) fn read_input_mesh_for(path: &Path, job: Job) -> anyhow::Result<PolygonMesh> {
+    let estimated = check_memory(path, job)?;
+    let mesh = read_input_mesh(path)?;
+    if estimated {
+        recheck_memory(path, job, &mesh)?;
+    }
+    Ok(mesh)
+}
+
+/// Refuses `job` on the input at `path` in one line when its estimated peak exceeds a hard
+/// memory limit (`ulimit -v`, the cgroup's, the machine's RAM and swap), from the file's head
+/// alone (see [`meshpyr::memory`]); warns when it exceeds the memory available now. Returns
+/// whether the counts were only estimated from the file's size, so that the caller checks
+/// again once it has read them ([`recheck_memory`]).
+pub(crate) fn check_memory(path: &Path, job: Job) -> anyhow::Result<bool> {
+    let Some(fit) = memory::check_file(path, job)? else {
+        return Ok(false);
+    };
+    warn_short_of_available(path, job, &fit);
+    Ok(fit.size.from_file_size)
+}
+
+/// [`check_memory`] with the counts of the mesh read from `path`.
+pub(crate) fn recheck_memory(path: &Path, job: Job, mesh: &PolygonMesh) -> anyhow::Result<()> {
+    let size = InputSize::mesh(mesh.n_vertices() as u64, mesh.n_faces() as u64);
+    let fit = memory::check_size(path, job, &size)?;
+    warn_short_of_available(path, job, &fit);
+    Ok(())
+}
+
+/// A warning line when the job needs more than the memory available now (not an error:
+/// other programs may end or be swapped out).
+fn warn_short_of_available(path: &Path, job: Job, fit: &memory::Fit) {
+    if let Some(available) = fit.short_of_available {
+        eprintln!(
+            "warning: {}: needs about {} of memory for {} vertices ({job}), {} available now; \
+             it may swap or be stopped by the system",
+            path.display(),
+            memory::Bytes(fit.need.resident),
+            fit.need.vertices,
+            memory::Bytes(available),
+        );
+    }
 }
 
 /// [`read_input_mesh`] for the commands that take point clouds as well (`convert`): only a
@@ -79,11 +129,15 @@ pub(crate) fn load_pyramid(
     global: &Global,
 ) -> anyhow::Result<Pyramid> {
     let wanted = relax.map(RelaxKind::spec);
+    let estimated = check_memory(path, Job::Pyramid)?;
     if is_pyr_file(path) {
         return load_pyr_scan(path, wanted, global);
     }
     let input = io::read_mesh(path)?;
     require(path, input.check_surface())?;
+    if estimated {
+        recheck_memory(path, Job::Pyramid, &input)?;
+    }
     build_pyramid(
         input,
         wanted.unwrap_or_default(),
@@ -168,6 +222,7 @@ pub(crate) fn load_spectrum(
         return Ok(load_pyramid(path, relax, global)?.spectrum());
     }
     let relaxation = relax.map(RelaxKind::spec);
+    check_memory(path, Job::Pyramid)?;
     let start = Instant::now();
     let data = load_pyr(path)?;
     let Ok(spectrum) = data.stored_spectrum(relaxation) else {

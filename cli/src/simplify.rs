@@ -52,7 +52,7 @@ pub(crate) struct SimplifyArgs {
 pub(crate) fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
     let goal = SimplifyGoal::one_of(args.faces, args.ratio, args.error, args.prune)?;
-    let input = super::input::read_input_mesh(&args.input)?;
+    let input = super::input::read_input_mesh_for(&args.input, meshpyr::memory::Job::Simplify)?;
     let opts = PmOptions {
         max_normal_angle_degrees: args.max_angle,
         min_quality: args.min_quality,

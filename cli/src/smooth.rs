@@ -127,7 +127,7 @@ impl SmoothArgs {
 pub(crate) fn run(args: SmoothArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
     let method = args.settings().method()?;
-    let input = super::input::read_input_mesh(&args.input)?;
+    let input = super::input::read_input_mesh_for(&args.input, meshpyr::memory::Job::Smooth)?;
     let start = Instant::now();
     let bar = global.progress("smooth");
     let smoothed = smooth_mesh(&input, &method, &BarProgress(&bar))

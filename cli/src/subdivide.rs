@@ -6,7 +6,7 @@ use anyhow::Context;
 use meshpyr::choice::Choice;
 use meshpyr::io;
 use meshpyr::mesh::{Mesh, PolygonMesh};
-use meshpyr::subdiv::{self, Refinement, Scheme, SolverChoice, SubdivSettings};
+use meshpyr::subdiv::{self, Refinement, Scheme, Solver, SolverChoice, SubdivSettings};
 use meshpyr::wording::Count;
 use std::path::PathBuf;
 
@@ -54,7 +54,7 @@ pub(crate) struct SubdivideArgs {
 /// Runs `meshpyr subdivide`.
 pub(crate) fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
     super::check_mesh_output(&args.output)?;
-    let input = super::input::read_input_mesh(&args.input)?;
+    let input = read_input(&args)?;
     let built = Mesh::from_polygons(&input)
         .with_context(|| format!("building a mesh from {}", args.input.display()))?;
     if built.report.repaired_anything() {
@@ -103,4 +103,37 @@ pub(crate) fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
         Count(output.n_faces(), "face", "faces")
     ));
     Ok(())
+}
+
+/// The input, first checked for memory ([`super::input::read_input_mesh_for`]) unless the
+/// output would exceed the library's own face limit, whose error says it better.
+fn read_input(args: &SubdivideArgs) -> anyhow::Result<PolygonMesh> {
+    let limit = meshpyr::SubdivOptions::default().max_output_faces as u64;
+    let growth = 4u64.saturating_pow(args.levels.min(32) as u32);
+    let size = meshpyr::memory::input_size(&args.input);
+    let beyond_limit = size.is_some_and(|s| {
+        s.faces
+            .max(s.vertices.saturating_mul(2))
+            .saturating_mul(growth)
+            > limit
+    });
+    if beyond_limit {
+        return super::input::read_input_mesh(&args.input);
+    }
+    // The solver `auto` picks, as the library will for the repaired mesh (whose vertex count
+    // the header's approaches).
+    let exact_solver = args.scheme == Scheme::Mcm
+        && match args.solver {
+            SolverChoice::Exact => true,
+            SolverChoice::Auto => size.is_some_and(|s| {
+                Solver::auto(s.scale() as usize, args.levels, args.refine) == Solver::Exact
+            }),
+            _ => false,
+        };
+    let job = meshpyr::memory::Job::Subdivide {
+        levels: args.levels,
+        refinement: args.refine,
+        exact_solver,
+    };
+    super::input::read_input_mesh_for(&args.input, job)
 }

@@ -2,10 +2,14 @@
 //! library's `view` module for the page, the API and what the server exposes).
 
 use super::Global;
-use super::input::{build_pyramid_watched, decode_pyr, is_pyr_file, pyramid_of_pyr_bytes, require};
+use super::input::{
+    build_pyramid_watched, check_memory, decode_pyr, is_pyr_file, pyramid_of_pyr_bytes,
+    recheck_memory, require,
+};
 use crate::view::limits::BUDGET;
 use crate::view::{Loader, Opening, Picture, ViewServer, first_picture};
 use anyhow::Context;
+use meshpyr::memory::Job;
 use meshpyr::pm::ProgressiveMesh;
 use meshpyr::relax::RelaxationSpec;
 use meshpyr::{format, io};
@@ -65,6 +69,7 @@ fn open_in_stages(
     global: &Global,
 ) -> anyhow::Result<(Picture, Loader)> {
     let (path, global) = (path.to_path_buf(), global.clone());
+    let estimated = check_memory(&path, Job::Pyramid)?;
     if is_pyr_file(&path) {
         let bytes =
             std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
@@ -87,6 +92,9 @@ fn open_in_stages(
     }
     let input = io::read_mesh(&path)?;
     require(&path, input.check_surface())?;
+    if estimated {
+        recheck_memory(&path, Job::Pyramid, &input)?;
+    }
     let first = first_picture(&input, budget);
     let load: Loader = Box::new(move |opening: &Opening| {
         opening.stage("building the hierarchy");

@@ -55,6 +55,7 @@ use input_side::{
     InputSide, decode_input_side, encode_polygons, encode_vertex_order, finest_faces,
     restore_input_positions,
 };
+pub(crate) use meta::head_counts;
 use meta::{build_info, describe, encode_meta};
 use positions::exactly_f32;
 

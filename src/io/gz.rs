@@ -34,6 +34,19 @@ pub(crate) fn read_gz_file(path: &Path, format: MeshFormat) -> Result<Vec<u8>, I
     inflate(&magic[..n], stream, squeezer).map_err(|e| e.with_path(path))
 }
 
+/// The first `at_most` decompressed bytes of the gzip data that `compressed` starts with (a
+/// header to read counts from); `None` when it is not gzip data or nothing inflates.
+pub(crate) fn head_of_gz(compressed: &[u8], at_most: usize) -> Option<Vec<u8>> {
+    if !compressed.starts_with(&[0x1f, 0x8b]) {
+        return None;
+    }
+    let mut out = Vec::new();
+    let decoder = flate2::read::MultiGzDecoder::new(compressed);
+    // A truncated stream is fine here: the head is what counts.
+    let _ = decoder.take(at_most as u64).read_to_end(&mut out);
+    (!out.is_empty()).then_some(out)
+}
+
 /// Decompresses gzip data (several concatenated members too, as `cat a.gz b.gz` makes).
 ///
 /// A corrupt or truncated stream is a parse error (with the number of decompressed bytes

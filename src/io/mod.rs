@@ -47,6 +47,7 @@ mod text;
 pub use atomic::hold_writes_for_tests;
 pub use atomic::{exit_removing_temporary_files, write_atomic};
 pub(crate) use fuzz::fuzz_read;
+pub(crate) use gz::head_of_gz;
 pub use gz::{gunzip, gzip};
 
 /// The mesh file formats meshpyr reads and writes.

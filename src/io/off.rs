@@ -73,7 +73,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
         lines: Lines::new(bytes, 1),
         last: 0,
     };
-    let header = read_header(&mut lines, &mut mesh.comments)?;
+    let header = read_header(&mut lines, &mut mesh.comments, 0)?;
     let (positions, vertices) = read_vertices(&mut lines, &header)?;
     (mesh.positions, mesh.position_type) = positions.finish();
     let face_colours = read_faces(&mut lines, &header, &mut mesh)?;
@@ -98,8 +98,27 @@ impl OffHeader {
     }
 }
 
+/// The vertex and face counts of an OFF file's header, from the head of the file, for an
+/// estimate before the body is read; `file_len` is the whole file's length when known. `None`
+/// when the header is malformed or the file cannot hold the counts (the reader says why).
+pub(crate) fn header_counts(head: &[u8], file_len: Option<u64>) -> Option<(u64, u64)> {
+    let mut lines = OffLines {
+        lines: Lines::new(head, 1),
+        last: 0,
+    };
+    // The bytes after the head count as room for the counts (all of them when unknown).
+    let beyond = file_len.map_or(u64::MAX / 2, |l| l.saturating_sub(head.len() as u64));
+    let header = read_header(&mut lines, &mut Vec::new(), beyond).ok()?;
+    Some((header.nv, header.nf))
+}
+
 /// The keyword line (if any) and the counts line; comments before the counts are kept.
-fn read_header(lines: &mut OffLines, comments: &mut Vec<String>) -> Result<OffHeader, IoError> {
+/// `beyond`: bytes of the file after `lines`' text (0 when `lines` hold the whole file).
+fn read_header(
+    lines: &mut OffLines,
+    comments: &mut Vec<String>,
+    beyond: u64,
+) -> Result<OffHeader, IoError> {
     let Some((hline, htoks)) = lines.next(Some(comments)) else {
         return Err(err_line(lines.last.max(1), "empty file (no OFF header)"));
     };
@@ -120,7 +139,8 @@ fn read_header(lines: &mut OffLines, comments: &mut Vec<String>) -> Result<OffHe
             (flags, l, t)
         }
     };
-    let (nv, nf) = parse_counts(&count_toks, count_line, lines.lines.rest_len())?;
+    let rest = (lines.lines.rest_len() as u64).saturating_add(beyond);
+    let (nv, nf) = parse_counts(&count_toks, count_line, rest)?;
     Ok(OffHeader {
         uvs,
         colours,
@@ -169,7 +189,7 @@ fn parse_keyword(htoks: &[&[u8]], hline: u64) -> Result<(bool, bool, bool), IoEr
 fn parse_counts(
     count_toks: &[&[u8]],
     count_line: u64,
-    rest_len: usize,
+    rest_len: u64,
 ) -> Result<(u64, u64), IoError> {
     if !(2..=3).contains(&count_toks.len()) {
         return Err(err_line(
@@ -183,7 +203,7 @@ fn parse_counts(
         parse_count(e, count_line)?;
     }
     // Each vertex line needs at least "0 0 0\n", each face line "0\n".
-    let left = rest_len as u64 + 1;
+    let left = rest_len.saturating_add(1);
     let need = nv.saturating_mul(6).saturating_add(nf.saturating_mul(2));
     if need > left {
         return Err(err_line(

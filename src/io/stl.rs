@@ -64,6 +64,14 @@ impl Welder {
     }
 }
 
+/// The triangle count of a binary STL file whose head is `head` and length `len`, detected as
+/// [`read`] does; `None` for ASCII STL (or a binary file whose count does not match its size,
+/// which the reader rejects).
+pub(crate) fn binary_triangles(head: &[u8], len: u64) -> Option<u64> {
+    let declared = u32::from_le_bytes(head.get(80..84)?.try_into().ok()?) as u64;
+    (84 + 50 * declared == len).then_some(declared)
+}
+
 /// Reads an STL file (binary or ASCII, detected from the content).
 pub(crate) fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     let declared = (bytes.len() >= 84)

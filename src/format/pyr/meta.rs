@@ -138,3 +138,13 @@ pub(super) fn build_info(meta: &Meta) -> PyramidOptions {
         relaxation: meta.relaxation,
     }
 }
+
+/// The input's vertex and face counts from the head of a `.pyr` file (its header, section
+/// table and `META`, checked), for an estimate before the file is read; `None` when the head
+/// does not hold them or they are not valid.
+pub(crate) fn head_counts(head: &[u8]) -> Option<(u64, u64)> {
+    let c = Container::parse(head).ok()?;
+    check_version(&c).ok()?;
+    let meta = read_meta(&c).ok()?;
+    Some((meta.n_input_vertices, meta.n_input_faces))
+}

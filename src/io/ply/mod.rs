@@ -61,6 +61,33 @@ pub(crate) fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     Ok(mesh)
 }
 
+/// The vertex and face counts a PLY header announces, from the head of the file (which must
+/// hold the whole header), for an estimate before the body is read. `None` when the header is
+/// malformed, or when `body_len` (the file's length, when known) cannot hold the rows the
+/// counts claim: the reader then says what is wrong.
+pub(crate) fn header_counts(head: &[u8], file_len: Option<u64>) -> Option<(u64, u64)> {
+    let header = parse_header(head).ok()?;
+    let nv = vertex_count(&header).ok()?;
+    if let Some(len) = file_len {
+        let ascii = header.encoding == PlyEncoding::Ascii;
+        let mut need = 0u64;
+        for el in &header.elements {
+            let plans = plan::plan_element(el, &plan::Role::of(el)).ok()?;
+            need = need.saturating_add(el.count.saturating_mul(plan::min_row_bytes(&plans, ascii)));
+        }
+        // ASCII: the last row may lack its line break.
+        if need > len.saturating_sub(header.body as u64) + u64::from(ascii) {
+            return None;
+        }
+    }
+    let nf = header
+        .elements
+        .iter()
+        .find(|e| e.name == "face")
+        .map_or(0, |e| e.count);
+    Some((nv, nf))
+}
+
 /// Writes a PLY file.
 pub(crate) fn write(mesh: &PolygonMesh, encoding: PlyEncoding) -> Result<Vec<u8>, IoError> {
     validate(mesh)?;
