@@ -22,18 +22,25 @@ fn meshpyr_limited(kib: u64, args: &[&str], env: &[(&str, &str)]) -> Output {
         .expect("sh runs")
 }
 
-/// A binary PLY whose header claims 100M vertices and 200M triangles, as long as that body
-/// would be (3.8 GB) but sparse: no disk is used, and nothing but the header may be read.
-fn huge_ply(test: &str) -> PathBuf {
-    let path = scratch(test, "huge.ply");
-    let header = b"ply\nformat binary_little_endian 1.0\nelement vertex 100000000\n\
-        property float x\nproperty float y\nproperty float z\nelement face 200000000\n\
-        property list uchar int vertex_indices\nend_header\n";
+/// A binary PLY whose header claims `vertices` and `triangles`, as long as that body would be
+/// but sparse: no disk is used, and nothing but the header may be read.
+fn sparse_ply(test: &str, name: &str, vertices: u64, triangles: u64) -> PathBuf {
+    let path = scratch(test, name);
+    let header = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {vertices}\n\
+         property float x\nproperty float y\nproperty float z\nelement face {triangles}\n\
+         property list uchar int vertex_indices\nend_header\n"
+    );
     let mut f = std::fs::File::create(&path).unwrap();
-    std::io::Write::write_all(&mut f, header).unwrap();
-    f.set_len(header.len() as u64 + 100_000_000 * 12 + 200_000_000 * 13)
+    std::io::Write::write_all(&mut f, header.as_bytes()).unwrap();
+    f.set_len(header.len() as u64 + vertices * 12 + triangles * 13)
         .unwrap();
     path
+}
+
+/// 100M vertices and 200M triangles (3.8 GB, sparse).
+fn huge_ply(test: &str) -> PathBuf {
+    sparse_ply(test, "huge.ply", 100_000_000, 200_000_000)
 }
 
 /// 1 GiB, in the KiB `ulimit -v` takes.
@@ -91,14 +98,7 @@ fn a_scan_above_ulimit_v_fails_at_once_in_one_line_saying_what_it_would_need() {
 /// comes first above it).
 #[test]
 fn subdivision_is_estimated_by_its_output() {
-    let input = scratch("memory-subdiv", "scan.ply");
-    let header = b"ply\nformat binary_little_endian 1.0\nelement vertex 1000000\n\
-        property float x\nproperty float y\nproperty float z\nelement face 2000000\n\
-        property list uchar int vertex_indices\nend_header\n";
-    let mut f = std::fs::File::create(&input).unwrap();
-    std::io::Write::write_all(&mut f, header).unwrap();
-    f.set_len(header.len() as u64 + 1_000_000 * 12 + 2_000_000 * 13)
-        .unwrap();
+    let input = sparse_ply("memory-subdiv", "scan.ply", 1_000_000, 2_000_000);
     let output = scratch("memory-subdiv", "out.ply");
     let o = meshpyr_limited(
         ONE_GB,
