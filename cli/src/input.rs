@@ -56,7 +56,7 @@ pub(crate) fn check_memory(path: &Path, job: Job) -> anyhow::Result<bool> {
 }
 
 /// [`check_memory`] with the counts of the mesh read from `path`.
-pub(crate) fn recheck_memory(path: &Path, job: Job, mesh: &PolygonMesh) -> anyhow::Result<()> {
+fn recheck_memory(path: &Path, job: Job, mesh: &PolygonMesh) -> anyhow::Result<()> {
     let size = InputSize::mesh(mesh.n_vertices() as u64, mesh.n_faces() as u64);
     let fit = memory::check_size(path, job, &size)?;
     warn_short_of_available(path, job, &fit);
@@ -129,15 +129,11 @@ pub(crate) fn load_pyramid(
     global: &Global,
 ) -> anyhow::Result<Pyramid> {
     let wanted = relax.map(RelaxKind::spec);
-    let estimated = check_memory(path, Job::Pyramid)?;
     if is_pyr_file(path) {
+        check_memory(path, Job::Pyramid)?;
         return load_pyr_scan(path, wanted, global);
     }
-    let input = io::read_mesh(path)?;
-    require(path, input.check_surface())?;
-    if estimated {
-        recheck_memory(path, Job::Pyramid, &input)?;
-    }
+    let input = read_input_mesh_for(path, Job::Pyramid)?;
     build_pyramid(
         input,
         wanted.unwrap_or_default(),

@@ -4,15 +4,15 @@
 use super::Global;
 use super::input::{
     build_pyramid_watched, check_memory, decode_pyr, is_pyr_file, pyramid_of_pyr_bytes,
-    recheck_memory, require,
+    read_input_mesh_for,
 };
 use crate::view::limits::BUDGET;
 use crate::view::{Loader, Opening, Picture, ViewServer, first_picture};
 use anyhow::Context;
+use meshpyr::format;
 use meshpyr::memory::Job;
 use meshpyr::pm::ProgressiveMesh;
 use meshpyr::relax::RelaxationSpec;
-use meshpyr::{format, io};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `meshpyr view`.
@@ -69,8 +69,8 @@ fn open_in_stages(
     global: &Global,
 ) -> anyhow::Result<(Picture, Loader)> {
     let (path, global) = (path.to_path_buf(), global.clone());
-    let estimated = check_memory(&path, Job::Pyramid)?;
     if is_pyr_file(&path) {
+        check_memory(&path, Job::Pyramid)?;
         let bytes =
             std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
         let level = format::read_level_within(&bytes, budget)
@@ -90,11 +90,7 @@ fn open_in_stages(
         });
         return Ok((first, load));
     }
-    let input = io::read_mesh(&path)?;
-    require(&path, input.check_surface())?;
-    if estimated {
-        recheck_memory(&path, Job::Pyramid, &input)?;
-    }
+    let input = read_input_mesh_for(&path, Job::Pyramid)?;
     let first = first_picture(&input, budget);
     let load: Loader = Box::new(move |opening: &Opening| {
         opening.stage("building the hierarchy");
