@@ -614,7 +614,8 @@ pub(crate) fn is_collapse_topologically_legal(
     Some(new_valence)
 }
 
-/// The shape rules of [`Legality`] (normals, slivers) on the faces around `h`'s tail.
+/// The shape rules of [`Legality`] (normals, slivers) on the faces around `h`'s tail: the
+/// sliver penalty the collapse pays when it is legal, `None` when it is not.
 pub(crate) fn is_collapse_geometrically_legal(
     mesh: &Mesh,
     h: HalfedgeId,

@@ -1202,7 +1202,6 @@ mod tests {
             tight.legality.max_valence = 6;
             assert_same_as_reference(&mesh, &tight);
             let (_, _, outcome) = decimate(FlatMesh::from_mesh(&mesh), &tight, &NoProgress);
-            eprintln!("{name}: relaxed {:?}", outcome.relaxed);
             relaxed += outcome.relaxed.iter().sum::<usize>();
         }
         assert!(relaxed > 0);

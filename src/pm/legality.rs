@@ -41,7 +41,7 @@ pub struct Legality {
     /// Triangle quality `4√3·A / (l1² + l2² + l3²)` (1 for equilateral) below which a face left
     /// around the removed vertex counts as a sliver: a collapse that makes the worst face there
     /// a worse sliver pays a penalty on top of its error (module docs); 0 turns the penalty
-    /// off.
+    /// off, and with it the refusal of faces that would lose their normal.
     pub min_quality: f64,
 }
 
@@ -201,7 +201,6 @@ pub(crate) fn quality(n: DVec3, a: DVec3, b: DVec3, c: DVec3) -> f64 {
     }
 }
 
-/// The shape rules (module docs) for moving `u` from `pu` to `pv`, given every face around `u`.
 /// The shape rules (module docs) for moving `u` from `pu` to `pv`, given every face around `u`:
 /// the refusal, or the sliver penalty the collapse pays on top of its quadric error (a squared
 /// distance; 0 when it leaves no new sliver).
