@@ -519,7 +519,8 @@ pub fn input_size(path: &Path) -> Option<InputSize> {
     match format {
         MeshFormat::Ply => counted(io::ply::header_counts(&head, body_len)?),
         MeshFormat::Off => counted(io::off::header_counts(&head, body_len)?),
-        // Compressed text's size says little; read it and check the counts after.
+        // Compressed text's size says little: no estimate (the command line does not check
+        // these after reading either).
         MeshFormat::Obj | MeshFormat::Stl if gz => None,
         MeshFormat::Obj => by_size(len / OBJ_BYTES_PER_VERTEX, 0),
         MeshFormat::Stl => match io::stl::binary_triangles(&head, len) {
