@@ -209,26 +209,42 @@ fn obj_reader_handles_the_syntax_zoo() {
         m.comments,
         vec!["header comment".to_string(), "second".to_string()]
     );
-    let names: Vec<_> = m
-        .vertex_attributes
-        .iter()
-        .map(|a| a.name.as_str())
-        .collect();
-    assert_eq!(names, ["u", "v", "nx", "ny", "nz"]);
+    // Four vt for five v: per corner, every line kept with each corner's index.
+    assert!(m.vertex_attributes.is_empty());
+    let uv = m.corner_attribute("texcoord").unwrap();
+    assert_eq!(uv.indices, [0, 1, 2, 3, 2, 1]);
     assert_eq!(
-        m.vertex_attribute("u").unwrap().data,
-        AttributeData::F32(vec![0.0, 1.0, 0.0, 1.0, 0.0])
+        uv.columns[0].data,
+        AttributeData::F32(vec![0.0, 1.0, 0.0, 1.0])
     );
+    assert_eq!(m.corner_attribute("normal").unwrap().indices, [0; 6]);
+    assert_eq!(m.materials.libraries, ["a.mtl"]);
+    assert_eq!(m.materials.list[0].name, "m");
+    assert_eq!(m.group_names, ["g1", "g2"]);
+    assert_eq!(m.object_names, ["obj"]);
+    let column = |name: &str| m.face_attribute(name).unwrap().data.clone();
+    assert_eq!(column("obj_group"), AttributeData::I32(vec![1, 1]));
+    assert_eq!(column("texnumber"), AttributeData::I32(vec![0, 0]));
+    assert_eq!(column("obj_smoothing"), AttributeData::I32(vec![0, 0]));
     assert_eq!(m.position_type, Some(ScalarType::F32)); // short decimals: float data
 }
 
 #[test]
-fn obj_conflicting_corner_normals_are_dropped_positions_kept() {
+fn obj_conflicting_corner_normals_are_kept_per_corner() {
     let m = read_mesh(data("cube_degenerate_om.obj")).unwrap();
     assert_eq!(m.n_vertices(), 8);
     assert_eq!(m.n_faces(), 14);
     assert_eq!(m.face(10), &[1, 5, 7, 7, 1]);
     assert!(m.vertex_attributes.is_empty());
+    let normals = m.corner_attribute("normal").unwrap();
+    assert_eq!(normals.indices.len(), m.face_indices.len());
+    assert_eq!(normals.n_valued(), m.face_indices.len());
+    let again = read_mesh_bytes(
+        &write_mesh_bytes(&m, MeshFormat::Obj, &Default::default()).unwrap(),
+        MeshFormat::Obj,
+    )
+    .unwrap();
+    assert_eq!(again.corner_attributes, m.corner_attributes);
 }
 
 #[test]

@@ -25,7 +25,7 @@ pub(crate) fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
         let base = data.pm.describe_base();
         (data.input, Some(base))
     } else {
-        (meshpyr::io::read_mesh(&args.mesh)?, None)
+        (super::input::read_mesh_warning(&args.mesh)?, None)
     };
     super::input::require(&args.mesh, poly.check_not_empty())?;
     let mut info = MeshInfo::of(&poly).with_context(|| args.mesh.display().to_string())?;
@@ -69,7 +69,47 @@ pub(crate) fn run(args: InfoArgs, _global: &Global) -> anyhow::Result<()> {
     if !info.face_attributes.is_empty() {
         outln!("  face attributes: {}", info.face_attributes.join(" "));
     }
+    if let Some(t) = &info.texture {
+        print_texture(t)?;
+    }
     print_repairs(&info)
+}
+
+/// Texture coordinates and seams, materials, groups, and the files they name.
+fn print_texture(t: &meshpyr::mesh::TextureInfo) -> anyhow::Result<()> {
+    for (name, pool, valued) in &t.corner_attributes {
+        outln!(
+            "  per-corner {name}: {} on {}",
+            Count(*pool, "value", "values"),
+            Count(*valued, "corner", "corners")
+        );
+    }
+    if t.corner_attributes.iter().any(|a| a.0 == "texcoord") {
+        outln!(
+            "  texture seams: {}, {}",
+            Count(t.seam_edges, "edge", "edges"),
+            Count(t.seam_vertices, "vertex", "vertices")
+        );
+    }
+    if !t.materials.is_empty() {
+        outln!("  materials: {}", t.materials.join(" "));
+    }
+    if t.groups + t.objects > 0 {
+        outln!(
+            "  {}, {}",
+            Count(t.groups, "group", "groups"),
+            Count(t.objects, "object", "objects")
+        );
+    }
+    for (file, found) in &t.files {
+        let state = match found {
+            Some(true) => "found",
+            Some(false) => "missing",
+            None => "not looked up",
+        };
+        outln!("  file {file}: {state}");
+    }
+    Ok(())
 }
 
 /// The repairs the builder makes, and what they mean for the levels of the hierarchy.

@@ -90,7 +90,27 @@ fn read_any_input(path: &Path) -> anyhow::Result<PolygonMesh> {
     if is_pyr_file(path) {
         return Ok(load_pyr(path)?.input);
     }
-    Ok(io::read_mesh(path)?)
+    read_mesh_warning(path)
+}
+
+/// Reads a mesh file, with a warning on standard error for each file it names that is
+/// missing (material libraries, images, undefined materials).
+pub(crate) fn read_mesh_warning(path: &Path) -> anyhow::Result<PolygonMesh> {
+    let (mesh, warnings) = io::read_mesh_reporting(path)?;
+    for w in warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    Ok(mesh)
+}
+
+/// A warning on standard error when `output`, made with new faces, lacks the per-corner
+/// data, materials, groups or face properties that `input` has.
+pub(crate) fn warn_face_data_dropped(path: &Path, input: &PolygonMesh, output: &PolygonMesh) {
+    if output.face_data_dropped().is_none()
+        && let Some(what) = input.face_data_dropped()
+    {
+        eprintln!("warning: {}: {what}", path.display());
+    }
 }
 
 /// A failed content check as an error naming the file.

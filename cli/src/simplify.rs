@@ -72,6 +72,7 @@ pub(crate) fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
         ));
     }
     io::write_mesh(&args.output, &result.mesh)?;
+    super::input::warn_face_data_dropped(&args.input, &input, &result.mesh);
     if let Some(shortfall) = result.shortfall() {
         eprintln!("warning: {}: {shortfall}", args.input.display());
     }

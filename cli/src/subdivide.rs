@@ -96,6 +96,7 @@ pub(crate) fn run(args: SubdivideArgs, global: &Global) -> anyhow::Result<()> {
     }
     let output = PolygonMesh::from_triangle_vec(result.positions, result.triangles);
     io::write_mesh(&args.output, &output)?;
+    super::input::warn_face_data_dropped(&args.input, &input, &output);
     global.say(format_args!(
         "wrote {} ({}, {})",
         args.output.display(),

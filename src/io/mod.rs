@@ -32,7 +32,7 @@
 use std::fmt;
 use std::path::{Path, PathBuf};
 
-use crate::mesh::PolygonMesh;
+use crate::mesh::{Materials, PolygonMesh};
 
 mod atomic;
 mod fuzz;
@@ -40,6 +40,7 @@ mod gz;
 pub(crate) mod obj;
 pub(crate) mod off;
 pub(crate) mod ply;
+mod references;
 pub(crate) mod stl;
 mod text;
 
@@ -295,8 +296,15 @@ pub(crate) fn is_gzip(path: &Path) -> bool {
 
 /// Reads a mesh file; the format comes from the extension. `.gz` files are decompressed as a
 /// stream, dropping the comments the reader would discard, so a small file that inflates to
-/// gigabytes of comment text reads in little memory.
+/// gigabytes of comment text reads in little memory. The warnings of
+/// [`read_mesh_reporting`] (missing material libraries and images) are dropped.
 pub fn read_mesh(path: impl AsRef<Path>) -> Result<PolygonMesh, IoError> {
+    Ok(read_mesh_reporting(path)?.0)
+}
+
+/// [`read_mesh`], with a line for each file the mesh names that is missing: a material
+/// library, an image, or a material no library defines (see [`crate::mesh::Materials`]).
+pub fn read_mesh_reporting(path: impl AsRef<Path>) -> Result<(PolygonMesh, Vec<String>), IoError> {
     let path = path.as_ref();
     if path.is_dir() {
         return Err(IoError::Io {
@@ -316,7 +324,9 @@ pub fn read_mesh(path: impl AsRef<Path>) -> Result<PolygonMesh, IoError> {
             error,
         })?
     };
-    read_mesh_bytes(&bytes, format).map_err(|e| e.with_path(path))
+    let mut mesh = read_mesh_bytes(&bytes, format).map_err(|e| e.with_path(path))?;
+    let warnings = references::resolve(&mut mesh, path, format);
+    Ok((mesh, warnings))
 }
 
 /// Parses a mesh from memory.
@@ -343,15 +353,31 @@ pub fn write_mesh(path: impl AsRef<Path>, mesh: &PolygonMesh) -> Result<(), IoEr
 /// Writes a mesh atomically (see [`write_atomic`]); the format comes from the extension.
 /// The mesh is encoded completely before the file system is touched, so a rejected mesh
 /// leaves any existing file as it was.
+///
+/// Material libraries and images are referenced, not copied: relative references are
+/// rewritten to reach the same files from `path`'s folder. An OBJ output of a mesh with
+/// materials but no library (read from PLY) gets `NAME.mtl` written beside it.
 pub fn write_mesh_with(
     path: &Path,
     mesh: &PolygonMesh,
     opts: &WriteOptions,
 ) -> Result<(), IoError> {
     let format = MeshFormat::from_path(path)?;
-    let mut bytes = write_mesh_bytes(mesh, format, opts).map_err(|e| e.with_path(path))?;
+    let mut materials = references::rebased(&mesh.materials, path);
+    let sidecar = match format {
+        MeshFormat::Obj => references::sidecar_library(&materials, path),
+        _ => None,
+    };
+    if let Some((file, _)) = &sidecar {
+        let name = file.file_name().unwrap_or_default().to_string_lossy();
+        materials.libraries.push(name.into_owned());
+    }
+    let mut bytes = encode(mesh, &materials, format, opts).map_err(|e| e.with_path(path))?;
     if is_gzip(path) {
         bytes = gzip(&bytes);
+    }
+    if let Some((file, text)) = sidecar {
+        write_atomic(&file, text.as_bytes())?;
     }
     write_atomic(path, &bytes)
 }
@@ -363,13 +389,23 @@ pub fn write_mesh_bytes(
     format: MeshFormat,
     opts: &WriteOptions,
 ) -> Result<Vec<u8>, IoError> {
+    encode(mesh, &mesh.materials, format, opts)
+}
+
+/// [`write_mesh_bytes`] with `materials` in place of the mesh's.
+fn encode(
+    mesh: &PolygonMesh,
+    materials: &Materials,
+    format: MeshFormat,
+    opts: &WriteOptions,
+) -> Result<Vec<u8>, IoError> {
     mesh.check().map_err(|r| err_invalid(format, r))?;
     if mesh.positions.len() > u32::MAX as usize {
         return Err(err_invalid(format, "more than 2^32 - 1 vertices"));
     }
     match format {
-        MeshFormat::Obj => obj::write(mesh),
-        MeshFormat::Ply => ply::write(mesh, opts.ply_encoding),
+        MeshFormat::Obj => obj::write(mesh, materials),
+        MeshFormat::Ply => ply::write(mesh, materials, opts.ply_encoding),
         MeshFormat::Off => off::write(mesh),
         MeshFormat::Stl => stl::write(mesh, opts.stl_binary),
     }

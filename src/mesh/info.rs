@@ -1,7 +1,7 @@
 //! [`MeshInfo`]: counts, topology, size and repairs of a file-level mesh, as `meshpyr info`
 //! reports them.
 
-use super::{BuildError, BuildReport, Mesh, PolygonMesh};
+use super::{BuildError, BuildReport, Mesh, PolygonMesh, TextureInfo};
 use serde::Serialize;
 
 /// What `meshpyr info` reports about a mesh. Counts describe the file as given; topology
@@ -44,6 +44,9 @@ pub struct MeshInfo {
     pub vertex_attributes: Vec<String>,
     /// Per-face attribute names, in file order.
     pub face_attributes: Vec<String>,
+    /// Texture coordinates, seams, materials and the files they name; `None` for a mesh
+    /// without any.
+    pub texture: Option<TextureInfo>,
 }
 
 impl MeshInfo {
@@ -77,6 +80,7 @@ impl MeshInfo {
                 .iter()
                 .map(|a| a.name.clone())
                 .collect(),
+            texture: TextureInfo::of(poly),
         })
     }
 }

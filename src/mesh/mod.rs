@@ -2,13 +2,16 @@
 //! processing, with the builder that turns one into the other.
 
 pub(crate) mod build;
+pub mod corners;
 pub(crate) mod geometry;
 pub(crate) mod halfedge;
 pub(crate) mod info;
+mod normals;
 pub(crate) mod polygon;
 mod prune;
 pub mod shapes;
 mod surface;
+mod texture_info;
 pub(crate) mod topology;
 mod union_find;
 pub(crate) mod validate;
@@ -16,6 +19,7 @@ pub(crate) mod validate;
 pub use build::BuildReport;
 pub(crate) use build::CornerTable;
 pub use build::{BuildError, Built, SourceMap};
+pub use corners::{CornerAttribute, Material, Materials, NO_VALUE};
 pub use geometry::BoundingBox;
 pub use geometry::cotangent;
 pub use halfedge::{FaceId, HalfedgeId};
@@ -26,5 +30,6 @@ pub use polygon::{
 };
 pub use prune::{Pruned, prune_small_components};
 pub use surface::MissingSurface;
+pub use texture_info::TextureInfo;
 pub use topology::Topology;
 pub use validate::ValidationError;

@@ -7,6 +7,8 @@
 
 use glam::DVec3;
 
+use super::corners::{CornerAttribute, Materials};
+
 /// How a file stores a scalar: the PLY scalar types, which also cover OBJ/OFF/STL needs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum ScalarType {
@@ -110,6 +112,21 @@ impl AttributeData {
         }
     }
 
+    /// Appends `x` converted to the column's type (exact when `x` is a value of that type, as
+    /// the PLY reader's widened list items are).
+    pub(crate) fn push_f64(&mut self, x: f64) {
+        match self {
+            AttributeData::I8(v) => v.push(x as i8),
+            AttributeData::U8(v) => v.push(x as u8),
+            AttributeData::I16(v) => v.push(x as i16),
+            AttributeData::U16(v) => v.push(x as u16),
+            AttributeData::I32(v) => v.push(x as i32),
+            AttributeData::U32(v) => v.push(x as u32),
+            AttributeData::F32(v) => v.push(x as f32),
+            AttributeData::F64(v) => v.push(x),
+        }
+    }
+
     /// A new column holding the values at `rows`, in that order (used to carry attributes
     /// through simplification and compaction).
     pub(crate) fn gather(&self, rows: &[u32]) -> AttributeData {
@@ -163,6 +180,25 @@ pub struct ListProperty {
     pub items: Vec<f64>,
 }
 
+impl ListProperty {
+    /// The same property with row `rows[i]` in row `i`.
+    pub(crate) fn gathered(&self, rows: &[u32]) -> ListProperty {
+        let mut starts = Vec::with_capacity(rows.len() + 1);
+        starts.push(0);
+        let mut items = Vec::new();
+        for &r in rows {
+            let (s, e) = (self.starts[r as usize], self.starts[r as usize + 1]);
+            items.extend_from_slice(&self.items[s as usize..e as usize]);
+            starts.push(items.len() as u32);
+        }
+        ListProperty {
+            starts,
+            items,
+            ..self.clone()
+        }
+    }
+}
+
 /// A property of an element that is neither `vertex` nor `face`, kept so that it survives a
 /// read → write trip.
 #[derive(Clone, Debug, PartialEq)]
@@ -188,7 +224,9 @@ pub struct ExtraElement {
 ///
 /// Invariants (checked by [`PolygonMesh::check`]): every index is `< positions.len()`, every
 /// position is finite, `face_starts` is non-decreasing, starts at 0 and ends at
-/// `face_indices.len()`, and every attribute column has one row per vertex (or face).
+/// `face_indices.len()`, every attribute column has one row per vertex (or face), every corner
+/// attribute one index per corner into its pool, every face list one row per face, and the
+/// material, group and object attributes index their tables (see [`crate::mesh::corners`]).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PolygonMesh {
     /// Vertex positions, widened to f64 (exact for f32 input).
@@ -202,8 +240,19 @@ pub struct PolygonMesh {
     pub face_indices: Vec<u32>,
     /// Per-vertex columns in file order (colours, normals, texture coordinates, scalars).
     pub vertex_attributes: Vec<Attribute>,
-    /// Per-face columns in file order.
+    /// Per-face columns in file order (materials and groups among them, see
+    /// [`crate::mesh::corners`]).
     pub face_attributes: Vec<Attribute>,
+    /// Per-corner data with seams: texture coordinates, normals (see [`CornerAttribute`]).
+    pub corner_attributes: Vec<CornerAttribute>,
+    /// Per-face list properties other than the indices and `texcoord` (PLY only), kept opaque.
+    pub face_lists: Vec<ListProperty>,
+    /// The materials faces index, and the files that define them.
+    pub materials: Materials,
+    /// OBJ group (`g`) names, indexed by the face attribute `obj_group`.
+    pub group_names: Vec<String>,
+    /// OBJ object (`o`) names, indexed by the face attribute `obj_object`.
+    pub object_names: Vec<String>,
     /// Other elements (PLY only), kept verbatim.
     pub extra_elements: Vec<ExtraElement>,
     /// Header comments (PLY `comment`, OFF/OBJ `#` lines before the data), kept for writing.
@@ -345,7 +394,7 @@ impl PolygonMesh {
                 ));
             }
         }
-        Ok(())
+        self.check_corners()
     }
 }
 

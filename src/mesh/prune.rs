@@ -67,20 +67,7 @@ pub fn prune_small_components(mesh: &PolygonMesh, min_fraction: f64) -> (Polygon
     let kept: Vec<u32> = (0..mesh.n_faces() as u32)
         .filter(|&f| face_root[f as usize].is_some_and(|r| keep_root(r as usize)))
         .collect();
-    let mut out = PolygonMesh {
-        face_starts: vec![0],
-        face_indices: Vec::new(),
-        face_attributes: Vec::new(),
-        ..mesh.clone()
-    };
-    for &f in &kept {
-        out.push_face(mesh.face(f as usize));
-    }
-    out.face_attributes = mesh
-        .face_attributes
-        .iter()
-        .map(|a| a.gathered(&kept))
-        .collect();
+    let out = mesh.with_faces(&kept);
     let components = (0..n)
         .filter(|&r| boxes[r].is_some() && !keep_root(r))
         .count();

@@ -279,10 +279,12 @@ impl Pyramid {
         input_positions(&self.pm, &self.source, pm_signal, &self.input.positions)
     }
 
-    /// The input mesh with its positions replaced by `pm_signal` (PM order).
+    /// The input mesh with its positions replaced by `pm_signal` (PM order), its stored
+    /// normals recomputed where the surface moved ([`PolygonMesh::refresh_normals`]).
     pub fn output_mesh(&self, pm_signal: &[DVec3]) -> PolygonMesh {
         let mut out = self.input.clone();
         out.positions = self.to_input_positions(pm_signal);
+        out.refresh_normals(&self.input.positions);
         out
     }
 
@@ -298,7 +300,9 @@ impl Pyramid {
             ..
         } = self;
         drop(pyramid);
-        input.positions = input_positions(&pm, &source, pm_signal, &input.positions);
+        let moved = input_positions(&pm, &source, pm_signal, &input.positions);
+        let before = std::mem::replace(&mut input.positions, moved);
+        input.refresh_normals(&before);
         input
     }
 

@@ -67,7 +67,8 @@ impl SmoothMethod {
 #[derive(Clone, Debug)]
 pub struct Smoothed {
     /// The input with new positions: its vertices (count and order), faces and attributes
-    /// unchanged. Vertices in no face keep their positions.
+    /// unchanged but for stored normals, which follow the new surface
+    /// ([`PolygonMesh::refresh_normals`]). Vertices in no face keep their positions.
     pub mesh: PolygonMesh,
     /// What the builder repaired before smoothing (a vertex it split gets the mean of its
     /// copies in [`Smoothed::mesh`]).
@@ -88,13 +89,15 @@ pub fn smooth_mesh(
     input.check_surface()?;
     let built = Mesh::from_polygons(input)?;
     let (positions, summary) = smooth_positions(&built.mesh, method, progress)?;
+    let mut mesh = PolygonMesh {
+        positions: built
+            .source
+            .to_input_positions(&positions, &input.positions),
+        ..input.clone()
+    };
+    mesh.refresh_normals(&input.positions);
     Ok(Smoothed {
-        mesh: PolygonMesh {
-            positions: built
-                .source
-                .to_input_positions(&positions, &input.positions),
-            ..input.clone()
-        },
+        mesh,
         repair: built.report,
         summary,
     })

@@ -339,11 +339,12 @@ impl Session {
         Ok((bytes, format!("{}-view.{format}", safe_stem(&self.name))))
     }
 
-    /// The input with `positions`; when the format cannot carry the input's other data (PLY
+    /// The input with `positions` (stored normals following them); when the format cannot carry the input's other data (PLY
     /// properties in an OBJ, say), the geometry alone.
     fn mesh_bytes(&self, positions: Vec<DVec3>, format: MeshFormat) -> Result<Vec<u8>, String> {
         let mut mesh = self.pyramid.input.clone();
         mesh.positions = positions;
+        mesh.refresh_normals(&self.pyramid.input.positions);
         let opts = WriteOptions::default();
         meshpyr::io::write_mesh_bytes(&mesh, format, &opts).or_else(|_| {
             let mut bare = PolygonMesh::new();

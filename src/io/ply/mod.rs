@@ -11,16 +11,18 @@
 //!   become positions, every
 //!   other scalar property becomes a vertex attribute in file order.
 //! - `face`: the list `vertex_indices` (or `vertex_index`) gives the polygons; other scalar
-//!   properties become face attributes.
+//!   properties become face attributes; `texcoord` (two values per corner) becomes the corner
+//!   attribute `texcoord` and other lists are kept in `face_lists` (see `corners` for them and
+//!   for the `TextureFile` comments).
 //! - other elements are kept verbatim in `extra_elements`; `comment` and `obj_info` lines are
 //!   kept in `comments` (an `obj_info` line becomes the comment `obj_info …`).
-//! - list properties on `vertex`, and on `face` other than the indices, cannot be represented
-//!   and are rejected with an error.
+//! - list properties on `vertex` cannot be represented and are rejected with an error.
 //!
 //! The writer emits `vertex` (`double` positions when `position_type` is `F64`, `float` when it
 //! is `F32`; otherwise `float` if every coordinate is an f32 value and `double` if not), then
 //! `face` (`list uchar int vertex_indices`, or `uint` counts for polygons with more than 255
-//! corners), then the extra elements.
+//! corners; then the corner lists, the face lists and the scalar face properties), then the
+//! extra elements.
 //!
 //! Layout of the module: [`read()`] parses the header (`header`), checks the vertex count and
 //! reads element by element (`reader`: a plan per property from `plan`, then the binary fast
@@ -29,13 +31,15 @@
 //! (`write_header`), then the body (`write_body`). `types` holds the PLY type names.
 
 use super::{IoError, PlyEncoding};
-use crate::mesh::PolygonMesh;
+use crate::mesh::{Materials, PolygonMesh};
+use corners::comments_to_tables;
 use header::parse_header;
 use reader::{BodyReader, vertex_count};
 use validate::validate;
 use write_body::{ascii_body, binary_body};
 use write_header::{Layout, header_text};
 
+mod corners;
 mod fast;
 mod header;
 mod plan;
@@ -58,6 +62,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
         body.read_element(el, &mut mesh)?;
     }
     body.finish(&mut mesh);
+    comments_to_tables(&mut mesh);
     Ok(mesh)
 }
 
@@ -88,10 +93,14 @@ pub(crate) fn header_counts(head: &[u8], file_len: Option<u64>) -> Option<(u64, 
     Some((nv, nf))
 }
 
-/// Writes a PLY file.
-pub(crate) fn write(mesh: &PolygonMesh, encoding: PlyEncoding) -> Result<Vec<u8>, IoError> {
-    validate(mesh)?;
-    let layout = Layout::of(mesh)?;
+/// Writes a PLY file with `materials` in place of the mesh's (their paths rebased).
+pub(crate) fn write(
+    mesh: &PolygonMesh,
+    materials: &Materials,
+    encoding: PlyEncoding,
+) -> Result<Vec<u8>, IoError> {
+    let layout = Layout::of(mesh, materials)?;
+    validate(mesh, &layout)?;
     let header = header_text(mesh, encoding, &layout);
     Ok(match encoding {
         PlyEncoding::Ascii => ascii_body(header, mesh, &layout).into_bytes(),

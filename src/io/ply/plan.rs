@@ -65,8 +65,10 @@ pub(super) fn plan_element(el: &ElementDef, role: &Role) -> Result<Vec<Plan>, Io
                 have_indices = true;
                 Plan::Indices { count, item }
             }
-            (PropKind::List { count, item }, Role::Extra) => Plan::List { count, item },
-            (PropKind::List { .. }, _) => {
+            (PropKind::List { count, item }, Role::Extra | Role::Face) => {
+                Plan::List { count, item }
+            }
+            (PropKind::List { .. }, Role::Vertex) => {
                 return Err(err_line(
                     el.line,
                     format!(

@@ -4,6 +4,7 @@
 
 use glam::DVec3;
 
+use super::corners::lists_to_corners;
 use super::fast::{float_positions, read_faces_fast, row_stride, scalar_columns};
 use super::header::{ElementDef, Header};
 use super::plan::{Out, Plan, Role, min_row_bytes, plan_element};
@@ -100,10 +101,11 @@ impl<'a> BodyReader<'a> {
         Ok(())
     }
 
-    /// Hands the faces read to `mesh`.
+    /// Hands the faces read to `mesh`, with their per-corner lists as corner attributes.
     pub(super) fn finish(self, mesh: &mut PolygonMesh) {
         mesh.face_starts = self.ctx.face_starts;
         mesh.face_indices = self.ctx.face_indices;
+        lists_to_corners(mesh);
     }
 
     /// Rejects counts the rest of the file cannot hold, before allocating anything; returns
@@ -229,14 +231,17 @@ fn store_vertices(mesh: &mut PolygonMesh, el: &ElementDef, decoded: Decoded) {
     };
 }
 
-/// The scalar properties of `face` become face attributes (the indices are in the context).
+/// The scalar properties of `face` become face attributes and its lists face lists (the
+/// indices are in the context; per-corner lists become corner attributes in `finish`).
 fn store_face_attributes(mesh: &mut PolygonMesh, el: &ElementDef, outs: Vec<Out>) {
     for (p, out) in el.props.iter().zip(outs) {
-        if let Out::Col(data) = out {
-            mesh.face_attributes.push(Attribute {
+        match out {
+            Out::Col(data) => mesh.face_attributes.push(Attribute {
                 name: p.name.clone(),
                 data,
-            });
+            }),
+            Out::List(l) => mesh.face_lists.push(l),
+            Out::Indices => {}
         }
     }
 }

@@ -41,9 +41,54 @@ pub(super) fn read_rows(
                 _ => unreachable!("plans and outputs are built together"),
             }
         }
+        if is_face {
+            check_corner_lists(src, row, &outs, ctx)?;
+        }
         src.end_row()?;
     }
     Ok(outs)
+}
+
+/// A face's per-corner list (`texcoord`, `corner_*`) holds a whole number of values per corner
+/// (`texcoord`: two), or nothing for a face without them.
+fn check_corner_lists(
+    src: &dyn Source,
+    row: usize,
+    outs: &[Out],
+    ctx: &Ctx,
+) -> Result<(), IoError> {
+    let n = ctx.face_starts.len();
+    let corners = (ctx.face_starts[n - 1] - ctx.face_starts[n - 2]) as usize;
+    for out in outs {
+        let Out::List(l) = out else { continue };
+        let Some(per) = corner_list_width(&l.name) else {
+            continue;
+        };
+        let len = (l.starts[row + 1] - l.starts[row]) as usize;
+        let fits = match per {
+            Some(k) => len == k * corners,
+            None => corners > 0 && len.is_multiple_of(corners),
+        };
+        if len != 0 && !fits {
+            let each = per.map_or("a whole number of".to_string(), |k| k.to_string());
+            return Err(src.err(format!(
+                "face {row}: list {:?} has {len} values for {corners} corners ({each} per corner)",
+                l.name
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Whether a face list holds values per corner, and how many per corner when the name says:
+/// `texcoord` two, `corner_normal` three, any other `corner_*` list as many as it holds.
+pub(super) fn corner_list_width(name: &str) -> Option<Option<usize>> {
+    match name {
+        "texcoord" => Some(Some(2)),
+        "corner_normal" => Some(Some(3)),
+        n if n.starts_with("corner_") => Some(None),
+        _ => None,
+    }
 }
 
 /// One output per plan, with room for `rows` rows; lists carry their property's name.

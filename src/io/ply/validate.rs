@@ -1,8 +1,9 @@
 //! What the writer checks before writing: names PLY can hold, consistent extra elements.
 
 use super::types::{is_int, type_name};
+use super::write_header::Layout;
 use crate::io::{IoError, MeshFormat, err_invalid};
-use crate::mesh::{ElementProperty, PolygonMesh, ScalarType};
+use crate::mesh::{ElementProperty, ListProperty, PolygonMesh, ScalarType};
 
 pub(super) fn check_name(name: &str, what: &str) -> Result<(), IoError> {
     if name.is_empty() || name.bytes().any(|b| b.is_ascii_whitespace()) {
@@ -59,8 +60,32 @@ pub(super) fn max_count(t: ScalarType) -> u64 {
     }
 }
 
-pub(super) fn validate(mesh: &PolygonMesh) -> Result<(), IoError> {
-    for c in &mesh.comments {
+/// A list property of `rows` rows that PLY can hold as its types say.
+fn check_list(l: &ListProperty, rows: usize) -> Result<(), String> {
+    if !is_int(l.count_type) {
+        return Err(format!("{} has a non-integer count type", l.name));
+    }
+    if l.starts.len() != rows + 1
+        || l.starts[0] != 0
+        || *l.starts.last().unwrap_or(&0) as usize != l.items.len()
+        || l.starts
+            .windows(2)
+            .any(|w| w[0] > w[1] || (w[1] - w[0]) as u64 > max_count(l.count_type))
+    {
+        return Err(format!("list {} has inconsistent offsets", l.name));
+    }
+    if let Some(x) = l.items.iter().find(|&&x| !fits(x, l.item_type)) {
+        return Err(format!(
+            "list {} holds {x}, which is not a valid {}",
+            l.name,
+            type_name(l.item_type)
+        ));
+    }
+    Ok(())
+}
+
+pub(super) fn validate(mesh: &PolygonMesh, layout: &Layout) -> Result<(), IoError> {
+    for c in &layout.comments {
         if c.contains('\n') || c.ends_with('\r') {
             return Err(err_invalid(
                 MeshFormat::Ply,
@@ -74,10 +99,17 @@ pub(super) fn validate(mesh: &PolygonMesh) -> Result<(), IoError> {
         "vertex attribute",
     )?;
     check_unique(
-        mesh.face_attributes.iter().map(|a| a.name.as_str()),
+        mesh.face_attributes
+            .iter()
+            .map(|a| a.name.as_str())
+            .chain(layout.face_lists(mesh).map(|l| l.name.as_str())),
         &["vertex_indices"],
-        "face attribute",
+        "face property",
     )?;
+    for l in layout.face_lists(mesh) {
+        check_list(l, mesh.n_faces())
+            .map_err(|what| err_invalid(MeshFormat::Ply, format!("face {what}")))?;
+    }
     check_unique(
         mesh.extra_elements.iter().map(|e| e.name.as_str()),
         &["vertex", "face"],
@@ -101,27 +133,7 @@ pub(super) fn validate(mesh: &PolygonMesh) -> Result<(), IoError> {
                         return Err(bad(&format!("{} has {} rows", a.name, a.data.len())));
                     }
                 }
-                ElementProperty::List(l) => {
-                    if !is_int(l.count_type) {
-                        return Err(bad(&format!("{} has a non-integer count type", l.name)));
-                    }
-                    if l.starts.len() != e.rows + 1
-                        || l.starts[0] != 0
-                        || *l.starts.last().unwrap_or(&0) as usize != l.items.len()
-                        || l.starts
-                            .windows(2)
-                            .any(|w| w[0] > w[1] || (w[1] - w[0]) as u64 > max_count(l.count_type))
-                    {
-                        return Err(bad(&format!("list {} has inconsistent offsets", l.name)));
-                    }
-                    if let Some(x) = l.items.iter().find(|&&x| !fits(x, l.item_type)) {
-                        return Err(bad(&format!(
-                            "list {} holds {x}, which is not a valid {}",
-                            l.name,
-                            type_name(l.item_type)
-                        )));
-                    }
-                }
+                ElementProperty::List(l) => check_list(l, e.rows).map_err(|w| bad(&w))?,
             }
         }
     }

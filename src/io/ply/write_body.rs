@@ -21,7 +21,7 @@ macro_rules! put_endian {
 /// Appends the ASCII body of `mesh` to its header `s`.
 pub(super) fn ascii_body(mut s: String, mesh: &PolygonMesh, layout: &Layout) -> String {
     push_ascii_vertices(&mut s, mesh, layout);
-    push_ascii_faces(&mut s, mesh);
+    push_ascii_faces(&mut s, mesh, layout);
     push_ascii_extra_elements(&mut s, mesh);
     s
 }
@@ -67,11 +67,15 @@ fn push_ascii_vertices(s: &mut String, mesh: &PolygonMesh, layout: &Layout) {
     }
 }
 
-fn push_ascii_faces(s: &mut String, mesh: &PolygonMesh) {
+fn push_ascii_faces(s: &mut String, mesh: &PolygonMesh, layout: &Layout) {
     for (f, face) in mesh.faces().enumerate() {
         let _ = write!(s, "{}", face.len());
         for &v in face {
             let _ = write!(s, " {v}");
+        }
+        for l in layout.face_lists(mesh) {
+            s.push(' ');
+            put_list_txt(s, l, f);
         }
         for a in &mesh.face_attributes {
             s.push(' ');
@@ -126,6 +130,9 @@ fn push_binary_faces(out: &mut Vec<u8>, mesh: &PolygonMesh, layout: &Layout, big
             } else {
                 out.extend_from_slice(&v.to_le_bytes());
             }
+        }
+        for l in layout.face_lists(mesh) {
+            put_list_bin(out, l, f, big);
         }
         for a in &mesh.face_attributes {
             put_bin(out, &a.data, f, big);

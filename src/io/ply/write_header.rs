@@ -3,9 +3,10 @@
 
 use std::fmt::Write as _;
 
+use super::corners::{corner_lists, table_comments};
 use super::types::type_name;
 use crate::io::{IoError, MeshFormat, PlyEncoding, err_invalid};
-use crate::mesh::{ElementProperty, PolygonMesh, ScalarType};
+use crate::mesh::{ElementProperty, ListProperty, Materials, PolygonMesh, ScalarType};
 
 /// The types the writer stores positions, face lengths and face indices in.
 pub(super) struct Layout {
@@ -15,6 +16,20 @@ pub(super) struct Layout {
     pub(super) count_type: ScalarType,
     /// `int` unless there are more vertices than `int` holds (then `uint`).
     pub(super) index_type: ScalarType,
+    /// The face lists of the corner attributes (before the mesh's own face lists).
+    pub(super) corner_lists: Vec<ListProperty>,
+    /// The mesh's comments, then those that store its tables.
+    pub(super) comments: Vec<String>,
+}
+
+impl Layout {
+    /// Every face list property in the order the face element holds them.
+    pub(super) fn face_lists<'a>(
+        &'a self,
+        mesh: &'a PolygonMesh,
+    ) -> impl Iterator<Item = &'a ListProperty> + 'a {
+        self.corner_lists.iter().chain(&mesh.face_lists)
+    }
 }
 
 impl Layout {
@@ -22,7 +37,7 @@ impl Layout {
     /// error if a value does not fit); untyped (or integer) positions are written as `float`
     /// when every value is an f32 value and as `double` otherwise, so the write is lossless
     /// unless the mesh says its positions are f32.
-    pub(super) fn of(mesh: &PolygonMesh) -> Result<Layout, IoError> {
+    pub(super) fn of(mesh: &PolygonMesh, materials: &Materials) -> Result<Layout, IoError> {
         let pos_double = match mesh.position_type {
             Some(ScalarType::F64) => true,
             Some(ScalarType::F32) => {
@@ -47,10 +62,21 @@ impl Layout {
         } else {
             ScalarType::U32
         };
+        let mut corner_lists = corner_lists(mesh);
+        for l in &mut corner_lists {
+            let longest = l.starts.windows(2).map(|w| w[1] - w[0]).max().unwrap_or(0);
+            if longest > 255 {
+                l.count_type = ScalarType::U32;
+            }
+        }
+        let mut comments = mesh.comments.clone();
+        comments.extend(table_comments(mesh, materials));
         Ok(Layout {
             pos_double,
             count_type,
             index_type,
+            corner_lists,
+            comments,
         })
     }
 }
@@ -64,7 +90,7 @@ pub(super) fn header_text(mesh: &PolygonMesh, encoding: PlyEncoding, layout: &La
         PlyEncoding::BinaryLittleEndian => "format binary_little_endian 1.0\n",
         PlyEncoding::BinaryBigEndian => "format binary_big_endian 1.0\n",
     });
-    for c in &mesh.comments {
+    for c in &layout.comments {
         let _ = writeln!(h, "comment {c}");
     }
     push_vertex_element(&mut h, mesh, layout);
@@ -93,6 +119,9 @@ fn push_face_element(h: &mut String, mesh: &PolygonMesh, layout: &Layout) {
         type_name(layout.count_type),
         type_name(layout.index_type)
     );
+    for l in layout.face_lists(mesh) {
+        push_list_property(h, l);
+    }
     for a in &mesh.face_attributes {
         let _ = writeln!(h, "property {} {}", type_name(a.data.scalar_type()), a.name);
     }
@@ -106,16 +135,18 @@ fn push_extra_elements(h: &mut String, mesh: &PolygonMesh) {
                 ElementProperty::Scalar(a) => {
                     let _ = writeln!(h, "property {} {}", type_name(a.data.scalar_type()), a.name);
                 }
-                ElementProperty::List(l) => {
-                    let _ = writeln!(
-                        h,
-                        "property list {} {} {}",
-                        type_name(l.count_type),
-                        type_name(l.item_type),
-                        l.name
-                    );
-                }
+                ElementProperty::List(l) => push_list_property(h, l),
             }
         }
     }
+}
+
+fn push_list_property(h: &mut String, l: &ListProperty) {
+    let _ = writeln!(
+        h,
+        "property list {} {} {}",
+        type_name(l.count_type),
+        type_name(l.item_type),
+        l.name
+    );
 }

@@ -1,44 +1,12 @@
-//! Wavefront OBJ reader and writer.
-//!
-//! Hand-written rather than built on `tobj`: tobj re-indexes vertices per model/group (its
-//! `add_vertex` keeps an index map per mesh), so vertex count and order are not kept and
-//! unreferenced vertices disappear, and its `LoadError` carries no line number. Here the
-//! vertices are exactly the `v` lines in file order, and every error names its line.
-//!
-//! What is read:
-//! - `v x y z [w] [r g b]`: positions (float or double, see below); `w` becomes the
-//!   attribute `w` (f64, 1 where absent) when any vertex has one; colours become `red`, `green`,
-//!   `blue` (f32) when every vertex has them (otherwise they are dropped).
-//! - `vt u [v [w]]`, `vn x y z` and `f` corners `v`, `v/vt`, `v//vn`, `v/vt/vn` (negative indices
-//!   count back from the latest element). Texture coordinates and normals are per corner in
-//!   OBJ; they are kept as per-vertex attributes `u`,`v` and `nx`,`ny`,`nz` (f32) only when every
-//!   corner has one and each vertex is always used with the same value (unreferenced vertices
-//!   get 0). Otherwise positions and faces are kept exactly and the per-corner data is dropped
-//!   (a known limitation: OBJ seams need a split mesh, which is the mesh builder's business).
-//!   A third texture coordinate is dropped.
-//! - polygons are kept as they are (no triangulation).
-//! - `#` comments before the first statement become [`PolygonMesh::comments`]; `o`, `g`, `s`,
-//!   `usemtl`, `mtllib`, `l`, `p` and other statements are skipped (groups, smoothing groups,
-//!   materials, lines and points are not kept). Line continuation (`\`) and CRLF are handled.
-//!
-//! Precision: OBJ text does not say whether it holds float or double data. When every
-//! coordinate has at most 9 significant digits (and fits a float) the positions are read as
-//! f32 values with `position_type = Some(F32)`, otherwise as exact f64 parses with
-//! `position_type = None`. The writer uses shortest f32 formatting for f32 data (and for
-//! untyped positions that are all f32 values) and shortest f64 formatting otherwise, so
-//! write → read is bit-exact either way.
-//!
-//! The writer emits the comments, `v` (with `w` and colours when those attributes exist),
-//! `vt` when `u`,`v` exist, `vn` when `nx`,`ny`,`nz` exist, and `f` lines. Other attributes
-//! have no place in OBJ and are not written.
+//! The OBJ reader: statements into a [`PolygonMesh`] (see the module docs of `obj`).
 
-use std::fmt::Write as _;
+use super::statements::FaceState;
+use crate::io::text::{self, Lines, TextPositions};
+use crate::io::{IoError, err_line};
+use crate::mesh::corners::{NORMAL, TEXCOORD};
+use crate::mesh::{Attribute, AttributeData, CornerAttribute, NO_VALUE, PolygonMesh};
 
-use super::text::{self, Lines, PositionFormat, TextPositions};
-use super::{IoError, MeshFormat, err_invalid, err_line};
-use crate::mesh::{Attribute, AttributeData, PolygonMesh};
-
-const NONE: u32 = u32::MAX;
+const NONE: u32 = NO_VALUE;
 
 /// One resolved face corner reference kind.
 struct IndexSpace {
@@ -149,41 +117,36 @@ fn parse_floats<const N: usize>(
     Ok(out)
 }
 
-/// Per-vertex value from per-corner references, if consistent.
-fn per_vertex<const N: usize>(
-    nv: usize,
-    corners_v: &[u32],
-    corners_x: &[u32],
+/// True when `vt` (or `vn`) entry `k` belongs to vertex `k` exactly: as many entries as
+/// vertices and every corner refers to the entry of its vertex (what the writer emits for
+/// per-vertex attributes), so per-vertex columns write back to the same file.
+fn is_per_vertex(nv: usize, corners_v: &[u32], corners_x: &[u32], n_values: usize) -> bool {
+    n_values == nv && nv > 0 && corners_v == corners_x
+}
+
+/// The per-corner pool of `vt` or `vn` values with the corners' indices.
+fn corner_attribute<const N: usize>(
+    name: &str,
+    columns: &[&str],
     values: &[[f32; N]],
-) -> Option<Vec<[f32; N]>> {
-    if corners_x.is_empty() {
-        // No faces: a point cloud with one vt/vn per v is kept in order.
-        return (nv > 0 && values.len() == nv).then(|| values.to_vec());
+    indices: Vec<u32>,
+) -> CornerAttribute {
+    CornerAttribute {
+        name: name.into(),
+        columns: columns
+            .iter()
+            .enumerate()
+            .map(|(k, c)| Attribute {
+                name: (*c).into(),
+                data: AttributeData::F32(values.iter().map(|x| x[k]).collect()),
+            })
+            .collect(),
+        indices,
     }
-    if corners_x.contains(&NONE) {
-        return None;
-    }
-    let mut out: Vec<Option<[f32; N]>> = vec![None; nv];
-    for (&v, &x) in corners_v.iter().zip(corners_x) {
-        let val = values[x as usize];
-        match &out[v as usize] {
-            None => out[v as usize] = Some(val),
-            Some(old) => {
-                if old
-                    .iter()
-                    .zip(&val)
-                    .any(|(a, b)| a.to_bits() != b.to_bits())
-                {
-                    return None;
-                }
-            }
-        }
-    }
-    Some(out.into_iter().map(|o| o.unwrap_or([0.0; N])).collect())
 }
 
 /// Reads an OBJ file.
-pub(crate) fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
+pub(super) fn read(bytes: &[u8]) -> Result<PolygonMesh, IoError> {
     let mut reader = ObjReader::new();
     for (line, l) in logical_lines(bytes) {
         reader.read_line(line, &l)?;
@@ -208,6 +171,8 @@ struct ObjReader {
     vs: IndexSpace,
     vts: IndexSpace,
     vns: IndexSpace,
+    /// Materials, groups, objects and smoothing groups of the faces.
+    state: FaceState,
     /// No statement yet: comments are kept.
     in_preamble: bool,
 }
@@ -227,6 +192,7 @@ impl ObjReader {
             vs: IndexSpace::new("vertex", "vertices"),
             vts: IndexSpace::new("texture coordinate", "texture coordinates"),
             vns: IndexSpace::new("normal", "normals"),
+            state: FaceState::default(),
             in_preamble: true,
         }
     }
@@ -256,8 +222,9 @@ impl ObjReader {
             b"vt" => self.read_texcoord(line, args),
             b"vn" => self.read_normal(line, args),
             b"f" => self.read_face(line, args),
+            b"usemtl" | b"mtllib" | b"g" | b"o" | b"s" => self.state.statement(line, kw, args),
             k if k.iter().all(|b| b.is_ascii_alphanumeric() || *b == b'_') => {
-                // o, g, s, usemtl, mtllib, l, p, curves, … : tolerated, not kept.
+                // l, p, curves, … : tolerated, not kept.
                 Ok(())
             }
             k => Err(err_line(
@@ -368,6 +335,7 @@ impl ObjReader {
         }
         let len = u32::try_from(self.mesh.face_indices.len())
             .map_err(|_| err_line(line, "more than 2^32 - 1 face corners"))?;
+        self.state.face(self.mesh.face_starts.len() as u32 - 1);
         self.mesh.face_starts.push(len);
         Ok(())
     }
@@ -385,14 +353,32 @@ impl ObjReader {
         if self.all_coloured && nv > 0 {
             push_columns(&mut mesh, &self.colours, &["red", "green", "blue"]);
         }
-        if let Some(uv) = per_vertex(nv, &mesh.face_indices, &self.corner_vt, &self.texcoords) {
-            push_columns(&mut mesh, &uv, &["u", "v"]);
+        let corners_v = &mesh.face_indices;
+        let (vt_per_vertex, vn_per_vertex) = (
+            is_per_vertex(nv, corners_v, &self.corner_vt, self.texcoords.len()),
+            is_per_vertex(nv, corners_v, &self.corner_vn, self.normals.len()),
+        );
+        let (any_vt, any_vn) = (has_any(&self.corner_vt), has_any(&self.corner_vn));
+        if vt_per_vertex {
+            push_columns(&mut mesh, &self.texcoords, &["u", "v"]);
+        } else if any_vt {
+            let a = corner_attribute(TEXCOORD, &["u", "v"], &self.texcoords, self.corner_vt);
+            mesh.corner_attributes.push(a);
         }
-        if let Some(n) = per_vertex(nv, &mesh.face_indices, &self.corner_vn, &self.normals) {
-            push_columns(&mut mesh, &n, &["nx", "ny", "nz"]);
+        if vn_per_vertex {
+            push_columns(&mut mesh, &self.normals, &["nx", "ny", "nz"]);
+        } else if any_vn {
+            let a = corner_attribute(NORMAL, &["nx", "ny", "nz"], &self.normals, self.corner_vn);
+            mesh.corner_attributes.push(a);
         }
+        self.state.finish(&mut mesh);
         Ok(mesh)
     }
+}
+
+/// True when some corner refers to a value.
+fn has_any(indices: &[u32]) -> bool {
+    indices.iter().any(|&i| i != NONE)
 }
 
 /// The attribute `w` (1 where a vertex has none), when any vertex has one.
@@ -418,115 +404,4 @@ fn push_columns<const N: usize>(mesh: &mut PolygonMesh, vals: &[[f32; N]], names
             data: AttributeData::F32(vals.iter().map(|c| c[k]).collect()),
         });
     }
-}
-
-/// A float-typed vertex attribute column, or `None`.
-fn float_col<'a>(mesh: &'a PolygonMesh, name: &str) -> Option<&'a AttributeData> {
-    mesh.vertex_attribute(name)
-        .map(|a| &a.data)
-        .filter(|d| matches!(d, AttributeData::F32(_) | AttributeData::F64(_)))
-}
-
-fn push_attr(out: &mut String, d: &AttributeData, i: usize) {
-    match d {
-        AttributeData::F32(v) => text::push_f32(out, v[i]),
-        AttributeData::U8(v) => text::push_f32(out, v[i] as f32 / 255.0),
-        _ => text::push_f64(out, d.get_f64(i)),
-    }
-}
-
-/// Writes an OBJ file.
-pub(crate) fn write(mesh: &PolygonMesh) -> Result<Vec<u8>, IoError> {
-    let pf = PositionFormat::new(mesh)
-        .map_err(|i| err_invalid(MeshFormat::Obj, format!("vertex {i} does not fit in float")))?;
-    let w = float_col(mesh, "w");
-    let colour_cols: Vec<&AttributeData> = ["red", "green", "blue"]
-        .iter()
-        .filter_map(|n| {
-            mesh.vertex_attribute(n).map(|a| &a.data).filter(|d| {
-                matches!(
-                    d,
-                    AttributeData::F32(_) | AttributeData::F64(_) | AttributeData::U8(_)
-                )
-            })
-        })
-        .collect();
-    let colours = (colour_cols.len() == 3).then_some(colour_cols);
-    let uv = float_col(mesh, "u").zip(float_col(mesh, "v"));
-    let normals = match (
-        float_col(mesh, "nx"),
-        float_col(mesh, "ny"),
-        float_col(mesh, "nz"),
-    ) {
-        (Some(a), Some(b), Some(c)) => Some([a, b, c]),
-        _ => None,
-    };
-
-    let mut s = String::with_capacity(mesh.positions.len() * 30 + mesh.face_indices.len() * 8);
-    for c in &mesh.comments {
-        if c.contains('\n') || c.ends_with(['\r', '\\']) {
-            return Err(err_invalid(
-                MeshFormat::Obj,
-                format!("comment {c:?} has a line break"),
-            ));
-        }
-        let _ = writeln!(s, "# {c}");
-    }
-    for (i, p) in mesh.positions.iter().enumerate() {
-        s.push('v');
-        for (k, c) in p.to_array().into_iter().enumerate() {
-            s.push(' ');
-            pf.push(&mut s, i, k, c);
-        }
-        if let Some(w) = w {
-            s.push(' ');
-            push_attr(&mut s, w, i);
-        }
-        if let Some(cols) = &colours {
-            for c in cols {
-                s.push(' ');
-                push_attr(&mut s, c, i);
-            }
-        }
-        s.push('\n');
-    }
-    if let Some((u, v)) = uv {
-        for i in 0..mesh.positions.len() {
-            s.push_str("vt ");
-            push_attr(&mut s, u, i);
-            s.push(' ');
-            push_attr(&mut s, v, i);
-            s.push('\n');
-        }
-    }
-    if let Some(n) = &normals {
-        for i in 0..mesh.positions.len() {
-            s.push_str("vn");
-            for c in n {
-                s.push(' ');
-                push_attr(&mut s, c, i);
-            }
-            s.push('\n');
-        }
-    }
-    for (f, face) in mesh.faces().enumerate() {
-        if face.is_empty() {
-            return Err(err_invalid(
-                MeshFormat::Obj,
-                format!("face {f} has no vertices"),
-            ));
-        }
-        s.push('f');
-        for &v in face {
-            let k = v as u64 + 1;
-            let _ = match (uv.is_some(), normals.is_some()) {
-                (false, false) => write!(s, " {k}"),
-                (true, false) => write!(s, " {k}/{k}"),
-                (false, true) => write!(s, " {k}//{k}"),
-                (true, true) => write!(s, " {k}/{k}/{k}"),
-            };
-        }
-        s.push('\n');
-    }
-    Ok(s.into_bytes())
 }

@@ -1,0 +1,307 @@
+//! Textured scans keep their texture: per-corner texture coordinates and normals with seams,
+//! materials, groups and the files they name, through reading, writing, converting and the
+//! commands that keep faces. The scans are tests/data/textured (made by
+//! benches/compare/make_textured_scans.py from anchor.ply).
+
+mod common;
+
+use common::*;
+use glam::DVec3;
+use meshpyr::io::{
+    MeshFormat, PlyEncoding, read_mesh, read_mesh_bytes, read_mesh_reporting, write_mesh,
+    write_mesh_bytes, write_mesh_with,
+};
+use meshpyr::mesh::{AttributeData, PolygonMesh};
+use meshpyr::{Filter, MoveHandle, Pyramid};
+
+const OBJ: &str = "textured/anchor_tex.obj";
+const PLY: &str = "textured/anchor_tex.ply";
+
+/// Every corner's value of the corner attribute `name`, as f64 bits (`None`: no value).
+fn corner_values(m: &PolygonMesh, name: &str) -> Vec<Option<Vec<u64>>> {
+    let a = m.corner_attribute(name).unwrap();
+    (0..m.face_indices.len())
+        .map(|c| a.value(c).map(|v| v.iter().map(|x| x.to_bits()).collect()))
+        .collect()
+}
+
+/// Every face's material name.
+fn face_materials(m: &PolygonMesh) -> Vec<String> {
+    let a = m.face_attribute("texnumber").unwrap();
+    (0..m.n_faces())
+        .map(|f| m.materials.list[a.data.get_f64(f) as usize].name.clone())
+        .collect()
+}
+
+/// Every face's group name.
+fn face_groups(m: &PolygonMesh) -> Vec<String> {
+    let a = m.face_attribute("obj_group").unwrap();
+    (0..m.n_faces())
+        .map(|f| m.group_names[a.data.get_f64(f) as usize].clone())
+        .collect()
+}
+
+/// The images of the materials, as paths that exist, sorted (an OBJ names its materials in
+/// order of first use, a PLY in the order of its `TextureFile` lines).
+fn images(m: &PolygonMesh) -> Vec<std::path::PathBuf> {
+    let folder = m.materials.folder.clone().unwrap();
+    let mut all: Vec<_> = m
+        .materials
+        .list
+        .iter()
+        .map(|x| {
+            let p = folder.join(x.texture.as_ref().unwrap());
+            p.canonicalize().unwrap_or_else(|_| panic!("{} exists", p.display()))
+        })
+        .collect();
+    all.sort();
+    all
+}
+
+/// Every face's image.
+fn face_images(m: &PolygonMesh) -> Vec<Option<String>> {
+    let a = m.face_attribute("texnumber").unwrap();
+    (0..m.n_faces())
+        .map(|f| {
+            let t = m.materials.list[a.data.get_f64(f) as usize].texture.as_ref()?;
+            let p = m.materials.folder.as_ref()?.join(t).canonicalize().ok()?;
+            Some(p.display().to_string())
+        })
+        .collect()
+}
+
+#[test]
+fn an_obj_with_seams_keeps_its_vt_and_vn_lines_and_indices_through_a_write() {
+    let (m, warnings) = read_mesh_reporting(data(OBJ)).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let uv = m.corner_attribute("texcoord").unwrap();
+    assert!(uv.pool_len() > m.n_vertices(), "seams split the texture coordinates");
+    let again = trip(&m, MeshFormat::Obj, &Default::default());
+    assert_eq!(again.corner_attributes, m.corner_attributes);
+    assert_eq!(again.face_attributes, m.face_attributes);
+    assert_eq!(again.group_names, m.group_names);
+    assert_eq!(again.object_names, m.object_names);
+    assert_eq!(again.materials.libraries, m.materials.libraries);
+    assert_eq!(position_bits(&again), position_bits(&m));
+    assert_eq!(m.materials.list.len(), 2);
+    assert_eq!(images(&m).len(), 2);
+}
+
+#[test]
+fn a_ply_with_texcoord_lists_reads_the_same_corners_as_the_obj_and_round_trips() {
+    let obj = read_mesh(data(OBJ)).unwrap();
+    let (scan, warnings) = read_mesh_reporting(data(PLY)).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert_eq!(corner_values(&scan, "texcoord"), corner_values(&obj, "texcoord"));
+    assert_eq!(images(&scan), images(&obj));
+    assert_eq!(face_images(&scan), face_images(&obj));
+    for enc in ENCODINGS {
+        let again = trip(&scan, MeshFormat::Ply, &ply(enc));
+        assert_eq!(corner_values(&again, "texcoord"), corner_values(&scan, "texcoord"));
+        assert_eq!(again.face_attributes, scan.face_attributes);
+        assert_eq!(again.materials.list, scan.materials.list);
+    }
+}
+
+#[test]
+fn obj_to_ply_to_obj_in_other_folders_gives_the_same_corners_materials_groups_and_files() {
+    let obj = read_mesh(data(OBJ)).unwrap();
+    let ply_path = scratch("obj_ply_obj", "a/scan.ply");
+    std::fs::create_dir_all(ply_path.parent().unwrap()).unwrap();
+    write_mesh(&ply_path, &obj).unwrap();
+    let (ply, warnings) = read_mesh_reporting(&ply_path).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    let back_path = scratch("obj_ply_obj", "b/c/back.obj");
+    std::fs::create_dir_all(back_path.parent().unwrap()).unwrap();
+    write_mesh(&back_path, &ply).unwrap();
+    let (back, warnings) = read_mesh_reporting(&back_path).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    for name in ["texcoord", "normal"] {
+        assert_eq!(corner_values(&back, name), corner_values(&obj, name), "{name}");
+    }
+    assert_eq!(face_materials(&back), face_materials(&obj));
+    assert_eq!(face_groups(&back), face_groups(&obj));
+    assert_eq!(images(&back), images(&obj));
+    assert_eq!(position_bits(&back), position_bits(&obj));
+}
+
+#[test]
+fn a_ply_with_textures_written_as_obj_gets_a_material_library_beside_it() {
+    let ply = read_mesh(data(PLY)).unwrap();
+    let out = scratch("ply_to_obj_library", "out.obj");
+    write_mesh(&out, &ply).unwrap();
+    let (obj, warnings) = read_mesh_reporting(&out).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    assert_eq!(obj.materials.libraries, ["out.mtl"]);
+    assert_eq!(images(&obj), images(&ply));
+    assert_eq!(face_images(&obj), face_images(&ply));
+    assert_eq!(face_materials(&obj), face_materials(&ply));
+    assert_eq!(corner_values(&obj, "texcoord"), corner_values(&ply, "texcoord"));
+}
+
+#[test]
+fn a_missing_library_image_or_material_is_a_warning_naming_it() {
+    let dir = scratch("missing_references", "x");
+    let dir = dir.parent().unwrap();
+    let obj = b"mtllib here.mtl gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\n\
+        usemtl painted\nf 1/1 2/1 3/1\nusemtl nowhere\nf 1/1 3/1 2/1\n";
+    std::fs::write(dir.join("scan.obj"), obj).unwrap();
+    std::fs::write(dir.join("here.mtl"), "newmtl painted\nmap_Kd -s 1 1 1 paint.png\n").unwrap();
+    let (m, warnings) = read_mesh_reporting(dir.join("scan.obj")).unwrap();
+    assert_eq!(m.n_faces(), 2);
+    let all = warnings.join("\n");
+    assert_eq!(warnings.len(), 3, "{all}");
+    assert!(all.contains("gone.mtl"), "{all}");
+    assert!(all.contains("material nowhere"), "{all}");
+    assert!(all.contains("image paint.png not found"), "{all}");
+}
+
+#[test]
+fn a_vt_index_past_the_last_vt_is_a_one_line_error_with_its_line() {
+    let src = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/9\n";
+    let e = read_mesh_bytes(src, MeshFormat::Obj).unwrap_err().to_string();
+    assert_eq!(e, "line 5: texture coordinate index 9 but the file has 1 texture coordinates");
+}
+
+#[test]
+fn a_texcoord_list_of_the_wrong_length_is_a_one_line_error_with_its_line() {
+    let src = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+        property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+        property list uchar float texcoord\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 4 0 0 1 0\n";
+    let e = read_mesh_bytes(src, MeshFormat::Ply).unwrap_err().to_string();
+    assert_eq!(
+        e,
+        "line 14: face 0: list \"texcoord\" has 4 values for 3 corners (2 per corner)"
+    );
+}
+
+#[test]
+fn other_face_lists_are_kept() {
+    let src = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+        property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
+        property list uchar short flags\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 2 7 -1\n";
+    let m = read_mesh_bytes(src, MeshFormat::Ply).unwrap();
+    assert_eq!(m.face_lists[0].items, [7.0, -1.0]);
+    let out = write_mesh_bytes(&m, MeshFormat::Ply, &ply(PlyEncoding::Ascii)).unwrap();
+    assert!(String::from_utf8(out).unwrap().contains("property list uchar short flags"));
+}
+
+/// The angle in degrees between each corner's stored normal and the area-weighted normal of
+/// the faces of its cluster (corners of one vertex with the same stored normal).
+fn normal_angles(m: &PolygonMesh) -> Vec<f64> {
+    let n = m.corner_attribute("normal").unwrap();
+    let area = |f: usize| {
+        let face = m.face(f);
+        let mut a = DVec3::ZERO;
+        for (i, &v) in face.iter().enumerate() {
+            a += m.positions[v as usize].cross(m.positions[face[(i + 1) % face.len()] as usize]);
+        }
+        a
+    };
+    let mut sums = std::collections::HashMap::new();
+    for f in 0..m.n_faces() {
+        for c in m.face_starts[f] as usize..m.face_starts[f + 1] as usize {
+            *sums.entry((m.face_indices[c], n.indices[c])).or_insert(DVec3::ZERO) += area(f);
+        }
+    }
+    (0..m.face_indices.len())
+        .map(|c| {
+            let v = n.value(c).unwrap();
+            let stored = DVec3::new(v[0], v[1], v[2]);
+            stored.angle_between(sums[&(m.face_indices[c], n.indices[c])]).to_degrees()
+        })
+        .collect()
+}
+
+/// Distinct stored normals per vertex: the hard edges.
+fn normals_per_vertex(m: &PolygonMesh) -> Vec<usize> {
+    let n = m.corner_attribute("normal").unwrap();
+    let mut per = vec![std::collections::BTreeSet::new(); m.n_vertices()];
+    for c in 0..m.face_indices.len() {
+        let v = n.value(c).unwrap();
+        per[m.face_indices[c] as usize].insert(v.iter().map(|x| x.to_bits()).collect::<Vec<_>>());
+    }
+    per.iter().map(|s| s.len()).collect()
+}
+
+/// A command that keeps faces kept everything but positions and normals, and the normals
+/// follow the new surface with the input's hard edges.
+fn assert_carried(input: &PolygonMesh, out: &PolygonMesh, what: &str) {
+    assert_ne!(position_bits(out), position_bits(input), "{what} moved vertices");
+    assert_eq!(corner_values(out, "texcoord"), corner_values(input, "texcoord"), "{what}");
+    assert_eq!(out.face_attributes, input.face_attributes, "{what}");
+    assert_eq!(out.materials, input.materials, "{what}");
+    assert_eq!(out.group_names, input.group_names, "{what}");
+    assert_eq!(out.face_indices, input.face_indices, "{what}");
+    let angles = normal_angles(out);
+    let mean = angles.iter().sum::<f64>() / angles.len() as f64;
+    assert!(mean < 2.0, "{what}: stored normals {mean:.2}° off the surface on average");
+    assert_eq!(normals_per_vertex(out), normals_per_vertex(input), "{what}: hard edges");
+}
+
+#[test]
+fn filter_edit_and_smooth_keep_every_corner_material_and_group_and_normals_follow() {
+    let input = read_mesh(data(OBJ)).unwrap();
+    let before = normal_angles(&input).iter().sum::<f64>() / (input.face_indices.len() as f64);
+    assert!(before < 2.0, "the scan's own normals agree with it ({before:.2}°)");
+    let pyramid = Pyramid::build(&input).unwrap();
+    let filtered = pyramid.filter(&Filter::new().lowpass(60));
+    assert_carried(&input, &filtered, "filter");
+    let handle = MoveHandle {
+        center: input.positions[0],
+        displacement: DVec3::Y * 0.2,
+        radius: 0.5,
+    };
+    let edited = pyramid.edit(40, &[handle], &Filter::new()).unwrap();
+    assert_carried(&input, &edited, "edit");
+    let method = meshpyr::SmoothMethod::default();
+    let smoothed = meshpyr::smooth_mesh(&input, &method, &meshpyr::NoProgress).unwrap().mesh;
+    assert_carried(&input, &smoothed, "smooth");
+}
+
+#[test]
+fn stored_vertex_normals_follow_a_filter_and_unmoved_ones_keep_their_bits() {
+    let mut m = read_mesh(data("anchor.ply")).unwrap();
+    let stale: Vec<f32> = (0..m.n_vertices()).map(|i| (i % 3) as f32).collect();
+    for name in ["nx", "ny", "nz"] {
+        m.set_vertex_attribute(meshpyr::mesh::Attribute {
+            name: name.into(),
+            data: AttributeData::F32(stale.clone()),
+        })
+        .unwrap();
+    }
+    let same = Pyramid::build(&m).unwrap().filter(&Filter::new());
+    assert_eq!(same.vertex_attributes, m.vertex_attributes, "no vertex moved");
+    let out = Pyramid::build(&m).unwrap().filter(&Filter::new().lowpass(60));
+    let col = |name: &str| out.vertex_attribute(name).unwrap().data.clone();
+    let (x, y, z) = (col("nx"), col("ny"), col("nz"));
+    let mut sum = vec![DVec3::ZERO; out.n_vertices()];
+    for f in out.faces() {
+        let p = |k: usize| out.positions[f[k] as usize];
+        let a = (p(1) - p(0)).cross(p(2) - p(0));
+        for &v in f {
+            sum[v as usize] += a;
+        }
+    }
+    let mean = (0..out.n_vertices())
+        .map(|v| {
+            let stored = DVec3::new(x.get_f64(v), y.get_f64(v), z.get_f64(v));
+            stored.angle_between(sum[v]).to_degrees()
+        })
+        .sum::<f64>()
+        / out.n_vertices() as f64;
+    assert!(mean < 2.0, "{mean:.2}°");
+}
+
+#[test]
+fn writing_into_another_folder_points_at_the_same_library_with_a_relative_path() {
+    let m = read_mesh(data(OBJ)).unwrap();
+    let out = scratch("relative_library", "deeper/still/copy.obj");
+    std::fs::create_dir_all(out.parent().unwrap()).unwrap();
+    write_mesh_with(&out, &m, &Default::default()).unwrap();
+    let text = std::fs::read_to_string(&out).unwrap();
+    let lib = text.lines().find(|l| l.starts_with("mtllib ")).unwrap();
+    assert!(lib.starts_with("mtllib ../"), "{lib}");
+    let again = read_mesh(&out).unwrap();
+    assert_eq!(images(&again), images(&m));
+}
