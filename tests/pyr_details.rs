@@ -287,7 +287,7 @@ fn the_section_is_optional_and_last() {
     let mut s = sections(&with);
     let last = s.pop().unwrap();
     assert_eq!((&last.tag, last.flags), (b"DETL", 0));
-    assert!(write_container(format::MAJOR, format::MINOR, &s) == without);
+    assert!(write_container(format::MAJOR, format::MINOR_WITHOUT_CORNERS, &s) == without);
     assert!(matches!(
         format::decode(&without).unwrap().details,
         FileDetails::Absent

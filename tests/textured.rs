@@ -51,7 +51,8 @@ fn images(m: &PolygonMesh) -> Vec<std::path::PathBuf> {
         .iter()
         .map(|x| {
             let p = folder.join(x.texture.as_ref().unwrap());
-            p.canonicalize().unwrap_or_else(|_| panic!("{} exists", p.display()))
+            p.canonicalize()
+                .unwrap_or_else(|_| panic!("{} exists", p.display()))
         })
         .collect();
     all.sort();
@@ -63,7 +64,9 @@ fn face_images(m: &PolygonMesh) -> Vec<Option<String>> {
     let a = m.face_attribute("texnumber").unwrap();
     (0..m.n_faces())
         .map(|f| {
-            let t = m.materials.list[a.data.get_f64(f) as usize].texture.as_ref()?;
+            let t = m.materials.list[a.data.get_f64(f) as usize]
+                .texture
+                .as_ref()?;
             let p = m.materials.folder.as_ref()?.join(t).canonicalize().ok()?;
             Some(p.display().to_string())
         })
@@ -75,7 +78,10 @@ fn an_obj_with_seams_keeps_its_vt_and_vn_lines_and_indices_through_a_write() {
     let (m, warnings) = read_mesh_reporting(data(OBJ)).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
     let uv = m.corner_attribute("texcoord").unwrap();
-    assert!(uv.pool_len() > m.n_vertices(), "seams split the texture coordinates");
+    assert!(
+        uv.pool_len() > m.n_vertices(),
+        "seams split the texture coordinates"
+    );
     let again = trip(&m, MeshFormat::Obj, &Default::default());
     assert_eq!(again.corner_attributes, m.corner_attributes);
     assert_eq!(again.face_attributes, m.face_attributes);
@@ -92,12 +98,18 @@ fn a_ply_with_texcoord_lists_reads_the_same_corners_as_the_obj_and_round_trips()
     let obj = read_mesh(data(OBJ)).unwrap();
     let (scan, warnings) = read_mesh_reporting(data(PLY)).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
-    assert_eq!(corner_values(&scan, "texcoord"), corner_values(&obj, "texcoord"));
+    assert_eq!(
+        corner_values(&scan, "texcoord"),
+        corner_values(&obj, "texcoord")
+    );
     assert_eq!(images(&scan), images(&obj));
     assert_eq!(face_images(&scan), face_images(&obj));
     for enc in ENCODINGS {
         let again = trip(&scan, MeshFormat::Ply, &ply(enc));
-        assert_eq!(corner_values(&again, "texcoord"), corner_values(&scan, "texcoord"));
+        assert_eq!(
+            corner_values(&again, "texcoord"),
+            corner_values(&scan, "texcoord")
+        );
         assert_eq!(again.face_attributes, scan.face_attributes);
         assert_eq!(again.materials.list, scan.materials.list);
     }
@@ -117,7 +129,11 @@ fn obj_to_ply_to_obj_in_other_folders_gives_the_same_corners_materials_groups_an
     let (back, warnings) = read_mesh_reporting(&back_path).unwrap();
     assert!(warnings.is_empty(), "{warnings:?}");
     for name in ["texcoord", "normal"] {
-        assert_eq!(corner_values(&back, name), corner_values(&obj, name), "{name}");
+        assert_eq!(
+            corner_values(&back, name),
+            corner_values(&obj, name),
+            "{name}"
+        );
     }
     assert_eq!(face_materials(&back), face_materials(&obj));
     assert_eq!(face_groups(&back), face_groups(&obj));
@@ -136,7 +152,10 @@ fn a_ply_with_textures_written_as_obj_gets_a_material_library_beside_it() {
     assert_eq!(images(&obj), images(&ply));
     assert_eq!(face_images(&obj), face_images(&ply));
     assert_eq!(face_materials(&obj), face_materials(&ply));
-    assert_eq!(corner_values(&obj, "texcoord"), corner_values(&ply, "texcoord"));
+    assert_eq!(
+        corner_values(&obj, "texcoord"),
+        corner_values(&ply, "texcoord")
+    );
 }
 
 #[test]
@@ -146,7 +165,11 @@ fn a_missing_library_image_or_material_is_a_warning_naming_it() {
     let obj = b"mtllib here.mtl gone.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\n\
         usemtl painted\nf 1/1 2/1 3/1\nusemtl nowhere\nf 1/1 3/1 2/1\n";
     std::fs::write(dir.join("scan.obj"), obj).unwrap();
-    std::fs::write(dir.join("here.mtl"), "newmtl painted\nmap_Kd -s 1 1 1 paint.png\n").unwrap();
+    std::fs::write(
+        dir.join("here.mtl"),
+        "newmtl painted\nmap_Kd -s 1 1 1 paint.png\n",
+    )
+    .unwrap();
     let (m, warnings) = read_mesh_reporting(dir.join("scan.obj")).unwrap();
     assert_eq!(m.n_faces(), 2);
     let all = warnings.join("\n");
@@ -159,8 +182,13 @@ fn a_missing_library_image_or_material_is_a_warning_naming_it() {
 #[test]
 fn a_vt_index_past_the_last_vt_is_a_one_line_error_with_its_line() {
     let src = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 3/9\n";
-    let e = read_mesh_bytes(src, MeshFormat::Obj).unwrap_err().to_string();
-    assert_eq!(e, "line 5: texture coordinate index 9 but the file has 1 texture coordinates");
+    let e = read_mesh_bytes(src, MeshFormat::Obj)
+        .unwrap_err()
+        .to_string();
+    assert_eq!(
+        e,
+        "line 5: texture coordinate index 9 but the file has 1 texture coordinates"
+    );
 }
 
 #[test]
@@ -168,7 +196,9 @@ fn a_texcoord_list_of_the_wrong_length_is_a_one_line_error_with_its_line() {
     let src = b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
         property float z\nelement face 1\nproperty list uchar int vertex_indices\n\
         property list uchar float texcoord\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2 4 0 0 1 0\n";
-    let e = read_mesh_bytes(src, MeshFormat::Ply).unwrap_err().to_string();
+    let e = read_mesh_bytes(src, MeshFormat::Ply)
+        .unwrap_err()
+        .to_string();
     assert_eq!(
         e,
         "line 14: face 0: list \"texcoord\" has 4 values for 3 corners (2 per corner)"
@@ -183,7 +213,11 @@ fn other_face_lists_are_kept() {
     let m = read_mesh_bytes(src, MeshFormat::Ply).unwrap();
     assert_eq!(m.face_lists[0].items, [7.0, -1.0]);
     let out = write_mesh_bytes(&m, MeshFormat::Ply, &ply(PlyEncoding::Ascii)).unwrap();
-    assert!(String::from_utf8(out).unwrap().contains("property list uchar short flags"));
+    assert!(
+        String::from_utf8(out)
+            .unwrap()
+            .contains("property list uchar short flags")
+    );
 }
 
 /// The angle in degrees between each corner's stored normal and the area-weighted normal of
@@ -201,14 +235,18 @@ fn normal_angles(m: &PolygonMesh) -> Vec<f64> {
     let mut sums = std::collections::HashMap::new();
     for f in 0..m.n_faces() {
         for c in m.face_starts[f] as usize..m.face_starts[f + 1] as usize {
-            *sums.entry((m.face_indices[c], n.indices[c])).or_insert(DVec3::ZERO) += area(f);
+            *sums
+                .entry((m.face_indices[c], n.indices[c]))
+                .or_insert(DVec3::ZERO) += area(f);
         }
     }
     (0..m.face_indices.len())
         .map(|c| {
             let v = n.value(c).unwrap();
             let stored = DVec3::new(v[0], v[1], v[2]);
-            stored.angle_between(sums[&(m.face_indices[c], n.indices[c])]).to_degrees()
+            stored
+                .angle_between(sums[&(m.face_indices[c], n.indices[c])])
+                .to_degrees()
         })
         .collect()
 }
@@ -227,23 +265,41 @@ fn normals_per_vertex(m: &PolygonMesh) -> Vec<usize> {
 /// A command that keeps faces kept everything but positions and normals, and the normals
 /// follow the new surface with the input's hard edges.
 fn assert_carried(input: &PolygonMesh, out: &PolygonMesh, what: &str) {
-    assert_ne!(position_bits(out), position_bits(input), "{what} moved vertices");
-    assert_eq!(corner_values(out, "texcoord"), corner_values(input, "texcoord"), "{what}");
+    assert_ne!(
+        position_bits(out),
+        position_bits(input),
+        "{what} moved vertices"
+    );
+    assert_eq!(
+        corner_values(out, "texcoord"),
+        corner_values(input, "texcoord"),
+        "{what}"
+    );
     assert_eq!(out.face_attributes, input.face_attributes, "{what}");
     assert_eq!(out.materials, input.materials, "{what}");
     assert_eq!(out.group_names, input.group_names, "{what}");
     assert_eq!(out.face_indices, input.face_indices, "{what}");
     let angles = normal_angles(out);
     let mean = angles.iter().sum::<f64>() / angles.len() as f64;
-    assert!(mean < 2.0, "{what}: stored normals {mean:.2}° off the surface on average");
-    assert_eq!(normals_per_vertex(out), normals_per_vertex(input), "{what}: hard edges");
+    assert!(
+        mean < 2.0,
+        "{what}: stored normals {mean:.2}° off the surface on average"
+    );
+    assert_eq!(
+        normals_per_vertex(out),
+        normals_per_vertex(input),
+        "{what}: hard edges"
+    );
 }
 
 #[test]
 fn filter_edit_and_smooth_keep_every_corner_material_and_group_and_normals_follow() {
     let input = read_mesh(data(OBJ)).unwrap();
     let before = normal_angles(&input).iter().sum::<f64>() / (input.face_indices.len() as f64);
-    assert!(before < 2.0, "the scan's own normals agree with it ({before:.2}°)");
+    assert!(
+        before < 2.0,
+        "the scan's own normals agree with it ({before:.2}°)"
+    );
     let pyramid = Pyramid::build(&input).unwrap();
     let filtered = pyramid.filter(&Filter::new().lowpass(60));
     assert_carried(&input, &filtered, "filter");
@@ -255,7 +311,9 @@ fn filter_edit_and_smooth_keep_every_corner_material_and_group_and_normals_follo
     let edited = pyramid.edit(40, &[handle], &Filter::new()).unwrap();
     assert_carried(&input, &edited, "edit");
     let method = meshpyr::SmoothMethod::default();
-    let smoothed = meshpyr::smooth_mesh(&input, &method, &meshpyr::NoProgress).unwrap().mesh;
+    let smoothed = meshpyr::smooth_mesh(&input, &method, &meshpyr::NoProgress)
+        .unwrap()
+        .mesh;
     assert_carried(&input, &smoothed, "smooth");
 }
 
@@ -271,8 +329,13 @@ fn stored_vertex_normals_follow_a_filter_and_unmoved_ones_keep_their_bits() {
         .unwrap();
     }
     let same = Pyramid::build(&m).unwrap().filter(&Filter::new());
-    assert_eq!(same.vertex_attributes, m.vertex_attributes, "no vertex moved");
-    let out = Pyramid::build(&m).unwrap().filter(&Filter::new().lowpass(60));
+    assert_eq!(
+        same.vertex_attributes, m.vertex_attributes,
+        "no vertex moved"
+    );
+    let out = Pyramid::build(&m)
+        .unwrap()
+        .filter(&Filter::new().lowpass(60));
     let col = |name: &str| out.vertex_attribute(name).unwrap().data.clone();
     let (x, y, z) = (col("nx"), col("ny"), col("nz"));
     let mut sum = vec![DVec3::ZERO; out.n_vertices()];
@@ -304,4 +367,24 @@ fn writing_into_another_folder_points_at_the_same_library_with_a_relative_path()
     assert!(lib.starts_with("mtllib ../"), "{lib}");
     let again = read_mesh(&out).unwrap();
     assert_eq!(images(&again), images(&m));
+}
+
+#[test]
+fn build_then_extract_restores_the_textured_input_exactly_in_a_2_2_file() {
+    let input = read_mesh(data(OBJ)).unwrap();
+    let (bytes, _) = Pyramid::build(&input).unwrap().to_pyr_bytes().unwrap();
+    assert_eq!(
+        u16::from_le_bytes([bytes[10], bytes[11]]),
+        2,
+        "minor version"
+    );
+    let restored = meshpyr::format::decode(&bytes).unwrap().input;
+    assert_eq!(restored, input);
+    let plain = read_mesh(data("anchor.ply")).unwrap();
+    let (bytes, _) = Pyramid::build(&plain).unwrap().to_pyr_bytes().unwrap();
+    assert_eq!(
+        u16::from_le_bytes([bytes[10], bytes[11]]),
+        1,
+        "untextured files stay 2.1"
+    );
 }

@@ -13,7 +13,8 @@ pub mod varint;
 pub use pyr::is_pyr;
 pub use pyr::{FileDetails, LevelMesh, PyrData, PyramidOptions, SizeReport, StoredDetails};
 pub use pyr::{
-    MAJOR, MINOR, OLDEST_MAJOR, decode, encode, encode_with_details, read_level, read_level_within,
+    MAJOR, MINOR, MINOR_WITHOUT_CORNERS, OLDEST_MAJOR, decode, encode, encode_with_details,
+    read_level, read_level_within,
 };
 pub(crate) use pyr::{fix_checksums, fuzz_read_pyr, with_positions};
 

@@ -27,6 +27,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 mod attributes;
+mod corners;
 mod decode_ahead;
 mod details;
 mod edit;
@@ -47,6 +48,7 @@ pub use loaded::FileDetails;
 use loaded::file_details;
 
 use attributes::encode_attributes;
+use corners::{encode_corners, has_corner_data};
 use details::{decode_details, encode_details, step_exponent};
 use hierarchy::{
     Progressive, encode_base, encode_isolated, encode_splits, read_isolated, read_progressive,
@@ -65,8 +67,12 @@ pub const MAJOR: u16 = 2;
 /// The oldest major this reader still decodes.
 pub const OLDEST_MAJOR: u16 = 1;
 /// Minor version written; readers accept any minor of their major (unknown optional sections
-/// are skipped). 2.1 adds the optional `DETL` section.
-pub const MINOR: u16 = 1;
+/// are skipped). 2.1 adds the optional `DETL` section; 2.2 the required `CRNR` section of a
+/// textured input. A file without `CRNR` is written as 2.1 ([`MINOR_WITHOUT_CORNERS`]), byte
+/// for byte what a 2.1 writer wrote, so untextured files still open in 2.1 readers.
+pub const MINOR: u16 = 2;
+/// The minor version of a file without a `CRNR` section.
+pub const MINOR_WITHOUT_CORNERS: u16 = 1;
 /// Vertex splits per block of the `SPLT` section.
 pub(crate) const SPLITS_PER_BLOCK: u32 = 4096;
 
@@ -78,7 +84,8 @@ const ORDR: [u8; 4] = *b"ORDR";
 const POLY: [u8; 4] = *b"POLY";
 const ATTR: [u8; 4] = *b"ATTR";
 const DETL: [u8; 4] = *b"DETL";
-const KNOWN: [[u8; 4]; 8] = [META, BASE, SPLT, ISOL, ORDR, POLY, ATTR, DETL];
+const CRNR: [u8; 4] = *b"CRNR";
+const KNOWN: [[u8; 4]; 9] = [META, BASE, SPLT, ISOL, ORDR, POLY, ATTR, DETL, CRNR];
 
 /// The `META` section (bincode 2 standard configuration). Fixed-size fields only: nothing in
 /// it allocates while decoding, so a damaged length cannot make bincode allocate.
@@ -263,6 +270,18 @@ pub fn encode_with_details(
         bytes,
     })
     .collect();
+    let minor = if has_corner_data(input) {
+        let bytes = encode_corners(input);
+        sizes.trailing += bytes.len();
+        sections.push(Section {
+            tag: CRNR,
+            flags: REQUIRED,
+            bytes,
+        });
+        MINOR
+    } else {
+        MINOR_WITHOUT_CORNERS
+    };
     if let Some(bytes) = detl {
         sizes.details = bytes.len();
         // Optional: a 2.0 reader skips it and analyses the hierarchy as before.
@@ -272,7 +291,7 @@ pub fn encode_with_details(
             bytes,
         });
     }
-    let bytes = write_container(MAJOR, MINOR, &sections);
+    let bytes = write_container(MAJOR, minor, &sections);
     sizes.total = bytes.len();
     Ok((bytes, sizes))
 }

@@ -84,7 +84,7 @@ fn put_element(out: &mut Vec<u8>, e: &ExtraElement) {
 
 /// A list property: name, count and item types, the row starts as deltas, then the items as
 /// f64.
-fn put_list_property(out: &mut Vec<u8>, l: &ListProperty) {
+pub(super) fn put_list_property(out: &mut Vec<u8>, l: &ListProperty) {
     put_str(out, &l.name);
     out.push(scalar_code(l.count_type));
     out.push(scalar_code(l.item_type));
@@ -98,7 +98,7 @@ fn put_list_property(out: &mut Vec<u8>, l: &ListProperty) {
     }
 }
 
-fn put_attribute(out: &mut Vec<u8>, a: &Attribute) {
+pub(super) fn put_attribute(out: &mut Vec<u8>, a: &Attribute) {
     put_str(out, &a.name);
     put_column(out, &a.data);
 }
@@ -131,7 +131,7 @@ fn put_column(out: &mut Vec<u8>, d: &AttributeData) {
     }
 }
 
-fn put_str(out: &mut Vec<u8>, s: &str) {
+pub(super) fn put_str(out: &mut Vec<u8>, s: &str) {
     put_uvarint(out, s.len() as u64);
     out.extend_from_slice(s.as_bytes());
 }
@@ -203,7 +203,10 @@ fn read_element(r: &mut ByteReader<'_>) -> Result<ExtraElement, FormatError> {
     })
 }
 
-fn read_list_property(r: &mut ByteReader<'_>, rows: usize) -> Result<ListProperty, FormatError> {
+pub(super) fn read_list_property(
+    r: &mut ByteReader<'_>,
+    rows: usize,
+) -> Result<ListProperty, FormatError> {
     let name = read_str(r)?;
     let count_type = read_scalar_type(r)?;
     let item_type = read_scalar_type(r)?;
@@ -242,7 +245,10 @@ fn read_list_property(r: &mut ByteReader<'_>, rows: usize) -> Result<ListPropert
     })
 }
 
-fn read_attribute(r: &mut ByteReader<'_>, rows: usize) -> Result<Attribute, FormatError> {
+pub(super) fn read_attribute(
+    r: &mut ByteReader<'_>,
+    rows: usize,
+) -> Result<Attribute, FormatError> {
     let name = read_str(r)?;
     let data = read_column(r, rows)?;
     Ok(Attribute { name, data })
@@ -283,7 +289,7 @@ fn read_scalar_type(r: &mut ByteReader<'_>) -> Result<ScalarType, FormatError> {
     scalar_of(c).ok_or_else(|| corrupt(at, format!("unknown scalar type {c}")))
 }
 
-fn read_str(r: &mut ByteReader<'_>) -> Result<String, FormatError> {
+pub(super) fn read_str(r: &mut ByteReader<'_>) -> Result<String, FormatError> {
     let n = r.count(r.remaining() as u64, "string length")?;
     let at = r.offset();
     let b = r.take(n, "string")?;

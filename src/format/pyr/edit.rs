@@ -9,7 +9,8 @@ use super::internal;
 
 /// The same hierarchy with new original positions (for saving an edit): `positions` are the
 /// new positions of the input's vertices; split copies follow their source vertex. When the
-/// input stores f32 positions they are rounded to f32 first, as writing a mesh file would.
+/// input stores f32 positions they are rounded to f32 first, as writing a mesh file would;
+/// stored normals follow them ([`PolygonMesh::refresh_normals`]).
 pub(crate) fn with_positions(
     input: &PolygonMesh,
     source: &SourceMap,
@@ -25,6 +26,7 @@ pub(crate) fn with_positions(
         .into_iter()
         .map(|p| if round { p.as_vec3().as_dvec3() } else { p })
         .collect();
+    new_input.refresh_normals(&input.positions);
     let source = &source.vertex_source;
     let mut pm_positions = Vec::with_capacity(pm.pm_to_mesh().len());
     for &s in pm.pm_to_mesh() {

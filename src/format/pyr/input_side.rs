@@ -10,7 +10,8 @@ use crate::pm::{FaceBuckets, FlatReplay, ProgressiveMesh, canonical_sorted};
 use glam::DVec3;
 
 use super::attributes::decode_attributes;
-use super::{ATTR, Meta, ORDR, POLY, corrupt, required};
+use super::corners::decode_corners;
+use super::{ATTR, CRNR, Meta, ORDR, POLY, corrupt, required};
 
 /// `ORDR`: the input vertex of each PM vertex.
 pub(super) fn encode_vertex_order(pm: &ProgressiveMesh) -> Vec<u8> {
@@ -106,6 +107,9 @@ pub(super) fn decode_input_side(c: &Container<'_>, meta: &Meta) -> Result<InputS
     decode_polygons(&mut r, meta.n_input_faces, n_input, &mut input)?;
     let mut r = required(c, ATTR)?;
     decode_attributes(&mut r, &mut input)?;
+    if let Some(mut r) = c.section(CRNR)? {
+        decode_corners(&mut r, &mut input)?;
+    }
     let (mesh_to_pm, permutation) = invert_order(&pm_to_mesh, n_total);
     // The positions are placeholders (all finite, as the stored ones are: `read_position`
     // refuses others), so this checks the polygons and attributes here, off the replay's
