@@ -111,6 +111,15 @@ fn canonical_nans(mesh: &PolygonMesh) -> PolygonMesh {
         .iter_mut()
         .for_each(|a| fix(&mut a.data));
     m.face_attributes.iter_mut().for_each(|a| fix(&mut a.data));
+    for a in &mut m.corner_attributes {
+        a.columns.iter_mut().for_each(|c| fix(&mut c.data));
+    }
+    for l in &mut m.face_lists {
+        l.items
+            .iter_mut()
+            .filter(|x| x.is_nan())
+            .for_each(|x| *x = f64::NAN);
+    }
     for e in &mut m.extra_elements {
         for p in &mut e.properties {
             match p {

@@ -9,7 +9,7 @@ use crate::mesh::Material;
 
 /// The materials (`newmtl`) of an MTL file's text with their `map_Kd` images, as written
 /// (relative to the library's folder, or absolute). Options before the file name (`-s 1 1 1`,
-/// `-bm 0.5`, …) are skipped: the image is the last word.
+/// `-clamp on`, …) are skipped; the rest of the line is the file name (spaces included).
 pub(crate) fn parse(bytes: &[u8]) -> Vec<Material> {
     let mut out: Vec<Material> = Vec::new();
     for (_, line) in Lines::new(bytes, 1) {
@@ -21,14 +21,33 @@ pub(crate) fn parse(bytes: &[u8]) -> Vec<Material> {
                 texture: None,
             }),
             Some((&b"map_Kd", args)) => {
-                if let (Some(m), Some(file)) = (out.last_mut(), args.last()) {
-                    m.texture = Some(String::from_utf8_lossy(file).into_owned());
+                let file = without_options(args);
+                if let Some(m) = out.last_mut().filter(|_| !file.is_empty()) {
+                    m.texture = Some(join(file));
                 }
             }
             _ => {}
         }
     }
     out
+}
+
+/// The words of a map statement after its options: each `-name` with the numbers or
+/// `on`/`off` after it.
+fn without_options<'a, 'b>(mut args: &'a [&'b [u8]]) -> &'a [&'b [u8]] {
+    while let Some((first, rest)) = args.split_first()
+        && first.starts_with(b"-")
+        && rest.len() > 1
+    {
+        args = rest;
+        while let Some((value, rest)) = args.split_first()
+            && rest.len() > 0
+            && (text::parse_f64(value).is_some() || matches!(*value, b"on" | b"off"))
+        {
+            args = rest;
+        }
+    }
+    args
 }
 
 /// Words joined by single spaces (how the OBJ reader names a `usemtl` material).
@@ -51,4 +70,20 @@ pub(crate) fn write(materials: &[Material]) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn map_kd_skips_options_and_keeps_spaces_in_the_file_name() {
+        let m =
+            parse(b"newmtl a\nmap_Kd -s 1 1 1 -clamp on my image.png\nnewmtl b c\nmap_Kd 7.png\n");
+        assert_eq!(m[0].texture.as_deref(), Some("my image.png"));
+        assert_eq!(
+            (m[1].name.as_str(), m[1].texture.as_deref()),
+            ("b c", Some("7.png"))
+        );
+    }
 }

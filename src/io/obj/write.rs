@@ -211,8 +211,8 @@ impl<'a> Statements<'a> {
             .into_iter()
             .filter_map(|(attr, table, kw)| {
                 let a = mesh.face_attribute(attr)?;
-                // A PLY `texnumber` without materials has no names to write.
-                let useful = table.as_ref().is_none_or(|t| !t.is_empty());
+                // A PLY `texnumber` without materials is no material index.
+                let useful = attr != MATERIAL_ATTRIBUTE || !materials.list.is_empty();
                 useful.then_some((&a.data, table, kw))
             })
             .collect();
@@ -229,8 +229,9 @@ impl<'a> Statements<'a> {
             } else {
                 value
             };
-            let unset = if table.is_some() { -1 } else { 0 };
-            if self.last[k] == Some(value) || (self.last[k].is_none() && value == unset) {
+            // The first face always gets the statement, so the attribute exists on reading
+            // even when every face has the value of none.
+            if self.last[k] == Some(value) {
                 continue;
             }
             self.last[k] = Some(value);

@@ -13,21 +13,17 @@ use std::collections::HashMap;
 
 use super::rows::corner_list_width;
 use super::types::empty_col;
-use crate::mesh::corners::TEXCOORD;
+use crate::mesh::corners::{NORMAL, TEXCOORD};
 use crate::mesh::{Attribute, CornerAttribute, ListProperty, Material, NO_VALUE, PolygonMesh};
 
 /// The corner attribute a face list read as `name` becomes, and its column names.
 fn corner_name(list: &str, width: usize) -> (String, Vec<String>) {
     match list {
         "texcoord" => (TEXCOORD.into(), vec!["u".into(), "v".into()]),
-        "corner_normal" => (
-            "normal".into(),
-            ["nx", "ny", "nz"].map(String::from).to_vec(),
-        ),
+        "corner_normal" => (NORMAL.into(), ["nx", "ny", "nz"].map(String::from).to_vec()),
         _ => {
-            let name = list.trim_start_matches("corner_").to_string();
-            let cols = (0..width).map(|k| format!("{name}_{k}")).collect();
-            (name, cols)
+            let cols = (0..width).map(|k| format!("{list}_{k}")).collect();
+            (list.to_string(), cols)
         }
     }
 }
@@ -35,7 +31,9 @@ fn corner_name(list: &str, width: usize) -> (String, Vec<String>) {
 /// The face list with this corner attribute's values (inverse of [`corner_name`]).
 fn list_name(a: &CornerAttribute) -> String {
     match a.name.as_str() {
-        TEXCOORD if a.columns.len() == 2 => "texcoord".into(),
+        TEXCOORD => "texcoord".into(),
+        NORMAL => "corner_normal".into(),
+        n if n.starts_with("corner_") => n.into(),
         n => format!("corner_{n}"),
     }
 }
@@ -69,7 +67,9 @@ fn width(l: &ListProperty, face_starts: &[u32]) -> Option<usize> {
             Some(_) => return None,
         }
     }
-    w.or(Some(2)).filter(|&k| k > 0)
+    w.or(corner_list_width(&l.name).flatten())
+        .or(Some(1))
+        .filter(|&k| k > 0)
 }
 
 /// The pool (each distinct value once, in order of first use) and the corners' indices.
