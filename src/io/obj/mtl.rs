@@ -41,7 +41,7 @@ fn without_options<'a, 'b>(mut args: &'a [&'b [u8]]) -> &'a [&'b [u8]] {
     {
         args = rest;
         while let Some((value, rest)) = args.split_first()
-            && rest.len() > 0
+            && !rest.is_empty()
             && (text::parse_f64(value).is_some() || matches!(*value, b"on" | b"off"))
         {
             args = rest;
