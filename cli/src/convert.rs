@@ -1,7 +1,7 @@
 //! `meshpyr convert IN OUT`: any supported format to any other, data kept as it is.
 
 use super::Global;
-use meshpyr::io::{self, PlyEncoding, WriteOptions};
+use meshpyr::io::{PlyEncoding, WriteOptions};
 use meshpyr::wording::Count;
 use std::path::PathBuf;
 
@@ -43,7 +43,7 @@ pub(crate) fn run(args: ConvertArgs, global: &Global) -> anyhow::Result<()> {
         },
         stl_binary: !args.stl_ascii,
     };
-    io::write_mesh_with(&args.output, &mesh, &opts)?;
+    super::output::write_mesh_output(&args.output, &mesh, &opts)?;
     global.say(format_args!(
         "wrote {} ({}, {})",
         args.output.display(),

@@ -124,7 +124,7 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
         };
         save_edited(&scan, positions, content, &args.output)?;
     } else {
-        io::write_mesh(&args.output, &edited.mesh)?;
+        super::output::write_mesh_output(&args.output, &edited.mesh, &Default::default())?;
     }
     global.say(format_args!("wrote {}", args.output.display()));
     Ok(())

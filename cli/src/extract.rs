@@ -80,7 +80,7 @@ fn write_original(
 ) -> anyhow::Result<Option<format::FormatError>> {
     match format::decode(bytes) {
         Ok(data) => {
-            io::write_mesh(&args.output, &data.input)?;
+            super::output::write_mesh_output(&args.output, &data.input, &Default::default())?;
             global.say(format_args!(
                 "wrote {}: the original mesh, {}, {}",
                 args.output.display(),

@@ -5,7 +5,6 @@
 
 use super::Global;
 use super::input::load_pyramid;
-use meshpyr::io;
 use meshpyr::pyramid::{Filter, GainBand, GainParseError, LevelSpec};
 use meshpyr::relax::RelaxKind;
 use meshpyr::wording::Count;
@@ -110,7 +109,7 @@ pub(crate) fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
         Count(levels.end() - levels.start(), "level", "levels"),
         start.elapsed().as_secs_f64()
     ));
-    io::write_mesh(&args.output, &filtered.mesh)?;
+    super::output::write_mesh_output(&args.output, &filtered.mesh, &Default::default())?;
     global.say(format_args!("wrote {}", args.output.display()));
     Ok(())
 }

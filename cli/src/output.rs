@@ -19,6 +19,21 @@ pub(crate) fn check_mesh_output(path: &Path) -> anyhow::Result<()> {
     check_output_folder(path)
 }
 
+/// Writes `mesh` to `path` (atomically, references rebased), first warning about the texture
+/// data the format cannot hold.
+pub(crate) fn write_mesh_output(
+    path: &Path,
+    mesh: &meshpyr::mesh::PolygonMesh,
+    opts: &meshpyr::io::WriteOptions,
+) -> anyhow::Result<()> {
+    let format = meshpyr::io::MeshFormat::from_path(path)?;
+    if let Some(what) = meshpyr::io::texture_data_not_held(mesh, format) {
+        eprintln!("warning: {}: {what}", path.display());
+    }
+    meshpyr::io::write_mesh_with(path, mesh, opts)?;
+    Ok(())
+}
+
 /// Fails before any work when `path` is not a PNG name (the charts are PNG only, and PNG bytes
 /// under another name would mislead every viewer), or when its folder cannot take it.
 pub(crate) fn check_png_output(path: &Path) -> anyhow::Result<()> {

@@ -5,7 +5,6 @@ use super::{BarProgress, Global};
 use crate::choices::named;
 use anyhow::Context;
 use meshpyr::choice::Choice;
-use meshpyr::io;
 use meshpyr::smooth::{
     Boundary, FilterScale, SmoothKind, SmoothSettings, Variance, Weights, smooth_mesh,
 };
@@ -146,7 +145,7 @@ pub(crate) fn run(args: SmoothArgs, global: &Global) -> anyhow::Result<()> {
         start.elapsed().as_secs_f64(),
         smoothed.summary
     ));
-    io::write_mesh(&args.output, &smoothed.mesh)?;
+    super::output::write_mesh_output(&args.output, &smoothed.mesh, &Default::default())?;
     global.say(format_args!(
         "wrote {} ({} vertices, {} faces)",
         args.output.display(),

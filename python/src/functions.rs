@@ -82,7 +82,7 @@ pub(crate) fn write(
 /// euler_characteristic, genus (None when not manifold), floor_vertices (the fewest vertices
 /// its topology can be simplified to), pm_base (None), manifold, bbox_diagonal,
 /// mean_edge_length, repairs (a dict of what the mesh builder would change to process it),
-/// vertex_attributes and face_attributes (empty lists for arrays).
+/// vertex_attributes and face_attributes (empty lists for arrays), texture (None for arrays).
 #[pyfunction]
 #[pyo3(signature = (v, f, /))]
 pub(crate) fn info<'py>(

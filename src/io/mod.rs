@@ -11,12 +11,17 @@
 //!
 //! Format notes (what survives and what does not):
 //! - **PLY** (`ply`): everything (positions in their stored type, all scalar vertex/face
-//!   properties, extra elements, comments; `obj_info` lines are kept as comments). List
-//!   properties on `vertex`, and list properties other than the indices on `face`, have no
-//!   place in [`PolygonMesh`] and are rejected with an error.
-//! - **OBJ** (`obj`): positions, `w`, vertex colours, and texture coordinates/normals when they
-//!   are consistent per vertex. `o`/`g`/`s`/`usemtl`/`mtllib`, `l`/`p` and other statements are
-//!   skipped; `#` lines before the first statement become [`PolygonMesh::comments`].
+//!   properties, face list properties (`texcoord` per corner), `TextureFile` comments as
+//!   materials, extra elements, comments; `obj_info` lines are kept as comments). List
+//!   properties on `vertex` have no place in [`PolygonMesh`] and are rejected with an error.
+//! - **OBJ** (`obj`): positions, `w`, vertex colours, texture coordinates and normals (per
+//!   vertex when the file indexes them so, else per corner with their pools and seams),
+//!   `mtllib`/`usemtl` materials, `g`/`o`/`s` groups. `l`/`p` and other statements are skipped;
+//!   `#` lines before the first statement become [`PolygonMesh::comments`].
+//! - Textured meshes: see [`crate::mesh::corners`] for the model and `references` (below) for
+//!   the files they name: referenced, never copied; rebased when written elsewhere; missing
+//!   ones are warnings of [`read_mesh_reporting`]. [`texture_data_not_held`] says what OFF and
+//!   STL cannot hold.
 //! - **OFF** (`off`): positions, `C`/`N`/`ST` vertex data, per-face colours when every face has
 //!   one.
 //! - **STL** (`stl`): triangles, welded by exact f32 bit equality; file normals are dropped
@@ -343,6 +348,40 @@ pub fn read_mesh_bytes(bytes: &[u8], format: MeshFormat) -> Result<PolygonMesh, 
         mesh.check().map_err(err_file)?;
     }
     Ok(mesh)
+}
+
+/// What of `mesh`'s texture side (per-corner data, materials, groups, per-face lists) a file
+/// of `format` cannot hold: one line, or `None` when it holds all of it. OBJ holds all but the
+/// per-face lists; PLY all; OFF and STL none.
+pub fn texture_data_not_held(mesh: &PolygonMesh, format: MeshFormat) -> Option<String> {
+    let mut what = Vec::new();
+    let plain = matches!(format, MeshFormat::Off | MeshFormat::Stl);
+    if plain {
+        what.extend(
+            mesh.corner_attributes
+                .iter()
+                .map(|a| format!("per-corner {}", a.name)),
+        );
+        if !mesh.materials.is_empty() {
+            what.push("materials".to_string());
+        }
+        if !mesh.group_names.is_empty() || !mesh.object_names.is_empty() {
+            what.push("groups".to_string());
+        }
+    }
+    if format != MeshFormat::Ply {
+        what.extend(
+            mesh.face_lists
+                .iter()
+                .map(|l| format!("face list {}", l.name)),
+        );
+    }
+    (!what.is_empty()).then(|| {
+        format!(
+            "{format} cannot hold the mesh's {}; they are not written",
+            what.join(", ")
+        )
+    })
 }
 
 /// Writes a mesh atomically with default options; the format comes from the extension.
