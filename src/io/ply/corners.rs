@@ -11,6 +11,8 @@
 
 use std::collections::HashMap;
 
+use smallvec::SmallVec;
+
 use super::rows::corner_list_width;
 use super::types::empty_col;
 use crate::mesh::corners::{NORMAL, TEXCOORD};
@@ -78,11 +80,12 @@ fn corner_attribute(l: &ListProperty, width: usize, face_starts: &[u32]) -> Corn
     let corners = *face_starts.last().unwrap_or(&0) as usize;
     let mut indices = vec![NO_VALUE; corners];
     let mut pool: Vec<&[f64]> = Vec::new();
-    let mut seen: HashMap<Vec<u64>, u32> = HashMap::new();
+    // Keys inline up to four values: a scan has millions of corners.
+    let mut seen: HashMap<SmallVec<[u64; 4]>, u32> = HashMap::new();
     for f in 0..face_starts.len() - 1 {
         let items = &l.items[l.starts[f] as usize..l.starts[f + 1] as usize];
         for (k, value) in items.chunks_exact(width).enumerate() {
-            let key: Vec<u64> = value.iter().map(|x| x.to_bits()).collect();
+            let key: SmallVec<[u64; 4]> = value.iter().map(|x| x.to_bits()).collect();
             let next = pool.len() as u32;
             let row = *seen.entry(key).or_insert_with(|| {
                 pool.push(value);
