@@ -165,3 +165,56 @@ fn drop_unused_rows(attr: &mut super::CornerAttribute) {
         *c = c.gathered(&kept);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::{Attribute, CornerAttribute};
+
+    /// Two triangles folded at 90° along the edge 0–1, with a hard edge there: each face's
+    /// corners have the face's own normal.
+    fn folded() -> PolygonMesh {
+        let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
+        let mut m = PolygonMesh::from_triangles(p, &[[0, 1, 2], [1, 0, 3]]);
+        let col = |name: &str, v: Vec<f32>| Attribute {
+            name: name.into(),
+            data: AttributeData::F32(v),
+        };
+        m.corner_attributes.push(CornerAttribute {
+            name: NORMAL.into(),
+            columns: vec![
+                col("nx", vec![0.0, 0.0]),
+                col("ny", vec![0.0, 1.0]),
+                col("nz", vec![1.0, 0.0]),
+            ],
+            indices: vec![0, 0, 0, 1, 1, 1],
+        });
+        m
+    }
+
+    #[test]
+    fn a_moved_fold_keeps_its_hard_edge_and_unmoved_normals_keep_their_bits() {
+        let mut m = folded();
+        let before = m.positions.clone();
+        m.refresh_normals(&before);
+        assert_eq!(m, folded(), "nothing moved, nothing changes");
+        m.positions[3] = DVec3::new(0.0, -1.0, 1.0);
+        m.refresh_normals(&before);
+        let n = m.corner_attribute(NORMAL).unwrap();
+        let value = |c: usize| DVec3::from_slice(&n.value(c).unwrap());
+        assert_eq!(
+            value(0),
+            DVec3::Z,
+            "the unmoved face's corners keep their normal"
+        );
+        let tilted = DVec3::new(0.0, 1.0, 1.0).normalize();
+        for c in 3..6 {
+            assert!(value(c).angle_between(tilted) < 1e-6, "{}", value(c));
+        }
+        assert_eq!(
+            n.pool_len(),
+            4,
+            "a row per moved cluster (vertex), the unused one dropped"
+        );
+    }
+}

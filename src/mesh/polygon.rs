@@ -2,7 +2,8 @@
 //!
 //! [`PolygonMesh`] is the user's data. Readers fill it without changing anything (no welding, no
 //! reordering, unreferenced vertices kept) and writers emit it unchanged, so a read → write trip
-//! keeps vertex count, vertex order, face order and extra properties. Processing happens on the
+//! keeps vertex count, vertex order, face order and extra properties, and a textured scan's
+//! per-corner data, materials and groups ([`crate::mesh::corners`]). Processing happens on the
 //! half-edge [`crate::mesh::Mesh`] built from it; results are mapped back onto these vertices.
 
 use glam::DVec3;

@@ -40,8 +40,9 @@ pub enum SimplifyError {
 #[derive(Clone, Debug)]
 pub struct Simplified {
     /// The result: triangles, the surviving vertices at their original positions (PM order),
-    /// the input's per-vertex attributes gathered along; per-face attributes and extra
-    /// elements are dropped (their rows no longer exist).
+    /// the input's per-vertex attributes gathered along; per-face attributes, per-corner data
+    /// (texture coordinates and their seams), materials, groups and extra elements are
+    /// dropped (their rows no longer exist; [`PolygonMesh::face_data_dropped`] says which).
     pub mesh: PolygonMesh,
     /// Triangles of the input after the builder's repairs.
     pub input_triangles: usize,

@@ -211,8 +211,9 @@ impl<'a> Statements<'a> {
             .into_iter()
             .filter_map(|(attr, table, kw)| {
                 let a = mesh.face_attribute(attr)?;
-                // A PLY `texnumber` without materials is no material index.
-                let useful = attr != MATERIAL_ATTRIBUTE || !materials.list.is_empty();
+                // A material, group or object that no face has writes nothing, so that the
+                // file reads back to what it writes again.
+                let useful = table.is_none() || (0..a.data.len()).any(|f| a.data.get_f64(f) >= 0.0);
                 useful.then_some((&a.data, table, kw))
             })
             .collect();
