@@ -85,8 +85,7 @@ pub(crate) fn write(mesh: &PolygonMesh, materials: &Materials) -> Result<Vec<u8>
     let mut s = String::with_capacity(mesh.positions.len() * 30 + mesh.face_indices.len() * 8);
     push_comments(&mut s, mesh)?;
     for lib in &materials.libraries {
-        check_one_line(lib, "material library")?;
-        let _ = writeln!(s, "mtllib {lib}");
+        push_statement(&mut s, "mtllib", lib)?;
     }
     push_vertices(&mut s, mesh)?;
     let uv = Source::of(mesh, TEXCOORD, &["u", "v"]);
@@ -138,14 +137,17 @@ fn push_comments(s: &mut String, mesh: &PolygonMesh) -> Result<(), IoError> {
     Ok(())
 }
 
-/// A name or path written on one line must hold no line break and not end in `\`.
-fn check_one_line(name: &str, what: &str) -> Result<(), IoError> {
-    if name.is_empty() || name.contains(['\n', '\r', '#']) || name.ends_with('\\') {
+/// `kw name` on a line of its own. A name ending in a backslash gets a space after it, so that
+/// it does not continue the line; names with line breaks or `#` cannot be written.
+fn push_statement(s: &mut String, kw: &str, name: &str) -> Result<(), IoError> {
+    if name.is_empty() || name.contains(['\n', '\r', '#']) {
         return Err(err_invalid(
             MeshFormat::Obj,
-            format!("{what} {name:?} cannot be written on an OBJ line"),
+            format!("{kw} {name:?} cannot be written on an OBJ line"),
         ));
     }
+    let gap = if name.ends_with('\\') { " " } else { "" };
+    let _ = writeln!(s, "{kw} {name}{gap}");
     Ok(())
 }
 
@@ -250,8 +252,7 @@ impl<'a> Statements<'a> {
                         Some(name) => name.to_string(),
                         None => format!("{}{i}", if *kw == "usemtl" { "material" } else { kw }),
                     };
-                    check_one_line(&name, kw)?;
-                    let _ = writeln!(s, "{kw} {name}");
+                    push_statement(s, kw, &name)?;
                 }
             }
         }
