@@ -101,6 +101,35 @@ pub struct Container<'a> {
     /// Section table.
     pub sections: Vec<SectionEntry>,
     bytes: &'a [u8],
+    release: Release<'a>,
+}
+
+/// What a reader calls with the parts of the bytes it is done with: a mapped file hands their
+/// pages back to the kernel (see [`crate::format::PyrFile`]), bytes in memory do nothing.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct Release<'a>(Option<&'a ReleaseFn<'a>>);
+
+/// See [`Release`].
+type ReleaseFn<'a> = dyn Fn(&[u8]) + Sync + 'a;
+
+impl<'a> Release<'a> {
+    /// Calls `f` with every part a reader is done with.
+    pub(crate) fn to(f: &'a ReleaseFn<'a>) -> Release<'a> {
+        Release(Some(f))
+    }
+
+    /// The reader is done with `part` (a slice of the bytes it reads).
+    pub(crate) fn done_with(&self, part: &[u8]) {
+        if let Some(f) = self.0 {
+            f(part);
+        }
+    }
+}
+
+impl std::fmt::Debug for Release<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(if self.0.is_some() { "Release" } else { "Keep" })
+    }
 }
 
 impl<'a> Container<'a> {
@@ -169,7 +198,27 @@ impl<'a> Container<'a> {
             minor,
             sections,
             bytes,
+            release: Release::default(),
         })
+    }
+
+    /// The container, calling `release` with the parts of the bytes its reader is done with.
+    pub(crate) fn releasing(self, release: Release<'a>) -> Container<'a> {
+        Container { release, ..self }
+    }
+
+    /// What to call with the parts of the bytes a reader is done with.
+    pub(crate) fn release(&self) -> Release<'a> {
+        self.release
+    }
+
+    /// The reader is done with section `tag` (if the file holds it).
+    pub(crate) fn done_with(&self, tag: [u8; 4]) {
+        if let Some(e) = self.entry(tag) {
+            let start = e.offset.min(self.bytes.len() as u64) as usize;
+            let end = (e.offset + e.length).min(self.bytes.len() as u64) as usize;
+            self.release.done_with(&self.bytes[start..end]);
+        }
     }
 
     /// Total size of the file the table describes (larger than the bytes held if truncated).

@@ -7,9 +7,11 @@
 //! [`crate::pyramid`].
 
 pub mod container;
+mod file;
 pub(crate) mod pyr;
 pub mod varint;
 
+pub use file::PyrFile;
 pub use pyr::is_pyr;
 pub use pyr::{FileDetails, LevelMesh, PyrData, PyramidOptions, SizeReport, StoredDetails};
 pub use pyr::{
