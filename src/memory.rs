@@ -127,8 +127,9 @@ pub const FIGURES: [(Job, Figure); 4] = [
     // whose layout (about 600 B per vertex) goes into mapped temporary files: resident is the
     // working window, the address space holds the whole mapping.
     (Job::Pyramid, figure(391, 1_050)),
-    // The same, and the details as f64 and the whole encoded file held beside the pyramid.
-    (Job::SavePyramid, figure(703, 1_170)),
+    // The same; then the details coded and the detail pyramid dropped before the hierarchy's
+    // sections are encoded and written.
+    (Job::SavePyramid, figure(396, 1_170)),
     // The decimator's quadrics, candidates and working mesh beside the input.
     (Job::Simplify, figure(391, 430)),
     // The half-edge mesh and the filter's own arrays.

@@ -150,6 +150,26 @@ fn a_file_read_in_place_decodes_as_its_bytes() {
     }
 }
 
+/// Saving consumes the pyramid section by section (its detail pyramid dropped before the
+/// hierarchy is encoded) and writes the bytes a pyramid gathers in memory.
+#[test]
+fn a_pyramid_written_section_by_section_is_the_file_gathered_in_memory() {
+    let input = rich_mesh();
+    let pyramid = Pyramid::build(&input).unwrap();
+    let (bytes, sizes) = pyramid.to_pyr_bytes().unwrap();
+    let mut written = Vec::new();
+    let encoded = pyramid.encode_as(meshpyr::PyrContent::WithDetails).unwrap();
+    encoded.write_to(&mut written).unwrap();
+    assert!(written == bytes);
+    let (consumed, pm) = pyramid
+        .into_encoded(meshpyr::PyrContent::WithDetails)
+        .unwrap();
+    assert_eq!(consumed.sizes, sizes);
+    assert_eq!(sizes.total, bytes.len());
+    assert!(consumed.into_bytes() == bytes);
+    assert_eq!(pm.n_vertices(), input.n_vertices());
+}
+
 #[test]
 fn f64_positions_are_kept_exactly() {
     let mut m = io::read_mesh(data("joint.ply")).unwrap();

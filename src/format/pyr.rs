@@ -17,7 +17,9 @@
 //! fuzz target's body.
 
 use super::FormatError;
-use super::container::{Container, REQUIRED, Release, Section, write_container};
+use super::container::{
+    Container, REQUIRED, Release, Section, container_len, write_container, write_container_to,
+};
 use super::varint::ByteReader;
 use crate::mesh::{Built, PolygonMesh, ScalarType};
 use crate::pm::{PmOptions, PmParts, ProgressiveMesh};
@@ -219,6 +221,18 @@ pub fn encode_with_details(
     info: &PyramidOptions,
     details: Option<&StoredDetails>,
 ) -> Result<(Vec<u8>, SizeReport), FormatError> {
+    let encoded = encode_sections(input, pm, info, details)?;
+    let sizes = encoded.sizes;
+    Ok((encoded.into_bytes(), sizes))
+}
+
+/// [`encode_with_details`], section by section, for writing to a file without gathering it.
+pub fn encode_sections(
+    input: &PolygonMesh,
+    pm: &ProgressiveMesh,
+    info: &PyramidOptions,
+    details: Option<&StoredDetails>,
+) -> Result<EncodedPyr, FormatError> {
     check_pm_belongs(input, pm)?;
     let f32 = pm.original_positions().iter().all(|&p| exactly_f32(p));
     let meta = encode_meta(&describe(input, pm, info, f32))?;
@@ -271,9 +285,29 @@ pub fn encode_with_details(
             bytes,
         });
     }
-    let bytes = write_container(MAJOR, MINOR, &sections);
-    sizes.total = bytes.len();
-    Ok((bytes, sizes))
+    sizes.total = container_len(&sections);
+    Ok(EncodedPyr { sections, sizes })
+}
+
+/// A `.pyr` file encoded section by section: written to a file as it is
+/// ([`Self::write_to`]), it is never gathered into one buffer beside its sections.
+#[derive(Clone, Debug)]
+pub struct EncodedPyr {
+    sections: Vec<Section>,
+    /// The byte counts of its parts.
+    pub sizes: SizeReport,
+}
+
+impl EncodedPyr {
+    /// Writes the file to `w`.
+    pub fn write_to(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        write_container_to(w, MAJOR, MINOR, &self.sections)
+    }
+
+    /// The file's bytes.
+    pub fn into_bytes(self) -> Vec<u8> {
+        write_container(MAJOR, MINOR, &self.sections)
+    }
 }
 
 /// The input positions are restored from the PM positions through the vertex order, so check

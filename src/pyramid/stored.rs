@@ -15,24 +15,17 @@ use crate::relax::RelaxationSpec;
 impl StoredDetails {
     /// The details of `pyramid`, analysed with `relaxation`, in split order, with the step
     /// they are whole multiples of (what a `.pyr` file stores; the pyramid's own values, so
-    /// a pyramid opened from them filters with the very same bits).
+    /// a pyramid opened from them filters with the very same bits), coded as the file codes
+    /// them ([`StoredDetails::coded`]).
     pub fn of(pyramid: &DetailPyramid, relaxation: RelaxationSpec) -> StoredDetails {
-        let n = pyramid.n_splits();
-        let mut counts = Vec::with_capacity(n);
-        let mut details = Vec::with_capacity(pyramid.n_details());
-        for k in 0..n {
-            let d = pyramid.split_quantised(k);
-            counts.push(d.len() as u32);
-            details.extend_from_slice(d);
-        }
-        StoredDetails::from_quantised(
+        StoredDetails::coded(
             relaxation,
             pyramid.base.clone(),
-            counts,
-            details,
+            pyramid.n_splits(),
+            |k| pyramid.split_quantised(k),
             pyramid.detail_step,
         )
-        .expect("a pyramid's counts add up and its step is a power of two")
+        .expect("a pyramid's step is a power of two")
     }
 
     /// The detail spectrum of these details on the hierarchy `pm`, without any analysis.
