@@ -7,26 +7,23 @@
 //! edges have no dual edge. The anisotropic variant lengthens each dual edge by how much the
 //! normals around it disagree with each other and with the source ([`edge_weight`]).
 
-use super::surface::{FaceFrames, FlatSurface, NO_FACE};
+use super::surface::{FlatSurface, NO_FACE};
 use glam::DVec3;
 
 /// The dual graph: for each face, its (up to) three neighbours and the dual edge lengths.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct DualGraph {
-    /// `neighbors[f][k]`: the face across edge `k` of `f`, or [`NO_FACE`].
-    pub neighbors: Vec<[u32; 3]>,
+pub(crate) struct DualGraph<'a> {
+    /// `neighbors[f][k]`: the face across edge `k` of `f`, or [`NO_FACE`] (the surface's
+    /// adjacency, borrowed).
+    pub neighbors: &'a [[u32; 3]],
     /// `lengths[f][k]`: `|C_f − M_k| + |M_k − C_g|`, with `M_k` the midpoint of edge `k`
     /// (0 where there is no neighbour).
     pub lengths: Vec<[f64; 3]>,
 }
 
-impl DualGraph {
-    /// The dual graph of `surface` at `positions`, with centroids from `frames`.
-    pub(crate) fn new(
-        surface: &FlatSurface,
-        positions: &[DVec3],
-        frames: &FaceFrames,
-    ) -> DualGraph {
+impl<'a> DualGraph<'a> {
+    /// The dual graph of `surface` at `positions`.
+    pub(crate) fn new(surface: &'a FlatSurface, positions: &[DVec3]) -> DualGraph<'a> {
         let mut lengths = Vec::with_capacity(surface.n_faces());
         for (f, t) in surface.triangles.iter().enumerate() {
             let mut l = [0.0; 3];
@@ -36,13 +33,13 @@ impl DualGraph {
                     continue;
                 }
                 let m = 0.5 * (positions[t[k] as usize] + positions[t[(k + 1) % 3] as usize]);
-                l[k] = (frames.centroids[f] - m).length()
-                    + (m - frames.centroids[g as usize]).length();
+                l[k] = (surface.centroid(positions, f) - m).length()
+                    + (m - surface.centroid(positions, g as usize)).length();
             }
             lengths.push(l);
         }
         DualGraph {
-            neighbors: surface.adjacency.clone(),
+            neighbors: &surface.adjacency,
             lengths,
         }
     }
@@ -205,6 +202,7 @@ fn heap_pop(heap: &mut Vec<(f64, u32)>) -> Option<(f64, u32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fairing::surface::FaceFrames;
     use crate::mesh::Mesh;
 
     /// An n×n grid of unit squares in the plane z = 0, each split along the same diagonal.
@@ -212,19 +210,19 @@ mod tests {
         crate::mesh::shapes::grid(n, |i, j| DVec3::new(i as f64, j as f64, 0.0))
     }
 
-    fn setup(p: &[DVec3], t: &[[u32; 3]]) -> (FlatSurface, FaceFrames, DualGraph, Vec<DVec3>) {
+    fn setup(p: &[DVec3], t: &[[u32; 3]]) -> (FlatSurface, FaceFrames, Vec<DVec3>) {
         let built = Mesh::from_triangles(p, t).expect("valid mesh");
         let s = FlatSurface::new(&built.mesh);
         let pos = built.mesh.positions();
         let frames = s.face_frames(&pos);
-        let g = DualGraph::new(&s, &pos, &frames);
-        (s, frames, g, pos)
+        (s, frames, pos)
     }
 
     #[test]
     fn distances_on_a_regular_grid() {
         let (p, t) = grid(8);
-        let (_, frames, g, _) = setup(&p, &t);
+        let (s, frames, pos) = setup(&p, &t);
+        let g = DualGraph::new(&s, &pos);
         // Centroid to a leg midpoint: the lower triangle of square (i, j) has centroid
         // (i + 2/3, j + 1/3); the diagonal's midpoint is (i + 1/2, j + 1/2).
         let to_diag = (DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0) - DVec3::new(0.5, 0.5, 0.0)).length();
@@ -266,7 +264,8 @@ mod tests {
         let off = p.len() as u32;
         p.extend(p2.iter().map(|q| *q + DVec3::new(1.5, 0.0, 0.0)));
         t.extend(t2.iter().map(|f| f.map(|v| v + off)));
-        let (_, frames, g, _) = setup(&p, &t);
+        let (s, frames, pos) = setup(&p, &t);
+        let g = DualGraph::new(&s, &pos);
         let mut ball = DualBall::new(g.len());
         ball.grow(&g, &frames.normals, 0.0, 0, 1e9);
         let mut faces: Vec<u32> = ball.ball.iter().map(|e| e.1).collect();
@@ -283,7 +282,8 @@ mod tests {
                 *q = DVec3::new(4.0, q.y, q.x - 4.0);
             }
         }
-        let (_, frames, g, _) = setup(&p, &t);
+        let (s, frames, pos) = setup(&p, &t);
+        let g = DualGraph::new(&s, &pos);
         let src = (2 * (4 * 8 + 3)) as u32; // lower triangle of square (3, 4), left of the fold
         let mut iso = DualBall::new(g.len());
         iso.grow(&g, &frames.normals, 0.0, src, 100.0);
