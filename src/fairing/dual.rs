@@ -69,13 +69,16 @@ pub(crate) fn edge_weight(length: f64, rho: f64, n_o: DVec3, n_p: DVec3, n_q: DV
     length * (1.0 + 0.5 * rho * spread)
 }
 
-/// Reusable Dijkstra workspace for one thread: distances stamped with a generation counter so
-/// a new search needs no clearing, a binary min-heap, and the result ball.
+/// Reusable Dijkstra workspace for one thread: tentative distances, a binary min-heap and the
+/// result ball.
+///
+/// The distances are one `f64` per face, infinite except during a search: every face a search
+/// writes is pushed, hence settled, hence in the ball, so resetting the ball's faces afterwards
+/// clears them all, at the cost of the ball rather than of the mesh. Half the bytes of a
+/// distance with a generation stamp, and each worker thread holds one array.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct DualBall {
-    /// Tentative distance and the generation that wrote it, side by side for one cache miss.
-    dist: Vec<(f64, u32)>,
-    generation: u32,
+    dist: Vec<f64>,
     heap: Vec<(f64, u32)>,
     /// The faces within the radius of the last search with their distances, in the order
     /// Dijkstra settled them (non-decreasing distance; the source first at 0).
@@ -86,8 +89,7 @@ impl DualBall {
     /// A workspace for graphs of up to `n_faces` dual vertices.
     pub(crate) fn new(n_faces: usize) -> DualBall {
         DualBall {
-            dist: vec![(0.0, 0); n_faces],
-            generation: 0,
+            dist: vec![f64::INFINITY; n_faces],
             heap: Vec::with_capacity(256),
             ball: Vec::with_capacity(1024),
         }
@@ -105,23 +107,19 @@ impl DualBall {
         radius: f64,
     ) {
         if self.dist.len() < graph.len() {
-            self.dist.resize(graph.len(), (0.0, 0));
+            self.dist.resize(graph.len(), f64::INFINITY);
         }
-        self.generation = self.generation.wrapping_add(1);
-        if self.generation == 0 {
-            // The counter wrapped: old stamps could collide with new ones.
-            self.dist.fill((0.0, 0));
-            self.generation = 1;
+        for &(_, f) in &self.ball {
+            self.dist[f as usize] = f64::INFINITY;
         }
-        let generation = self.generation;
         self.ball.clear();
         self.heap.clear();
         let n_o = normals[source as usize];
-        self.dist[source as usize] = (0.0, generation);
+        self.dist[source as usize] = 0.0;
         heap_push(&mut self.heap, (0.0, source));
         while let Some((d, p)) = heap_pop(&mut self.heap) {
             let pi = p as usize;
-            if d > self.dist[pi].0 {
+            if d > self.dist[pi] {
                 continue; // stale entry; p was reached more cheaply
             }
             self.ball.push((d, p));
@@ -135,12 +133,8 @@ impl DualBall {
                 }
                 let qi = q as usize;
                 let nd = d + edge_weight(lens[k], rho, n_o, n_p, normals[qi]);
-                if nd >= radius {
-                    continue;
-                }
-                let slot = &mut self.dist[qi];
-                if slot.1 != generation || nd < slot.0 {
-                    *slot = (nd, generation);
+                if nd < radius && nd < self.dist[qi] {
+                    self.dist[qi] = nd;
                     heap_push(&mut self.heap, (nd, q));
                 }
             }
