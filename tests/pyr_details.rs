@@ -47,13 +47,14 @@ fn stored_details_are_the_pyramids_own() {
         assert_eq!(stored.step, p.pyramid.detail_step(), "{name}");
         assert_eq!(stored.step.log2().fract(), 0.0, "{name}");
         assert!(stored.step <= diagonal * 2f64.powi(-21), "{name}");
+        let details = stored.details().unwrap();
         let mut at = 0;
         for k in 0..p.pyramid.n_splits() {
             let (_, exact) = p.pyramid.split_details(k);
             let n = exact.len();
             assert_eq!(stored.counts[k] as usize, n, "{name}: split {k}");
             assert!(
-                stored.details[at..at + n].iter().copied().eq(exact),
+                details[at..at + n].iter().copied().eq(exact),
                 "{name}: split {k}"
             );
             at += n;

@@ -114,6 +114,62 @@ fn decode_restores_input_and_hierarchy_exactly() {
     }
 }
 
+/// A file read in place (mapped, its pages handed back as they are decoded) decodes to what
+/// its bytes decode to, details included; an empty or foreign file gives the usual errors.
+#[test]
+fn a_file_read_in_place_decodes_as_its_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, input) in meshes() {
+        let (_, bytes) = build(&input);
+        let path = dir.path().join(format!("{name}.pyr"));
+        std::fs::write(&path, &bytes).unwrap();
+        let file = format::PyrFile::open(&path).unwrap();
+        assert_eq!(file.bytes(), &bytes[..], "{name}");
+        let (mapped, read) = (file.decode().unwrap(), format::decode(&bytes).unwrap());
+        assert_eq!(mapped.input, read.input, "{name}");
+        assert_eq!(mapped.pm.splits(), read.pm.splits(), "{name}");
+        let (format::FileDetails::Stored(a), format::FileDetails::Stored(b)) =
+            (&mapped.details, &read.details)
+        else {
+            panic!("{name}: no stored details");
+        };
+        assert_eq!(a, b, "{name}");
+        assert!(reencode(&mapped) == bytes, "{name}");
+    }
+    for (content, error) in [
+        (&b""[..], "byte 0: file is truncated inside magic"),
+        (
+            b"ply\nformat ascii 1.0\n",
+            "not a .pyr file (bad signature)",
+        ),
+    ] {
+        let other = dir.path().join("other.pyr");
+        std::fs::write(&other, content).unwrap();
+        let got = format::PyrFile::open(&other).unwrap().decode().unwrap_err();
+        assert_eq!(got.to_string(), error);
+    }
+}
+
+/// Saving consumes the pyramid section by section (its detail pyramid dropped before the
+/// hierarchy is encoded) and writes the bytes a pyramid gathers in memory.
+#[test]
+fn a_pyramid_written_section_by_section_is_the_file_gathered_in_memory() {
+    let input = rich_mesh();
+    let pyramid = Pyramid::build(&input).unwrap();
+    let (bytes, sizes) = pyramid.to_pyr_bytes().unwrap();
+    let mut written = Vec::new();
+    let encoded = pyramid.encode_as(meshpyr::PyrContent::WithDetails).unwrap();
+    encoded.write_to(&mut written).unwrap();
+    assert!(written == bytes);
+    let (consumed, pm) = pyramid
+        .into_encoded(meshpyr::PyrContent::WithDetails)
+        .unwrap();
+    assert_eq!(consumed.sizes, sizes);
+    assert_eq!(sizes.total, bytes.len());
+    assert!(consumed.into_bytes() == bytes);
+    assert_eq!(pm.n_vertices(), input.n_vertices());
+}
+
 #[test]
 fn f64_positions_are_kept_exactly() {
     let mut m = io::read_mesh(data("joint.ply")).unwrap();

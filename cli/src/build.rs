@@ -46,9 +46,9 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
         Job::SavePyramid
     };
     let input = read_input_mesh_for(&args.input, job)?;
+    let n_input = input.n_vertices();
     let start = Instant::now();
-    // Without details the file needs the hierarchy only: the analysis would be wasted.
-    let (bytes, sizes, pm) = if args.no_details {
+    let (encoded, pm) = if args.no_details {
         let bar = global.progress("build");
         let (pm, _) = ProgressiveMesh::from_polygons(&input, &options.pm, &BarProgress(&bar))
             .with_context(|| {
@@ -58,27 +58,27 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
                 )
             })?;
         bar.finish_and_clear();
-        let (bytes, sizes) = format::encode(&input, &pm, &options)
+        let encoded = format::encode_sections(&input, &pm, &options, None)
             .with_context(|| format!("cannot encode {}", args.input.display()))?;
-        (bytes, sizes, pm)
+        (encoded, pm)
     } else {
         let bar = global.progress("build");
-        let pyramid = Pyramid::build_with(input.clone(), &options, &BarProgress(&bar))
+        let pyramid = Pyramid::build_with(input, &options, &BarProgress(&bar))
             .with_context(|| format!("cannot build the pyramid of {}", args.input.display()))?;
         bar.finish_and_clear();
-        let (bytes, sizes) = pyramid
-            .to_pyr_bytes_as(PyrContent::WithDetails)
-            .with_context(|| format!("cannot encode {}", args.input.display()))?;
-        (bytes, sizes, pyramid.pm)
+        pyramid
+            .into_encoded(PyrContent::WithDetails)
+            .with_context(|| format!("cannot encode {}", args.input.display()))?
     };
     let took = start.elapsed().as_secs_f64();
-    io::write_atomic(&args.output, &bytes)?;
-    let n = input.n_vertices().max(1) as f64;
+    io::write_atomic_with(&args.output, |w| encoded.write_to(w))?;
+    let sizes = encoded.sizes;
+    let n = n_input.max(1) as f64;
     global.say(format_args!(
         "wrote {}: {} bytes for {} vertices, levels {}..={} ({} and encoded in {took:.1} s){}",
         args.output.display(),
         sizes.total,
-        input.n_vertices(),
+        n_input,
         pm.n_base_vertices(),
         pm.n_vertices(),
         if args.no_details {
@@ -86,7 +86,7 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
         } else {
             "hierarchy and details built"
         },
-        super::input::extra_vertices_note(input.n_vertices(), pm.n_vertices()),
+        super::input::extra_vertices_note(n_input, pm.n_vertices()),
     ));
     global.say(format_args!(
         "  bytes/vertex: whole file {:.2}, PM connectivity {:.2}, split errors {:.2}, positions {:.2}, input order+polygons+attributes {:.2}{}",

@@ -126,10 +126,12 @@ pub(crate) fn is_pyr_file(path: &Path) -> bool {
         .is_ok_and(|_| format::is_pyr(&head))
 }
 
-/// Reads and decodes a whole `.pyr` file (validated), errors naming the file.
+/// Decodes a whole `.pyr` file in place (validated), errors naming the file.
 pub(crate) fn load_pyr(path: &Path) -> anyhow::Result<format::PyrData> {
-    let bytes = std::fs::read(path).with_context(|| format!("cannot read {}", path.display()))?;
-    decode_pyr(path, &bytes)
+    let file =
+        format::PyrFile::open(path).with_context(|| format!("cannot read {}", path.display()))?;
+    file.decode()
+        .with_context(|| format!("cannot load {}", path.display()))
 }
 
 /// Decodes the bytes of the `.pyr` file `path` (validated), errors naming the file.
@@ -174,17 +176,19 @@ fn load_pyr_scan(
     pyramid_of_pyr(path, data, relaxation, start, global, &NoProgress)
 }
 
-/// The pyramid of the `.pyr` file `path` whose bytes are `bytes` (with its relaxation and
-/// stored details), its progress also reported to `also`. The bytes are freed once decoded.
-pub(crate) fn pyramid_of_pyr_bytes(
+/// The pyramid of the `.pyr` file `path`, opened as `file` (with its relaxation and stored
+/// details), its progress also reported to `also`. The file is closed once decoded.
+pub(crate) fn pyramid_of_pyr_file(
     path: &Path,
-    bytes: Vec<u8>,
+    file: format::PyrFile,
     global: &Global,
     also: &dyn Progress,
 ) -> anyhow::Result<Pyramid> {
     let start = Instant::now();
-    let data = decode_pyr(path, &bytes)?;
-    drop(bytes);
+    let data = file
+        .decode()
+        .with_context(|| format!("cannot load {}", path.display()))?;
+    drop(file);
     pyramid_of_pyr(path, data, None, start, global, also)
 }
 

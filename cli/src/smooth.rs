@@ -6,7 +6,7 @@ use crate::choices::named;
 use anyhow::Context;
 use meshpyr::choice::Choice;
 use meshpyr::smooth::{
-    Boundary, FilterScale, SmoothKind, SmoothSettings, Variance, Weights, smooth_mesh,
+    Boundary, FilterScale, SmoothKind, SmoothSettings, Variance, Weights, smooth_mesh_owned,
 };
 use std::path::PathBuf;
 use std::time::Instant;
@@ -129,7 +129,9 @@ pub(crate) fn run(args: SmoothArgs, global: &Global) -> anyhow::Result<()> {
     let input = super::input::read_input_mesh_for(&args.input, meshpyr::memory::Job::Smooth)?;
     let start = Instant::now();
     let bar = global.progress("smooth");
-    let smoothed = smooth_mesh(&input, &method, &BarProgress(&bar))
+    let faces = input.n_faces();
+    // The input is given away: its positions are replaced in place, so a scan is held once.
+    let smoothed = smooth_mesh_owned(input, &method, &BarProgress(&bar))
         .with_context(|| format!("smoothing {}", args.input.display()))?;
     bar.finish_and_clear();
     if smoothed.repair.repaired_anything() {
@@ -141,7 +143,7 @@ pub(crate) fn run(args: SmoothArgs, global: &Global) -> anyhow::Result<()> {
     global.say(format_args!(
         "{:?}: {} faces in {:.2} s; {}",
         args.method,
-        input.n_faces(),
+        faces,
         start.elapsed().as_secs_f64(),
         smoothed.summary
     ));

@@ -3,7 +3,7 @@
 
 use super::Global;
 use super::input::{
-    build_pyramid_watched, check_memory, decode_pyr, is_pyr_file, pyramid_of_pyr_bytes,
+    build_pyramid_watched, check_memory, decode_pyr, is_pyr_file, pyramid_of_pyr_file,
     read_input_mesh_for,
 };
 use crate::view::limits::BUDGET;
@@ -71,13 +71,13 @@ fn open_in_stages(
     let (path, global) = (path.to_path_buf(), global.clone());
     if is_pyr_file(&path) {
         check_memory(&path, Job::Pyramid)?;
-        let bytes =
-            std::fs::read(&path).with_context(|| format!("cannot read {}", path.display()))?;
-        let level = format::read_level_within(&bytes, budget)
+        let file = format::PyrFile::open(&path)
+            .with_context(|| format!("cannot read {}", path.display()))?;
+        let level = format::read_level_within(file.bytes(), budget)
             .with_context(|| format!("cannot load {}", path.display()))?;
         if level.truncated {
             // Said now, with the decoder's words, rather than after the page has opened.
-            decode_pyr(&path, &bytes)?;
+            decode_pyr(&path, file.bytes())?;
         }
         let what = format!(
             "level {} of {} vertices, read from the start of the file",
@@ -86,7 +86,7 @@ fn open_in_stages(
         let first = Picture::new(what, &level.positions, level.triangles);
         let load: Loader = Box::new(move |opening: &Opening| {
             opening.stage("reading the hierarchy and its details");
-            pyramid_of_pyr_bytes(&path, bytes, &global, opening).map_err(|e| format!("{e:#}"))
+            pyramid_of_pyr_file(&path, file, &global, opening).map_err(|e| format!("{e:#}"))
         });
         return Ok((first, load));
     }

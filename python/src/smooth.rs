@@ -94,8 +94,9 @@ pub(crate) fn smooth<'py>(
     };
     let method = settings.method().map_err(input_error)?;
     let mesh = arrays::mesh(v, f)?;
+    // The mesh is ours: smoothing writes into it rather than into a copy.
     let smoothed = py
-        .detach(|| meshpyr::smooth_mesh(&mesh, &method, &NoProgress))
+        .detach(|| meshpyr::smooth::smooth_mesh_owned(mesh, &method, &NoProgress))
         .map_err(input_error)?;
     Ok(positions_array(py, &smoothed.mesh.positions))
 }

@@ -7,26 +7,23 @@
 //! edges have no dual edge. The anisotropic variant lengthens each dual edge by how much the
 //! normals around it disagree with each other and with the source ([`edge_weight`]).
 
-use super::surface::{FaceFrames, FlatSurface, NO_FACE};
+use super::surface::{FlatSurface, NO_FACE};
 use glam::DVec3;
 
 /// The dual graph: for each face, its (up to) three neighbours and the dual edge lengths.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct DualGraph {
-    /// `neighbors[f][k]`: the face across edge `k` of `f`, or [`NO_FACE`].
-    pub neighbors: Vec<[u32; 3]>,
+pub(crate) struct DualGraph<'a> {
+    /// `neighbors[f][k]`: the face across edge `k` of `f`, or [`NO_FACE`] (the surface's
+    /// adjacency, borrowed).
+    pub neighbors: &'a [[u32; 3]],
     /// `lengths[f][k]`: `|C_f − M_k| + |M_k − C_g|`, with `M_k` the midpoint of edge `k`
     /// (0 where there is no neighbour).
     pub lengths: Vec<[f64; 3]>,
 }
 
-impl DualGraph {
-    /// The dual graph of `surface` at `positions`, with centroids from `frames`.
-    pub(crate) fn new(
-        surface: &FlatSurface,
-        positions: &[DVec3],
-        frames: &FaceFrames,
-    ) -> DualGraph {
+impl<'a> DualGraph<'a> {
+    /// The dual graph of `surface` at `positions`.
+    pub(crate) fn new(surface: &'a FlatSurface, positions: &[DVec3]) -> DualGraph<'a> {
         let mut lengths = Vec::with_capacity(surface.n_faces());
         for (f, t) in surface.triangles.iter().enumerate() {
             let mut l = [0.0; 3];
@@ -36,13 +33,13 @@ impl DualGraph {
                     continue;
                 }
                 let m = 0.5 * (positions[t[k] as usize] + positions[t[(k + 1) % 3] as usize]);
-                l[k] = (frames.centroids[f] - m).length()
-                    + (m - frames.centroids[g as usize]).length();
+                l[k] = (surface.centroid(positions, f) - m).length()
+                    + (m - surface.centroid(positions, g as usize)).length();
             }
             lengths.push(l);
         }
         DualGraph {
-            neighbors: surface.adjacency.clone(),
+            neighbors: &surface.adjacency,
             lengths,
         }
     }
@@ -72,14 +69,17 @@ pub(crate) fn edge_weight(length: f64, rho: f64, n_o: DVec3, n_p: DVec3, n_q: DV
     length * (1.0 + 0.5 * rho * spread)
 }
 
-/// Reusable Dijkstra workspace for one thread: distances stamped with a generation counter so
-/// a new search needs no clearing, a binary min-heap, and the result ball.
+/// Reusable Dijkstra workspace for one thread: tentative distances, a binary min-heap and the
+/// result ball.
+///
+/// The distances are one `f64` per face, infinite except during a search: every face a search
+/// writes is pushed, hence settled, hence in the ball, so resetting the ball's faces afterwards
+/// clears them all, at the cost of the ball rather than of the mesh. Half the bytes of a
+/// distance with a generation stamp, and each worker thread holds one array.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct DualBall {
-    /// Tentative distance and the generation that wrote it, side by side for one cache miss.
-    dist: Vec<(f64, u32)>,
-    generation: u32,
-    heap: Vec<(f64, u32)>,
+    dist: Vec<f64>,
+    heap: Vec<u128>,
     /// The faces within the radius of the last search with their distances, in the order
     /// Dijkstra settled them (non-decreasing distance; the source first at 0).
     pub ball: Vec<(f64, u32)>,
@@ -89,8 +89,7 @@ impl DualBall {
     /// A workspace for graphs of up to `n_faces` dual vertices.
     pub(crate) fn new(n_faces: usize) -> DualBall {
         DualBall {
-            dist: vec![(0.0, 0); n_faces],
-            generation: 0,
+            dist: vec![f64::INFINITY; n_faces],
             heap: Vec::with_capacity(256),
             ball: Vec::with_capacity(1024),
         }
@@ -108,23 +107,19 @@ impl DualBall {
         radius: f64,
     ) {
         if self.dist.len() < graph.len() {
-            self.dist.resize(graph.len(), (0.0, 0));
+            self.dist.resize(graph.len(), f64::INFINITY);
         }
-        self.generation = self.generation.wrapping_add(1);
-        if self.generation == 0 {
-            // The counter wrapped: old stamps could collide with new ones.
-            self.dist.fill((0.0, 0));
-            self.generation = 1;
+        for &(_, f) in &self.ball {
+            self.dist[f as usize] = f64::INFINITY;
         }
-        let generation = self.generation;
         self.ball.clear();
         self.heap.clear();
         let n_o = normals[source as usize];
-        self.dist[source as usize] = (0.0, generation);
-        heap_push(&mut self.heap, (0.0, source));
-        while let Some((d, p)) = heap_pop(&mut self.heap) {
+        self.dist[source as usize] = 0.0;
+        heap_push(&mut self.heap, heap_key(0.0, source));
+        while let Some((d, p)) = heap_pop(&mut self.heap).map(heap_item) {
             let pi = p as usize;
-            if d > self.dist[pi].0 {
+            if d > self.dist[pi] {
                 continue; // stale entry; p was reached more cheaply
             }
             self.ball.push((d, p));
@@ -138,13 +133,9 @@ impl DualBall {
                 }
                 let qi = q as usize;
                 let nd = d + edge_weight(lens[k], rho, n_o, n_p, normals[qi]);
-                if nd >= radius {
-                    continue;
-                }
-                let slot = &mut self.dist[qi];
-                if slot.1 != generation || nd < slot.0 {
-                    *slot = (nd, generation);
-                    heap_push(&mut self.heap, (nd, q));
+                if nd < radius && nd < self.dist[qi] {
+                    self.dist[qi] = nd;
+                    heap_push(&mut self.heap, heap_key(nd, q));
                 }
             }
         }
@@ -152,18 +143,25 @@ impl DualBall {
 }
 
 /// Heap order: by distance, ties by face index, so the settle order is fully deterministic.
+/// Both go into one integer (the bits of a non-negative `f64` order like its values), so
+/// the heap compares once per step instead of branching on a float test and a tie test.
 #[inline]
-fn less(a: (f64, u32), b: (f64, u32)) -> bool {
-    a.0 < b.0 || (a.0 == b.0 && a.1 < b.1)
+fn heap_key(distance: f64, face: u32) -> u128 {
+    (u128::from(distance.to_bits()) << 32) | u128::from(face)
 }
 
 #[inline]
-fn heap_push(heap: &mut Vec<(f64, u32)>, item: (f64, u32)) {
+fn heap_item(key: u128) -> (f64, u32) {
+    (f64::from_bits((key >> 32) as u64), key as u32)
+}
+
+#[inline]
+fn heap_push(heap: &mut Vec<u128>, item: u128) {
     let mut i = heap.len();
     heap.push(item);
     while i > 0 {
         let parent = (i - 1) / 2;
-        if !less(item, heap[parent]) {
+        if item >= heap[parent] {
             break;
         }
         heap[i] = heap[parent];
@@ -173,7 +171,7 @@ fn heap_push(heap: &mut Vec<(f64, u32)>, item: (f64, u32)) {
 }
 
 #[inline]
-fn heap_pop(heap: &mut Vec<(f64, u32)>) -> Option<(f64, u32)> {
+fn heap_pop(heap: &mut Vec<u128>) -> Option<u128> {
     let last = heap.pop()?;
     if heap.is_empty() {
         return Some(last);
@@ -187,12 +185,8 @@ fn heap_pop(heap: &mut Vec<(f64, u32)>) -> Option<(f64, u32)> {
             break;
         }
         let r = l + 1;
-        let c = if r < n && less(heap[r], heap[l]) {
-            r
-        } else {
-            l
-        };
-        if !less(heap[c], last) {
+        let c = if r < n && heap[r] < heap[l] { r } else { l };
+        if heap[c] >= last {
             break;
         }
         heap[i] = heap[c];
@@ -205,6 +199,7 @@ fn heap_pop(heap: &mut Vec<(f64, u32)>) -> Option<(f64, u32)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fairing::surface::FaceFrames;
     use crate::mesh::Mesh;
 
     /// An n×n grid of unit squares in the plane z = 0, each split along the same diagonal.
@@ -212,19 +207,19 @@ mod tests {
         crate::mesh::shapes::grid(n, |i, j| DVec3::new(i as f64, j as f64, 0.0))
     }
 
-    fn setup(p: &[DVec3], t: &[[u32; 3]]) -> (FlatSurface, FaceFrames, DualGraph, Vec<DVec3>) {
+    fn setup(p: &[DVec3], t: &[[u32; 3]]) -> (FlatSurface, FaceFrames, Vec<DVec3>) {
         let built = Mesh::from_triangles(p, t).expect("valid mesh");
         let s = FlatSurface::new(&built.mesh);
         let pos = built.mesh.positions();
         let frames = s.face_frames(&pos);
-        let g = DualGraph::new(&s, &pos, &frames);
-        (s, frames, g, pos)
+        (s, frames, pos)
     }
 
     #[test]
     fn distances_on_a_regular_grid() {
         let (p, t) = grid(8);
-        let (_, frames, g, _) = setup(&p, &t);
+        let (s, frames, pos) = setup(&p, &t);
+        let g = DualGraph::new(&s, &pos);
         // Centroid to a leg midpoint: the lower triangle of square (i, j) has centroid
         // (i + 2/3, j + 1/3); the diagonal's midpoint is (i + 1/2, j + 1/2).
         let to_diag = (DVec3::new(2.0 / 3.0, 1.0 / 3.0, 0.0) - DVec3::new(0.5, 0.5, 0.0)).length();
@@ -266,7 +261,8 @@ mod tests {
         let off = p.len() as u32;
         p.extend(p2.iter().map(|q| *q + DVec3::new(1.5, 0.0, 0.0)));
         t.extend(t2.iter().map(|f| f.map(|v| v + off)));
-        let (_, frames, g, _) = setup(&p, &t);
+        let (s, frames, pos) = setup(&p, &t);
+        let g = DualGraph::new(&s, &pos);
         let mut ball = DualBall::new(g.len());
         ball.grow(&g, &frames.normals, 0.0, 0, 1e9);
         let mut faces: Vec<u32> = ball.ball.iter().map(|e| e.1).collect();
@@ -283,7 +279,8 @@ mod tests {
                 *q = DVec3::new(4.0, q.y, q.x - 4.0);
             }
         }
-        let (_, frames, g, _) = setup(&p, &t);
+        let (s, frames, pos) = setup(&p, &t);
+        let g = DualGraph::new(&s, &pos);
         let src = (2 * (4 * 8 + 3)) as u32; // lower triangle of square (3, 4), left of the fold
         let mut iso = DualBall::new(g.len());
         iso.grow(&g, &frames.normals, 0.0, src, 100.0);
@@ -309,10 +306,10 @@ mod tests {
         let mut h = Vec::new();
         let vals = [5.0, 1.0, 3.0, 1.0, 9.0, 0.5, 7.0, 2.0];
         for (i, &v) in vals.iter().enumerate() {
-            heap_push(&mut h, (v, i as u32));
+            heap_push(&mut h, heap_key(v, i as u32));
         }
         let mut out = Vec::new();
-        while let Some(x) = heap_pop(&mut h) {
+        while let Some(x) = heap_pop(&mut h).map(heap_item) {
             out.push(x);
         }
         let mut sorted: Vec<(f64, u32)> = vals

@@ -72,10 +72,12 @@ pub struct FitReport {
 pub(crate) struct Fitting<'a> {
     surface: &'a FlatSurface,
     targets: &'a [DVec3],
-    /// CSR of corners per vertex slot: `corners[starts[v]..starts[v + 1]]` are `(face, k)`
-    /// with `triangles[face][k] == v`, in face order.
+    /// CSR of faces per vertex slot: `faces[starts[v]..starts[v + 1]]` are the faces with a
+    /// corner at `v`, in face order (which fixes the order of every per-vertex sum). The
+    /// corner itself is found again in the triangle (its three vertices differ), which
+    /// costs less than storing it at the fitting's peak.
     starts: Vec<u32>,
-    corners: Vec<(u32, u8)>,
+    faces: Vec<u32>,
 }
 
 impl<'a> Fitting<'a> {
@@ -93,10 +95,10 @@ impl<'a> Fitting<'a> {
             starts[i + 1] += starts[i];
         }
         let mut fill = starts.clone();
-        let mut corners = vec![(0u32, 0u8); starts[nv] as usize];
+        let mut faces = vec![0u32; starts[nv] as usize];
         for (f, t) in surface.triangles.iter().enumerate() {
-            for (k, &v) in t.iter().enumerate() {
-                corners[fill[v as usize] as usize] = (f as u32, k as u8);
+            for &v in t {
+                faces[fill[v as usize] as usize] = f as u32;
                 fill[v as usize] += 1;
             }
         }
@@ -104,8 +106,14 @@ impl<'a> Fitting<'a> {
             surface,
             targets,
             starts,
-            corners,
+            faces,
         }
+    }
+
+    /// The faces with a corner at vertex slot `v`, in face order.
+    #[inline]
+    fn faces_at(&self, v: usize) -> &[u32] {
+        &self.faces[self.starts[v] as usize..self.starts[v + 1] as usize]
     }
 
     /// `E = Σ_T (2A(T) − N_T·m(T))` over faces with a target.
@@ -131,14 +139,14 @@ impl<'a> Fitting<'a> {
             .enumerate()
             .for_each(|(v, g)| {
                 let mut acc = DVec3::ZERO;
-                for &(f, k) in &self.corners[self.starts[v] as usize..self.starts[v + 1] as usize] {
+                for &f in self.faces_at(v) {
                     let f = f as usize;
                     let m = self.targets[f];
                     if m == DVec3::ZERO {
                         continue;
                     }
                     let t = tris[f];
-                    let k = k as usize;
+                    let k = t.iter().position(|&u| u as usize == v).unwrap_or(0);
                     let a = positions[t[(k + 1) % 3] as usize];
                     let b = positions[t[(k + 2) % 3] as usize];
                     let (n, _) = unit_normal(self.surface.area_vector(positions, f));
@@ -164,9 +172,7 @@ impl<'a> Fitting<'a> {
                 .for_each(|(v, out)| {
                     let x = positions[v];
                     let (mut sum, mut count) = (DVec3::ZERO, 0.0);
-                    for &(f, _) in
-                        &self.corners[self.starts[v] as usize..self.starts[v + 1] as usize]
-                    {
+                    for &f in self.faces_at(v) {
                         let m = self.targets[f as usize];
                         if m == DVec3::ZERO {
                             continue;
@@ -439,10 +445,8 @@ mod tests {
 
     fn targets(s: &FlatSurface, p: &[DVec3]) -> Vec<DVec3> {
         // Radial directions at the centroids: the normals of the clean sphere.
-        s.face_frames(p)
-            .centroids
-            .iter()
-            .map(|c| c.normalize())
+        (0..s.n_faces())
+            .map(|f| s.centroid(p, f).normalize())
             .collect()
     }
 

@@ -112,18 +112,27 @@ pub(crate) fn filter_normals(
     let pool = Pool(Mutex::new(Vec::new()));
     let done = AtomicUsize::new(0);
     let step = (n / 200).max(1024);
-    let results: Vec<(DVec3, u8)> = (0..n as u32)
-        .into_par_iter()
+    // Written in place rather than collected and split: the filter runs at the denoiser's
+    // peak, where a face-sized temporary would raise it.
+    let mut filtered = FilteredNormals {
+        normals: vec![DVec3::ZERO; n],
+        scale: vec![u8::MAX; n],
+    };
+    filtered
+        .normals
+        .par_iter_mut()
+        .zip(filtered.scale.par_iter_mut())
+        .enumerate()
         .with_min_len(256)
-        .map_init(
+        .for_each_init(
             || pool.take(n),
-            |ws, f| {
+            |ws, (f, (normal, scale))| {
                 let ball = ws.ball.as_mut().expect("workspace present until dropped");
-                let local = grid.local.get(f as usize).copied().unwrap_or(1.0);
-                ball.grow(graph, normals, grid.rho, f, radius * local);
+                let local = grid.local.get(f).copied().unwrap_or(1.0);
+                ball.grow(graph, normals, grid.rho, f as u32, radius * local);
                 let inv_local: [f64; MAX_SCALES] =
                     std::array::from_fn(|s| inv.get(s).map_or(0.0, |i| i / local));
-                let r = select_scale(
+                (*normal, *scale) = select_scale(
                     &ball.ball,
                     normals,
                     areas,
@@ -136,13 +145,10 @@ pub(crate) fn filter_normals(
                 if c.is_multiple_of(step) {
                     progress.update(c as f64 / n as f64);
                 }
-                r
             },
-        )
-        .collect();
+        );
     progress.update(1.0);
-    let (normals, scale) = results.into_iter().unzip();
-    FilteredNormals { normals, scale }
+    filtered
 }
 
 /// The sweep for one face: accumulate `Σw` and `S` for every scale over the sorted ball, then
@@ -252,7 +258,7 @@ mod tests {
         let s = FlatSurface::new(mesh);
         let pos = mesh.positions();
         let fr = s.face_frames(&pos);
-        let g = DualGraph::new(&s, &pos, &fr);
+        let g = DualGraph::new(&s, &pos);
         (
             filter_normals(&g, &fr.normals, &fr.areas, grid, &NoProgress),
             fr.normals,

@@ -187,23 +187,35 @@ pub fn denoise(
     progress: &dyn Progress,
 ) -> Result<Denoised, SmoothError> {
     options.validate()?;
-    let mut surface = FlatSurface::new(mesh);
-    let mut positions = vec![DVec3::ZERO; surface.vertex_slots];
+    let surface = FlatSurface::new(mesh);
+    let mut input = vec![DVec3::ZERO; surface.vertex_slots];
     for v in mesh.vertices() {
         let p = mesh.position(v);
         if !p.is_finite() {
             return Err(SmoothError::NonFinite(v.slot()));
         }
-        positions[v.slot()] = p;
+        input[v.slot()] = p;
     }
+    Ok(denoise_surface(surface, &|i| input[i], options, progress))
+}
+
+/// [`denoise`] on a flat surface whose vertex slot `i` sits at `input(i)` (finite; zero for
+/// an empty slot), for callers that never make the half-edge mesh. Does not validate
+/// `options`.
+pub(crate) fn denoise_surface(
+    mut surface: FlatSurface,
+    input: &dyn Fn(usize) -> DVec3,
+    options: &DenoiseOptions,
+    progress: &dyn Progress,
+) -> Denoised {
+    let slots = surface.vertex_slots;
     // Everything below runs relative to the bounding-box centre: the fitting's energy is a sum
     // of tiny differences and the scale selection a discrete choice, so in the absolute
     // coordinates of a scan far from the origin (georeferenced units) rounding would decide
     // them (1e6 units away, results differed by a quarter of the displacement). An exactly
     // translated input now gives exactly translated output.
-    let origin = BoundingBox::of(positions.iter().copied()).map_or(DVec3::ZERO, |b| b.centre());
-    let input = positions;
-    let positions: Vec<DVec3> = input.iter().map(|&p| p - origin).collect();
+    let origin = BoundingBox::of((0..slots).map(input)).map_or(DVec3::ZERO, |b| b.centre());
+    let positions: Vec<DVec3> = (0..slots).map(|i| input(i) - origin).collect();
     let l = surface.mean_edge_length(&positions);
     let mut result = Denoised {
         positions,
@@ -214,8 +226,8 @@ pub fn denoise(
     };
     if !(l > 0.0 && l.is_finite()) {
         progress.update(1.0);
-        result.positions = input;
-        return Ok(result);
+        result.positions = (0..slots).map(input).collect();
+        return result;
     }
     surface.reorder_spatially(&result.positions);
     let passes = options.passes.max(1);
@@ -226,10 +238,11 @@ pub fn denoise(
     // Back to the input's coordinates; vertices the fitting did not move (those in no face,
     // and empty slots) keep their exact input bits. Nothing changed the positions before the
     // fitting, so a vertex it left alone still holds exactly `q - origin`.
-    for (p, &q) in result.positions.iter_mut().zip(&input) {
+    for (i, p) in result.positions.iter_mut().enumerate() {
+        let q = input(i);
         *p = if *p == q - origin { q } else { *p + origin };
     }
-    Ok(result)
+    result
 }
 
 /// One pass: filter the face normals of `result.positions`, then fit the vertices to them.
@@ -240,23 +253,7 @@ fn run_pass(
     l: f64,
     progress: &dyn Progress,
 ) {
-    let frames = surface.face_frames(&result.positions);
-    let graph = DualGraph::new(surface, &result.positions, &frames);
-    let grid = ScaleGrid {
-        sigmas: options.sigmas().iter().map(|s| s * l).collect(),
-        epsilon: options.epsilon * l * l,
-        rho: options.rho,
-        variance: options.variance,
-        local: if options.local_scale {
-            surface.local_length_factors(&result.positions, l)
-        } else {
-            Vec::new()
-        },
-    };
-    let filtered: FilteredNormals =
-        filter_normals(&graph, &frames.normals, &frames.areas, &grid, &|x: f64| {
-            progress.update(0.7 * x)
-        });
+    let filtered = filter_pass(surface, &result.positions, options, l, progress);
     result.scale_histogram.fill(0);
     result.unfiltered_faces = 0;
     for &s in &filtered.scale {
@@ -287,4 +284,31 @@ fn run_pass(
         });
     }
     progress.update(1.0);
+}
+
+/// The filtered normals of the faces at `positions`. The face normals, the dual graph and the
+/// local scales are dropped on return, before the fitting makes its own arrays.
+fn filter_pass(
+    surface: &FlatSurface,
+    positions: &[DVec3],
+    options: &DenoiseOptions,
+    l: f64,
+    progress: &dyn Progress,
+) -> FilteredNormals {
+    let frames = surface.face_frames(positions);
+    let graph = DualGraph::new(surface, positions);
+    let grid = ScaleGrid {
+        sigmas: options.sigmas().iter().map(|s| s * l).collect(),
+        epsilon: options.epsilon * l * l,
+        rho: options.rho,
+        variance: options.variance,
+        local: if options.local_scale {
+            surface.local_length_factors(positions, l)
+        } else {
+            Vec::new()
+        },
+    };
+    filter_normals(&graph, &frames.normals, &frames.areas, &grid, &|x: f64| {
+        progress.update(0.7 * x)
+    })
 }

@@ -1,11 +1,17 @@
-//! Flat arrays of a half-edge [`Mesh`] for the denoiser's hot loops: triangles as vertex slots,
-//! face adjacency across interior edges, and per-face normals, areas and centroids.
+//! Flat arrays of a triangle mesh for the denoiser's hot loops: triangles as vertex slots,
+//! face adjacency across interior edges, and per-face normals and areas.
 //!
-//! Faces are numbered `0..n` in slot order of the mesh; vertices keep their slot index, so
-//! position arrays are indexed by [`SlotIndex::slot`] and dead slots simply stay unreferenced.
+//! Two sources give the same arrays: the builder's corner table ([`FlatSurface::from_corners`],
+//! what `meshpyr smooth` uses, so no half-edge record is ever made: those records cost several
+//! times these arrays) and a half-edge [`Mesh`] ([`FlatSurface::new`]). Face `t` of the corner
+//! table is face slot `t` of the mesh the builder would assemble from it, and vertex `i` its
+//! vertex slot `i`, so both give the same surface, hence the same smoothing, bit for bit.
+//!
+//! Faces are numbered `0..n` in slot order; vertices keep their slot index, so position arrays
+//! are indexed by [`SlotIndex::slot`] and dead slots simply stay unreferenced.
 
 use crate::mesh::geometry::morton_codes;
-use crate::mesh::{Mesh, SlotIndex};
+use crate::mesh::{CornerTable, Mesh, SlotIndex};
 use glam::DVec3;
 
 /// "No neighbour" in [`FlatSurface::adjacency`].
@@ -50,6 +56,29 @@ impl FlatSurface {
         }
     }
 
+    /// The surface of the builder's corner table with `vertices` mesh vertices (isolated ones
+    /// included), the same as [`FlatSurface::new`] of the mesh assembled from it. Takes the
+    /// table so that its arrays become the surface's in place where the allocator allows,
+    /// one at a time otherwise: the peak stays at the table's size.
+    pub(crate) fn from_corners(corners: CornerTable, vertices: usize) -> FlatSurface {
+        let CornerTable {
+            corner_vertex,
+            mut mate,
+        } = corners;
+        let triangles = into_triples(corner_vertex);
+        // The face across half-edge `c` is the triangle of its twin.
+        for m in &mut mate {
+            if *m != NO_FACE {
+                *m /= 3;
+            }
+        }
+        FlatSurface {
+            triangles,
+            adjacency: into_triples(mate),
+            vertex_slots: vertices,
+        }
+    }
+
     /// Renumbers the faces along a Morton (Z-order) curve of their centroids at `positions`,
     /// so faces near on the surface are near in memory: the Dijkstra balls then stay in cache.
     /// Ties (equal codes) keep the previous order, so the result is deterministic.
@@ -66,23 +95,28 @@ impl FlatSurface {
         let Some(codes) = morton_codes(&centroids) else {
             return;
         };
+        drop(centroids);
         let mut keyed: Vec<(u64, u32)> = codes
             .into_iter()
             .enumerate()
             .map(|(i, code)| (code, i as u32))
             .collect();
         keyed.sort_unstable();
+        let order: Vec<u32> = keyed.iter().map(|&(_, old)| old).collect();
+        drop(keyed);
         let mut new_index = vec![0u32; n];
-        for (new, &(_, old)) in keyed.iter().enumerate() {
+        for (new, &old) in order.iter().enumerate() {
             new_index[old as usize] = new as u32;
         }
-        let triangles = keyed
+        // One array at a time, the old one dropped before the next is made: this runs at
+        // the denoiser's largest resident set besides the filter's.
+        self.triangles = order
             .iter()
-            .map(|&(_, old)| self.triangles[old as usize])
+            .map(|&old| self.triangles[old as usize])
             .collect();
-        let adjacency = keyed
+        self.adjacency = order
             .iter()
-            .map(|&(_, old)| {
+            .map(|&old| {
                 self.adjacency[old as usize].map(|g| {
                     if g == NO_FACE {
                         g
@@ -92,8 +126,6 @@ impl FlatSurface {
                 })
             })
             .collect();
-        self.triangles = triangles;
-        self.adjacency = adjacency;
     }
 
     /// Number of triangles.
@@ -153,22 +185,34 @@ impl FlatSurface {
         (b - a).cross(c - a)
     }
 
-    /// Per-face unit normals, areas and centroids at `positions`; see [`FaceFrames`].
+    /// Centroid of face `f`, the vertex of the dual mesh.
+    #[inline]
+    pub(crate) fn centroid(&self, positions: &[DVec3], f: usize) -> DVec3 {
+        let [a, b, c] = self.triangles[f].map(|v| positions[v as usize]);
+        (a + b + c) / 3.0
+    }
+
+    /// Per-face unit normals and areas at `positions`; see [`FaceFrames`].
     pub(crate) fn face_frames(&self, positions: &[DVec3]) -> FaceFrames {
         let n = self.n_faces();
         let mut frames = FaceFrames {
             normals: Vec::with_capacity(n),
             areas: Vec::with_capacity(n),
-            centroids: Vec::with_capacity(n),
         };
-        for (f, t) in self.triangles.iter().enumerate() {
+        for f in 0..n {
             let (normal, area) = unit_normal(self.area_vector(positions, f));
             frames.normals.push(normal);
             frames.areas.push(area);
-            let [a, b, c] = t.map(|v| positions[v as usize]);
-            frames.centroids.push((a + b + c) / 3.0);
         }
         frames
+    }
+}
+
+/// `flat` as triples, in place when its allocation holds a whole number of them.
+fn into_triples(flat: Vec<u32>) -> Vec<[u32; 3]> {
+    match bytemuck::allocation::try_cast_vec(flat) {
+        Ok(triples) => triples,
+        Err((_, flat)) => flat.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect(),
     }
 }
 
@@ -192,8 +236,6 @@ pub(crate) struct FaceFrames {
     pub normals: Vec<DVec3>,
     /// Areas (zero for a degenerate face).
     pub areas: Vec<f64>,
-    /// Centroids, the vertices of the dual mesh.
-    pub centroids: Vec<DVec3>,
 }
 
 #[cfg(test)]

@@ -56,32 +56,48 @@ pub struct SectionEntry {
 
 /// Serialises a container with the given version and sections.
 pub fn write_container(major: u16, minor: u16, sections: &[Section]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(container_len(sections));
+    write_container_to(&mut out, major, minor, sections).expect("writing to memory");
+    out
+}
+
+/// The size of the container of `sections`.
+pub fn container_len(sections: &[Section]) -> usize {
+    HEADER_LEN + ENTRY_LEN * sections.len() + sections.iter().map(|s| s.bytes.len()).sum::<usize>()
+}
+
+/// Writes the container [`write_container`] makes to `w`, without gathering it in memory.
+pub fn write_container_to(
+    w: &mut dyn std::io::Write,
+    major: u16,
+    minor: u16,
+    sections: &[Section],
+) -> std::io::Result<()> {
     let table_len = ENTRY_LEN * sections.len();
-    let total: usize =
-        HEADER_LEN + table_len + sections.iter().map(|s| s.bytes.len()).sum::<usize>();
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(&MAGIC);
-    out.extend_from_slice(&major.to_le_bytes());
-    out.extend_from_slice(&minor.to_le_bytes());
-    out.extend_from_slice(&0u32.to_le_bytes());
-    out.extend_from_slice(&(sections.len() as u32).to_le_bytes());
-    out.extend_from_slice(&[0; 4]); // header CRC, filled below
+    let mut head = Vec::with_capacity(HEADER_LEN + table_len);
+    head.extend_from_slice(&MAGIC);
+    head.extend_from_slice(&major.to_le_bytes());
+    head.extend_from_slice(&minor.to_le_bytes());
+    head.extend_from_slice(&0u32.to_le_bytes());
+    head.extend_from_slice(&(sections.len() as u32).to_le_bytes());
+    head.extend_from_slice(&[0; 4]); // header CRC, filled below
     let mut offset = (HEADER_LEN + table_len) as u64;
     for s in sections {
-        out.extend_from_slice(&s.tag);
-        out.extend_from_slice(&s.flags.to_le_bytes());
-        out.extend_from_slice(&offset.to_le_bytes());
-        out.extend_from_slice(&(s.bytes.len() as u64).to_le_bytes());
-        out.extend_from_slice(&crc32fast::hash(&s.bytes).to_le_bytes());
-        out.extend_from_slice(&0u32.to_le_bytes());
+        head.extend_from_slice(&s.tag);
+        head.extend_from_slice(&s.flags.to_le_bytes());
+        head.extend_from_slice(&offset.to_le_bytes());
+        head.extend_from_slice(&(s.bytes.len() as u64).to_le_bytes());
+        head.extend_from_slice(&crc32fast::hash(&s.bytes).to_le_bytes());
+        head.extend_from_slice(&0u32.to_le_bytes());
         offset += s.bytes.len() as u64;
     }
-    let crc = header_crc(&out[..HEADER_LEN + table_len]);
-    out[20..24].copy_from_slice(&crc.to_le_bytes());
+    let crc = header_crc(&head);
+    head[20..24].copy_from_slice(&crc.to_le_bytes());
+    w.write_all(&head)?;
     for s in sections {
-        out.extend_from_slice(&s.bytes);
+        w.write_all(&s.bytes)?;
     }
-    out
+    Ok(())
 }
 
 fn header_crc(header_and_table: &[u8]) -> u32 {
@@ -101,6 +117,35 @@ pub struct Container<'a> {
     /// Section table.
     pub sections: Vec<SectionEntry>,
     bytes: &'a [u8],
+    release: Release<'a>,
+}
+
+/// What a reader calls with the parts of the bytes it is done with: a mapped file hands their
+/// pages back to the kernel (see [`crate::format::PyrFile`]), bytes in memory do nothing.
+#[derive(Clone, Copy, Default)]
+pub(crate) struct Release<'a>(Option<&'a ReleaseFn<'a>>);
+
+/// See [`Release`].
+type ReleaseFn<'a> = dyn Fn(&[u8]) + Sync + 'a;
+
+impl<'a> Release<'a> {
+    /// Calls `f` with every part a reader is done with.
+    pub(crate) fn to(f: &'a ReleaseFn<'a>) -> Release<'a> {
+        Release(Some(f))
+    }
+
+    /// The reader is done with `part` (a slice of the bytes it reads).
+    pub(crate) fn done_with(&self, part: &[u8]) {
+        if let Some(f) = self.0 {
+            f(part);
+        }
+    }
+}
+
+impl std::fmt::Debug for Release<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(if self.0.is_some() { "Release" } else { "Keep" })
+    }
 }
 
 impl<'a> Container<'a> {
@@ -169,7 +214,27 @@ impl<'a> Container<'a> {
             minor,
             sections,
             bytes,
+            release: Release::default(),
         })
+    }
+
+    /// The container, calling `release` with the parts of the bytes its reader is done with.
+    pub(crate) fn releasing(self, release: Release<'a>) -> Container<'a> {
+        Container { release, ..self }
+    }
+
+    /// What to call with the parts of the bytes a reader is done with.
+    pub(crate) fn release(&self) -> Release<'a> {
+        self.release
+    }
+
+    /// The reader is done with section `tag` (if the file holds it).
+    pub(crate) fn done_with(&self, tag: [u8; 4]) {
+        if let Some(e) = self.entry(tag) {
+            let start = e.offset.min(self.bytes.len() as u64) as usize;
+            let end = (e.offset + e.length).min(self.bytes.len() as u64) as usize;
+            self.release.done_with(&self.bytes[start..end]);
+        }
     }
 
     /// Total size of the file the table describes (larger than the bytes held if truncated).

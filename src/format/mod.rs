@@ -7,14 +7,18 @@
 //! [`crate::pyramid`].
 
 pub mod container;
+mod file;
 pub(crate) mod pyr;
 pub mod varint;
 
+pub use file::PyrFile;
 pub use pyr::is_pyr;
-pub use pyr::{FileDetails, LevelMesh, PyrData, PyramidOptions, SizeReport, StoredDetails};
 pub use pyr::{
-    MAJOR, MINOR, MINOR_WITHOUT_CORNERS, OLDEST_MAJOR, decode, encode, encode_with_details,
-    read_level, read_level_within,
+    EncodedPyr, FileDetails, LevelMesh, PyrData, PyramidOptions, SizeReport, StoredDetails,
+};
+pub use pyr::{
+    MAJOR, MINOR, MINOR_WITHOUT_CORNERS, OLDEST_MAJOR, decode, encode, encode_sections,
+    encode_with_details, read_level, read_level_within,
 };
 pub(crate) use pyr::{fix_checksums, fuzz_read_pyr, with_positions};
 

@@ -17,9 +17,10 @@
 //! fuzz target's body.
 
 use super::FormatError;
-use super::container::{Container, REQUIRED, Section, write_container};
+use super::container::{
+    Container, REQUIRED, Release, Section, container_len, write_container, write_container_to,
+};
 use super::varint::ByteReader;
-use crate::mesh::geometry::BoundingBox;
 use crate::mesh::{Built, PolygonMesh, ScalarType};
 use crate::pm::{PmOptions, PmParts, ProgressiveMesh};
 use crate::relax::RelaxationSpec;
@@ -49,7 +50,7 @@ use loaded::file_details;
 
 use attributes::encode_attributes;
 use corners::{encode_corners, has_corner_data};
-use details::{decode_details, encode_details, step_exponent};
+use details::{decode_details, encode_details};
 use hierarchy::{
     Progressive, encode_base, encode_isolated, encode_splits, read_isolated, read_progressive,
 };
@@ -219,14 +220,26 @@ pub fn encode(
 }
 
 /// [`encode`], with `details` (the pyramid of `pm`'s original positions, analysed with
-/// `info.relaxation`) in a `DETL` section, quantised (see `formats/pyr.md`). Details that
-/// cannot be quantised (not finite) leave the section out.
+/// `info.relaxation`) in a `DETL` section (see `formats/pyr.md`). Details whose step the
+/// format cannot code leave the section out.
 pub fn encode_with_details(
     input: &PolygonMesh,
     pm: &ProgressiveMesh,
     info: &PyramidOptions,
     details: Option<&StoredDetails>,
 ) -> Result<(Vec<u8>, SizeReport), FormatError> {
+    let encoded = encode_sections(input, pm, info, details)?;
+    let sizes = encoded.sizes;
+    Ok((encoded.into_bytes(), sizes))
+}
+
+/// [`encode_with_details`], section by section, for writing to a file without gathering it.
+pub fn encode_sections(
+    input: &PolygonMesh,
+    pm: &ProgressiveMesh,
+    info: &PyramidOptions,
+    details: Option<&StoredDetails>,
+) -> Result<EncodedPyr, FormatError> {
     check_pm_belongs(input, pm)?;
     let f32 = pm.original_positions().iter().all(|&p| exactly_f32(p));
     let meta = encode_meta(&describe(input, pm, info, f32))?;
@@ -250,10 +263,10 @@ pub fn encode_with_details(
     sizes.positions += split_sizes.positions + isol.len();
     sizes.split_errors += split_sizes.split_errors;
     sizes.trailing = ordr.len() + poly.len() + attr.len();
-    let detl = details.and_then(|d| {
-        let crcs = [crc32fast::hash(&base), crc32fast::hash(&splt)];
-        encode_details(d, step_exponent(bbox_diagonal(pm)), crcs)
-    });
+    let detl = match details {
+        Some(d) => encode_details(d, [crc32fast::hash(&base), crc32fast::hash(&splt)])?,
+        None => None,
+    };
     let mut sections: Vec<Section> = [
         (META, meta),
         (BASE, base),
@@ -291,15 +304,35 @@ pub fn encode_with_details(
             bytes,
         });
     }
-    let bytes = write_container(MAJOR, minor, &sections);
-    sizes.total = bytes.len();
-    Ok((bytes, sizes))
+    sizes.total = container_len(&sections);
+    Ok(EncodedPyr {
+        minor,
+        sections,
+        sizes,
+    })
 }
 
-/// The bounding-box diagonal of the finest level, as the analysis computes it.
-fn bbox_diagonal(pm: &ProgressiveMesh) -> f64 {
-    let finest = &pm.original_positions()[..pm.n_vertices()];
-    BoundingBox::of(finest.iter().copied()).map_or(0.0, |b| b.diagonal())
+/// A `.pyr` file encoded section by section: written to a file as it is
+/// ([`Self::write_to`]), it is never gathered into one buffer beside its sections.
+#[derive(Clone, Debug)]
+pub struct EncodedPyr {
+    /// The minor version: files without corner data keep the older one, byte for byte.
+    minor: u16,
+    sections: Vec<Section>,
+    /// The byte counts of its parts.
+    pub sizes: SizeReport,
+}
+
+impl EncodedPyr {
+    /// Writes the file to `w`.
+    pub fn write_to(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        write_container_to(w, MAJOR, self.minor, &self.sections)
+    }
+
+    /// The file's bytes.
+    pub fn into_bytes(self) -> Vec<u8> {
+        write_container(MAJOR, self.minor, &self.sections)
+    }
 }
 
 /// The input positions are restored from the PM positions through the vertex order, so check
@@ -323,17 +356,28 @@ fn check_pm_belongs(input: &PolygonMesh, pm: &ProgressiveMesh) -> Result<(), For
 /// Decodes a complete file: the hierarchy (validated), the user's mesh, and the build options.
 /// Truncated or damaged files are errors (use [`read_level`] for the progressive prefix).
 pub fn decode(bytes: &[u8]) -> Result<PyrData, FormatError> {
+    decode_releasing(bytes, Release::default())
+}
+
+/// [`decode`], calling `release` with the parts of `bytes` it is done with (see
+/// [`super::PyrFile`]).
+pub(super) fn decode_releasing(bytes: &[u8], release: Release<'_>) -> Result<PyrData, FormatError> {
     // The replay of the splits is sequential and about half of a load; the input's side
     // (vertex order, polygons, attributes, its faces in canonical order) does not depend on it,
     // so it is decoded on another core meanwhile (after that core has decoded split blocks
     // ahead of the replay). Errors come in the order a sequential reader meets them: the
     // progressive part, ISOL, then the input's side.
-    let (c, p, (input_side, detl)) = read_progressive(bytes, None, |c, meta| {
+    let (c, p, (input_side, detl)) = read_progressive(bytes, None, release, |c, meta| {
         let detl = c.section(DETL).and_then(|r| {
             r.map(|r| decode_details(r, meta.n_base as usize, meta.n_splits as usize))
                 .transpose()
         });
-        (decode_input_side(c, meta), detl)
+        c.done_with(DETL);
+        let input_side = decode_input_side(c, meta);
+        for tag in [ORDR, POLY, ATTR] {
+            c.done_with(tag);
+        }
+        (input_side, detl)
     })?;
     check_complete(&p, bytes.len())?;
     let Progressive {

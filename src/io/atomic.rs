@@ -53,6 +53,15 @@ pub fn exit_removing_temporary_files(code: i32) -> ! {
 /// the old file or the complete new one. On any error the temporary file is removed and an
 /// existing `path` is left untouched.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
+    write_atomic_with(path, |w| w.write_all(bytes))
+}
+
+/// [`write_atomic`] of what `write` writes, through a buffer: the bytes need not be in memory
+/// all at once.
+pub fn write_atomic_with(
+    path: &Path,
+    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<(), IoError> {
     let io_err = |p: &Path| {
         let p = p.to_path_buf();
         move |error| IoError::Io { path: p, error }
@@ -95,7 +104,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), IoError> {
             }
         }
     };
-    let written = write_sync(file, bytes).map_err(io_err(path));
+    let written = write_sync(file, write).map_err(io_err(path));
     hold_for_tests(&tmp);
     let result = {
         let mut registry = in_flight();
@@ -124,8 +133,12 @@ fn hold_for_tests(tmp: &Path) {
     std::thread::sleep(std::time::Duration::from_millis(ms));
 }
 
-fn write_sync(mut file: File, bytes: &[u8]) -> std::io::Result<()> {
-    file.write_all(bytes)?;
-    file.flush()?;
+fn write_sync(
+    file: File,
+    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let mut buffered = std::io::BufWriter::with_capacity(1 << 20, file);
+    write(&mut buffered)?;
+    let file = buffered.into_inner().map_err(|e| e.into_error())?;
     file.sync_all()
 }

@@ -51,7 +51,7 @@ mod text;
 
 #[doc(hidden)]
 pub use atomic::hold_writes_for_tests;
-pub use atomic::{exit_removing_temporary_files, write_atomic};
+pub use atomic::{exit_removing_temporary_files, write_atomic, write_atomic_with};
 pub(crate) use fuzz::fuzz_read;
 pub(crate) use gz::head_of_gz;
 pub use gz::{gunzip, gzip};

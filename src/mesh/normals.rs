@@ -43,6 +43,15 @@ impl PolygonMesh {
         self.refresh_corner_normals(&face_moved, &areas);
     }
 
+    /// Whether the mesh stores normals that [`Self::refresh_normals`] would recompute: a
+    /// caller that moves positions in place keeps the old ones only then.
+    pub fn stores_normals(&self) -> bool {
+        let vertex = ["nx", "ny", "nz"]
+            .iter()
+            .all(|n| is_float(self.vertex_attribute(n).map(|a| &a.data)));
+        vertex || self.corner_attributes.iter().any(|a| a.name == NORMAL)
+    }
+
     /// The per-vertex `nx`,`ny`,`nz` of every vertex of a moved face.
     fn refresh_vertex_normals(&mut self, face_moved: &[bool], areas: &[DVec3]) {
         let names = ["nx", "ny", "nz"];

@@ -148,6 +148,11 @@ impl Layout {
             n_splits,
             geometry.len(),
             |k| {
+                // The scan reads the locals once, in split order: hand back the pages of
+                // each block of splits once it is past them.
+                if k % RELEASE_EVERY == 0 && k > 0 {
+                    release_locals(&records, k - RELEASE_EVERY..k);
+                }
                 let (rec, i) = record_of(&records, k);
                 let (o, next) = (rec.offsets[i], rec.offsets[i + 1]);
                 (&rec.locals[o.locals..next.locals], next.details - o.details)
@@ -593,6 +598,30 @@ fn record_of(records: &[Records], k: usize) -> (&Records, usize) {
         k - rec.range.start
     };
     (rec, i)
+}
+
+/// Splits whose recorded locals [`Waves::schedule`] reads before their pages are handed back.
+const RELEASE_EVERY: usize = 4096;
+
+/// Hands back the pages of the local tables and offsets of splits `splits` (see [`Stream::release`]).
+fn release_locals(records: &[Records], splits: std::ops::Range<usize>) {
+    for rec in records {
+        let (a, b) = (
+            splits.start.max(rec.range.start),
+            splits.end.min(rec.range.end),
+        );
+        if a >= b {
+            continue;
+        }
+        let (i0, i1) = if rec.reversed {
+            (rec.range.end - b, rec.range.end - a)
+        } else {
+            (a - rec.range.start, b - rec.range.start)
+        };
+        rec.locals
+            .release(rec.offsets[i0].locals..rec.offsets[i1].locals);
+        rec.offsets.release(i0..i1);
+    }
 }
 
 /// The records of all splits in slot order (see `waves`), codes as narrow as the widest

@@ -424,6 +424,13 @@ impl DetailPyramid {
         )
     }
 
+    /// The details of split `k` as the pyramid keeps them: whole multiples of
+    /// [`Self::detail_step`], in the order of [`Self::split_details`].
+    pub(crate) fn split_quantised(&self, k: usize) -> &[[i32; 3]] {
+        let slot = self.split_slot(k);
+        &self.details[self.offsets[slot].details..self.offsets[slot + 1].details]
+    }
+
     /// Whether the signal-independent layout (weights, local tables, codes: most of a large
     /// pyramid) lives in a temporary file mapped into memory rather than on the heap; decided
     /// by its size and `MESHPYR_SPILL_MIB` (docs/performance.md, "Scans of millions of

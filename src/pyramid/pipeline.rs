@@ -205,9 +205,39 @@ impl Pyramid {
         &self,
         content: PyrContent,
     ) -> Result<(Vec<u8>, SizeReport), FormatError> {
+        let encoded = self.encode_as(content)?;
+        let sizes = encoded.sizes;
+        Ok((encoded.into_bytes(), sizes))
+    }
+
+    /// [`Self::encode_as`], consuming the pyramid: its details are coded first and the
+    /// detail pyramid dropped before the hierarchy is encoded (whose replay is most of the
+    /// encoder's memory), so that saving a large scan's pyramid peaks no higher than making
+    /// it. Gives the hierarchy back with the file.
+    pub fn into_encoded(
+        self,
+        content: PyrContent,
+    ) -> Result<(format::EncodedPyr, ProgressiveMesh), FormatError> {
+        let Pyramid {
+            input,
+            pm,
+            pyramid,
+            options,
+            ..
+        } = self;
+        let details = (content == PyrContent::WithDetails)
+            .then(|| StoredDetails::of(&pyramid, options.relaxation));
+        drop(pyramid);
+        let encoded = format::encode_sections(&input, &pm, &options, details.as_ref())?;
+        Ok((encoded, pm))
+    }
+
+    /// The `.pyr` file of this pyramid, with or without the details, section by section:
+    /// [`format::EncodedPyr::write_to`] writes it without gathering it in memory.
+    pub fn encode_as(&self, content: PyrContent) -> Result<format::EncodedPyr, FormatError> {
         let details = (content == PyrContent::WithDetails)
             .then(|| StoredDetails::of(&self.pyramid, self.options.relaxation));
-        format::encode_with_details(&self.input, &self.pm, &self.options, details.as_ref())
+        format::encode_sections(&self.input, &self.pm, &self.options, details.as_ref())
     }
 
     /// The `.pyr` file of an edit: this hierarchy and options with `positions` (one per input
@@ -259,10 +289,10 @@ impl Pyramid {
     /// [`Self::save`], with or without the details.
     pub fn save_as(&self, path: impl AsRef<Path>, content: PyrContent) -> Result<(), PyrFileError> {
         let path = path.as_ref();
-        let (bytes, _) = self
-            .to_pyr_bytes_as(content)
+        let encoded = self
+            .encode_as(content)
             .map_err(|e| PyrFileError::from(e).in_file(path))?;
-        crate::io::write_atomic(path, &bytes)?;
+        crate::io::write_atomic_with(path, |w| encoded.write_to(w))?;
         Ok(())
     }
 

@@ -95,17 +95,23 @@ impl Pyramid {
     }
 
     /// Opens the `.pyr` file at `path` with the relaxation `relaxation` (default: the file's)
-    /// and says whether its stored details were used ([`Self::from_pyr_bytes_with`]).
+    /// and says whether its stored details were used ([`Self::from_pyr_bytes_with`]). The file
+    /// is read in place ([`format::PyrFile`]), not copied into memory first.
     pub fn load_with(
         path: impl AsRef<Path>,
         relaxation: Option<RelaxationSpec>,
         progress: &dyn Progress,
     ) -> Result<(Pyramid, DetailSource), PyrFileError> {
         let path = path.as_ref();
-        let bytes = std::fs::read(path).map_err(|error| IoError::Io {
+        let file = format::PyrFile::open(path).map_err(|error| IoError::Io {
             path: path.to_path_buf(),
             error,
         })?;
-        Self::from_pyr_bytes_with(&bytes, relaxation, progress).map_err(|e| e.in_file(path))
+        let data = file
+            .decode()
+            .map_err(|e| PyrFileError::from(e).in_file(path))?;
+        drop(file);
+        data.into_pyramid_with(relaxation, progress)
+            .map_err(|e| PyrFileError::from(e).in_file(path))
     }
 }

@@ -4,7 +4,7 @@
 //! neither.
 
 use super::analysis::{Layout, surface_stats};
-use super::quantise::{dequantised, quantised};
+use super::quantise::dequantised;
 use super::spectrum::octave_spectrum;
 use super::{DetailPyramid, PyramidError, Spectrum};
 use crate::format::StoredDetails;
@@ -15,23 +15,17 @@ use crate::relax::RelaxationSpec;
 impl StoredDetails {
     /// The details of `pyramid`, analysed with `relaxation`, in split order, with the step
     /// they are whole multiples of (what a `.pyr` file stores; the pyramid's own values, so
-    /// a pyramid opened from them filters with the very same bits).
+    /// a pyramid opened from them filters with the very same bits), coded as the file codes
+    /// them ([`StoredDetails::coded`]).
     pub fn of(pyramid: &DetailPyramid, relaxation: RelaxationSpec) -> StoredDetails {
-        let n = pyramid.n_splits();
-        let mut counts = Vec::with_capacity(n);
-        let mut details = Vec::with_capacity(pyramid.n_details());
-        for k in 0..n {
-            let (_, d) = pyramid.split_details(k);
-            counts.push(d.len() as u32);
-            details.extend(d);
-        }
-        StoredDetails {
+        StoredDetails::coded(
             relaxation,
-            base: pyramid.base.clone(),
-            counts,
-            details,
-            step: pyramid.detail_step,
-        }
+            pyramid.base.clone(),
+            pyramid.n_splits(),
+            |k| pyramid.split_quantised(k),
+            pyramid.detail_step,
+        )
+        .expect("a pyramid's step is a power of two")
     }
 
     /// The detail spectrum of these details on the hierarchy `pm`, without any analysis.
@@ -40,9 +34,13 @@ impl StoredDetails {
         let n_finest = pm.n_vertices();
         let (area, diagonal) =
             surface_stats(&pm.original_positions()[..n_finest], pm.finest_faces());
+        let details = self.quantised().map_err(|e| mismatch(e.to_string()))?;
+        let step = self.step;
         let mut at = 0;
         let per_split = self.counts.iter().map(|&c| {
-            let d = self.details[at..at + c as usize].iter().copied();
+            let d = details[at..at + c as usize]
+                .iter()
+                .map(move |&q| dequantised(q, step));
             at += c as usize;
             d
         });
@@ -59,13 +57,13 @@ impl StoredDetails {
     fn check_counts_sum(&self, pm: &ProgressiveMesh) -> Result<(), PyramidError> {
         let total: u64 = self.counts.iter().map(|&c| u64::from(c)).sum();
         if self.counts.len() != pm.splits().len()
-            || total != self.details.len() as u64
+            || total != self.n_details() as u64
             || self.base.len() != pm.n_base_vertices()
         {
             return Err(mismatch(format!(
                 "{} splits, {} details and {} base values for a hierarchy of {} splits and {} base vertices",
                 self.counts.len(),
-                self.details.len(),
+                self.n_details(),
                 self.base.len(),
                 pm.splits().len(),
                 pm.n_base_vertices()
@@ -94,42 +92,36 @@ impl DetailPyramid {
     ) -> Result<DetailPyramid, PyramidError> {
         stored.check_counts_sum(pm)?;
         let layout = Layout::record(pm, relaxation, progress, None)?;
-        if layout.n_details() != stored.details.len() {
+        if layout.n_details() != stored.n_details() {
             return Err(mismatch(format!(
                 "{} details where the hierarchy has {}",
-                stored.details.len(),
+                stored.n_details(),
                 layout.n_details()
             )));
         }
-        let step = stored.step;
-        if !(step > 0.0 && step.log2().fract() == 0.0) {
-            return Err(mismatch(format!(
-                "a detail step of {step} (the steps are powers of two)"
-            )));
-        }
-        let mut details = vec![[0; 3]; stored.details.len()];
-        let mut at = 0;
-        for (k, &c) in stored.counts.iter().enumerate() {
-            let c = c as usize;
-            if layout.details_of_split(k) != c {
-                return Err(mismatch(format!(
-                    "split {k} carries {c} details where its level has {}",
-                    layout.details_of_split(k)
-                )));
-            }
-            let to = layout.details_start(k);
-            for (q, &d) in details[to..to + c]
-                .iter_mut()
-                .zip(&stored.details[at..at + c])
-            {
-                *q = quantised(d, step);
-                if dequantised(*q, step) != d {
-                    return Err(mismatch(format!(
-                        "split {k} has a detail that is not a whole multiple of the step {step} in 32 bits"
-                    )));
+        let mut details = vec![[0; 3]; stored.n_details()];
+        let mut mismatched = None;
+        stored
+            .for_each_block(|first, counts, block| {
+                let mut at = 0;
+                for (k, &c) in (first..).zip(counts) {
+                    let c = c as usize;
+                    if layout.details_of_split(k) != c {
+                        mismatched.get_or_insert(k);
+                    } else if mismatched.is_none() {
+                        let to = layout.details_start(k);
+                        details[to..to + c].copy_from_slice(&block[at..at + c]);
+                    }
+                    at += c;
                 }
-            }
-            at += c;
+            })
+            .map_err(|e| mismatch(e.to_string()))?;
+        if let Some(k) = mismatched {
+            return Err(mismatch(format!(
+                "split {k} carries {} details where its level has {}",
+                stored.counts[k],
+                layout.details_of_split(k)
+            )));
         }
         progress.update(1.0);
         let pyramid = layout.into_pyramid(
@@ -137,7 +129,7 @@ impl DetailPyramid {
             pm.original_positions(),
             stored.base.clone(),
             details,
-            step,
+            stored.step,
         );
         Ok(pyramid)
     }

@@ -2,8 +2,10 @@
 //! [`smooth_mesh`] runs it on a mesh as read from a file, so the command line, the Python
 //! package and the viewer choose a method the same way and get the same bits.
 
+use super::flat::denoise_in_place;
 use super::{
-    DenoiseOptions, McfOptions, SmoothError, TaubinOptions, denoise, implicit_mcf, taubin_smoothing,
+    DenoiseOptions, Denoised, McfOptions, SmoothError, TaubinOptions, denoise, implicit_mcf,
+    taubin_smoothing,
 };
 use crate::mesh::{BuildReport, Mesh, PolygonMesh};
 use crate::progress::Progress;
@@ -87,18 +89,48 @@ pub fn smooth_mesh(
 ) -> Result<Smoothed, SmoothError> {
     method.validate()?;
     input.check_surface()?;
-    let built = Mesh::from_polygons(input)?;
-    let (positions, summary) = smooth_positions(&built.mesh, method, progress)?;
-    let mut mesh = PolygonMesh {
-        positions: built
-            .source
-            .to_input_positions(&positions, &input.positions),
-        ..input.clone()
+    smooth_mesh_owned(input.clone(), method, progress)
+}
+
+/// [`smooth_mesh`] on a mesh the caller gives away: the new positions are written over its
+/// own, so no second copy of the mesh is ever held (what `meshpyr smooth` uses on scans).
+pub fn smooth_mesh_owned(
+    mut input: PolygonMesh,
+    method: &SmoothMethod,
+    progress: &dyn Progress,
+) -> Result<Smoothed, SmoothError> {
+    method.validate()?;
+    input.check_surface()?;
+    let automatic;
+    let method = match method {
+        SmoothMethod::Auto => {
+            automatic = SmoothMethod::Ohtake(DenoiseOptions::automatic());
+            &automatic
+        }
+        chosen => chosen,
     };
-    mesh.refresh_normals(&input.positions);
+    // The old positions are kept only when stored normals must follow the new ones.
+    let before = input.stores_normals().then(|| input.positions.clone());
+    let (repair, summary) = match method {
+        SmoothMethod::Ohtake(options) => {
+            let (repair, r) = denoise_in_place(&mut input, options, progress)?;
+            (repair, denoise_summary(&r))
+        }
+        _ => {
+            let built = Mesh::from_polygons(&input)?;
+            let (positions, summary) = smooth_positions(&built.mesh, method, progress)?;
+            drop(built.mesh);
+            let source = built.source;
+            source.write_input_positions(&positions, &mut input.positions);
+            (built.report, summary)
+        }
+    };
+    if let Some(before) = before {
+        input.refresh_normals(&before);
+    }
     Ok(Smoothed {
-        mesh,
-        repair: built.report,
+        mesh: input,
+        repair,
         summary,
     })
 }
@@ -117,14 +149,7 @@ pub fn smooth_positions(
         }
         SmoothMethod::Ohtake(options) => {
             let r = denoise(mesh, options, progress)?;
-            let summary = format!(
-                "mean edge {:.4e}; σ_opt histogram {:?}; fitting {}, energy {:.4e} → {:.4e}",
-                r.mean_edge,
-                r.scale_histogram,
-                iterations(r.fit.iterations),
-                r.fit.initial_energy,
-                r.fit.final_energy
-            );
+            let summary = denoise_summary(&r);
             (r.positions, summary)
         }
         SmoothMethod::Taubin(options) => (
@@ -146,6 +171,18 @@ pub fn smooth_positions(
             (r.positions, summary)
         }
     })
+}
+
+/// The line saying what the denoiser did.
+fn denoise_summary(r: &Denoised) -> String {
+    format!(
+        "mean edge {:.4e}; σ_opt histogram {:?}; fitting {}, energy {:.4e} → {:.4e}",
+        r.mean_edge,
+        r.scale_histogram,
+        iterations(r.fit.iterations),
+        r.fit.initial_energy,
+        r.fit.final_energy
+    )
 }
 
 fn iterations(n: usize) -> String {

@@ -9,6 +9,7 @@
 //!
 //! Measure results with [`crate::metrics::compare`] (E_v, E_n, Hausdorff).
 
+mod flat;
 pub(crate) mod method;
 mod settings;
 
@@ -16,5 +17,5 @@ pub use crate::fairing::{
     Boundary, DenoiseOptions, Denoised, FitReport, McfOptions, SmoothError, TaubinOptions,
     Variance, Weights, denoise, implicit_mcf, taubin_smoothing,
 };
-pub use method::{SmoothMethod, Smoothed, smooth_mesh, smooth_positions};
+pub use method::{SmoothMethod, Smoothed, smooth_mesh, smooth_mesh_owned, smooth_positions};
 pub use settings::{FilterScale, SmoothKind, SmoothSettings};

@@ -1,11 +1,11 @@
 //! The `SPLT` blocks located up front and decoded on another core ahead of the sequential
 //! replay, which then finds most blocks ready (see [`SplitBlocks`]).
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Mutex, PoisonError};
 
 use crate::format::FormatError;
-use crate::format::container::Container;
+use crate::format::container::{Container, Release};
 
 use super::split_block::{BlockLayout, BlockRef, DecodedBlock, decode_block};
 use super::{Meta, SPLT, corrupt, internal};
@@ -28,7 +28,16 @@ pub(super) struct SplitBlocks<'a> {
     layout: BlockLayout,
     claimed: Vec<AtomicBool>,
     ready: Vec<Slot>,
+    /// The block the replay took last (plus one), so that decoding ahead stays near it.
+    replayed: AtomicUsize,
+    /// Set once the replay has stopped, finished or failed: nobody takes blocks any more.
+    stopped: AtomicBool,
+    release: Release<'a>,
 }
+
+/// Blocks decoded ahead of the replay at most: decoded blocks hold about 60 bytes per split,
+/// so running ahead through a whole file would hold them all at once.
+const LOOKAHEAD: usize = 16;
 
 impl<'a> SplitBlocks<'a> {
     /// Scans the block headers of `c`'s `SPLT` section up to `max_level` (default: all).
@@ -54,6 +63,9 @@ impl<'a> SplitBlocks<'a> {
             },
             claimed: (0..n).map(|_| Default::default()).collect(),
             ready: (0..n).map(|_| Default::default()).collect(),
+            replayed: AtomicUsize::new(0),
+            stopped: AtomicBool::new(false),
+            release: c.release(),
         }
     }
 
@@ -75,6 +87,7 @@ impl<'a> SplitBlocks<'a> {
     /// Block `k`, for the replay: decoded here unless another thread claimed it first, in
     /// which case that thread is decoding it right now and the wait is short.
     pub(super) fn take(&self, k: usize) -> Result<DecodedBlock, FormatError> {
+        self.replayed.store(k + 1, Ordering::Release);
         if !self.claimed[k].swap(true, Ordering::AcqRel) {
             return self.decode(k);
         }
@@ -90,9 +103,24 @@ impl<'a> SplitBlocks<'a> {
         }
     }
 
-    /// Decodes, in order, every block the replay has not claimed yet.
-    pub(super) fn decode_ahead(&self) {
+    /// A guard for the replay: once dropped (the replay finished, failed or panicked),
+    /// [`Self::decode_ahead`] stops waiting for it.
+    pub(super) fn replaying(&self) -> Replaying<'_, 'a> {
+        Replaying(self)
+    }
+
+    /// Decodes, in order, the blocks the replay has not claimed yet, at most [`LOOKAHEAD`]
+    /// ahead of it. When `wait` is false, returns once it is that far ahead (the caller has
+    /// other work); otherwise waits for the replay to move on, until every block is claimed
+    /// or the replay stops.
+    pub(super) fn decode_ahead(&self, wait: bool) {
         for k in 0..self.blocks.len() {
+            while k >= self.replayed.load(Ordering::Acquire) + LOOKAHEAD {
+                if !wait || self.stopped.load(Ordering::Acquire) {
+                    return;
+                }
+                std::thread::sleep(std::time::Duration::from_micros(100));
+            }
             if self.claimed[k].swap(true, Ordering::AcqRel) {
                 continue;
             }
@@ -102,7 +130,18 @@ impl<'a> SplitBlocks<'a> {
     }
 
     fn decode(&self, k: usize) -> Result<DecodedBlock, FormatError> {
-        decode_block(&self.blocks[k], &self.layout)
+        let decoded = decode_block(&self.blocks[k], &self.layout);
+        self.release.done_with(self.blocks[k].payload);
+        decoded
+    }
+}
+
+/// See [`SplitBlocks::replaying`].
+pub(super) struct Replaying<'b, 'a>(&'b SplitBlocks<'a>);
+
+impl Drop for Replaying<'_, '_> {
+    fn drop(&mut self) {
+        self.0.stopped.store(true, Ordering::Release);
     }
 }
 
@@ -133,8 +172,11 @@ fn locate_blocks<'a>(
     let whole = if truncated {
         c.section_prefix(SPLT)
     } else {
-        // An intact file: check the section checksum too.
-        c.section(SPLT)?
+        // An intact file: check the section checksum too. Its blocks are read again one by
+        // one, so their pages can go back until then.
+        let checked = c.section(SPLT)?;
+        c.done_with(SPLT);
+        checked
     };
     let mut r = whole.ok_or_else(|| corrupt(0, "section SPLT is missing"))?;
     let mut done = 0;

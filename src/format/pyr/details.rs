@@ -15,10 +15,6 @@ use glam::DVec3;
 /// changes its output, so that details of an older analysis are recomputed, not used.
 pub(crate) const ANALYSIS_VERSION: u8 = 3;
 
-/// Details given without a step (exact) are quantised with `2^(⌊log2 diagonal⌋ − STEP_BITS)`:
-/// at most 2^-STEP_BITS of the diagonal, at least half that.
-pub(crate) const STEP_BITS: i32 = 36;
-
 /// Splits per independently coded block (blocks decode on all cores).
 const SPLITS_PER_BLOCK: usize = 4096;
 
@@ -36,7 +32,13 @@ const N_CONTEXTS: usize = 7;
 
 /// The details of a pyramid in split order, as a `.pyr` file stores them (`formats/pyr.md`,
 /// section `DETL`), with what they were computed with.
-#[derive(Clone, Debug, PartialEq)]
+///
+/// Each detail is held quantised: three integers `q` with detail `q · step` in its local frame
+/// `(t1, t2, n)`, as the pyramid keeps them. Details read from a file stay coded (about a
+/// fifth of their decoded size) until they are asked for ([`Self::for_each_block`],
+/// [`Self::quantised`]), so that a reader never holds them twice: the pyramid decodes them
+/// straight into its own order.
+#[derive(Clone, Debug)]
 pub struct StoredDetails {
     /// The relaxation operator, with its options, the details were analysed with.
     pub relaxation: RelaxationSpec,
@@ -44,11 +46,195 @@ pub struct StoredDetails {
     pub base: Vec<DVec3>,
     /// Per split, how many details it carries (the new vertex and its ring).
     pub counts: Vec<u32>,
-    /// All details in split order, each in its local frame `(t1, t2, n)`.
-    pub details: Vec<DVec3>,
-    /// The quantisation step of every detail component (model units; 0 for exact values):
-    /// each component is within half of it of the analysed one.
+    /// The quantisation step of every detail component (model units, a power of two): each
+    /// component is a whole multiple of it.
     pub step: f64,
+    values: Values,
+}
+
+/// Where a [`StoredDetails`]' values are.
+#[derive(Clone, Debug)]
+enum Values {
+    /// Quantised, in split order.
+    Quantised(Vec<[i32; 3]>),
+    /// The section's coded blocks, checked when the file was read.
+    Coded(CodedBlocks),
+}
+
+/// The coded blocks of a `DETL` section, copied out of the file.
+#[derive(Clone, Debug)]
+struct CodedBlocks {
+    /// The blocks' bytes, one after another.
+    bytes: Vec<u8>,
+    /// Per block: its number of splits, its byte range in `bytes` and its offset in the file.
+    blocks: Vec<(usize, std::ops::Range<usize>, u64)>,
+    n_details: usize,
+}
+
+impl PartialEq for StoredDetails {
+    /// Equal details, however they are held.
+    fn eq(&self, other: &Self) -> bool {
+        self.relaxation == other.relaxation
+            && self.base == other.base
+            && self.counts == other.counts
+            && self.step.to_bits() == other.step.to_bits()
+            && self.quantised().ok() == other.quantised().ok()
+    }
+}
+
+impl StoredDetails {
+    /// Details `q · step` (`quantised`, in split order, `counts[k]` of them for split `k`).
+    /// Fails unless the counts add up to the details and `step` is a positive power of two.
+    pub fn from_quantised(
+        relaxation: RelaxationSpec,
+        base: Vec<DVec3>,
+        counts: Vec<u32>,
+        quantised: Vec<[i32; 3]>,
+        step: f64,
+    ) -> Result<StoredDetails, String> {
+        let total: u64 = counts.iter().map(|&c| u64::from(c)).sum();
+        if total != quantised.len() as u64 {
+            return Err(format!(
+                "the counts add up to {total} details, not {}",
+                quantised.len()
+            ));
+        }
+        if !(step > 0.0 && step.is_finite() && step.log2().fract() == 0.0) {
+            return Err(format!(
+                "a detail step of {step} (it must be a power of two)"
+            ));
+        }
+        Ok(StoredDetails {
+            relaxation,
+            base,
+            counts,
+            step,
+            values: Values::Quantised(quantised),
+        })
+    }
+
+    /// The details of `n_splits` splits, split `k`'s being `split(k)` (whole multiples of
+    /// `step`, a positive power of two), coded as a file stores them: a fifth of their size in
+    /// memory, and a `.pyr` writer copies the blocks as they are. The blocks are coded on all
+    /// cores.
+    pub fn coded<'s>(
+        relaxation: RelaxationSpec,
+        base: Vec<DVec3>,
+        n_splits: usize,
+        split: impl Fn(usize) -> &'s [[i32; 3]] + Sync,
+        step: f64,
+    ) -> Result<StoredDetails, String> {
+        use rayon::prelude::*;
+        let checked = StoredDetails::from_quantised(relaxation, base, vec![], vec![], step)?;
+        let n_blocks = n_splits.div_ceil(SPLITS_PER_BLOCK);
+        let coded: Vec<(Vec<u32>, usize, Vec<u8>)> = (0..n_blocks)
+            .into_par_iter()
+            .map(|b| {
+                let splits = b * SPLITS_PER_BLOCK..((b + 1) * SPLITS_PER_BLOCK).min(n_splits);
+                let counts: Vec<u32> = splits.clone().map(|k| split(k).len() as u32).collect();
+                let details: Vec<[i32; 3]> =
+                    splits.flat_map(|k| split(k).iter().copied()).collect();
+                let block = encode_block(&counts, &details);
+                (counts, details.len(), block)
+            })
+            .collect();
+        let mut counts = Vec::with_capacity(n_splits);
+        let mut blocks = CodedBlocks {
+            bytes: Vec::with_capacity(coded.iter().map(|c| c.2.len()).sum()),
+            blocks: Vec::with_capacity(n_blocks),
+            n_details: 0,
+        };
+        for (c, n, bytes) in coded {
+            let start = blocks.bytes.len();
+            blocks.bytes.extend_from_slice(&bytes);
+            blocks.blocks.push((c.len(), start..blocks.bytes.len(), 0));
+            blocks.n_details += n;
+            counts.extend(c);
+        }
+        Ok(StoredDetails {
+            counts,
+            values: Values::Coded(blocks),
+            ..checked
+        })
+    }
+
+    /// Total number of details.
+    pub fn n_details(&self) -> usize {
+        match &self.values {
+            Values::Quantised(q) => q.len(),
+            Values::Coded(c) => c.n_details,
+        }
+    }
+
+    /// Calls `f(first, counts, details)` for consecutive runs of splits in split order:
+    /// `first` is the run's first split, `counts` its splits' detail counts and `details`
+    /// their quantised details. Coded details are decoded a few blocks at a time on all
+    /// cores, so that only those blocks are held decoded.
+    pub fn for_each_block(
+        &self,
+        mut f: impl FnMut(usize, &[u32], &[[i32; 3]]),
+    ) -> Result<(), FormatError> {
+        match &self.values {
+            Values::Quantised(q) => {
+                let mut at = 0;
+                for (b, counts) in self.counts.chunks(SPLITS_PER_BLOCK).enumerate() {
+                    let n: usize = counts.iter().map(|&c| c as usize).sum();
+                    f(b * SPLITS_PER_BLOCK, counts, &q[at..at + n]);
+                    at += n;
+                }
+                Ok(())
+            }
+            Values::Coded(coded) => coded.for_each_block(&mut f),
+        }
+    }
+
+    /// All quantised details in split order.
+    pub fn quantised(&self) -> Result<std::borrow::Cow<'_, [[i32; 3]]>, FormatError> {
+        if let Values::Quantised(q) = &self.values {
+            return Ok(std::borrow::Cow::Borrowed(q));
+        }
+        let mut all = Vec::with_capacity(self.n_details());
+        self.for_each_block(|_, _, d| all.extend_from_slice(d))?;
+        Ok(std::borrow::Cow::Owned(all))
+    }
+
+    /// All details in split order, in model units.
+    pub fn details(&self) -> Result<Vec<DVec3>, FormatError> {
+        let step = self.step;
+        Ok(self
+            .quantised()?
+            .iter()
+            .map(|q| DVec3::from_array(q.map(|x| f64::from(x) * step)))
+            .collect())
+    }
+}
+
+impl CodedBlocks {
+    /// Decodes the blocks a few at a time on all cores and hands them to `f` in order.
+    fn for_each_block(
+        &self,
+        f: &mut impl FnMut(usize, &[u32], &[[i32; 3]]),
+    ) -> Result<(), FormatError> {
+        use rayon::prelude::*;
+        let batch = 4 * rayon::current_num_threads().max(1);
+        let mut first = 0;
+        for blocks in self.blocks.chunks(batch) {
+            let decoded: Vec<(Vec<u32>, Vec<[i32; 3]>)> = blocks
+                .par_iter()
+                .map(|(n, range, at)| {
+                    let mut out = Some(Vec::new());
+                    let bytes = &self.bytes[range.clone()];
+                    let (counts, _) = decode_block(*n, bytes, *at, self.n_details, &mut out)?;
+                    Ok((counts, out.unwrap_or_default()))
+                })
+                .collect::<Result<_, FormatError>>()?;
+            for (counts, details) in decoded {
+                f(first, &counts, &details);
+                first += counts.len();
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A decoded `DETL` section.
@@ -58,8 +244,8 @@ pub(crate) struct DetailSection {
     pub analysis_version: u8,
     /// CRC-32 of the `BASE` and `SPLT` payloads they were analysed on.
     pub hierarchy_crcs: [u32; 2],
-    /// The details (dequantised) and what they were computed with.
-    pub stored: StoredDetails,
+    /// The details and what they were computed with, or why this reader cannot hold them.
+    pub stored: Result<StoredDetails, String>,
 }
 
 /// The exact power of two `2^e`, for `e` in the normal range.
@@ -69,72 +255,53 @@ fn power_of_two(e: i32) -> Option<f64> {
         .then(|| f64::from_bits(((e + 1023) as u64) << 52))
 }
 
-/// The quantisation step the writer uses for a mesh of bounding-box diagonal `diagonal`.
-pub(crate) fn step_exponent(diagonal: f64) -> i32 {
-    let e = if diagonal > 0.0 && diagonal.is_finite() {
-        diagonal.log2().floor() as i32
-    } else {
-        0
-    };
-    (e - STEP_BITS).clamp(-1022, MAX_STEP_EXP)
-}
-
-/// The `DETL` payload of `stored` (details in split order), quantised with its step if it has
-/// one (a power of two, as [`StoredDetails::of`] gives), else with `2^step_exp`, analysed on the hierarchy whose `BASE` and `SPLT` payloads have checksums
-/// `hierarchy_crcs`. `None` when a detail is not finite or too large to quantise (the file is
-/// then written without the section).
+/// The `DETL` payload of `stored` (details in split order, whole multiples of its step),
+/// analysed on the hierarchy whose `BASE` and `SPLT` payloads have checksums
+/// `hierarchy_crcs`. `None` when the step is outside the range the format codes.
 pub(crate) fn encode_details(
     stored: &StoredDetails,
-    step_exp: i32,
     hierarchy_crcs: [u32; 2],
-) -> Option<Vec<u8>> {
-    let step_exp = if stored.step > 0.0 {
-        stored.step.log2() as i32
-    } else {
-        step_exp
+) -> Result<Option<Vec<u8>>, FormatError> {
+    let step_exp = stored.step.log2() as i32;
+    if power_of_two(step_exp) != Some(stored.step) || step_exp > MAX_STEP_EXP {
+        return Ok(None);
+    }
+    let Ok(relaxation) =
+        bincode::serde::encode_to_vec(stored.relaxation, bincode::config::standard())
+    else {
+        return Ok(None);
     };
-    let step = power_of_two(step_exp).filter(|&s| stored.step == 0.0 || s == stored.step)?;
-    let quantised = quantise(&stored.details, step)?;
     let mut out = vec![ANALYSIS_VERSION];
-    out.extend(bincode::serde::encode_to_vec(stored.relaxation, bincode::config::standard()).ok()?);
+    out.extend(relaxation);
     for crc in hierarchy_crcs {
         out.extend_from_slice(&crc.to_le_bytes());
     }
     out.extend_from_slice(&(step_exp as i16).to_le_bytes());
     put_uvarint(&mut out, stored.counts.len() as u64);
-    put_uvarint(&mut out, stored.details.len() as u64);
+    put_uvarint(&mut out, stored.n_details() as u64);
     for p in &stored.base {
         for x in p.to_array() {
             out.extend_from_slice(&x.to_bits().to_le_bytes());
         }
     }
-    let mut at = 0;
-    for counts in stored.counts.chunks(SPLITS_PER_BLOCK) {
-        let n: usize = counts.iter().map(|&c| c as usize).sum();
-        let block = encode_block(counts, &quantised[at..at + n]);
-        at += n;
-        put_uvarint(&mut out, block.len() as u64);
-        out.extend_from_slice(&block);
+    match &stored.values {
+        // Coded by this coder (a pyramid's, or a file's checked on load): the same bytes.
+        Values::Coded(coded) => {
+            for (_, range, _) in &coded.blocks {
+                put_uvarint(&mut out, range.len() as u64);
+                out.extend_from_slice(&coded.bytes[range.clone()]);
+            }
+        }
+        Values::Quantised(_) => stored.for_each_block(|_, counts, details| {
+            let block = encode_block(counts, details);
+            put_uvarint(&mut out, block.len() as u64);
+            out.extend_from_slice(&block);
+        })?,
     }
-    Some(out)
+    Ok(Some(out))
 }
 
-/// Each component as a multiple of `step`; `None` if one is not finite or beyond 2^53 steps
-/// (where `q · step` would no longer be exact).
-fn quantise(details: &[DVec3], step: f64) -> Option<Vec<[i64; 3]>> {
-    const LIMIT: f64 = MAX_QUANTISED as f64;
-    details
-        .iter()
-        .map(|d| {
-            let q = d.to_array().map(|x| (x / step).round());
-            q.iter()
-                .all(|x| x.abs() < LIMIT)
-                .then(|| q.map(|x| x as i64))
-        })
-        .collect()
-}
-
-fn encode_block(counts: &[u32], details: &[[i64; 3]]) -> Vec<u8> {
+fn encode_block(counts: &[u32], details: &[[i32; 3]]) -> Vec<u8> {
     let mut w = BitWriter::default();
     let mut ctx = [Context::default(); N_CONTEXTS];
     let mut at = 0;
@@ -143,7 +310,7 @@ fn encode_block(counts: &[u32], details: &[[i64; 3]]) -> Vec<u8> {
         for (i, d) in details[at..at + c as usize].iter().enumerate() {
             let first = if i == 0 { 1 } else { 4 };
             for (j, &x) in d.iter().enumerate() {
-                w.code(&mut ctx[first + j], x);
+                w.code(&mut ctx[first + j], i64::from(x));
             }
         }
         at += c as usize;
@@ -183,18 +350,39 @@ pub(crate) fn decode_details(
     let n_details = r.count(max_details, "detail count")?;
     let base = read_base(&mut r, n_base)?;
     let blocks = block_slices(&mut r, n_splits)?;
-    let (counts, details) = decode_blocks(&blocks, n_details, step)?;
-    Ok(DetailSection {
-        analysis_version,
-        hierarchy_crcs,
-        stored: StoredDetails {
+    let (counts, fit) = check_blocks(&blocks, n_details)?;
+    let stored = fit
+        .then(|| StoredDetails {
             relaxation,
             base,
             counts,
-            details,
             step,
-        },
+            values: Values::Coded(coded_copy(&blocks, n_details)),
+        })
+        .ok_or_else(|| "a stored detail is beyond the 32 bits the pyramid keeps".to_string());
+    Ok(DetailSection {
+        analysis_version,
+        hierarchy_crcs,
+        stored,
     })
+}
+
+/// The blocks copied out of the file, to be decoded when the details are asked for.
+fn coded_copy(blocks: &[Block<'_>], n_details: usize) -> CodedBlocks {
+    let mut bytes = Vec::with_capacity(blocks.iter().map(|b| b.1.len()).sum());
+    let blocks = blocks
+        .iter()
+        .map(|&(n, b, at)| {
+            let start = bytes.len();
+            bytes.extend_from_slice(b);
+            (n, start..bytes.len(), at)
+        })
+        .collect();
+    CodedBlocks {
+        bytes,
+        blocks,
+        n_details,
+    }
 }
 
 fn read_relaxation(r: &mut ByteReader<'_>) -> Result<RelaxationSpec, FormatError> {
@@ -246,67 +434,123 @@ fn block_slices<'a>(
     Ok(blocks)
 }
 
-/// Decodes the blocks on all cores; the counts must add up to `n_details`.
-fn decode_blocks(
-    blocks: &[Block<'_>],
-    n_details: usize,
-    step: f64,
-) -> Result<(Vec<u32>, Vec<DVec3>), FormatError> {
+/// Decodes the blocks on all cores to check them, keeping only their counts, which must add
+/// up to `n_details`; says whether every detail fits 32 bits.
+fn check_blocks(blocks: &[Block<'_>], n_details: usize) -> Result<(Vec<u32>, bool), FormatError> {
     use rayon::prelude::*;
-    let decoded: Vec<(Vec<u32>, Vec<DVec3>)> = blocks
+    let decoded: Vec<(Vec<u32>, bool)> = blocks
         .par_iter()
-        .map(|&(n, bytes, at)| decode_block(n, bytes, at, n_details, step))
+        .map(|&(n, bytes, at)| decode_block(n, bytes, at, n_details, &mut None))
         .collect::<Result<_, _>>()?;
-    let total: usize = decoded.iter().map(|b| b.1.len()).sum();
-    if total != n_details {
+    let total: u64 = decoded
+        .iter()
+        .flat_map(|b| &b.0)
+        .map(|&c| u64::from(c))
+        .sum();
+    if total != n_details as u64 {
         let end = blocks.last().map_or(0, |b| b.2 + b.1.len() as u64);
         return Err(corrupt(
             end,
             format!("{total} details where the section announces {n_details}"),
         ));
     }
+    let fit = decoded.iter().all(|b| b.1);
     let mut counts = Vec::with_capacity(blocks.iter().map(|b| b.0).sum());
-    let mut details = Vec::with_capacity(n_details);
-    for (c, d) in decoded {
+    for (c, _) in decoded {
         counts.extend(c);
-        details.extend(d);
     }
-    Ok((counts, details))
+    Ok((counts, fit))
 }
 
-/// One block of `n` splits; no block holds more than `max_details` details.
+/// One block of `n` splits (no block holds more than `max_details` details): its counts, and
+/// whether every detail fits 32 bits. With `out`, the details are appended to it, and then
+/// they must fit.
 fn decode_block(
     n: usize,
     bytes: &[u8],
     at: u64,
     max_details: usize,
-    step: f64,
-) -> Result<(Vec<u32>, Vec<DVec3>), FormatError> {
+    out: &mut Option<Vec<[i32; 3]>>,
+) -> Result<(Vec<u32>, bool), FormatError> {
     let mut r = BitReader::new(bytes, at);
     let mut ctx = [Context::default(); N_CONTEXTS];
     let mut counts = Vec::with_capacity(n);
-    let mut details = Vec::new();
+    let mut seen = 0i64;
+    let mut fit = true;
     for _ in 0..n {
         let c = r.decode(&mut ctx[0])?.saturating_add(7);
-        if c < 1 || (details.len() as i64).saturating_add(c) > max_details as i64 {
+        if c < 1 || seen.saturating_add(c) > max_details as i64 {
             return Err(corrupt(at, format!("a split with {c} details")));
         }
+        seen += c;
         counts.push(c as u32);
         for i in 0..c {
             let first = if i == 0 { 1 } else { 4 };
-            let mut q = [0.0; 3];
+            let mut q = [0i32; 3];
             for (j, x) in q.iter_mut().enumerate() {
                 let v = r.decode(&mut ctx[first + j])?;
                 if !(-MAX_QUANTISED < v && v < MAX_QUANTISED) {
                     return Err(corrupt(at, format!("quantised detail {v} out of range")));
                 }
-                *x = v as f64 * step;
+                *x = i32::try_from(v).unwrap_or_else(|_| {
+                    fit = false;
+                    0
+                });
             }
-            details.push(DVec3::from_array(q));
+            if let Some(out) = out.as_mut() {
+                if !fit {
+                    return Err(corrupt(at, "a detail beyond 32 bits"));
+                }
+                out.push(q);
+            }
         }
     }
     if !r.at_end() {
         return Err(corrupt(at, "bytes after the last detail of a block"));
     }
-    Ok((counts, details))
+    Ok((counts, fit))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stored(counts: Vec<u32>, n: usize, step: f64) -> Result<StoredDetails, String> {
+        let details = (0..n as i32).map(|i| [i, -i, 2 * i]).collect();
+        StoredDetails::from_quantised(RelaxationSpec::default(), vec![], counts, details, step)
+    }
+
+    #[test]
+    fn quantised_details_need_matching_counts_and_a_power_of_two_step() {
+        assert!(stored(vec![7, 8], 15, 0.25).is_ok());
+        assert!(stored(vec![7, 8], 14, 0.25).is_err());
+        assert!(stored(vec![7, 8], 15, 0.3).is_err());
+        assert!(stored(vec![7, 8], 15, 0.0).is_err());
+    }
+
+    #[test]
+    fn coded_details_decode_to_the_values_they_were_coded_from() {
+        let counts: Vec<u32> = (0..3 * SPLITS_PER_BLOCK as u32 + 5)
+            .map(|k| 7 + k % 3)
+            .collect();
+        let n = counts.iter().map(|&c| c as usize).sum();
+        let plain = stored(counts, n, 0.5).unwrap();
+        let bytes = encode_details(&plain, [1, 2]).unwrap().unwrap();
+        let n_splits = plain.counts.len();
+        let section = decode_details(ByteReader::new(&bytes, 0), 0, n_splits).unwrap();
+        let coded = section.stored.unwrap();
+        assert!(matches!(coded.values, Values::Coded(_)));
+        assert_eq!(coded, plain);
+        assert_eq!(coded.quantised().unwrap(), plain.quantised().unwrap());
+        let mut firsts = vec![];
+        coded
+            .for_each_block(|first, counts, details| {
+                let sum: u32 = counts.iter().sum();
+                assert_eq!(details.len(), sum as usize);
+                firsts.push(first);
+            })
+            .unwrap();
+        assert_eq!(firsts, [0, 4096, 8192, 12288]);
+        assert_eq!(encode_details(&coded, [1, 2]).unwrap().unwrap(), bytes);
+    }
 }

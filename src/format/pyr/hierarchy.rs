@@ -4,7 +4,7 @@
 //! reader.
 
 use crate::format::FormatError;
-use crate::format::container::Container;
+use crate::format::container::{Container, Release};
 use crate::format::varint::{ByteReader, put_ivarint, put_uvarint};
 use crate::pm::{FlatReplay, ProgressiveMesh, VertexSplit};
 use glam::DVec3;
@@ -106,23 +106,30 @@ pub(super) struct Progressive {
     pub(super) errors: Vec<f32>,
 }
 
-/// The progressive part of `bytes` up to `max_level` (default: all), with `also` run on
+/// The progressive part of `bytes` up to `max_level` (default: all), handing the parts it is
+/// done with to `release`, with `also` run on
 /// another core meanwhile (after it has helped decode the split blocks). Errors come in the
 /// order a sequential reader meets them: header, `BASE`, then block by block.
 pub(super) fn read_progressive<'a, R: Send>(
     bytes: &'a [u8],
     max_level: Option<usize>,
+    release: Release<'a>,
     also: impl FnOnce(&Container<'a>, &Meta) -> R + Send,
 ) -> Result<(Container<'a>, Progressive, R), FormatError> {
-    let c = Container::parse(bytes)?;
+    let c = Container::parse(bytes)?.releasing(release);
     check_version(&c)?;
     let meta = read_meta(&c)?;
     let blocks = SplitBlocks::scan(&c, &meta, max_level);
     let (p, r) = rayon::join(
-        || replay_progressive(&c, &meta, &blocks, bytes.len()),
         || {
-            blocks.decode_ahead();
-            also(&c, &meta)
+            let _replaying = blocks.replaying();
+            replay_progressive(&c, &meta, &blocks, bytes.len())
+        },
+        || {
+            blocks.decode_ahead(false);
+            let r = also(&c, &meta);
+            blocks.decode_ahead(true);
+            r
         },
     );
     Ok((c, p?, r))
@@ -256,7 +263,7 @@ pub fn read_level_within(bytes: &[u8], max_triangles: usize) -> Result<LevelMesh
     // A split adds one or two triangles, so the level sought is at most `max_triangles`
     // splits past the base; one past it tells whether the prefix's last level still fits.
     let upto = n_base.saturating_add(max_triangles).saturating_add(1);
-    let (_, p, ()) = read_progressive(bytes, Some(upto), |_, _| ())?;
+    let (_, p, ()) = read_progressive(bytes, Some(upto), Release::default(), |_, _| ())?;
     let replayed = p.replay.triangles();
     let added: usize = p.splits.iter().map(VertexSplit::n_new_faces).sum();
     let mut faces = replayed.len() - added;
@@ -296,7 +303,7 @@ pub fn read_level_within(bytes: &[u8], max_triangles: usize) -> Result<LevelMesh
 /// Reads level `level` (default: the finest in the file) from the progressive part only. A
 /// truncated file yields its last complete level (`truncated` set); the caller warns.
 pub fn read_level(bytes: &[u8], level: Option<usize>) -> Result<LevelMesh, FormatError> {
-    let (_, p, ()) = read_progressive(bytes, level, |_, _| ())?;
+    let (_, p, ()) = read_progressive(bytes, level, Release::default(), |_, _| ())?;
     let n_base = p.meta.n_base as usize;
     let finest = n_base + p.meta.n_splits as usize;
     // The progressive reader stopped at the level asked for (or where the file ends).

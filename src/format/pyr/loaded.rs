@@ -67,6 +67,9 @@ pub(super) fn file_details(c: &Container<'_>, detl: Option<DetailSection>) -> Fi
     } else if d.hierarchy_crcs != [crc(BASE), crc(SPLT)] {
         FileDetails::Unusable("the stored ones were analysed on another hierarchy".into())
     } else {
-        FileDetails::Stored(d.stored)
+        match d.stored {
+            Ok(stored) => FileDetails::Stored(stored),
+            Err(why) => FileDetails::Unusable(why),
+        }
     }
 }

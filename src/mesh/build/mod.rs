@@ -104,18 +104,30 @@ impl SourceMap {
         fallback: &[DVec3],
     ) -> Vec<DVec3> {
         let mut out = fallback.to_vec();
-        let mut sum = vec![DVec3::ZERO; self.input_vertices];
-        let mut count = vec![0u32; self.input_vertices];
-        for (i, &src) in self.vertex_source.iter().enumerate() {
-            sum[src as usize] += mesh_values[i];
-            count[src as usize] += 1;
+        self.write_input_positions(mesh_values, &mut out);
+        out
+    }
+
+    /// [`SourceMap::to_input_positions`] into `out` (the input's positions, one per input
+    /// vertex), in place: the caller needs no second position array. Every input vertex is
+    /// a mesh vertex of its own (referenced or not), so each gets the mean of itself and its
+    /// copies, summed in mesh order; only the few split vertices need a count.
+    pub(crate) fn write_input_positions(&self, mesh_values: &[DVec3], out: &mut [DVec3]) {
+        let n = self.input_vertices.min(out.len());
+        for (o, &v) in out[..n].iter_mut().zip(mesh_values) {
+            *o = DVec3::ZERO + v;
         }
-        for i in 0..self.input_vertices {
-            if count[i] > 0 {
-                out[i] = sum[i] / count[i] as f64;
+        let mut copies = std::collections::BTreeMap::<u32, u32>::new();
+        let split = self.vertex_source.iter().zip(mesh_values).skip(n);
+        for (&src, &v) in split {
+            if let Some(o) = out.get_mut(src as usize) {
+                *o += v;
+                *copies.entry(src).or_insert(1) += 1;
             }
         }
-        out
+        for (src, count) in copies {
+            out[src as usize] /= count as f64;
+        }
     }
 }
 
