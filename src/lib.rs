@@ -140,6 +140,9 @@ pub use pyramid::{
     PyramidOptions, Spectrum, StoredDetails, SynthesisCache,
 };
 pub use relax::RelaxationSpec;
-pub use render::{RenderError, RenderOptions, Shading, View, render_mesh, render_meshes};
+pub use render::{
+    RenderError, RenderOptions, Shading, Textures, View, render_mesh, render_meshes,
+    render_textured_meshes,
+};
 pub use smooth::{DenoiseOptions, SmoothMethod, Smoothed, smooth_mesh};
 pub use subdiv::{SubdivOptions, subdivide_mesh};

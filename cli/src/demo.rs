@@ -176,6 +176,7 @@ fn write_previews(
             mesh,
             label: name,
             values: None,
+            texture: None,
         })
         .collect();
     let all = render_scene(&labelled, &options);

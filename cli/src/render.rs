@@ -5,7 +5,7 @@ use super::Global;
 use anyhow::Context;
 use meshpyr::format;
 use meshpyr::mesh::PolygonMesh;
-use meshpyr::render::{RenderOptions, Shading, View, render_meshes};
+use meshpyr::render::{RenderOptions, Shading, Textures, View, render_textured_meshes};
 use std::path::{Path, PathBuf};
 
 /// Arguments of `meshpyr render`.
@@ -17,7 +17,10 @@ use std::path::{Path, PathBuf};
                   by side with one camera, so equal sizes look equal, each captioned with its \
                   file name. --color-by colours the surface by a per-vertex PLY property (e.g. \
                   `distance` from `compare --per-vertex`) through viridis, with a colour bar \
-                  showing the range (default: the values' minimum and maximum over all inputs)."
+                  showing the range (default: the values' minimum and maximum over all inputs). A \
+                  textured mesh (OBJ map_Kd, PLY TextureFile; PNG images) shows its texture, \
+                  shaded like the surface; a missing or unreadable image is a warning and its \
+                  faces are drawn plain."
 )]
 pub(crate) struct RenderArgs {
     /// Meshes to draw (.obj, .ply, .off, .stl, or a .pyr file: its stored input, or a level
@@ -51,6 +54,9 @@ pub(crate) struct RenderArgs {
     /// The values at the ends of the colour map (default: the values' own range).
     #[arg(long, value_name = "MIN:MAX", value_parser = parse_range, requires = "color_by", allow_hyphen_values = true)]
     pub(crate) range: Option<(f64, f64)>,
+    /// Draw textured meshes in the plain surface colour instead of their images.
+    #[arg(long)]
+    pub(crate) no_texture: bool,
     /// Draw this level (vertex count) of each .pyr input instead of its stored mesh.
     #[arg(long, value_name = "N")]
     pub(crate) level: Option<usize>,
@@ -90,8 +96,18 @@ pub(crate) fn run(args: RenderArgs, global: &Global) -> anyhow::Result<()> {
         .map(|path| read_panel_mesh(path, args.level))
         .collect::<anyhow::Result<Vec<PolygonMesh>>>()?;
     let labels: Vec<String> = args.inputs.iter().map(|p| file_label(p)).collect();
-    let pairs: Vec<(&str, &PolygonMesh)> = labels.iter().map(String::as_str).zip(&meshes).collect();
-    let image = render_meshes(&pairs, &render_options(&args))?;
+    let textures: Vec<Option<Textures>> = meshes
+        .iter()
+        .zip(&args.inputs)
+        .map(|(m, path)| (!args.no_texture).then(|| load_textures(m, path)))
+        .collect();
+    let panels: Vec<(&str, &PolygonMesh, Option<&Textures>)> = labels
+        .iter()
+        .zip(&meshes)
+        .zip(&textures)
+        .map(|((label, m), t)| (label.as_str(), m, t.as_ref()))
+        .collect();
+    let image = render_textured_meshes(&panels, &render_options(&args))?;
     meshpyr::io::write_atomic(&args.output, &image.encode_png()?)?;
     global.say(format_args!(
         "wrote {} ({}x{})",
@@ -124,6 +140,16 @@ fn render_options(args: &RenderArgs) -> RenderOptions {
         range: args.range,
         ..RenderOptions::default()
     }
+}
+
+/// The images of `mesh`'s materials, with a warning on standard error for each one that
+/// cannot be drawn.
+fn load_textures(mesh: &PolygonMesh, path: &Path) -> Textures {
+    let (textures, warnings) = Textures::load(mesh);
+    for w in warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    textures
 }
 
 /// Fails before any work when the output is not a `.png`.

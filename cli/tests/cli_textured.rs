@@ -1,5 +1,6 @@
 //! Textured scans through the command line: what `info` says of them, what the commands that
-//! keep faces write, and the warnings of those that cannot keep everything.
+//! keep faces write, the warnings of those that cannot keep everything, and `render` drawing
+//! their texture.
 
 mod common;
 
@@ -109,5 +110,124 @@ fn build_then_extract_gives_back_the_textured_obj() {
         std::fs::read(&back).unwrap(),
         std::fs::read(&direct).unwrap(),
         "extract writes what convert writes"
+    );
+}
+
+/// The RGB pixels and width of a PNG picture.
+fn picture(path: &str) -> (Vec<u8>, usize) {
+    let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+    let mut reader = png::Decoder::new(file).read_info().unwrap();
+    let mut rgb = vec![0; reader.output_buffer_size().unwrap()];
+    let frame = reader.next_frame(&mut rgb).unwrap();
+    assert_eq!(frame.color_type, png::ColorType::Rgb);
+    (rgb, frame.width as usize)
+}
+
+/// Renders `input` front on at 160×160 into `out`, with `extra` options; returns the stderr.
+fn render(input: &str, out: &str, extra: &[&str]) -> String {
+    let mut args = vec!["render", input, "-o", out, "--size", "160x160"];
+    args.extend_from_slice(extra);
+    ok(&meshpyr(&args))
+}
+
+#[test]
+fn render_draws_the_texture_where_it_varies_and_no_texture_draws_the_clay() {
+    let textured = scratch_arg("cli_textured_render", "textured.png");
+    let plain = scratch_arg("cli_textured_render", "plain.png");
+    assert!(!render(&data(OBJ), &textured, &[]).contains("warning"));
+    render(&data(OBJ), &plain, &["--no-texture"]);
+    let ((a, _), (b, _)) = (picture(&textured), picture(&plain));
+    let background = [255u8; 3];
+    let surface: Vec<(&[u8], &[u8])> = a
+        .chunks_exact(3)
+        .zip(b.chunks_exact(3))
+        .filter(|(_, q)| *q != background)
+        .collect();
+    assert!(surface.len() > 1000, "{} surface pixels", surface.len());
+    // The clay is warm grey, red over green over blue; the texture's gradients and its two
+    // images' blues (60 and 180) are not.
+    assert!(surface.iter().all(|(_, q)| q[0] >= q[1] && q[1] >= q[2]));
+    let coloured = surface
+        .iter()
+        .filter(|(p, _)| p[1] > p[0] + 20 || p[2] > p[0] + 20)
+        .count();
+    assert!(
+        coloured * 5 > surface.len(),
+        "{coloured} of {} surface pixels show texture colours",
+        surface.len()
+    );
+}
+
+#[test]
+fn the_ply_with_texture_files_renders_as_the_obj_with_its_library() {
+    let (obj, ply) = (
+        scratch_arg("cli_textured_render_ply", "obj.png"),
+        scratch_arg("cli_textured_render_ply", "ply.png"),
+    );
+    render(&data(OBJ), &obj, &["--view", "iso"]);
+    render(&data("textured/anchor_tex.ply"), &ply, &["--view", "iso"]);
+    assert_eq!(picture(&obj), picture(&ply));
+}
+
+#[test]
+fn a_checker_on_a_square_shows_its_colours_at_their_quarters() {
+    let dir = scratch("cli_textured_checker", "square.obj");
+    let obj = dir.display().to_string();
+    std::fs::write(
+        &dir,
+        "mtllib square.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\
+         vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl checker\nf 1/1 2/2 3/3 4/4\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.with_file_name("square.mtl"),
+        "newmtl checker\nmap_Kd checker.png\n",
+    )
+    .unwrap();
+    let mut rgb = Vec::new();
+    for y in 0..8 {
+        for x in 0..8 {
+            rgb.extend_from_slice(match (x < 4, y < 4) {
+                (true, true) => &[255u8, 0, 0],
+                (false, true) => &[0, 255, 0],
+                (true, false) => &[0, 0, 255],
+                (false, false) => &[255, 255, 255],
+            });
+        }
+    }
+    let mut png_bytes = Vec::new();
+    let mut encoder = png::Encoder::new(&mut png_bytes, 8, 8);
+    encoder.set_color(png::ColorType::Rgb);
+    let mut writer = encoder.write_header().unwrap();
+    writer.write_image_data(&rgb).unwrap();
+    writer.finish().unwrap();
+    std::fs::write(dir.with_file_name("checker.png"), &png_bytes).unwrap();
+    let out = scratch_arg("cli_textured_checker", "square.png");
+    render(&obj, &out, &[]);
+    let (pixels, width) = picture(&out);
+    let at = |x: usize, y: usize| {
+        let i = 3 * (y * width + x);
+        [pixels[i], pixels[i + 1], pixels[i + 2]]
+    };
+    // The square fills the panel but its margins; the light dims every channel alike.
+    let lit = at(40, 40)[0];
+    assert!(lit > 150, "{:?}", at(40, 40));
+    assert_eq!(at(40, 40), [lit, 0, 0], "red top left (v = 1 at the top)");
+    assert_eq!(at(120, 40), [0, lit, 0], "green top right");
+    assert_eq!(at(40, 120), [0, 0, lit], "blue bottom left");
+    assert_eq!(at(120, 120), [lit; 3], "white bottom right");
+
+    std::fs::remove_file(dir.with_file_name("checker.png")).unwrap();
+    let err = render(&obj, &out, &[]);
+    assert!(
+        err.contains("image checker.png") && err.contains("warning"),
+        "{err}"
+    );
+    let plain = scratch_arg("cli_textured_checker", "plain.png");
+    render(&obj, &plain, &["--no-texture"]);
+    assert_eq!(
+        picture(&out),
+        picture(&plain),
+        "a missing image draws the clay"
     );
 }

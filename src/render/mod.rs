@@ -1,23 +1,28 @@
 //! Deterministic software pictures of meshes: an orthographic z-buffer rasteriser with flat or
 //! smooth Lambert shading, an optional wireframe, colour by a per-vertex value with a colour
-//! bar, captions, and a small RGB image type that encodes to PNG.
+//! bar or by the images of a textured mesh ([`Textures`]), captions, and a small RGB image type
+//! that encodes to PNG.
 //!
 //! No GPU, no threads, no font or system library: the same triangles and options always give a
 //! byte-identical PNG, which is what the tests and the demo rely on. Several meshes can be drawn
 //! side by side with one shared camera (fitted to the union of their bounding boxes), so the
 //! panels are comparable at a glance.
 //!
-//! [`render_mesh`] and [`render_meshes`] draw [`PolygonMesh`](crate::PolygonMesh)es (what
-//! `meshpyr render` does); [`render_scene`] draws triangle soups with captions and values.
+//! [`render_mesh`] and [`render_meshes`] draw [`PolygonMesh`](crate::PolygonMesh)es,
+//! [`render_textured_meshes`] with their textures (what `meshpyr render` does);
+//! [`render_scene`] draws triangle soups with captions and values.
 
 mod colormap;
 pub mod font;
 mod polygon;
 mod raster;
 mod scene;
+mod texture;
 
-pub use polygon::{RenderError, render_mesh, render_meshes};
+pub use polygon::{RenderError, render_mesh, render_meshes, render_textured_meshes};
+pub use raster::{NO_IMAGE, PanelTexture};
 pub use scene::{Panel, render_scene};
+pub use texture::{Textures, decode_image, sample};
 
 use glam::DVec3;
 
@@ -267,6 +272,7 @@ pub fn render_panels(meshes: &[Triangles<'_>], options: &RenderOptions) -> Image
             mesh,
             label: "",
             values: None,
+            texture: None,
         })
         .collect();
     render_scene(&panels, options)

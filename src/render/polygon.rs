@@ -1,9 +1,12 @@
 //! Pictures of [`PolygonMesh`]es as files hold them: polygons fanned into triangles, and the
 //! colour values taken from a named per-vertex attribute.
 
+use super::raster::{NO_IMAGE, PanelTexture};
 use super::scene::{Panel, render_scene};
+use super::texture::Textures;
 use super::{Image, RenderOptions, Triangles};
 use crate::mesh::PolygonMesh;
+use crate::mesh::corners::{MATERIAL_ATTRIBUTE, TEXCOORD};
 
 /// Why a picture cannot be drawn.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -44,24 +47,50 @@ pub fn render_meshes(
     meshes: &[(&str, &PolygonMesh)],
     options: &RenderOptions,
 ) -> Result<Image, RenderError> {
+    let untextured: Vec<(&str, &PolygonMesh, Option<&Textures>)> =
+        meshes.iter().map(|&(label, m)| (label, m, None)).collect();
+    render_textured_meshes(&untextured, options)
+}
+
+/// [`render_meshes`] with each mesh's texture: a face whose material has an image in its
+/// [`Textures`] ([`Textures::load`]) and whose corners have texture coordinates shows the
+/// image, shaded like the rest of the surface; other faces, and every face where
+/// `options.color_by` colours the surface, keep the plain or value colour.
+pub fn render_textured_meshes(
+    meshes: &[(&str, &PolygonMesh, Option<&Textures>)],
+    options: &RenderOptions,
+) -> Result<Image, RenderError> {
     if let Some((min, max)) = options.range
         && !(min.is_finite() && max.is_finite() && min < max)
     {
         return Err(RenderError::BadRange { min, max });
     }
-    let triangles: Vec<Vec<[u32; 3]>> = meshes.iter().map(|(_, m)| fan_triangles(m)).collect();
-    let values = attribute_values(meshes, options.color_by.as_deref())?;
+    let plain: Vec<(&str, &PolygonMesh)> = meshes.iter().map(|&(l, m, _)| (l, m)).collect();
+    let triangles: Vec<Vec<[u32; 3]>> = plain.iter().map(|(_, m)| fan_triangles(m)).collect();
+    let values = attribute_values(&plain, options.color_by.as_deref())?;
+    let corners: Vec<Option<(Vec<u32>, Vec<[f32; 2]>)>> = meshes
+        .iter()
+        .map(|&(_, m, t)| t.filter(|t| !t.is_empty()).and_then(|_| fan_texture(m)))
+        .collect();
     let panels: Vec<Panel<'_>> = meshes
         .iter()
         .zip(&triangles)
         .zip(&values)
-        .map(|(((label, m), t), v)| Panel {
+        .zip(&corners)
+        .map(|((((label, m, textures), t), v), c)| Panel {
             mesh: Triangles {
                 positions: &m.positions,
                 triangles: t,
             },
             label,
             values: v.as_deref(),
+            texture: textures
+                .zip(c.as_ref())
+                .map(|(textures, (materials, uvs))| PanelTexture {
+                    textures,
+                    materials,
+                    uvs,
+                }),
         })
         .collect();
     Ok(render_scene(&panels, options))
@@ -109,6 +138,56 @@ fn unknown_attribute(meshes: &[(&str, &PolygonMesh)], name: &str) -> RenderError
             available.join(", ")
         },
     }
+}
+
+/// Per fan triangle (as [`fan_triangles`] orders them) its material ([`NO_IMAGE`] when the
+/// face has none or a corner lacks texture coordinates) and its corners' texture coordinates;
+/// `None` when the mesh has no texture coordinates or no materials.
+fn fan_texture(mesh: &PolygonMesh) -> Option<(Vec<u32>, Vec<[f32; 2]>)> {
+    let uv = corner_texcoords(mesh)?;
+    let material = mesh.face_attribute(MATERIAL_ATTRIBUTE)?;
+    let mut materials = Vec::with_capacity(mesh.n_triangles());
+    let mut uvs = Vec::with_capacity(3 * mesh.n_triangles());
+    for f in 0..mesh.n_faces() {
+        let (s, e) = (
+            mesh.face_starts[f] as usize,
+            mesh.face_starts[f + 1] as usize,
+        );
+        let m = material.data.get_f64(f);
+        for k in s + 1..e.saturating_sub(1) {
+            let corners = [s, k, k + 1].map(&uv);
+            let whole = m >= 0.0 && corners.iter().all(Option::is_some);
+            materials.push(if whole { m as u32 } else { NO_IMAGE });
+            uvs.extend(corners.map(|c| c.unwrap_or([0.0; 2])));
+        }
+    }
+    Some((materials, uvs))
+}
+
+/// The texture coordinates of a face corner (an index into `face_indices`): the corner
+/// attribute [`TEXCOORD`], or else the vertex's `u`, `v` columns (where an OBJ file's `vt`
+/// follow its `v` one to one, the reader keeps them per vertex).
+fn corner_texcoords(mesh: &PolygonMesh) -> Option<impl Fn(usize) -> Option<[f32; 2]> + '_> {
+    let corner = mesh
+        .corner_attribute(TEXCOORD)
+        .filter(|a| a.columns.len() >= 2);
+    let vertex = match (mesh.vertex_attribute("u"), mesh.vertex_attribute("v")) {
+        (Some(u), Some(v)) => Some((u, v)),
+        _ => None,
+    };
+    if corner.is_none() && vertex.is_none() {
+        return None;
+    }
+    Some(move |c: usize| match (corner, vertex) {
+        (Some(a), _) => a
+            .row(c)
+            .map(|r| [0, 1].map(|k| a.columns[k].data.get_f64(r) as f32)),
+        (None, Some((u, v))) => {
+            let i = mesh.face_indices[c] as usize;
+            Some([u.data.get_f64(i) as f32, v.data.get_f64(i) as f32])
+        }
+        (None, None) => None,
+    })
 }
 
 /// Each polygon as a fan of triangles around its first corner.

@@ -2,6 +2,7 @@
 //! order, single-threaded, so the pixels depend on nothing but the input.
 
 use super::colormap::colormap;
+use super::texture::{Textures, sample};
 use super::{Image, RenderOptions, Shading, Triangles};
 use glam::{DMat3, DVec3};
 
@@ -73,10 +74,36 @@ impl Camera {
 }
 
 /// How the surface of one panel is coloured: the lighting and, optionally, a value per vertex
-/// mapped through the colour map over `range`.
+/// mapped through the colour map over `range`, or else the images of a textured mesh.
 pub(super) struct Paint<'a> {
     pub(super) values: Option<&'a [f64]>,
     pub(super) range: (f64, f64),
+    pub(super) texture: Option<PanelTexture<'a>>,
+}
+
+/// The texture of one panel's triangles: per triangle its material's image and its corners'
+/// texture coordinates.
+#[derive(Clone, Copy, Debug)]
+pub struct PanelTexture<'a> {
+    /// The images, one per material.
+    pub textures: &'a Textures,
+    /// Per triangle, the material whose image it shows ([`NO_IMAGE`]: the plain colour).
+    pub materials: &'a [u32],
+    /// Per triangle corner (three per triangle), its texture coordinates `(u, v)`.
+    pub uvs: &'a [[f32; 2]],
+}
+
+/// The material index of a triangle drawn without an image.
+pub const NO_IMAGE: u32 = u32::MAX;
+
+impl<'a> PanelTexture<'a> {
+    /// The image and corner coordinates of triangle `t`, when it shows one.
+    fn of(self, t: usize) -> Option<(&'a Image, [[f64; 2]; 3])> {
+        let material = *self.materials.get(t)?;
+        let image = self.textures.image(material as usize)?;
+        let uv = self.uvs.get(3 * t..3 * t + 3)?;
+        Some((image, [0, 1, 2].map(|k| uv[k].map(f64::from))))
+    }
 }
 
 /// Draws one mesh into a panel of `options.width × options.height` seen by `camera`.
@@ -94,7 +121,7 @@ pub(super) fn draw_panel(
     let vertex_normals =
         (options.shading == Shading::Smooth).then(|| view_vertex_normals(mesh, camera));
     let n = mesh.positions.len();
-    for t in mesh.triangles {
+    for (k, t) in mesh.triangles.iter().enumerate() {
         if t.iter().any(|&i| i as usize >= n) {
             continue;
         }
@@ -110,6 +137,11 @@ pub(super) fn draw_panel(
         let values = paint
             .values
             .map(|v| t.map(|i| v.get(i as usize).copied().unwrap_or(f64::NAN)));
+        // A value to colour by wins over the texture: the user asked for it.
+        let texture = paint
+            .texture
+            .filter(|_| values.is_none())
+            .and_then(|x| x.of(k));
         let shade_at = |b: [f64; 3]| {
             let normal = if vertex_normals.is_some() {
                 (b[0] * normals[0] + b[1] * normals[1] + b[2] * normals[2]).normalize_or_zero()
@@ -118,10 +150,17 @@ pub(super) fn draw_panel(
             };
             // Two-sided lighting: scans have holes, and back faces should not turn black.
             let shade = ambient + (1.0 - ambient) * normal.dot(light).abs();
-            let base = values.map_or(options.color, |v| {
-                value_color(b[0] * v[0] + b[1] * v[1] + b[2] * v[2], paint.range)
-            });
-            base.map(|c| (c as f64 * shade).round().clamp(0.0, 255.0) as u8)
+            let base = match (values, texture) {
+                (Some(v), _) => {
+                    value_color(b[0] * v[0] + b[1] * v[1] + b[2] * v[2], paint.range).map(f64::from)
+                }
+                (None, Some((image, uv))) => {
+                    let at = |c: usize| b[0] * uv[0][c] + b[1] * uv[1][c] + b[2] * uv[2][c];
+                    sample(image, at(0), at(1))
+                }
+                (None, None) => options.color.map(f64::from),
+            };
+            base.map(|c| (c * shade).round().clamp(0.0, 255.0) as u8)
         };
         let s = world.map(|p| camera.project(p, w, h));
         rasterise(&mut image, &mut depth, s, options.wireframe, shade_at);

@@ -2,7 +2,7 @@
 //! and a colour bar with its range under them when the panels carry values.
 
 use super::font::{draw_text, text_height, text_width};
-use super::raster::{Camera, Paint, draw_panel};
+use super::raster::{Camera, Paint, PanelTexture, draw_panel};
 use super::{Image, RenderOptions, Triangles};
 
 /// Colour of captions and colour-bar text.
@@ -18,6 +18,9 @@ pub struct Panel<'a> {
     pub label: &'a str,
     /// One value per vertex to colour the surface by (missing or non-finite values are grey).
     pub values: Option<&'a [f64]>,
+    /// The images and texture coordinates of a textured mesh (ignored where `values` colour
+    /// the surface).
+    pub texture: Option<PanelTexture<'a>>,
 }
 
 /// Draws the panels left to right with one shared camera, so equal sizes look equal. When
@@ -36,6 +39,7 @@ pub fn render_scene(panels: &[Panel<'_>], options: &RenderOptions) -> Image {
         let paint = Paint {
             values: panel.values,
             range,
+            texture: panel.texture,
         };
         let image = draw_panel(panel.mesh, &paint, &camera, options);
         let x = (k * layout.panel_width) as i64;
