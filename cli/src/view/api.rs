@@ -3,7 +3,8 @@
 
 use super::opening::Opening;
 use super::reply::Reply;
-use super::session::{EditorState, Session, ms_between, push_f32_bytes};
+use super::session::{Session, push_f32_bytes};
+use super::state::{EditorState, ms_between};
 use glam::DVec3;
 use meshpyr::pyramid::{LevelMove, MoveHandle};
 use serde::Deserialize;

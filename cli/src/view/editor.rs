@@ -7,7 +7,8 @@
 use super::api;
 use super::guard;
 use super::reply::Reply;
-use super::session::{EditorState, Session};
+use super::session::Session;
+use super::state::EditorState;
 use glam::DVec3;
 use meshpyr::pyramid::Pyramid;
 use std::sync::Arc;

@@ -33,6 +33,7 @@ mod opening;
 mod preview;
 mod reply;
 mod session;
+mod state;
 
 use http::{HttpRequest, Message};
 use meshpyr::pyramid::Pyramid;

@@ -20,7 +20,7 @@
 //! The exact full-resolution result is computed in the background and replaces the preview
 //! when it arrives; exports use it.
 
-use super::session::EditorState;
+use super::state::{EditorState, ms_between};
 use glam::{DMat3, DVec3};
 use meshpyr::pyramid::{LevelGains, LevelMove, MoveHandle, Pyramid, SynthesisCache};
 use rayon::prelude::*;
@@ -225,8 +225,8 @@ impl Preview {
             MoveHandle::apply(std::slice::from_ref(&m.handle), &mut out);
         }
         let timing = PreviewTiming {
-            synthesis: super::session::ms_between(start, synthesized),
-            combine: super::session::ms_between(synthesized, std::time::Instant::now()),
+            synthesis: ms_between(start, synthesized),
+            combine: ms_between(synthesized, std::time::Instant::now()),
         };
         (out, timing, complete)
     }

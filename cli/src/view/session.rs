@@ -4,21 +4,14 @@
 
 use super::background::{Background, StateKey};
 use super::preview::{self, Preview, PreviewTiming};
+use super::state::{EditorState, ms_between};
 use glam::DVec3;
 use meshpyr::io::{MeshFormat, WriteOptions};
 use meshpyr::mesh::PolygonMesh;
-use meshpyr::pyramid::{Filter, LevelGains, LevelMove, Pyramid, SynthesisCache};
+use meshpyr::pyramid::{Filter, LevelGains, Pyramid, SynthesisCache};
 use serde_json::json;
 use std::sync::Arc;
 use std::time::Instant;
-
-/// What the page shows: one gain per octave, the normal-only switch, the edits so far.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub(crate) struct EditorState {
-    pub gains: Vec<f64>,
-    pub normal_only: bool,
-    pub moves: Vec<LevelMove>,
-}
 
 /// Where the time of [`Session::positions_timed`] went, in milliseconds.
 #[derive(Clone, Copy, Debug, Default)]
@@ -373,11 +366,6 @@ pub(crate) fn push_u32_triples(out: &mut Vec<u8>, triangles: &[[u32; 3]]) {
     for i in triangles.iter().flatten() {
         out.extend_from_slice(&i.to_le_bytes());
     }
-}
-
-/// Milliseconds from `a` to `b`.
-pub(crate) fn ms_between(a: Instant, b: Instant) -> f64 {
-    b.duration_since(a).as_secs_f64() * 1e3
 }
 
 /// The input's file stem reduced to characters safe in a header and a file name.
