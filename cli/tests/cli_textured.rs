@@ -149,7 +149,10 @@ fn render_draws_the_texture_where_it_varies_and_no_texture_draws_the_clay() {
     assert!(surface.iter().all(|(_, q)| q[0] >= q[1] && q[1] >= q[2]));
     let coloured = surface
         .iter()
-        .filter(|(p, _)| p[1] > p[0] + 20 || p[2] > p[0] + 20)
+        .filter(|(p, _)| {
+            let [r, g, b] = [p[0], p[1], p[2]].map(i32::from);
+            g > r + 20 || b > r + 20
+        })
         .count();
     assert!(
         coloured * 5 > surface.len(),

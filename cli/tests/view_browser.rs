@@ -447,3 +447,49 @@ fn equalizer_latency_on_a_large_scan() {
     let _ = server.kill();
     let _ = server.wait();
 }
+
+/// Pixels of the canvas that are drawn (not the background) and, of those, how many show a
+/// colour the clay cannot: green or blue well above red (the clay is red over green over
+/// blue, and the grey-blue help text over the canvas is only a little bluer than red).
+fn texture_coloured(pixels: &[u8]) -> (usize, usize) {
+    let background = [18u8, 20, 26];
+    let drawn: Vec<&[u8]> = pixels
+        .chunks_exact(3)
+        .filter(|p| p.iter().zip(background).any(|(x, y)| x.abs_diff(y) > 30))
+        .collect();
+    let coloured = drawn
+        .iter()
+        .filter(|p| {
+            let [r, g, b] = [p[0], p[1], p[2]].map(i32::from);
+            g > r + 40 || b > r + 40
+        })
+        .count();
+    (drawn.len(), coloured)
+}
+
+#[test]
+fn the_editor_shows_the_texture_of_a_textured_scan_and_its_toggle_hides_it() {
+    let Some(driver) = driver_or_skip("the_editor_shows_the_texture_of_a_textured_scan") else {
+        return;
+    };
+    let server = serve("textured/anchor_tex.obj");
+    driver.navigate(&server.url);
+    driver.wait_for("window.meshpyr && window.meshpyr.ready && window.meshpyr.idle()");
+    let texture = driver.script("return window.meshpyr.texture;");
+    assert_eq!(texture["images"], 2, "{texture}");
+    let (drawn, coloured) = texture_coloured(&driver.canvas_pixels());
+    assert!(drawn > 2000, "only {drawn} pixels drawn");
+    assert!(
+        coloured * 5 > drawn,
+        "{coloured} of {drawn} drawn pixels show texture colours"
+    );
+    driver.script("document.getElementById('texture').click();");
+    // The toggle redraws at the next animation frame; two frames later it is on the canvas.
+    driver.async_script("requestAnimationFrame(() => requestAnimationFrame(() => done(true)));");
+    let (drawn, coloured) = texture_coloured(&driver.canvas_pixels());
+    assert!(drawn > 2000, "only {drawn} pixels drawn");
+    assert!(
+        coloured * 100 < drawn,
+        "{coloured} of {drawn} pixels coloured with the texture off"
+    );
+}

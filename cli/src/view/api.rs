@@ -81,6 +81,11 @@ pub(crate) fn dispatch(
     let result = match (method, path) {
         ("GET", "/api/info") => Ok(Reply::json(&session.info())),
         ("GET", "/api/faces") => Ok(Reply::binary(session.faces())),
+        ("GET", "/api/texcoords") => session
+            .texcoords()
+            .map(Reply::binary)
+            .ok_or_else(untextured),
+        ("GET", "/api/texture") => texture_image(session, param("image")),
         ("GET", "/api/level") => level(session, param("n")),
         ("GET", "/api/display") => session
             .display()
@@ -115,7 +120,7 @@ pub(crate) fn dispatch(
             .and_then(|state| export(session, state, param("format"))),
         (_, "/api/info" | "/api/faces" | "/api/level" | "/api/filter" | "/api/edit")
         | (_, "/api/export" | "/api/display" | "/api/preview" | "/api/status" | "/api/exact")
-        | (_, "/api/budget" | "/api/opening") => {
+        | (_, "/api/budget" | "/api/opening" | "/api/texcoords" | "/api/texture") => {
             Err(Reply::error(405, format!("{method} not allowed on {path}")))
         }
         _ => Err(Reply::error(404, format!("no endpoint {path}"))),
@@ -237,6 +242,25 @@ fn positions(session: &mut Session, state: EditorState) -> Result<Reply, Reply> 
                 "synthesis;dur={synthesis:.1}, reorder;dur={reorder:.1}, encode;dur={encode:.1}"
             ),
         ))
+}
+
+fn untextured() -> Reply {
+    Reply::error(
+        409,
+        "the scan has no texture (texture coordinates and an image)",
+    )
+}
+
+/// The bytes of image `image` of a textured scan (`/api/info`'s `texture.images` lists them),
+/// as its file holds them.
+fn texture_image(session: &Session, image: Option<&str>) -> Result<Reply, Reply> {
+    let texture = session.texture.as_ref().ok_or_else(untextured)?;
+    let n = texture.images.len();
+    let image = image
+        .and_then(|i| i.parse::<usize>().ok())
+        .and_then(|i| texture.images.get(i))
+        .ok_or_else(|| bad(format!("texture needs image=K with K in 0..{n}")))?;
+    Ok(Reply::bytes(200, image.media_type, image.bytes.clone()))
 }
 
 fn within_budget() -> Reply {

@@ -34,6 +34,7 @@ mod preview;
 mod reply;
 mod session;
 mod state;
+mod texture;
 
 use http::{HttpRequest, Message};
 use meshpyr::pyramid::Pyramid;

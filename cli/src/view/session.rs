@@ -5,6 +5,7 @@
 use super::background::{Background, StateKey};
 use super::preview::{self, Preview, PreviewTiming};
 use super::state::{EditorState, ms_between};
+use super::texture::ViewTexture;
 use glam::DVec3;
 use meshpyr::io::{MeshFormat, WriteOptions};
 use meshpyr::mesh::PolygonMesh;
@@ -50,6 +51,8 @@ pub(crate) struct Session {
     pub budget: usize,
     /// The level of detail, once made (only for scans over the budget).
     lod: Option<Lod>,
+    /// The images and materials of a textured scan (`None` for an untextured one).
+    pub texture: Option<ViewTexture>,
 }
 
 impl Session {
@@ -57,6 +60,7 @@ impl Session {
         let pyramid = pyramid.into();
         let octaves = pyramid.pyramid.levels_of_octaves();
         let cache = SynthesisCache::octaves(&pyramid.pyramid);
+        let texture = ViewTexture::of(&pyramid.input);
         let last = EditorState {
             gains: vec![1.0; octaves.len()],
             ..Default::default()
@@ -69,6 +73,7 @@ impl Session {
             last,
             budget: preview::DEFAULT_BUDGET,
             lod: None,
+            texture,
         }
     }
 
@@ -262,6 +267,7 @@ impl Session {
             "max_gain": super::limits::MAX_GAIN,
             "max_moves": super::limits::MAX_MOVES,
             "display": display,
+            "texture": self.texture.as_ref().map(ViewTexture::info),
         })
     }
 
@@ -277,6 +283,13 @@ impl Session {
             }
         }
         out
+    }
+
+    /// `/api/texcoords`: the drawing layout of a textured scan's texture coordinates
+    /// ([`ViewTexture::layout`]); `None` for an untextured one.
+    pub fn texcoords(&self) -> Option<Vec<u8>> {
+        let texture = self.texture.as_ref()?;
+        Some(texture.layout(&self.pyramid.input))
     }
 
     /// `/api/level`: vertex and triangle counts (u32), positions (f32 triples, PM order) and

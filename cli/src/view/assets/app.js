@@ -60,6 +60,8 @@ const M = window.meshpyr = {
   opening: null,      // while the scan opens: the server's stage, progress and picture
   firstPictureMs: null, // performance.now() when the first picture (of the opening) was drawn
   pictures: [],       // the opening's pictures drawn: {what, triangles, ms}
+  texture: null,      // a textured scan shown whole: {images: decoded count, groups} (null:
+                      // untextured, or over the budget, where the level has no coordinates)
 };
 
 // ---- camera ---------------------------------------------------------------------------------
@@ -131,17 +133,22 @@ const gl = $('canvas').getContext('webgl2', { antialias: !M.renderer.software, p
 const VERTEX = `#version 300 es
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
+layout(location = 2) in vec2 uv;
 uniform mat4 view, proj;
-out vec3 vPos; out vec3 vNormal;
+out vec3 vPos; out vec3 vNormal; out vec2 vUv;
 void main() {
   vec4 p = view * vec4(position, 1.0);
-  vPos = p.xyz; vNormal = mat3(view) * normal;
+  vPos = p.xyz; vNormal = mat3(view) * normal; vUv = uv;
   gl_Position = proj * p;
 }`;
 const SHADE = `#version 300 es
 precision highp float;
-in vec3 vPos; in vec3 vNormal;
+in vec3 vPos; in vec3 vNormal; in vec2 vUv;
 uniform bool flatShading;
+// A textured scan's image takes the clay's place; v runs upwards in texture coordinates and
+// downwards in the image's rows.
+uniform bool textured;
+uniform sampler2D image;
 out vec4 color;
 void main() {
   vec3 n = flatShading ? normalize(cross(dFdx(vPos), dFdy(vPos))) : normalize(vNormal);
@@ -150,7 +157,7 @@ void main() {
   vec3 key = normalize(vec3(0.4, 0.7, 0.6));
   float d = max(dot(n, key), 0.0) * 0.75 + max(dot(n, v), 0.0) * 0.25;
   float s = pow(max(dot(n, normalize(key + v)), 0.0), 40.0) * 0.25;
-  vec3 base = vec3(0.80, 0.76, 0.70);
+  vec3 base = textured ? texture(image, vec2(vUv.x, 1.0 - vUv.y)).rgb : vec3(0.80, 0.76, 0.70);
   color = vec4(base * (0.18 + 0.82 * d) + s, 1.0);
 }`;
 const LINE = `#version 300 es
@@ -201,11 +208,32 @@ class GpuMesh {
     this.indices = drawOrder(indices);
     this.normals = null;
     this.front = undefined;
+    this.split = null;
     gl.bindVertexArray(this.vao);
+    if (this.uv) gl.disableVertexAttribArray(2);
     gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.triangles);
     gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, this.indices, gl.STATIC_DRAW);
     gl.bindVertexArray(null);
     this.nTriangleIndices = indices.length;
+    this.edges = null;
+  }
+
+  // A textured scan: the vertices split by texture coordinates for drawing (`/api/texcoords`),
+  // while normals, culling and picking stay on the real vertices; the triangles are grouped by
+  // image, one draw each. After setTriangles, before setPositions.
+  setSplit(split) {
+    this.split = split;
+    if (!this.uv) this.uv = gl.createBuffer();
+    gl.bindVertexArray(this.vao);
+    gl.bindBuffer(gl.ARRAY_BUFFER, this.uv);
+    gl.bufferData(gl.ARRAY_BUFFER, split.uvs, gl.STATIC_DRAW);
+    gl.enableVertexAttribArray(2);
+    gl.vertexAttribPointer(2, 2, gl.FLOAT, false, 0, 0);
+    gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, this.triangles);
+    gl.bufferData(gl.ELEMENT_ARRAY_BUFFER, split.triangles, gl.STATIC_DRAW);
+    gl.bindVertexArray(null);
+    this.nTriangleIndices = split.triangles.length;
+    this.vertexCount = 0;
     this.edges = null;
   }
 
@@ -220,7 +248,8 @@ class GpuMesh {
       if (this.cullable) M.renderer.cullsBackFaces = this.front !== null;
     }
     const normalsDone = performance.now();
-    for (const [buf, data] of [[this.position, positions], [this.normal, this.normals]]) {
+    const [drawn, normals] = this.split ? this.splitCopies(positions) : [positions, this.normals];
+    for (const [buf, data] of [[this.position, drawn], [this.normal, normals]]) {
       gl.bindBuffer(gl.ARRAY_BUFFER, buf);
       if (grow) gl.bufferData(gl.ARRAY_BUFFER, data, gl.DYNAMIC_DRAW);
       else gl.bufferSubData(gl.ARRAY_BUFFER, 0, data);
@@ -229,9 +258,22 @@ class GpuMesh {
     return normalsDone;
   }
 
+  // The positions and normals of the split vertices: copies of their real vertices'.
+  splitCopies(positions) {
+    const of = this.split.vertexOf, n = of.length;
+    const p = this.split.positions || (this.split.positions = new Float32Array(3 * n));
+    const q = this.split.normals || (this.split.normals = new Float32Array(3 * n));
+    for (let i = 0; i < n; i++) {
+      const v = 3 * of[i];
+      p[3 * i] = positions[v]; p[3 * i + 1] = positions[v + 1]; p[3 * i + 2] = positions[v + 2];
+      q[3 * i] = this.normals[v]; q[3 * i + 1] = this.normals[v + 1]; q[3 * i + 2] = this.normals[v + 2];
+    }
+    return [p, q];
+  }
+
   edgeBuffer() {
     if (!this.edges) {
-      const t = this.indices;
+      const t = this.split ? this.split.triangles : this.indices;
       const lines = new Uint32Array(2 * t.length);
       for (let i = 0; i < t.length; i += 3) {
         lines.set([t[i], t[i + 1], t[i + 1], t[i + 2], t[i + 2], t[i]], 2 * i);
@@ -342,7 +384,19 @@ function draw() {
   gl.uniform1i(gl.getUniformLocation(shadeProgram, 'flatShading'), $('smooth').checked ? 0 : 1);
   gl.bindVertexArray(mesh.vao);
   gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, mesh.triangles);
-  gl.drawElements(gl.TRIANGLES, mesh.nTriangleIndices, gl.UNSIGNED_INT, 0);
+  const textured = gl.getUniformLocation(shadeProgram, 'textured');
+  if (mesh.split) {
+    const show = $('texture').checked;
+    for (const [image, first, count] of mesh.split.groups) {
+      const t = show ? mesh.split.textures[image] : undefined;
+      gl.uniform1i(textured, t ? 1 : 0);
+      if (t) gl.bindTexture(gl.TEXTURE_2D, t);
+      gl.drawElements(gl.TRIANGLES, 3 * count, gl.UNSIGNED_INT, 12 * first);
+    }
+  } else {
+    gl.uniform1i(textured, 0);
+    gl.drawElements(gl.TRIANGLES, mesh.nTriangleIndices, gl.UNSIGNED_INT, 0);
+  }
   if ($('wireframe').checked) {
     gl.useProgram(lineProgram);
     gl.uniformMatrix4fv(gl.getUniformLocation(lineProgram, 'view'), false, view);
@@ -773,7 +827,7 @@ async function download(format) {
 
 // ---- start ------------------------------------------------------------------------------------
 function installControls() {
-  for (const id of ['smooth', 'wireframe']) $(id).addEventListener('change', requestDraw);
+  for (const id of ['smooth', 'wireframe', 'texture']) $(id).addEventListener('change', requestDraw);
   $('reset-view').addEventListener('click', resetView);
   $('normal-only').addEventListener('change', (e) => { M.normalOnly = e.target.checked; requestResult(); });
   document.querySelectorAll('[data-preset]').forEach((b) =>
@@ -876,8 +930,49 @@ async function openScan() {
     $('display-label').textContent = `the whole scan: ${i.triangles.toLocaleString()} triangles`;
   }
   finest.setTriangles(M.faces);
+  M.texture = null;
+  $('texture-row').hidden = !(i.texture && !M.lod);
+  if (i.texture && !M.lod) await loadTexture(i.texture);
   M.showingResult = false;
   showFinest();
+}
+
+// A textured scan shown whole: its split vertices and grouped triangles, and its images as
+// WebGL textures (repeating, mipmapped). An image the browser cannot decode leaves its faces
+// plain.
+async function loadTexture(info) {
+  const bytes = await (await api('/api/texcoords')).arrayBuffer();
+  const [nd, nt, ng] = new Uint32Array(bytes, 0, 3);
+  let at = 12;
+  const take = (Type, n) => { const a = new Type(bytes, at, n).slice(); at += 4 * n; return a; };
+  const vertexOf = take(Uint32Array, nd);
+  const uvs = take(Float32Array, 2 * nd);
+  const triangles = take(Uint32Array, 3 * nt);
+  const flat = take(Uint32Array, 3 * ng);
+  const groups = [];
+  for (let g = 0; g < ng; g++) groups.push([flat[3 * g], flat[3 * g + 1], flat[3 * g + 2]]);
+  const textures = {};
+  let decoded = 0;
+  for (let k = 0; k < info.images.length; k++) {
+    try {
+      const blob = await (await api('/api/texture?image=' + k)).blob();
+      const bitmap = await createImageBitmap(blob);
+      const t = gl.createTexture();
+      gl.bindTexture(gl.TEXTURE_2D, t);
+      gl.texImage2D(gl.TEXTURE_2D, 0, gl.RGBA, gl.RGBA, gl.UNSIGNED_BYTE, bitmap);
+      gl.generateMipmap(gl.TEXTURE_2D);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MIN_FILTER, gl.LINEAR_MIPMAP_LINEAR);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_MAG_FILTER, gl.LINEAR);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_S, gl.REPEAT);
+      gl.texParameteri(gl.TEXTURE_2D, gl.TEXTURE_WRAP_T, gl.REPEAT);
+      textures[k] = t;
+      decoded += 1;
+    } catch (e) {
+      showError(`texture ${info.images[k]}: ${e.message || e}`);
+    }
+  }
+  finest.setSplit({ vertexOf, uvs, triangles, groups, textures });
+  M.texture = { images: decoded, groups: groups.length };
 }
 
 // A new display budget: the server makes the level of detail again and the page redraws.

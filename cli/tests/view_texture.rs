@@ -1,0 +1,163 @@
+//! A textured scan in `meshpyr view`'s API: the page gets the images as their files hold them
+//! and a drawing layout whose split vertices carry the input's texture coordinates, an
+//! untextured scan gets none of it, and exports after an edit keep the per-corner data and
+//! materials.
+
+mod view_support;
+
+use meshpyr::io::MeshFormat;
+use meshpyr::mesh::corners::{MATERIAL_ATTRIBUTE, TEXCOORD};
+use view_support::{data, octaves_of, serve};
+
+const OBJ: &str = "textured/anchor_tex.obj";
+
+fn u32s(bytes: &[u8]) -> impl Iterator<Item = u32> + '_ {
+    bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+}
+
+#[test]
+fn info_lists_the_images_and_the_texture_endpoint_serves_their_files() {
+    let server = serve(OBJ);
+    let info = server.api("GET", "/api/info", b"").json();
+    let texture = &info["texture"];
+    assert_eq!(
+        texture["images"],
+        serde_json::json!(["textures/right.png", "textures/left.png"])
+    );
+    assert_eq!(texture["materials"][0]["name"], "right");
+    assert_eq!(texture["materials"][1]["image"], 1);
+    for (k, name) in ["textures/right.png", "textures/left.png"]
+        .iter()
+        .enumerate()
+    {
+        let image = server.api("GET", &format!("/api/texture?image={k}"), b"");
+        assert_eq!(image.status, 200);
+        assert_eq!(image.header("Content-Type"), Some("image/png"));
+        let file = std::fs::read(data("textured").join(name)).unwrap();
+        assert_eq!(image.body, file);
+    }
+    for bad in [
+        "/api/texture?image=2",
+        "/api/texture",
+        "/api/texture?image=-1",
+    ] {
+        assert_eq!(server.api("GET", bad, b"").status, 400, "{bad}");
+    }
+}
+
+#[test]
+fn the_layout_splits_vertices_by_texture_coordinates_for_drawing_only() {
+    let server = serve(OBJ);
+    let input = meshpyr::read_mesh(data(OBJ)).unwrap();
+    let uv = input.corner_attribute(TEXCOORD).unwrap();
+    let bytes = server.api("GET", "/api/texcoords", b"").body;
+    let head: Vec<u32> = u32s(&bytes[..12]).collect();
+    let (nd, nt, ng) = (head[0] as usize, head[1] as usize, head[2] as usize);
+    let mut at = 12;
+    let mut take = |n: usize| {
+        let part = &bytes[at..at + 4 * n];
+        at += 4 * n;
+        part
+    };
+    let vertex_of: Vec<u32> = u32s(take(nd)).collect();
+    let uvs: Vec<f32> = take(2 * nd)
+        .chunks_exact(4)
+        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    let triangles: Vec<u32> = u32s(take(3 * nt)).collect();
+    let groups: Vec<u32> = u32s(take(3 * ng)).collect();
+    assert_eq!(at, bytes.len());
+    assert_eq!(nt, input.n_triangles());
+    // As many drawn vertices as distinct (vertex, coordinates) pairs: more than the vertices
+    // (seams), no more than the corners.
+    assert!(
+        nd > input.n_vertices() && nd <= input.face_indices.len(),
+        "{nd}"
+    );
+    // Every corner of the input appears, at its vertex, with its coordinates.
+    let mut drawn: Vec<(u32, [u32; 2])> = triangles
+        .iter()
+        .map(|&d| {
+            let d = d as usize;
+            (
+                vertex_of[d],
+                [uvs[2 * d].to_bits(), uvs[2 * d + 1].to_bits()],
+            )
+        })
+        .collect();
+    let mut corners: Vec<(u32, [u32; 2])> = (0..input.face_indices.len())
+        .map(|c| {
+            let value = uv.value(c).unwrap();
+            (
+                input.face_indices[c],
+                [(value[0] as f32).to_bits(), (value[1] as f32).to_bits()],
+            )
+        })
+        .collect();
+    drawn.sort_unstable();
+    drawn.dedup();
+    corners.sort_unstable();
+    corners.dedup();
+    assert_eq!(drawn, corners);
+    // Two materials, each with its image: two groups covering every triangle.
+    assert_eq!(ng, 2);
+    assert_eq!((groups[0], groups[1]), (0, 0));
+    assert_eq!((groups[3], groups[4]), (1, groups[2]));
+    assert_eq!(groups[2] + groups[5], nt as u32);
+}
+
+#[test]
+fn an_untextured_scan_has_no_texture_and_no_layout() {
+    let server = serve("mc/mc_bunny_vox40.ply");
+    let info = server.api("GET", "/api/info", b"").json();
+    assert!(info["texture"].is_null());
+    for path in ["/api/texcoords", "/api/texture?image=0"] {
+        assert_eq!(server.api("GET", path, b"").status, 409, "{path}");
+    }
+}
+
+#[test]
+fn an_export_after_an_edit_keeps_the_texture_coordinates_and_materials() {
+    let server = serve(OBJ);
+    let info = server.api("GET", "/api/info", b"").json();
+    let gains = vec![1.0; octaves_of(&info).len()];
+    let (min, max) = (&info["bbox"]["min"], &info["bbox"]["max"]);
+    let centre: Vec<f64> = (0..3)
+        .map(|k| 0.5 * (min[k].as_f64().unwrap() + max[k].as_f64().unwrap()))
+        .collect();
+    let diagonal = info["diagonal"].as_f64().unwrap();
+    let state = serde_json::json!({"gains": gains, "moves": [{
+        "level": info["levels"]["max"], "center": centre,
+        "displacement": [0.0, 0.05 * diagonal, 0.0], "radius": 0.3 * diagonal}]});
+    let body = state.to_string();
+    let edited = server.api("POST", "/api/export?format=obj", body.as_bytes());
+    assert_eq!(edited.status, 200);
+    let exported = meshpyr::io::read_mesh_bytes(&edited.body, MeshFormat::Obj).unwrap();
+    let input = meshpyr::read_mesh(data(OBJ)).unwrap();
+    let values = |m: &meshpyr::PolygonMesh| -> Vec<Option<Vec<f32>>> {
+        let uv = m.corner_attribute(TEXCOORD).unwrap();
+        (0..m.face_indices.len())
+            .map(|c| uv.value(c).map(|v| v.iter().map(|&x| x as f32).collect()))
+            .collect()
+    };
+    assert!(
+        values(&exported) == values(&input),
+        "the corners' vt differ"
+    );
+    let names = |m: &meshpyr::PolygonMesh| -> Vec<String> {
+        m.materials.list.iter().map(|x| x.name.clone()).collect()
+    };
+    assert_eq!(names(&exported), names(&input));
+    assert_eq!(exported.materials.libraries, input.materials.libraries);
+    assert!(
+        exported.face_attribute(MATERIAL_ATTRIBUTE) == input.face_attribute(MATERIAL_ATTRIBUTE),
+        "the faces' usemtl differ"
+    );
+    assert_eq!(exported.face_indices, input.face_indices);
+    assert_ne!(
+        exported.positions, input.positions,
+        "the edit moved vertices"
+    );
+}
