@@ -84,6 +84,9 @@ fn print_texture(t: &meshpyr::mesh::TextureInfo) -> anyhow::Result<()> {
             Count(*valued, "corner", "corners")
         );
     }
+    if t.vertex_texcoords {
+        outln!("  texture coordinates: per vertex (u v), no seams");
+    }
     if t.corner_attributes.iter().any(|a| a.0 == "texcoord") {
         outln!(
             "  texture seams: {}, {}",

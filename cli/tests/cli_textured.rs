@@ -205,6 +205,12 @@ fn a_checker_on_a_square_shows_its_colours_at_their_quarters() {
     writer.write_image_data(&rgb).unwrap();
     writer.finish().unwrap();
     std::fs::write(dir.with_file_name("checker.png"), &png_bytes).unwrap();
+    let info = meshpyr(&["info", &obj]);
+    let said = String::from_utf8_lossy(&info.stdout).into_owned();
+    assert!(
+        said.contains("texture coordinates: per vertex") && said.contains("checker.png: found"),
+        "{said}"
+    );
     let out = scratch_arg("cli_textured_checker", "square.png");
     render(&obj, &out, &[]);
     let (pixels, width) = picture(&out);
@@ -226,6 +232,9 @@ fn a_checker_on_a_square_shows_its_colours_at_their_quarters() {
         err.contains("image checker.png") && err.contains("warning"),
         "{err}"
     );
+    let info = meshpyr(&["info", &obj]);
+    let said = String::from_utf8_lossy(&info.stdout).into_owned();
+    assert!(said.contains("file checker.png: missing"), "{said}");
     let plain = scratch_arg("cli_textured_checker", "plain.png");
     render(&obj, &plain, &["--no-texture"]);
     assert_eq!(

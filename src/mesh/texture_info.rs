@@ -14,6 +14,9 @@ use super::polygon::PolygonMesh;
 pub struct TextureInfo {
     /// Per-corner attributes: name, pool rows and corners with a value.
     pub corner_attributes: Vec<(String, usize, usize)>,
+    /// True when the texture coordinates are per vertex (the vertex attributes `u`, `v`, as an
+    /// OBJ file's `vt` that follow its `v` one to one read): no seams then.
+    pub vertex_texcoords: bool,
     /// Polygon edges whose two sides have different texture coordinates at an end.
     pub seam_edges: usize,
     /// Vertices whose corners have more than one texture coordinate.
@@ -54,7 +57,11 @@ impl TextureInfo {
                 files.push((name.clone(), found));
             }
         }
+        let vertex_texcoords = mesh.corner_attribute(TEXCOORD).is_none()
+            && mesh.vertex_attribute("u").is_some()
+            && mesh.vertex_attribute("v").is_some();
         Some(TextureInfo {
+            vertex_texcoords,
             corner_attributes: mesh
                 .corner_attributes
                 .iter()
