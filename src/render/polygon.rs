@@ -68,7 +68,7 @@ pub fn render_textured_meshes(
     let plain: Vec<(&str, &PolygonMesh)> = meshes.iter().map(|&(l, m, _)| (l, m)).collect();
     let triangles: Vec<Vec<[u32; 3]>> = plain.iter().map(|(_, m)| fan_triangles(m)).collect();
     let values = attribute_values(&plain, options.color_by.as_deref())?;
-    let corners: Vec<Option<(Vec<u32>, Vec<[f32; 2]>)>> = meshes
+    let corners: Vec<Option<FanTexture>> = meshes
         .iter()
         .map(|&(_, m, t)| t.filter(|t| !t.is_empty()).and_then(|_| fan_texture(m)))
         .collect();
@@ -140,10 +140,13 @@ fn unknown_attribute(meshes: &[(&str, &PolygonMesh)], name: &str) -> RenderError
     }
 }
 
+/// Per fan triangle its material, and per triangle corner its texture coordinates.
+type FanTexture = (Vec<u32>, Vec<[f32; 2]>);
+
 /// Per fan triangle (as [`fan_triangles`] orders them) its material ([`NO_IMAGE`] when the
 /// face has none or a corner lacks texture coordinates) and its corners' texture coordinates;
 /// `None` when the mesh has no texture coordinates or no materials.
-fn fan_texture(mesh: &PolygonMesh) -> Option<(Vec<u32>, Vec<[f32; 2]>)> {
+fn fan_texture(mesh: &PolygonMesh) -> Option<FanTexture> {
     let uv = corner_texcoords(mesh)?;
     let material = mesh.face_attribute(MATERIAL_ATTRIBUTE)?;
     let mut materials = Vec::with_capacity(mesh.n_triangles());

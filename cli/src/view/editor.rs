@@ -112,10 +112,12 @@ impl Editor {
     /// [`Editor::check_state`]) with the editor's view (orbit, zoom, shading, wireframe) and
     /// needs no server: the triangles and f32 positions are inlined. A scan over the display
     /// budget is saved as the level of detail the editor shows, with the exact result's
-    /// positions at its vertices.
+    /// positions at its vertices; a textured scan is saved without its images.
     pub fn snapshot_html(&mut self, state: &[u8]) -> Result<String, String> {
         let state = self.parse(state)?;
         let mut info = self.session.info();
+        // A saved page carries no images: it draws the surface plain.
+        info["texture"] = serde_json::Value::Null;
         let (faces, positions) = match self.session.display() {
             None => {
                 let positions = self.session.positions(state)?;

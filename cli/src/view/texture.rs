@@ -41,9 +41,7 @@ impl ViewTexture {
     /// The texture of `mesh`: `None` unless it has texture coordinates, a material per face
     /// and at least one image file that is there and is a PNG or JPEG.
     pub fn of(mesh: &PolygonMesh) -> Option<ViewTexture> {
-        if texcoord_of(mesh).is_none() {
-            return None;
-        }
+        texcoord_of(mesh).map(|_| ())?;
         mesh.face_attribute(MATERIAL_ATTRIBUTE)?;
         let folder = mesh.materials.folder.as_deref()?;
         let mut images: Vec<ViewImage> = Vec::new();

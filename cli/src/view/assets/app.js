@@ -932,7 +932,8 @@ async function openScan() {
   finest.setTriangles(M.faces);
   M.texture = null;
   $('texture-row').hidden = !(i.texture && !M.lod);
-  if (i.texture && !M.lod) await loadTexture(i.texture);
+  // Without its texture the scan is still the scan: a failure here leaves it plain.
+  if (i.texture && !M.lod) await loadTexture(i.texture).catch(showError);
   M.showingResult = false;
   showFinest();
 }
