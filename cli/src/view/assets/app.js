@@ -130,25 +130,24 @@ M.renderer = probeRenderer();
 // Each result is drawn and waited for in one task, so the drawing buffer need not be kept.
 const gl = $('canvas').getContext('webgl2', { antialias: !M.renderer.software, preserveDrawingBuffer: false });
 
-const VERTEX = `#version 300 es
+// The shaders of the clay and, with `uv`, of a textured scan's image in the clay's place (v runs
+// upwards in texture coordinates and downwards in the image's rows). Two programs, so that an
+// untextured scan draws with exactly the clay's shader: a software rasteriser pays for a
+// texture fetch behind a branch even when the branch is not taken.
+const vertexSource = (uv) => `#version 300 es
 layout(location = 0) in vec3 position;
-layout(location = 1) in vec3 normal;
-layout(location = 2) in vec2 uv;
+layout(location = 1) in vec3 normal;${uv ? '\nlayout(location = 2) in vec2 uv;' : ''}
 uniform mat4 view, proj;
-out vec3 vPos; out vec3 vNormal; out vec2 vUv;
+out vec3 vPos; out vec3 vNormal;${uv ? ' out vec2 vUv;' : ''}
 void main() {
   vec4 p = view * vec4(position, 1.0);
-  vPos = p.xyz; vNormal = mat3(view) * normal; vUv = uv;
+  vPos = p.xyz; vNormal = mat3(view) * normal;${uv ? ' vUv = uv;' : ''}
   gl_Position = proj * p;
 }`;
-const SHADE = `#version 300 es
+const shadeSource = (uv) => `#version 300 es
 precision highp float;
-in vec3 vPos; in vec3 vNormal; in vec2 vUv;
+in vec3 vPos; in vec3 vNormal;${uv ? ' in vec2 vUv;\nuniform sampler2D image;' : ''}
 uniform bool flatShading;
-// A textured scan's image takes the clay's place; v runs upwards in texture coordinates and
-// downwards in the image's rows.
-uniform bool textured;
-uniform sampler2D image;
 out vec4 color;
 void main() {
   vec3 n = flatShading ? normalize(cross(dFdx(vPos), dFdy(vPos))) : normalize(vNormal);
@@ -157,9 +156,11 @@ void main() {
   vec3 key = normalize(vec3(0.4, 0.7, 0.6));
   float d = max(dot(n, key), 0.0) * 0.75 + max(dot(n, v), 0.0) * 0.25;
   float s = pow(max(dot(n, normalize(key + v)), 0.0), 40.0) * 0.25;
-  vec3 base = textured ? texture(image, vec2(vUv.x, 1.0 - vUv.y)).rgb : vec3(0.80, 0.76, 0.70);
+  vec3 base = ${uv ? 'texture(image, vec2(vUv.x, 1.0 - vUv.y)).rgb' : 'vec3(0.80, 0.76, 0.70)'};
   color = vec4(base * (0.18 + 0.82 * d) + s, 1.0);
 }`;
+const VERTEX = vertexSource(false);
+const SHADE = shadeSource(false);
 const LINE = `#version 300 es
 precision highp float;
 in vec3 vPos; in vec3 vNormal;
@@ -354,7 +355,7 @@ function drawOrder(t) {
   return out;
 }
 
-let shadeProgram, lineProgram, finest, level, queuedFrame = null;
+let shadeProgram, textureProgram, lineProgram, finest, level, queuedFrame = null;
 
 function requestDraw() {
   if (queuedFrame === null) queuedFrame = requestAnimationFrame(draw);
@@ -378,23 +379,27 @@ function draw() {
   if (mesh.front) { gl.enable(gl.CULL_FACE); gl.frontFace(mesh.front); } else gl.disable(gl.CULL_FACE);
   gl.enable(gl.POLYGON_OFFSET_FILL);
   gl.polygonOffset(1, 1);
-  gl.useProgram(shadeProgram);
-  gl.uniformMatrix4fv(gl.getUniformLocation(shadeProgram, 'view'), false, view);
-  gl.uniformMatrix4fv(gl.getUniformLocation(shadeProgram, 'proj'), false, proj);
-  gl.uniform1i(gl.getUniformLocation(shadeProgram, 'flatShading'), $('smooth').checked ? 0 : 1);
+  const flat = $('smooth').checked ? 0 : 1;
+  const use = (program) => {
+    gl.useProgram(program);
+    gl.uniformMatrix4fv(gl.getUniformLocation(program, 'view'), false, view);
+    gl.uniformMatrix4fv(gl.getUniformLocation(program, 'proj'), false, proj);
+    gl.uniform1i(gl.getUniformLocation(program, 'flatShading'), flat);
+  };
+  use(shadeProgram);
   gl.bindVertexArray(mesh.vao);
   gl.bindBuffer(gl.ELEMENT_ARRAY_BUFFER, mesh.triangles);
-  const textured = gl.getUniformLocation(shadeProgram, 'textured');
   if (mesh.split) {
     const show = $('texture').checked;
+    let current = shadeProgram;
     for (const [image, first, count] of mesh.split.groups) {
       const t = show ? mesh.split.textures[image] : undefined;
-      gl.uniform1i(textured, t ? 1 : 0);
+      const program = t ? textureProgram : shadeProgram;
+      if (program !== current) { use(program); current = program; }
       if (t) gl.bindTexture(gl.TEXTURE_2D, t);
       gl.drawElements(gl.TRIANGLES, 3 * count, gl.UNSIGNED_INT, 12 * first);
     }
   } else {
-    gl.uniform1i(textured, 0);
     gl.drawElements(gl.TRIANGLES, mesh.nTriangleIndices, gl.UNSIGNED_INT, 0);
   }
   if ($('wireframe').checked) {
@@ -972,6 +977,7 @@ async function loadTexture(info) {
       showError(`texture ${info.images[k]}: ${e.message || e}`);
     }
   }
+  if (!textureProgram) textureProgram = compile(vertexSource(true), shadeSource(true));
   finest.setSplit({ vertexOf, uvs, triangles, groups, textures });
   M.texture = { images: decoded, groups: groups.length };
 }
