@@ -102,7 +102,7 @@
 //! | [`subdiv`] | subdivision of coarse meshes |
 //! | [`metrics`] | distances (summaries and per-vertex fields) and curvature |
 //! | [`numerics`] | the finite elements and solvers that subdivision and smoothing share |
-//! | [`render`] | PNG pictures of meshes, coloured by a per-vertex value if asked |
+//! | [`render`] | PNG pictures of meshes, coloured by a per-vertex value if asked or by their texture |
 //! | [`progress`] | progress reporting |
 //! | [`wording`] | counts with their nouns, as messages show them |
 //!
