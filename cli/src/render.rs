@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
                   file name. --color-by colours the surface by a per-vertex PLY property (e.g. \
                   `distance` from `compare --per-vertex`) through viridis, with a colour bar \
                   showing the range (default: the values' minimum and maximum over all inputs). A \
-                  textured mesh (OBJ map_Kd, PLY TextureFile; PNG images) shows its texture, \
+                  textured mesh (OBJ map_Kd, PLY TextureFile; PNG or JPEG images) shows its texture, \
                   shaded like the surface; a missing or unreadable image is a warning and its \
                   faces are drawn plain."
 )]

@@ -3,7 +3,7 @@
 //!
 //! Steps: [`Textures::load`] reads each material's diffuse image (OBJ `map_Kd`, PLY
 //! `TextureFile`) once per file, relative to the folder the mesh was read from, and decodes it
-//! ([`decode_image`]: PNG in any bit depth and colour type, reduced to 8-bit RGB). The
+//! ([`decode_image`]: PNG in any bit depth and colour type, or JPEG, reduced to 8-bit RGB). The
 //! rasteriser then interpolates the per-corner texture coordinates of each triangle at the pixel
 //! and samples the image there ([`sample`]): bilinear between the four nearest texel centres,
 //! the coordinates wrapping (repeat), as OBJ and GPU samplers read them. `v` runs upwards, so
@@ -84,17 +84,15 @@ impl Textures {
     }
 }
 
-/// Decodes a PNG file of any bit depth and colour type to 8-bit RGB (grey is spread to the
-/// three channels, alpha dropped); a one-line error otherwise (JPEG and other formats among
-/// them).
+/// Decodes a PNG file of any bit depth and colour type, or a baseline or progressive JPEG
+/// file, to 8-bit RGB (grey is spread to the three channels, alpha dropped); a one-line error
+/// otherwise.
 pub fn decode_image(bytes: &[u8]) -> Result<Image, String> {
+    if bytes.starts_with(&[0xff, 0xd8, 0xff]) {
+        return decode_jpeg(bytes);
+    }
     if !bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
-        let kind = if bytes.starts_with(&[0xff, 0xd8, 0xff]) {
-            "a JPEG file; render decodes PNG only"
-        } else {
-            "not a PNG file"
-        };
-        return Err(kind.into());
+        return Err("neither a PNG nor a JPEG file".into());
     }
     let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
     decoder.set_transformations(png::Transformations::normalize_to_color8());
@@ -127,6 +125,28 @@ pub fn decode_image(bytes: &[u8]) -> Result<Image, String> {
         return Err("the image has no pixels".into());
     }
     Ok(Image { width, height, rgb })
+}
+
+/// A JPEG file decoded to 8-bit RGB, refused past [`MAX_SIDE`] before its pixels are
+/// allocated.
+fn decode_jpeg(bytes: &[u8]) -> Result<Image, String> {
+    let mut reader =
+        image::ImageReader::with_format(std::io::Cursor::new(bytes), image::ImageFormat::Jpeg);
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(MAX_SIDE);
+    limits.max_image_height = Some(MAX_SIDE);
+    limits.max_alloc = Some(8 * u64::from(MAX_SIDE) * u64::from(MAX_SIDE));
+    reader.limits(limits);
+    let rgb = reader.decode().map_err(|e| e.to_string())?.into_rgb8();
+    let (width, height) = (rgb.width() as usize, rgb.height() as usize);
+    if width == 0 || height == 0 {
+        return Err("the image has no pixels".into());
+    }
+    Ok(Image {
+        width,
+        height,
+        rgb: rgb.into_raw(),
+    })
 }
 
 /// The colour of `image` at texture coordinates `(u, v)` (`v` upwards), bilinear between the
@@ -195,13 +215,48 @@ mod tests {
         let image = four();
         let back = decode_image(&image.encode_png().unwrap()).unwrap();
         assert_eq!(back, image);
-        assert!(
-            decode_image(b"\xff\xd8\xff\xe0 jfif")
-                .unwrap_err()
-                .contains("JPEG")
-        );
-        assert!(decode_image(b"hello").is_err());
+        assert!(decode_image(b"\xff\xd8\xff\xe0 jfif").is_err());
+        assert!(decode_image(b"hello").unwrap_err().contains("neither"));
         let png = image.encode_png().unwrap();
         assert!(decode_image(&png[..png.len() / 2]).is_err());
+    }
+}
+
+#[cfg(test)]
+mod jpeg_tests {
+    use super::*;
+
+    #[test]
+    fn jpeg_files_decode_to_about_their_colours() {
+        // Two 8×8 blocks side by side, red and blue: each a JPEG block, so the lossy code keeps
+        // its colour to within a few levels.
+        let mut rgb = Vec::new();
+        for _y in 0..8 {
+            for x in 0..16 {
+                rgb.extend_from_slice(if x < 8 {
+                    &[220, 30, 30]
+                } else {
+                    &[30, 30, 220]
+                });
+            }
+        }
+        let mut bytes = Vec::new();
+        image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 95)
+            .encode(&rgb, 16, 8, image::ExtendedColorType::Rgb8)
+            .unwrap();
+        let image = decode_image(&bytes).unwrap();
+        assert_eq!((image.width, image.height), (16, 8));
+        let near = |a: [u8; 3], b: [u8; 3]| a.iter().zip(b).all(|(x, y)| x.abs_diff(y) <= 12);
+        assert!(
+            near(image.pixel(3, 4).unwrap(), [220, 30, 30]),
+            "{:?}",
+            image.pixel(3, 4)
+        );
+        assert!(
+            near(image.pixel(12, 4).unwrap(), [30, 30, 220]),
+            "{:?}",
+            image.pixel(12, 4)
+        );
+        assert!(decode_image(&bytes[..bytes.len() / 3]).is_err());
     }
 }
