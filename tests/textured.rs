@@ -390,10 +390,17 @@ fn build_then_extract_restores_the_textured_input_exactly_in_a_2_2_file() {
     );
 }
 
+/// The faces along an edge, each with its texture coordinates at the edge's lower and higher
+/// vertex.
+type EdgeSides = Vec<(usize, Vec<u64>, Vec<u64>)>;
+
+/// The charts with a corner of each (vertex, texture coordinates, material).
+type ChartsAt = HashMap<(u32, Vec<u64>, i64), BTreeSet<usize>>;
+
 /// The texture charts of `m`: faces joined across every edge whose two faces have the same
 /// material and the same texture coordinates at both ends. Returns, for every (vertex,
 /// texture coordinates, material) a corner has, the charts with such a corner.
-fn charts(m: &PolygonMesh) -> HashMap<(u32, Vec<u64>, i64), BTreeSet<usize>> {
+fn charts(m: &PolygonMesh) -> ChartsAt {
     let uv = |c: usize| {
         let a = m.corner_attribute("texcoord").unwrap();
         a.value(c)
@@ -412,7 +419,7 @@ fn charts(m: &PolygonMesh) -> HashMap<(u32, Vec<u64>, i64), BTreeSet<usize>> {
         p[x] = r;
         r
     }
-    let mut edges: HashMap<(u32, u32), Vec<(usize, Vec<u64>, Vec<u64>)>> = HashMap::new();
+    let mut edges: HashMap<(u32, u32), EdgeSides> = HashMap::new();
     for f in 0..m.n_faces() {
         let (s, e) = (m.face_starts[f] as usize, m.face_starts[f + 1] as usize);
         for c in s..e {
@@ -430,7 +437,7 @@ fn charts(m: &PolygonMesh) -> HashMap<(u32, Vec<u64>, i64), BTreeSet<usize>> {
             edges.entry(key).or_default().push((f, ends.0, ends.1));
         }
     }
-    let mut out: HashMap<(u32, Vec<u64>, i64), BTreeSet<usize>> = HashMap::new();
+    let mut out: ChartsAt = HashMap::new();
     for f in 0..m.n_faces() {
         let chart = find(&mut parent, f);
         for c in m.face_starts[f] as usize..m.face_starts[f + 1] as usize {

@@ -101,7 +101,9 @@ fn converting_to_off_says_what_is_not_carried_and_simplifying_carries_it() {
     let faces: Vec<&str> = text.lines().filter(|l| l.starts_with("f ")).collect();
     assert!(faces.len() < 600, "{} faces", faces.len());
     assert!(
-        faces.iter().all(|f| f.split(' ').skip(1).all(|c| c.split('/').count() == 3)),
+        faces
+            .iter()
+            .all(|f| f.split(' ').skip(1).all(|c| c.split('/').count() == 3)),
         "every corner has v/vt/vn"
     );
     fails_with(

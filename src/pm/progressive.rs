@@ -48,7 +48,7 @@ pub struct PmOptions {
     /// Weight of texture-coordinate error against geometric error for an input with texture
     /// coordinates: a texture-coordinate error of `1 / uv_weight` costs as much as a distance
     /// of the bounding box's largest side (meshoptimizer's attribute weights use the same
-    /// units). Default 1; 0 keeps the seams but ignores how the texture shifts
+    /// units). Default 0.25; 0 keeps the seams but ignores how the texture shifts
     /// (`docs/seams.md`).
     pub uv_weight: f64,
 }
@@ -63,7 +63,7 @@ impl Default for PmOptions {
             min_quality: 0.05,
             max_valence: 32,
             boundary_weight: 10.0,
-            uv_weight: 1.0,
+            uv_weight: 0.25,
         }
     }
 }

@@ -76,7 +76,7 @@ impl Seams {
     ) -> Option<Seams> {
         let material = input.face_attribute(MATERIAL_ATTRIBUTE);
         let materials_differ = material.is_some_and(|m| {
-            let first = (m.data.len() > 0).then(|| m.data.get_f64(0).to_bits());
+            let first = (!m.data.is_empty()).then(|| m.data.get_f64(0).to_bits());
             (0..m.data.len()).any(|f| Some(m.data.get_f64(f).to_bits()) != first)
         });
         if input.corner_attributes.is_empty() && !materials_differ {
