@@ -13,6 +13,7 @@ use meshpyr::io::{
 };
 use meshpyr::mesh::{AttributeData, PolygonMesh};
 use meshpyr::{Filter, MoveHandle, Pyramid};
+use std::collections::{BTreeSet, HashMap};
 
 const OBJ: &str = "textured/anchor_tex.obj";
 const PLY: &str = "textured/anchor_tex.ply";
@@ -387,4 +388,167 @@ fn build_then_extract_restores_the_textured_input_exactly_in_a_2_2_file() {
         1,
         "untextured files stay 2.1"
     );
+}
+
+/// The faces along an edge, each with its texture coordinates at the edge's lower and higher
+/// vertex.
+type EdgeSides = Vec<(usize, Vec<u64>, Vec<u64>)>;
+
+/// The charts with a corner of each (vertex, texture coordinates, material).
+type ChartsAt = HashMap<(u32, Vec<u64>, i64), BTreeSet<usize>>;
+
+/// The texture charts of `m`: faces joined across every edge whose two faces have the same
+/// material and the same texture coordinates at both ends. Returns, for every (vertex,
+/// texture coordinates, material) a corner has, the charts with such a corner.
+fn charts(m: &PolygonMesh) -> ChartsAt {
+    let uv = |c: usize| {
+        let a = m.corner_attribute("texcoord").unwrap();
+        a.value(c)
+            .unwrap()
+            .iter()
+            .map(|x| x.to_bits())
+            .collect::<Vec<_>>()
+    };
+    let material = |f: usize| m.face_attribute("texnumber").unwrap().data.get_f64(f) as i64;
+    let mut parent: Vec<usize> = (0..m.n_faces()).collect();
+    fn find(p: &mut [usize], x: usize) -> usize {
+        let mut r = x;
+        while p[r] != r {
+            r = p[r];
+        }
+        p[x] = r;
+        r
+    }
+    let mut edges: HashMap<(u32, u32), EdgeSides> = HashMap::new();
+    for f in 0..m.n_faces() {
+        let (s, e) = (m.face_starts[f] as usize, m.face_starts[f + 1] as usize);
+        for c in s..e {
+            let d = if c + 1 == e { s } else { c + 1 };
+            let (a, b) = (m.face_indices[c], m.face_indices[d]);
+            let (ua, ub) = (uv(c), uv(d));
+            let key = (a.min(b), a.max(b));
+            let ends = if a < b { (ua, ub) } else { (ub, ua) };
+            for (g, ga, gb) in edges.get(&key).into_iter().flatten() {
+                if (ga, gb) == (&ends.0, &ends.1) && material(*g) == material(f) {
+                    let (x, y) = (find(&mut parent, *g), find(&mut parent, f));
+                    parent[x] = y;
+                }
+            }
+            edges.entry(key).or_default().push((f, ends.0, ends.1));
+        }
+    }
+    let mut out: ChartsAt = HashMap::new();
+    for f in 0..m.n_faces() {
+        let chart = find(&mut parent, f);
+        for c in m.face_starts[f] as usize..m.face_starts[f + 1] as usize {
+            out.entry((m.face_indices[c], uv(c), material(f)))
+                .or_default()
+                .insert(chart);
+        }
+    }
+    out
+}
+
+/// Every triangle of `out` (a simplification of `input` with `source_rows`) lies in one
+/// texture chart of `input` with its material: each corner's texture coordinates are some
+/// input corner's at that vertex in a face of that material, and the three corners share a
+/// chart. Returns the number of seam corners checked (corners whose vertex is in two charts).
+fn assert_no_texture_across_seams(
+    input: &PolygonMesh,
+    out: &PolygonMesh,
+    source_rows: &[u32],
+    what: &str,
+) -> usize {
+    let charts = charts(input);
+    let tc = out.corner_attribute("texcoord").unwrap();
+    let material = out.face_attribute("texnumber").unwrap();
+    let mut seam_corners = 0;
+    for f in 0..out.n_faces() {
+        let m = material.data.get_f64(f) as i64;
+        let mut common: Option<BTreeSet<usize>> = None;
+        for c in out.face_starts[f] as usize..out.face_starts[f + 1] as usize {
+            let v = source_rows[out.face_indices[c] as usize];
+            let uv: Vec<u64> = tc.value(c).unwrap().iter().map(|x| x.to_bits()).collect();
+            let Some(here) = charts.get(&(v, uv, m)) else {
+                panic!("{what}: face {f} corner {c}: not a value its vertex had");
+            };
+            let at_vertex = charts.keys().filter(|k| k.0 == v).count();
+            seam_corners += usize::from(at_vertex > 1);
+            common = Some(match common {
+                None => here.clone(),
+                Some(s) => s.intersection(here).copied().collect(),
+            });
+        }
+        assert!(
+            !common.unwrap().is_empty(),
+            "{what}: face {f} stretches the texture across a seam"
+        );
+    }
+    seam_corners
+}
+
+#[test]
+fn simplify_keeps_every_triangle_inside_one_texture_chart_with_its_material() {
+    for name in [OBJ, PLY] {
+        let input = read_mesh(data(name)).unwrap();
+        for ratio in [0.5, 0.1, 0.02] {
+            let what = format!("{name} at {ratio}");
+            let s = meshpyr::simplify(
+                &input,
+                meshpyr::SimplifyTarget::Ratio(ratio),
+                &Default::default(),
+                &meshpyr::NoProgress,
+            )
+            .unwrap();
+            assert!(s.mesh.n_faces() < input.n_faces() * 3 / 4, "{what}");
+            assert_eq!(s.mesh.materials, input.materials, "{what}");
+            assert_eq!(s.mesh.group_names, input.group_names, "{what}");
+            let seam = assert_no_texture_across_seams(&input, &s.mesh, &s.source_rows, &what);
+            assert!(seam > 0, "{what}: no seam left to check");
+            // What is written reads back the same.
+            let format = if name.ends_with(".obj") {
+                MeshFormat::Obj
+            } else {
+                MeshFormat::Ply
+            };
+            let bytes = write_mesh_bytes(&s.mesh, format, &Default::default()).unwrap();
+            let back = read_mesh_bytes(&bytes, format).unwrap();
+            assert_eq!(
+                corner_values(&back, "texcoord"),
+                corner_values(&s.mesh, "texcoord"),
+                "{what}"
+            );
+        }
+    }
+}
+
+#[test]
+fn simplify_keeps_corner_normals_of_the_surviving_corners() {
+    let input = read_mesh(data(OBJ)).unwrap();
+    let s = meshpyr::simplify(
+        &input,
+        meshpyr::SimplifyTarget::Ratio(0.1),
+        &Default::default(),
+        &meshpyr::NoProgress,
+    )
+    .unwrap();
+    let normals = |m: &PolygonMesh, rows: &[u32]| {
+        let a = m.corner_attribute("normal").unwrap();
+        let mut per: HashMap<u32, BTreeSet<Vec<u64>>> = HashMap::new();
+        for c in 0..m.face_indices.len() {
+            let v = rows[m.face_indices[c] as usize];
+            let n = a.value(c).unwrap().iter().map(|x| x.to_bits()).collect();
+            per.entry(v).or_default().insert(n);
+        }
+        per
+    };
+    let identity: Vec<u32> = (0..input.positions.len() as u32).collect();
+    let before = normals(&input, &identity);
+    let after = normals(&s.mesh, &s.source_rows);
+    for (v, set) in &after {
+        assert!(
+            set.is_subset(&before[v]),
+            "vertex {v} got a normal it did not have"
+        );
+    }
 }

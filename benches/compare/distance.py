@@ -33,7 +33,12 @@ def sample(pos, tris, n, rng):
 
 
 def point_triangle_dist2(p, a, b, c):
-    """Squared distance from points p to triangles (a, b, c); all (n, 3). Ericson, RTCD 5.1.5."""
+    """Squared distance from points p to triangles (a, b, c); all (n, 3)."""
+    return ((p - point_triangle_closest(p, a, b, c)) ** 2).sum(1)
+
+
+def point_triangle_closest(p, a, b, c):
+    """Closest point to each of p on triangles (a, b, c); all (n, 3). Ericson, RTCD 5.1.5."""
     ab, ac, ap = b - a, c - a, p - a
     d1, d2 = np.einsum("ij,ij->i", ab, ap), np.einsum("ij,ij->i", ac, ap)
     bp = p - b
@@ -70,7 +75,7 @@ def point_triangle_dist2(p, a, b, c):
         corners = np.stack([a[bad], b[bad], c[bad]], 1)
         dd = ((corners - p[bad][:, None, :]) ** 2).sum(-1)
         out[bad] = corners[np.arange(bad.sum()), dd.argmin(1)]
-    return ((p - out) ** 2).sum(1)
+    return out
 
 
 def nearest_centroid_bound(points, pos, tris, tree, chunk=20000):

@@ -1,5 +1,6 @@
 //! `meshpyr simplify IN -o OUT (--faces N | --ratio R | --error E)`: QEM decimation, i.e. the
-//! progressive mesh cut at a level, written compacted with per-vertex attributes carried along.
+//! progressive mesh cut at a level, written compacted with per-vertex attributes carried along
+//! and a textured input's seams, corners and materials kept (docs/seams.md).
 
 use super::{BarProgress, Global};
 use anyhow::Context;
@@ -46,6 +47,11 @@ pub(crate) struct SimplifyArgs {
     /// this from 5 % to 1 % of the input's faces.
     #[arg(long, default_value_t = PmOptions::default().boundary_weight)]
     pub(crate) boundary_weight: f64,
+    /// For a textured input: weight of the texture-coordinate error against the geometric
+    /// error (a texture error of 1/W costs like a distance of the bounding box's longest side;
+    /// 0 keeps the seams but ignores how the texture shifts; docs/seams.md).
+    #[arg(long, value_name = "W", default_value_t = PmOptions::default().uv_weight)]
+    pub(crate) uv_weight: f64,
 }
 
 /// Runs `meshpyr simplify`.
@@ -57,6 +63,7 @@ pub(crate) fn run(args: SimplifyArgs, global: &Global) -> anyhow::Result<()> {
         max_normal_angle_degrees: args.max_angle,
         min_quality: args.min_quality,
         boundary_weight: args.boundary_weight,
+        uv_weight: args.uv_weight,
         ..PmOptions::default()
     };
     let bar = global.progress("simplify");

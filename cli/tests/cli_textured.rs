@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{data_arg as data, meshpyr, ok, scratch, scratch_arg, stderr};
+use common::{data_arg as data, fails_with, meshpyr, ok, scratch, scratch_arg, stderr};
 
 const OBJ: &str = "textured/anchor_tex.obj";
 
@@ -76,7 +76,7 @@ fn a_missing_image_is_a_warning_and_the_output_is_still_written() {
 }
 
 #[test]
-fn converting_to_off_or_simplifying_says_what_is_not_carried() {
+fn converting_to_off_says_what_is_not_carried_and_simplifying_carries_it() {
     let off = scratch_arg("cli_textured_off", "scan.off");
     let err = ok(&meshpyr(&["convert", &data(OBJ), &off]));
     assert!(
@@ -91,10 +91,33 @@ fn converting_to_off_or_simplifying_says_what_is_not_carried() {
         &simplified,
         "--ratio",
         "0.5",
+        "--uv-weight",
+        "2",
     ]));
+    assert!(!err.contains("does not carry"), "{err}");
+    let text = std::fs::read_to_string(&simplified).unwrap();
+    for what in ["mtllib ", "usemtl ", "\nvt ", "\nvn ", "\ng "] {
+        assert!(text.contains(what), "{what:?} missing");
+    }
+    let faces: Vec<&str> = text.lines().filter(|l| l.starts_with("f ")).collect();
+    assert!(faces.len() < 600, "{} faces", faces.len());
     assert!(
-        err.contains("does not carry the input's per-corner texcoord"),
-        "{err}"
+        faces
+            .iter()
+            .all(|f| f.split(' ').skip(1).all(|c| c.split('/').count() == 3)),
+        "every corner has v/vt/vn"
+    );
+    fails_with(
+        &meshpyr(&[
+            "simplify",
+            &data(OBJ),
+            "-o",
+            &simplified,
+            "--ratio",
+            "0.5",
+            "--uv-weight=-1",
+        ]),
+        "uv weight must be finite and >= 0",
     );
 }
 

@@ -29,6 +29,11 @@ impl BoundingBox {
         }
     }
 
+    /// The longest side.
+    pub fn max_side(&self) -> f64 {
+        (self.max - self.min).max_element()
+    }
+
     /// Length of the diagonal; the scale all relative tolerances refer to.
     pub fn diagonal(&self) -> f64 {
         (self.max - self.min).length()

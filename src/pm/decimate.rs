@@ -36,6 +36,7 @@
 use super::legality::{Legality, Refusal, Relaxation, RingFace, shape_check};
 use super::prefetch::prefetch;
 use super::quadric::{POINT_REGULARISATION, Quadric, Quadrics};
+use super::seams::Seams;
 use crate::mesh::build::{next_c, prev_c};
 use crate::mesh::{BoundingBox, CornerTable, Mesh, SlotIndex};
 use crate::progress::Progress;
@@ -265,7 +266,7 @@ impl FlatMesh {
 
     /// Twin of half-edge `h` (a corner or a boundary half-edge).
     #[inline]
-    fn twin(&self, h: u32) -> u32 {
+    pub(super) fn twin(&self, h: u32) -> u32 {
         match self.corners.get(h as usize) {
             Some(c) => c.twin,
             None => self.boundary_twin[(h - self.n_corners()) as usize],
@@ -282,7 +283,7 @@ impl FlatMesh {
     }
 
     #[inline]
-    fn is_boundary_halfedge(&self, h: u32) -> bool {
+    pub(super) fn is_boundary_halfedge(&self, h: u32) -> bool {
         h >= self.n_corners()
     }
 
@@ -304,7 +305,7 @@ impl FlatMesh {
     }
 
     #[inline]
-    fn tail_vertex(&self, h: u32) -> u32 {
+    pub(super) fn tail_vertex(&self, h: u32) -> u32 {
         if self.is_boundary_halfedge(h) {
             self.cv(next_c(self.twin(h)))
         } else {
@@ -322,7 +323,7 @@ impl FlatMesh {
     }
 
     #[inline]
-    fn position(&self, v: u32) -> DVec3 {
+    pub(super) fn position(&self, v: u32) -> DVec3 {
         self.vertices[v as usize].position
     }
 
@@ -355,7 +356,7 @@ impl FlatMesh {
 
     /// Calls `f` on every corner at `v` (the faces around it).
     #[inline]
-    fn for_each_corner(&self, v: u32, mut f: impl FnMut(u32)) {
+    pub(super) fn for_each_corner(&self, v: u32, mut f: impl FnMut(u32)) {
         let c0 = self.vertices[v as usize].corner;
         let nh = self.n_corners();
         let mut c = c0;
@@ -402,12 +403,22 @@ impl FlatMesh {
     /// for a direction that is never allowed (a boundary vertex may only slide along its
     /// boundary).
     #[inline]
-    fn edge_costs(&self, quadric: &Quadrics, h: u32, o: u32) -> (Option<f64>, Option<f64>) {
+    fn edge_costs(
+        &self,
+        quadric: &Quadrics,
+        seams: Option<&Seams>,
+        h: u32,
+        o: u32,
+    ) -> (Option<f64>, Option<f64>) {
         let boundary_edge = self.is_boundary_halfedge(h) || self.is_boundary_halfedge(o);
         let (a, b) = (self.tail_vertex(h), self.head_vertex(h));
         let q = quadric.merged(a, b);
-        let ab = (boundary_edge || !self.is_boundary_vertex(a)).then(|| q.error(self.position(b)));
-        let ba = (boundary_edge || !self.is_boundary_vertex(b)).then(|| q.error(self.position(a)));
+        let cost = |e: u32, p: DVec3| match seams {
+            None => q.error(p),
+            Some(s) => q.error(p) + s.cost(self, e, p),
+        };
+        let ab = (boundary_edge || !self.is_boundary_vertex(a)).then(|| cost(h, self.position(b)));
+        let ba = (boundary_edge || !self.is_boundary_vertex(b)).then(|| cost(o, self.position(a)));
         (ab, ba)
     }
 
@@ -415,7 +426,13 @@ impl FlatMesh {
     /// of the two half-edges, or its twin is a boundary half-edge, which has no corner to
     /// represent it) and some direction is allowed within `max_error_sq`.
     #[inline]
-    fn candidate(&self, quadric: &Quadrics, c: u32, max_error_sq: f64) -> Option<Candidate> {
+    fn candidate(
+        &self,
+        quadric: &Quadrics,
+        seams: Option<&Seams>,
+        c: u32,
+        max_error_sq: f64,
+    ) -> Option<Candidate> {
         let t = self.corners[c as usize].twin;
         let (sc, st) = (self.slot_of(c), self.slot_of(t));
         let (h, o) = if sc < st {
@@ -425,7 +442,7 @@ impl FlatMesh {
         } else {
             return None;
         };
-        let (ch, co) = self.edge_costs(quadric, h, o);
+        let (ch, co) = self.edge_costs(quadric, seams, h, o);
         let (cost, h, alt_cost) = match (ch, co) {
             (Some(a), Some(b)) if b < a => (b, o, a),
             (Some(a), Some(b)) => (a, h, b),
@@ -522,8 +539,18 @@ impl FlatMesh {
 
     /// Whether collapsing `h` is legal: the survivor's valence and the sliver penalty, or the
     /// rule that refuses.
-    fn legal(&self, h: u32, legality: &Legality) -> Result<(u32, f64), Refusal> {
+    fn legal(
+        &self,
+        h: u32,
+        legality: &Legality,
+        seams: Option<&Seams>,
+    ) -> Result<(u32, f64), Refusal> {
         let valence = self.topologically_legal(h, legality.max_valence)?;
+        if let Some(s) = seams
+            && !s.allows(self, h)
+        {
+            return Err(Refusal::Seam);
+        }
         let penalty = self.geometrically_legal(h, legality)?;
         Ok((valence, penalty))
     }
@@ -778,22 +805,35 @@ pub(super) struct Pass {
 
 /// What the passes accumulate: the quadrics, the survivors locked in the current pass and the
 /// collapses made so far.
-struct Decimation {
+struct Decimation<'a> {
     quadric: Quadrics,
     locked: Vec<u32>,
     collapses: Vec<Collapse>,
+    /// The corners' wedges of a mesh with texture seams (`super::seams`), `None` without.
+    seams: Option<&'a mut Seams>,
 }
 
 /// Decimates `mesh`; returns the collapses in order, the final mesh and why it stopped.
 pub(crate) fn decimate(
+    mesh: FlatMesh,
+    params: &DecimateParams,
+    progress: &dyn Progress,
+) -> (Vec<Collapse>, FlatMesh, Outcome) {
+    decimate_with_seams(mesh, params, None, progress)
+}
+
+/// [`decimate`] keeping the seams of `seams` (whose wedges follow the collapses).
+pub(crate) fn decimate_with_seams(
     mut mesh: FlatMesh,
     params: &DecimateParams,
+    seams: Option<&mut Seams>,
     progress: &dyn Progress,
 ) -> (Vec<Collapse>, FlatMesh, Outcome) {
     let mut state = Decimation {
         quadric: initial_quadrics(&mesh, params.boundary_weight),
         locked: Vec::new(),
         collapses: Vec::new(),
+        seams,
     };
     let mut cands: Vec<Candidate> = Vec::new();
     let mut relaxed = [0usize; 3];
@@ -809,6 +849,7 @@ pub(crate) fn decimate(
             &mesh,
             &live,
             &state.quadric,
+            state.seams.as_deref(),
             params.max_error_sq,
             &mut cands,
         );
@@ -816,7 +857,7 @@ pub(crate) fn decimate(
             stop = if params.max_error_sq.is_finite() {
                 Stop::ErrorBound
             } else {
-                Stop::NoLegalCollapse(mesh.refusals(&state.quadric, params))
+                Stop::NoLegalCollapse(mesh.refusals(&state.quadric, state.seams.as_deref(), params))
             };
             break;
         }
@@ -836,7 +877,11 @@ pub(crate) fn decimate(
         }
         progress.update((start_faces - mesh.n_faces) as f64 / work as f64);
         if schedule.pass_ended(made > 0, error_cut, params) {
-            stop = Stop::NoLegalCollapse(mesh.refusals(&state.quadric, params));
+            stop = Stop::NoLegalCollapse(mesh.refusals(
+                &state.quadric,
+                state.seams.as_deref(),
+                params,
+            ));
             break;
         }
     }
@@ -863,7 +908,7 @@ fn is_done(mesh: &FlatMesh, params: &DecimateParams) -> bool {
 
 /// The live triangles, in order: dead ones are dropped after every pass, so a pass reads only
 /// what is left.
-fn live_triangles(mesh: &FlatMesh) -> Vec<u32> {
+pub(super) fn live_triangles(mesh: &FlatMesh) -> Vec<u32> {
     (0..mesh.corners.len() as u32 / 3)
         .filter(|&t| mesh.corners[3 * t as usize].vertex != NONE)
         .collect()
@@ -924,6 +969,7 @@ fn perform_collapses(
     let mut budget = pass.budget;
     let before = state.collapses.len();
     let quadric: &mut Quadrics = &mut state.quadric;
+    let mut seams = state.seams.as_deref_mut();
     for (i, c) in cands.iter().enumerate() {
         if is_done(mesh, params) || budget == 0 {
             break;
@@ -952,16 +998,21 @@ fn perform_collapses(
             Ok((valence, penalty)) if cost + penalty <= pass.error_cut => Some(valence),
             _ => None,
         };
-        let (h, cost, valence) =
-            if let Some(val) = within_cut(mesh.legal(h0, &pass.legality), c.cost) {
-                (h0, c.cost, val)
-            } else if c.alt_cost <= pass.error_cut
-                && let Some(val) = within_cut(mesh.legal(o0, &pass.legality), c.alt_cost)
-            {
-                (o0, c.alt_cost, val)
-            } else {
-                continue;
-            };
+        let (h, cost, valence) = if let Some(val) =
+            within_cut(mesh.legal(h0, &pass.legality, seams.as_deref()), c.cost)
+        {
+            (h0, c.cost, val)
+        } else if c.alt_cost <= pass.error_cut
+            && let Some(val) =
+                within_cut(mesh.legal(o0, &pass.legality, seams.as_deref()), c.alt_cost)
+        {
+            (o0, c.alt_cost, val)
+        } else {
+            continue;
+        };
+        if let Some(s) = seams.as_deref_mut() {
+            s.collapse(mesh, h);
+        }
         let [u, v, left, right] = mesh.collapse(h, valence);
         quadric.absorb(u, v);
         mesh.set_locked(v, true);
@@ -996,6 +1047,7 @@ fn collect_candidates(
     mesh: &FlatMesh,
     live: &[u32],
     quadric: &Quadrics,
+    seams: Option<&Seams>,
     max_error_sq: f64,
     cands: &mut Vec<Candidate>,
 ) {
@@ -1010,7 +1062,7 @@ fn collect_candidates(
         }
         let t = live[i];
         for c in 3 * t..3 * t + 3 {
-            if let Some(x) = mesh.candidate(quadric, c, max_error_sq) {
+            if let Some(x) = mesh.candidate(quadric, seams, c, max_error_sq) {
                 out.push(x);
             }
         }
@@ -1048,7 +1100,12 @@ impl FlatMesh {
     /// For each rule, how many live edges within the error bound it refuses under the most
     /// relaxed rules (each edge counted once, in its cheaper allowed direction; an interior
     /// edge between two boundary vertices has none and counts as `Boundary`), most first.
-    fn refusals(&self, quadric: &Quadrics, params: &DecimateParams) -> Vec<(Refusal, usize)> {
+    fn refusals(
+        &self,
+        quadric: &Quadrics,
+        seams: Option<&Seams>,
+        params: &DecimateParams,
+    ) -> Vec<(Refusal, usize)> {
         let legality = params.legality.relaxed(Relaxation::Normals);
         let mut counts = std::collections::BTreeMap::<Refusal, usize>::new();
         for c in 0..self.n_corners() {
@@ -1057,9 +1114,9 @@ impl FlatMesh {
             if self.cv(c) == NONE || !represents {
                 continue;
             }
-            let refusal = match self.candidate(quadric, c, f64::INFINITY) {
+            let refusal = match self.candidate(quadric, seams, c, f64::INFINITY) {
                 None => Some(Refusal::Boundary),
-                Some(x) if x.cost <= params.max_error_sq => self.legal(x.h, &legality).err(),
+                Some(x) if x.cost <= params.max_error_sq => self.legal(x.h, &legality, seams).err(),
                 Some(_) => None,
             };
             if let Some(r) = refusal {

@@ -164,6 +164,8 @@ pub enum Refusal {
     Normal,
     /// A face would lose its normal (become degenerate).
     Degenerate,
+    /// A texture seam or material border would be broken (`docs/seams.md`).
+    Seam,
 }
 
 impl Refusal {
@@ -177,6 +179,7 @@ impl Refusal {
             Refusal::Valence => "valence cap",
             Refusal::Normal => "normal would fold",
             Refusal::Degenerate => "face would degenerate",
+            Refusal::Seam => "seam would break",
         }
     }
 }

@@ -14,6 +14,7 @@
 //!   [`simplify_to_goal`] takes the target as front ends give it, small pieces pruned first.
 //! - `fuzz`: the body of the `pm_ops` fuzz target (`meshpyr::fuzzing::fuzz_operations`).
 
+mod attribute_quadric;
 pub(crate) mod collapse;
 mod decimate;
 #[cfg(test)]
@@ -25,6 +26,7 @@ pub(crate) mod prefetch;
 mod progressive;
 pub(crate) mod quadric;
 mod replay;
+mod seams;
 pub(crate) mod simplify;
 
 pub use collapse::SplitError;

@@ -45,6 +45,12 @@ pub struct PmOptions {
     /// left; at the coarse end (1 %) they count 0.3 λ, so that hole rims give up the vertices the
     /// surface needs. Default 10 (`docs/algorithms.md` §4.3); 0 lets boundaries drift.
     pub boundary_weight: f64,
+    /// Weight of texture-coordinate error against geometric error for an input with texture
+    /// coordinates: a texture-coordinate error of `1 / uv_weight` costs as much as a distance
+    /// of the bounding box's largest side (meshoptimizer's attribute weights use the same
+    /// units). Default 0.25; 0 keeps the seams but ignores how the texture shifts
+    /// (`docs/seams.md`).
+    pub uv_weight: f64,
 }
 
 impl Default for PmOptions {
@@ -57,6 +63,7 @@ impl Default for PmOptions {
             min_quality: 0.05,
             max_valence: 32,
             boundary_weight: 10.0,
+            uv_weight: 0.25,
         }
     }
 }
@@ -568,6 +575,11 @@ pub(crate) fn decimate_params(
     if !(opts.boundary_weight >= 0.0 && opts.boundary_weight.is_finite()) {
         return Err(PmError::InvalidOption(
             "boundary weight must be finite and >= 0".into(),
+        ));
+    }
+    if !(opts.uv_weight >= 0.0 && opts.uv_weight.is_finite()) {
+        return Err(PmError::InvalidOption(
+            "uv weight must be finite and >= 0".into(),
         ));
     }
     if opts.max_valence < 3 {

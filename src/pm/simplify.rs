@@ -1,8 +1,14 @@
 //! Simplification of a file-level mesh: the progressive mesh cut at a level, written with the
 //! input's per-vertex attributes carried along (the behaviour of `meshpyr simplify`).
+//!
+//! A textured input keeps its seams (`super::seams`): the surviving triangles are input
+//! triangles with vertices renamed, so each keeps its polygon's face attributes (material,
+//! groups) and each of its corners takes the values of the survivor's corner in the same wedge.
 
-use super::decimate::{FlatMesh, Stop, decimate};
+use super::decimate::{FlatMesh, Stop, decimate_with_seams, live_triangles};
 use super::progressive::{PmError, PmOptions, decimate_params};
+use super::seams::Seams;
+use crate::mesh::CornerAttribute;
 use crate::mesh::{BoundingBox, BuildError, CornerTable, Mesh, PolygonMesh, Topology};
 use crate::progress::Progress;
 use glam::DVec3;
@@ -40,9 +46,10 @@ pub enum SimplifyError {
 #[derive(Clone, Debug)]
 pub struct Simplified {
     /// The result: triangles, the surviving vertices at their original positions (PM order),
-    /// the input's per-vertex attributes gathered along; per-face attributes, per-corner data
-    /// (texture coordinates and their seams), materials, groups and extra elements are
-    /// dropped (their rows no longer exist; [`PolygonMesh::face_data_dropped`] says which).
+    /// the input's per-vertex attributes gathered along. Each triangle keeps the face
+    /// attributes and face lists of the polygon it came from (materials and groups among
+    /// them), and its corners the per-corner data of the survivor's corner on the same side
+    /// of every seam (`docs/seams.md`); extra elements are dropped.
     pub mesh: PolygonMesh,
     /// Triangles of the input after the builder's repairs.
     pub input_triangles: usize,
@@ -119,8 +126,18 @@ pub fn simplify(
         }
     }
     let params = decimate_params(&o, bbox_diagonal)?;
+    let extent = BoundingBox::of(positions.iter().copied()).map_or(0.0, |b| b.max_side());
     let flat = FlatMesh::from_corners(positions, &repaired.corners);
-    let (_, coarse, outcome) = decimate(flat, &params, progress);
+    let mut seams = Seams::of(
+        input,
+        &repaired.corners.corner_vertex,
+        &repaired.source.face_source,
+        &repaired.source.vertex_source,
+        &flat,
+        o.uv_weight,
+        extent,
+    );
+    let (_, coarse, outcome) = decimate_with_seams(flat, &params, seams.as_mut(), progress);
     // The cut is the progressive mesh's base level: survivors in slot order, live triangles in
     // input order (exactly what `ProgressiveMesh::level_triangles` gives there).
     let survivors = coarse.survivors();
@@ -151,6 +168,14 @@ pub fn simplify(
         .iter()
         .map(|a| a.gathered(&source_rows))
         .collect();
+    let live = live_triangles(&coarse);
+    carry_face_data(
+        input,
+        &mut mesh,
+        &live,
+        &repaired.source.face_source,
+        seams.as_ref(),
+    );
     let short_of_target = match outcome.stop {
         Stop::NoLegalCollapse(_) => Some(Mesh::from_polygons(&mesh)?.mesh.topology()),
         _ => None,
@@ -163,4 +188,68 @@ pub fn simplify(
         relaxed_collapses: outcome.relaxed.iter().sum(),
         short_of_target,
     })
+}
+
+/// Gives `out`, whose triangles are the input triangles `live` (of the builder's table, each
+/// from input polygon `face_source[t]`), the face attributes and face lists of their polygons,
+/// the materials and group names, and the per-corner data of their corners' wedges, each
+/// attribute's pool reduced to the rows in use (in order of first use).
+fn carry_face_data(
+    input: &PolygonMesh,
+    out: &mut PolygonMesh,
+    live: &[u32],
+    face_source: &[u32],
+    seams: Option<&Seams>,
+) {
+    let faces: Vec<u32> = live.iter().map(|&t| face_source[t as usize]).collect();
+    out.face_attributes = input
+        .face_attributes
+        .iter()
+        .map(|a| a.gathered(&faces))
+        .collect();
+    out.face_lists = input
+        .face_lists
+        .iter()
+        .map(|l| l.gathered(&faces))
+        .collect();
+    out.materials = input.materials.clone();
+    out.group_names = input.group_names.clone();
+    out.object_names = input.object_names.clone();
+    let Some(seams) = seams else {
+        return;
+    };
+    let corners: Vec<u32> = live
+        .iter()
+        .flat_map(|&t| (3 * t..3 * t + 3).map(|c| seams.source_corner(seams.wedge(c))))
+        .collect();
+    out.corner_attributes = input
+        .corner_attributes
+        .iter()
+        .map(|a| compacted(a, &corners))
+        .collect();
+}
+
+/// `a` on the polygon corners `corners` (one per output corner), its pool reduced to the rows
+/// they use.
+fn compacted(a: &CornerAttribute, corners: &[u32]) -> CornerAttribute {
+    let mut new_row = vec![u32::MAX; a.pool_len()];
+    let mut rows = Vec::new();
+    let indices = corners
+        .iter()
+        .map(|&c| match a.row(c as usize) {
+            None => crate::mesh::NO_VALUE,
+            Some(r) => {
+                if new_row[r] == u32::MAX {
+                    new_row[r] = rows.len() as u32;
+                    rows.push(r as u32);
+                }
+                new_row[r]
+            }
+        })
+        .collect();
+    CornerAttribute {
+        name: a.name.clone(),
+        columns: a.columns.iter().map(|c| c.gathered(&rows)).collect(),
+        indices,
+    }
 }

@@ -134,6 +134,7 @@ pub(super) fn build_info(meta: &Meta) -> PyramidOptions {
             min_quality: meta.min_quality,
             max_valence: meta.max_valence as usize,
             boundary_weight: meta.boundary_weight,
+            ..PmOptions::default()
         },
         relaxation: meta.relaxation,
     }
