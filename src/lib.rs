@@ -103,6 +103,7 @@
 //! | [`metrics`] | distances (summaries and per-vertex fields) and curvature |
 //! | [`numerics`] | the finite elements and solvers that subdivision and smoothing share |
 //! | [`render`] | PNG pictures of meshes, coloured by a per-vertex value if asked or by their texture |
+//! | [`machine`] | the memory the machine offers this process (available, cgroup limit) |
 //! | [`progress`] | progress reporting |
 //! | [`wording`] | counts with their nouns, as messages show them |
 //!
@@ -118,6 +119,7 @@ pub mod format;
 #[doc(hidden)]
 pub mod fuzzing;
 pub mod io;
+pub mod machine;
 pub mod memory;
 pub mod mesh;
 pub mod metrics;

@@ -38,6 +38,8 @@ use std::path::{Path, PathBuf};
 
 use crate::format;
 use crate::io::{self, MeshFormat};
+use crate::machine::cgroup_limit;
+pub use crate::machine::{parse_cgroup_limit, parse_meminfo};
 use crate::subdiv::Refinement;
 
 /// The environment variable that turns the check off (`off`, `0` or `no`).
@@ -317,61 +319,6 @@ pub fn parse_address_space_limit(limits: &str) -> Option<u64> {
         .split_whitespace()
         .next()?;
     soft.parse().ok()
-}
-
-/// `(MemTotal + SwapTotal, MemAvailable + SwapFree)` in bytes from `/proc/meminfo` text.
-pub fn parse_meminfo(meminfo: &str) -> (Option<u64>, Option<u64>) {
-    let field = |name: &str| {
-        meminfo.lines().find_map(|l| {
-            let rest = l.strip_prefix(name)?.strip_prefix(':')?;
-            let kb: u64 = rest.split_whitespace().next()?.parse().ok()?;
-            Some(kb.saturating_mul(1024))
-        })
-    };
-    let swap = |name| field(name).unwrap_or(0);
-    (
-        field("MemTotal").map(|t| t.saturating_add(swap("SwapTotal"))),
-        field("MemAvailable").map(|a| a.saturating_add(swap("SwapFree"))),
-    )
-}
-
-/// A cgroup limit file's value: `max` (v2) or a value near 2^63 (v1's "unlimited") is none.
-pub fn parse_cgroup_limit(text: &str) -> Option<u64> {
-    let v: u64 = text.trim().parse().ok()?;
-    (v < 1 << 60).then_some(v)
-}
-
-/// The smallest memory limit on the cgroup path `/proc/self/cgroup` names and its ancestors,
-/// v2 (`memory.max`) or v1 (`memory.limit_in_bytes`), under `root` (`/sys/fs/cgroup`).
-fn cgroup_limit(self_cgroup: &str, root: &Path) -> Option<u64> {
-    let mut limit: Option<u64> = None;
-    for line in self_cgroup.lines() {
-        let mut parts = line.splitn(3, ':');
-        let (Some(id), Some(controllers), Some(path)) = (parts.next(), parts.next(), parts.next())
-        else {
-            continue;
-        };
-        let (dir, file) = if id == "0" && controllers.is_empty() {
-            (root.to_path_buf(), "memory.max")
-        } else if controllers.split(',').any(|c| c == "memory") {
-            (root.join("memory"), "memory.limit_in_bytes")
-        } else {
-            continue;
-        };
-        let mut at = dir.join(path.trim_start_matches('/'));
-        loop {
-            if let Some(v) = std::fs::read_to_string(at.join(file))
-                .ok()
-                .and_then(|t| parse_cgroup_limit(&t))
-            {
-                limit = Some(limit.map_or(v, |l| l.min(v)));
-            }
-            if at == dir || !at.pop() {
-                break;
-            }
-        }
-    }
-    limit
 }
 
 /// A job that fits, with its estimate.

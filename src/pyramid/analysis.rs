@@ -130,11 +130,17 @@ impl Layout {
         let n_finest = pm.n_vertices();
         let n_splits = n_finest - n_base;
         let (surface_area, bbox_diagonal) = surface_stats(&geometry[..n_finest], pm.finest_faces());
-        let ranges = split_ranges(n_splits, rayon::current_num_threads());
+        let cursor = relaxation.as_ring_stencils().is_none().then(|| pm.cursor());
+        // Ring stencils replay up to each range's start; the cursor's seek is not modelled.
+        let prefix_cost = if cursor.is_none() {
+            PREFIX_REPLAY_COST
+        } else {
+            0.0
+        };
+        let ranges = split_ranges(n_splits, rayon::current_num_threads(), prefix_cost);
         let placement = placement.unwrap_or_else(|| {
             Placement::for_layout(n_splits.saturating_mul(LAYOUT_BYTES_PER_SPLIT))
         });
-        let cursor = relaxation.as_ring_stencils().is_none().then(|| pm.cursor());
         let mut records = record_ranges(pm, relaxation, cursor, &ranges, placement, progress)?;
         // One code width for the pyramid: the widest range's.
         let widest = records.iter().map(|r| r.widest).max().unwrap_or(0);
@@ -241,13 +247,36 @@ const DOWNSAMPLE_SHARE: f64 = 0.1;
 /// which only pays off on long ranges.
 const SPLITS_PER_RANGE: usize = 1024;
 
-/// Cuts splits `0..n_splits` into at most `threads` contiguous ranges of near-equal length,
-/// coarsest first.
-fn split_ranges(n_splits: usize, threads: usize) -> Vec<std::ops::Range<usize>> {
+/// What replaying a split on the way to a range's start costs against recording one (its
+/// replay included), for operators with ring stencils: each range replays every split before
+/// it first, so ranges of equal length leave the coarsest range's thread idle while the finer
+/// ones still work (on the 6.66M scan, the finer of two equal ranges took about a fifth longer).
+const PREFIX_REPLAY_COST: f64 = 0.2;
+
+/// Cuts splits `0..n_splits` into at most `threads` contiguous ranges, coarsest first, of
+/// about equal work when reaching a range's start costs `prefix_cost` per split before it
+/// (relative to recording one): range `r` from `a_r` to `a_{r+1}` costs
+/// `ρ·a_r + (a_{r+1} − a_r)`, and equal costs give `a_r = n·(1 − q^r)/(1 − q^m)` for `m`
+/// ranges, `q = 1 − ρ` (equal lengths when `ρ = 0`). Empty ranges are dropped.
+fn split_ranges(n_splits: usize, threads: usize, prefix_cost: f64) -> Vec<std::ops::Range<usize>> {
     let n = threads.clamp(1, (n_splits / SPLITS_PER_RANGE).max(1));
-    (0..n)
-        .map(|r| r * n_splits / n..(r + 1) * n_splits / n)
-        .collect()
+    let q = 1.0 - prefix_cost.clamp(0.0, 0.9);
+    let cut = |r: usize| {
+        if q == 1.0 {
+            r * n_splits / n
+        } else {
+            let share = (1.0 - q.powi(r as i32)) / (1.0 - q.powi(n as i32));
+            ((share * n_splits as f64).round() as usize).min(n_splits)
+        }
+    };
+    let mut cuts: Vec<usize> = (0..=n).map(cut).collect();
+    cuts[n] = n_splits;
+    cuts.dedup();
+    if cuts.len() == 1 {
+        // No splits: one empty range.
+        cuts.push(n_splits);
+    }
+    cuts.windows(2).map(|w| w[0]..w[1]).collect()
 }
 
 /// Step 1 for every range of splits (coarsest range first), each range on its own thread.
@@ -896,4 +925,53 @@ pub(crate) fn surface_stats(positions: &[DVec3], faces: &[[u32; 3]]) -> (f64, f6
     let diagonal = crate::mesh::geometry::BoundingBox::of(positions.iter().copied())
         .map_or(0.0, |b| b.diagonal());
     (area, diagonal)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn lengths(ranges: &[std::ops::Range<usize>]) -> Vec<usize> {
+        ranges.iter().map(|r| r.len()).collect()
+    }
+
+    #[test]
+    fn ranges_tile_the_splits_coarsest_first() {
+        for (n_splits, threads, cost) in [
+            (0, 4, 0.2),
+            (1000, 4, 0.2),
+            (1_000_000, 2, 0.0),
+            (1_000_000, 3, 0.2),
+            (5_000, 64, 0.2),
+        ] {
+            let ranges = split_ranges(n_splits, threads, cost);
+            assert!(!ranges.is_empty() && ranges.len() <= threads);
+            assert_eq!(ranges[0].start, 0);
+            assert_eq!(ranges.last().unwrap().end, n_splits);
+            assert!(
+                ranges
+                    .windows(2)
+                    .all(|w| w[0].end == w[1].start && w[0].end > w[0].start)
+            );
+        }
+    }
+
+    #[test]
+    fn without_a_prefix_cost_ranges_are_equal_and_with_one_the_coarse_ranges_are_longer() {
+        assert_eq!(lengths(&split_ranges(1_000_000, 4, 0.0)), vec![250_000; 4]);
+        let ranges = split_ranges(1_000_000, 2, 0.2);
+        // ρ = 0.2: the coarse range takes 1/(2 − ρ) of the splits, and both cost the same.
+        assert_eq!(ranges[0].end, 555_556);
+        let cost = |r: &std::ops::Range<usize>| 0.2 * r.start as f64 + r.len() as f64;
+        let costs: Vec<f64> = split_ranges(1_000_000, 3, 0.2).iter().map(cost).collect();
+        assert!(
+            costs.iter().all(|c| (c - costs[0]).abs() < 2.0),
+            "{costs:?}"
+        );
+        assert!(
+            lengths(&split_ranges(1_000_000, 3, 0.2))
+                .windows(2)
+                .all(|w| w[0] > w[1])
+        );
+    }
 }

@@ -208,8 +208,9 @@ fn first_changed_level(
 impl DetailPyramid {
     /// The octave bands of levels `(lo, hi]` (those of [`DetailPyramid::spectrum`]), coarse to
     /// fine: where an equalizer puts its sliders.
+    /// They depend on the level counts only, so no detail is read.
     pub fn levels_of_octaves(&self) -> Vec<(usize, usize)> {
-        self.spectrum().bands.iter().map(|b| (b.lo, b.hi)).collect()
+        super::spectrum::octave_bands(self.n_base, self.n_finest)
     }
 }
 

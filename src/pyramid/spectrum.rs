@@ -48,6 +48,19 @@ impl DetailPyramid {
     }
 }
 
+/// The octave bands `(lo, hi]` of a hierarchy from `n_base` to `n_finest` vertices, coarse to
+/// fine: the bands of [`octave_spectrum`], from the level counts alone.
+pub(crate) fn octave_bands(n_base: usize, n_finest: usize) -> Vec<(usize, usize)> {
+    let mut bands = Vec::new();
+    let mut level = n_base + 1;
+    while level <= n_finest {
+        let hi = level.next_power_of_two();
+        bands.push(((hi / 2).max(n_base), hi.min(n_finest)));
+        level = hi + 1;
+    }
+    bands
+}
+
 /// The spectrum of the details of each split in split order (`per_split`), on a hierarchy from
 /// `n_base` to `n_finest` vertices whose finest mesh has area `surface_area` and bounding-box
 /// diagonal `diagonal`.
@@ -111,5 +124,34 @@ impl Spectrum {
             );
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn octave_bands_from_the_counts_are_the_spectrum_bands() {
+        let cases = [
+            (4, 4),
+            (4, 5),
+            (1, 2),
+            (3, 100),
+            (8, 8193),
+            (16, 1024),
+            (5, 1025),
+            (7, 64),
+        ];
+        for (n_base, n_finest) in cases {
+            let per_split = (n_base..n_finest).map(|_| std::iter::empty::<glam::DVec3>());
+            let spectrum = octave_spectrum(n_base, n_finest, 1.0, 1.0, per_split);
+            let bands: Vec<_> = spectrum.bands.iter().map(|b| (b.lo, b.hi)).collect();
+            assert_eq!(
+                octave_bands(n_base, n_finest),
+                bands,
+                "{n_base}..{n_finest}"
+            );
+        }
     }
 }

@@ -10,10 +10,20 @@
 //! the rest in memory still goes through, at the price of disk space in the temporary
 //! directory (`TMPDIR`).
 //!
-//! Where streams go is decided once per pyramid ([`Placement::for_layout`]): in a file when
-//! the layout is expected to exceed a threshold (`MESHPYR_SPILL_MIB`, default
-//! [`DEFAULT_THRESHOLD_MIB`]; `0` puts every layout in a file, `off` none). The bytes, and so
-//! every result, are the same either way.
+//! Where streams go is decided once per pyramid ([`Placement::for_layout`]), from the memory
+//! available when the pyramid is made (`MemAvailable`, capped by the cgroup's limit: see
+//! [`crate::machine::available_memory`]): a layout expected to take at most an eighth of it
+//! ([`MEMORY_SHARE`]) stays in memory, a larger one goes to a file. In memory the layout is
+//! about 60 % of the pyramid's peak, so a job whose layout passes the rule peaks near a
+//! quarter of what was available, leaving the rest to other programs and to the page cache;
+//! there the passes run without the file's page faults, which cost a mid-size scan a
+//! noticeable share of its time (docs/performance.md). A larger layout goes to the file, where
+//! the job's peak stays near 400 bytes per vertex; so the same scan may peak higher per vertex
+//! on a machine with more memory free, never above a quarter or so of what was free.
+//! Layouts below [`DEFAULT_THRESHOLD_MIB`]
+//! always stay in memory, and where the available memory is unknown (not Linux) that is the
+//! threshold. `MESHPYR_SPILL_MIB` overrides the rule: a threshold in MiB, `0` puts every
+//! layout in a file, `off` none. The bytes, and so every result, are the same either way.
 
 use bytemuck::Pod;
 use std::fs::File;
@@ -21,10 +31,14 @@ use std::io::{self, Write};
 use std::ops::{Deref, Range};
 use std::sync::Arc;
 
-/// Layouts expected above this many MiB go to a temporary file unless `MESHPYR_SPILL_MIB`
-/// says otherwise: below it the file would save little, and small pyramids (tests, the
-/// bunny) stay free of disk traffic.
+/// Layouts expected below this many MiB stay in memory (unless `MESHPYR_SPILL_MIB` says
+/// otherwise): the file would save little, and small pyramids (tests, the bunny) stay free of
+/// disk traffic. Where the available memory is unknown, larger layouts go to a file.
 pub(crate) const DEFAULT_THRESHOLD_MIB: usize = 64;
+
+/// A layout stays in memory while it is expected to take at most `1 / MEMORY_SHARE` of the
+/// memory available (see the module docs).
+pub(crate) const MEMORY_SHARE: u64 = 8;
 
 /// Where a pyramid's layout streams live.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,16 +50,31 @@ pub(crate) enum Placement {
 }
 
 impl Placement {
-    /// The placement of a layout of about `estimated_bytes`, by `MESHPYR_SPILL_MIB` (a
-    /// threshold in MiB, `0` for always, `off` for never) or [`DEFAULT_THRESHOLD_MIB`].
+    /// The placement of a layout of about `estimated_bytes`: by `MESHPYR_SPILL_MIB` if set,
+    /// else by the memory available now (see the module docs).
     pub(crate) fn for_layout(estimated_bytes: usize) -> Placement {
         let setting = std::env::var("MESHPYR_SPILL_MIB").ok();
-        let threshold_mib = match setting.as_deref().map(str::trim) {
+        let available = || crate::machine::available_memory();
+        Placement::by_rule(estimated_bytes, setting.as_deref(), available)
+    }
+
+    /// The rule of [`Self::for_layout`] with the setting of `MESHPYR_SPILL_MIB` and the
+    /// available memory in bytes (`None`: unknown) given.
+    fn by_rule(
+        estimated_bytes: usize,
+        setting: Option<&str>,
+        available: impl FnOnce() -> Option<u64>,
+    ) -> Placement {
+        let floor = (DEFAULT_THRESHOLD_MIB as u64) << 20;
+        let threshold = match setting.map(str::trim) {
             Some("off") => return Placement::Memory,
-            Some(s) => s.parse::<usize>().unwrap_or(DEFAULT_THRESHOLD_MIB),
-            None => DEFAULT_THRESHOLD_MIB,
+            Some(s) => match s.parse::<u64>() {
+                Ok(mib) => mib.saturating_mul(1 << 20),
+                Err(_) => floor,
+            },
+            None => available().map_or(floor, |a| (a / MEMORY_SHARE).max(floor)),
         };
-        if estimated_bytes >= threshold_mib.saturating_mul(1 << 20) {
+        if estimated_bytes as u64 >= threshold {
             Placement::TempFile
         } else {
             Placement::Memory
@@ -266,6 +295,75 @@ mod tests {
         file.release_all();
         assert_eq!(&*file, &values[..]);
         assert_eq!(file.clone().bytes(), 4 * values.len());
+    }
+
+    #[test]
+    fn a_layout_stays_in_memory_up_to_an_eighth_of_the_memory_available() {
+        const MIB: usize = 1 << 20;
+        let gib16 = || Some(16u64 << 30);
+        // 2 GiB is an eighth of 16 GiB: a 250 MB layout stays, a 4 GB one goes to a file.
+        assert_eq!(
+            Placement::by_rule(250 * MIB, None, gib16),
+            Placement::Memory
+        );
+        assert_eq!(
+            Placement::by_rule(2048 * MIB - 1, None, gib16),
+            Placement::Memory
+        );
+        assert_eq!(
+            Placement::by_rule(2048 * MIB, None, gib16),
+            Placement::TempFile
+        );
+        assert_eq!(
+            Placement::by_rule(4000 * MIB, None, gib16),
+            Placement::TempFile
+        );
+        // Little memory available: the 64 MiB floor still holds small layouts in memory.
+        let little = || Some(128u64 << 20);
+        assert_eq!(
+            Placement::by_rule(60 * MIB, None, little),
+            Placement::Memory
+        );
+        assert_eq!(
+            Placement::by_rule(65 * MIB, None, little),
+            Placement::TempFile
+        );
+        // Unknown: the floor is the threshold.
+        assert_eq!(
+            Placement::by_rule(63 * MIB, None, || None),
+            Placement::Memory
+        );
+        assert_eq!(
+            Placement::by_rule(64 * MIB, None, || None),
+            Placement::TempFile
+        );
+    }
+
+    #[test]
+    fn the_spill_setting_overrides_the_memory_rule() {
+        const MIB: usize = 1 << 20;
+        let plenty = || Some(1u64 << 40);
+        assert_eq!(
+            Placement::by_rule(0, Some("0"), plenty),
+            Placement::TempFile
+        );
+        assert_eq!(
+            Placement::by_rule(100 * MIB, Some(" 100 "), plenty),
+            Placement::TempFile
+        );
+        assert_eq!(
+            Placement::by_rule(99 * MIB, Some("100"), plenty),
+            Placement::Memory
+        );
+        assert_eq!(
+            Placement::by_rule(usize::MAX, Some("off"), || None),
+            Placement::Memory
+        );
+        // An unreadable setting falls back to the floor, not to the memory rule.
+        assert_eq!(
+            Placement::by_rule(65 * MIB, Some("lots"), plenty),
+            Placement::TempFile
+        );
     }
 
     #[test]
