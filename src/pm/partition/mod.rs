@@ -1,0 +1,179 @@
+//! The partitioned build of the progressive mesh: the same half-edge collapses, decided in
+//! spatial blocks with their borders pinned and merged pairwise up a tree until one block
+//! holds the base (`docs/partitioned.md`). The systems that scale mesh simplification work
+//! this way (Nexus's `nxsbuild`, meshoptimizer's clusterlod); Hoppe's view-dependent
+//! refinement (SIGGRAPH 1998) builds a large terrain's progressive mesh as a hierarchy of
+//! such block refinements.
+//!
+//! Steps ([`decimate_in_blocks`]):
+//! 1. the whole mesh's quadrics, once (a vertex's quadric sums its whole star's planes);
+//! 2. the vertices cut into `2^depth` cells of at most the block size (`cells.rs`), the
+//!    leaves of a complete binary merge tree (`tree.rs`);
+//! 3. level by level from the leaves, every node's block decimated by itself, its border
+//!    pinned (`block.rs`), the blocks of a level in parallel; a node's block is what its two
+//!    children left plus the input faces across their border, whose vertices are free now;
+//! 4. each level's collapses interleaved by cost (`order.rs`) and the levels concatenated:
+//!    one collapse sequence of the whole mesh, put into PM order like the one-process
+//!    build's.
+//!
+//! Below the root a block is decimated to half the input vertices its cells hold per level
+//! (`2^-(j+1)` of them at level `j`), so each level of the merge tree is a level of detail
+//! of the whole mesh and every block a task holds stays about the block size. A block never
+//! relaxes the shape rules; only the root, whose result is the base, does, as the
+//! one-process build does at its end.
+//!
+//! Results depend on the input and the block size only: each task is a function of its
+//! inputs, tasks of a level are collected in node order, and the merge breaks ties by node.
+
+mod block;
+mod cells;
+mod order;
+mod tree;
+
+use super::PmError;
+use super::decimate::{DecimateParams, FlatMesh, initial_quadrics};
+use super::progressive::Decimated;
+use crate::progress::Progress;
+use block::{BlockResult, BlockTask, VertexQuadric, decimate_block};
+use glam::DVec3;
+use rayon::prelude::*;
+use tree::MergeTree;
+
+/// Decimates `flat` in blocks of at most `max_block` vertices (see the module docs).
+pub(crate) fn decimate_in_blocks(
+    flat: FlatMesh,
+    params: &DecimateParams,
+    max_block: usize,
+    progress: &dyn Progress,
+) -> Result<Decimated, PmError> {
+    let quadric = initial_quadrics(&flat, params.boundary_weight);
+    let positions = flat.positions();
+    let faces = flat.triangles();
+    let referenced = flat.survivors();
+    drop(flat);
+    let mut quadrics: Vec<VertexQuadric> = (0..positions.len())
+        .map(|v| VertexQuadric {
+            planes: quadric.faces[v],
+            rim: quadric.rim(v as u32).copied(),
+        })
+        .collect();
+    drop(quadric);
+    let totals = (referenced.len(), faces.len());
+    let cells = cells::split_cells(&positions, referenced, max_block);
+    let tree = MergeTree::new(&cells.cell_of, cells.depth, &faces);
+    drop(cells);
+    let input = Input {
+        positions: &positions,
+        faces: &faces,
+        tree: &tree,
+        params,
+        totals,
+    };
+    let mut below: Vec<Vec<[u32; 3]>> = Vec::new();
+    let mut collapses = Vec::new();
+    for j in 0..=tree.depth {
+        let results: Vec<BlockResult> = (0..tree.nodes_at(j))
+            .into_par_iter()
+            .map(|k| decimate_block(input.task(j, k, &below, &quadrics)))
+            .collect();
+        let mut level = Vec::with_capacity(results.len());
+        below = Vec::with_capacity(results.len());
+        for r in results {
+            for &(v, q) in &r.quadrics {
+                quadrics[v as usize] = q;
+            }
+            level.push(r.collapses);
+            below.push(r.faces);
+            if j == tree.depth {
+                let base = below.pop().unwrap_or_default();
+                collapses.extend(order::merge_by_cost(level));
+                progress.update(1.0);
+                return Ok(Decimated {
+                    collapses,
+                    survivors: vertices_of(&base),
+                    n_base_faces: base.len(),
+                    stop: r.stop,
+                });
+            }
+        }
+        collapses.extend(order::merge_by_cost(level));
+        progress.update(f64::from(j + 1) / f64::from(tree.depth + 1));
+    }
+    Err(PmError::Internal("the merge tree has no root".into()))
+}
+
+/// What every task of a build reads from.
+struct Input<'a> {
+    positions: &'a [DVec3],
+    faces: &'a [[u32; 3]],
+    tree: &'a MergeTree,
+    params: &'a DecimateParams,
+    /// Referenced vertices and faces of the whole mesh.
+    totals: (usize, usize),
+}
+
+impl Input<'_> {
+    /// The task of node `k` at level `j`: its children's triangles (`below`, the previous
+    /// level's results) and the input faces that join here.
+    fn task(
+        &self,
+        j: u32,
+        k: usize,
+        below: &[Vec<[u32; 3]>],
+        quadrics: &[VertexQuadric],
+    ) -> BlockTask {
+        let mut faces: Vec<[u32; 3]> = Vec::new();
+        if j > 0 {
+            faces.extend_from_slice(&below[2 * k]);
+            faces.extend_from_slice(&below[2 * k + 1]);
+        }
+        let joined = self.tree.joined(j, k).iter();
+        faces.extend(joined.map(|&t| self.faces[t as usize]));
+        let vertices = vertices_of(&faces);
+        BlockTask {
+            positions: vertices
+                .iter()
+                .map(|&v| self.positions[v as usize])
+                .collect(),
+            quadrics: vertices.iter().map(|&v| quadrics[v as usize]).collect(),
+            pinned: vertices
+                .iter()
+                .map(|&v| self.tree.is_pinned(j, k, v))
+                .collect(),
+            faces,
+            vertices,
+            input_faces: self.tree.faces_in(j, k),
+            params: self.block_params(j, k),
+            last: j == self.tree.depth,
+        }
+    }
+
+    /// The decimator's parameters of node `k` at level `j`: below the root, down to half
+    /// the vertices its cells hold per level, and no further than its share of the user's
+    /// targets.
+    fn block_params(&self, j: u32, k: usize) -> DecimateParams {
+        let p = *self.params;
+        if j == self.tree.depth {
+            return p;
+        }
+        let (n_vertices, n_faces) = self.totals;
+        let held = self.tree.vertices_in(j, k);
+        let share = |target: usize, part: usize, whole: usize| {
+            (target as f64 * part as f64 / whole.max(1) as f64).ceil() as usize
+        };
+        let faces_in = self.tree.faces_in(j, k);
+        DecimateParams {
+            target_vertices: (held >> (j + 1)).max(share(p.target_vertices, held, n_vertices)),
+            target_faces: share(p.target_faces, faces_in, n_faces),
+            ..p
+        }
+    }
+}
+
+/// The vertices of `faces`, ascending.
+fn vertices_of(faces: &[[u32; 3]]) -> Vec<u32> {
+    let mut v: Vec<u32> = faces.iter().flatten().copied().collect();
+    v.sort_unstable();
+    v.dedup();
+    v
+}
