@@ -40,6 +40,9 @@ use crate::format;
 use crate::io::{self, MeshFormat};
 use crate::subdiv::Refinement;
 
+mod build_path;
+pub use build_path::{BuildPath, choose_build_path, parse_memory_size};
+
 /// The environment variable that turns the check off (`off`, `0` or `no`).
 pub const CHECK_ENV: &str = "MESHPYR_MEMORY_CHECK";
 
