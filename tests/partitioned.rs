@@ -7,7 +7,7 @@ use meshpyr::io::read_mesh;
 use meshpyr::mesh::{Mesh, PolygonMesh};
 use meshpyr::pm::{MeshRecords, PmOptions, PmParts, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Pyramid, PyramidOptions};
+use meshpyr::pyramid::{Filter, Pyramid, PyramidOptions};
 use proptest::prelude::*;
 
 mod common;
@@ -131,6 +131,98 @@ fn a_block_size_below_the_minimum_is_an_error() {
     let poly = load("tripod.ply");
     let err = ProgressiveMesh::from_polygons(&poly, &blocks(3), &NoProgress).unwrap_err();
     assert!(err.to_string().contains("block vertices"), "{err}");
+}
+
+/// A scan-like open surface of `n × n` vertices: two scales of bumps, a hash noise a tenth of
+/// the spacing, and two round holes.
+fn bumpy_scan(n: usize) -> PolygonMesh {
+    let h = 1.0 / (n - 1) as f64;
+    let noise = |i: usize| {
+        let x = (i as u64)
+            .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            .rotate_left(17);
+        (x % 10_000) as f64 / 10_000.0 - 0.5
+    };
+    let mut positions = Vec::with_capacity(n * n);
+    for y in 0..n {
+        for x in 0..n {
+            let (u, v) = (x as f64 * h, y as f64 * h);
+            let z = 0.08 * (6.0 * u).sin() * (5.0 * v).cos()
+                + 0.01 * (40.0 * u).sin() * (37.0 * v).sin()
+                + 0.1 * h * noise(positions.len());
+            positions.push(DVec3::new(u, v, z));
+        }
+    }
+    let hole = |u: f64, v: f64| {
+        let d = |cu: f64, cv: f64| (u - cu).hypot(v - cv);
+        d(0.3, 0.6) < 0.07 || d(0.7, 0.3) < 0.05
+    };
+    let id = |x: usize, y: usize| (y * n + x) as u32;
+    let mut faces = Vec::new();
+    for y in 0..n - 1 {
+        for x in 0..n - 1 {
+            if hole((x as f64 + 0.5) * h, (y as f64 + 0.5) * h) {
+                continue;
+            }
+            faces.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
+            faces.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
+        }
+    }
+    PolygonMesh::from_triangle_vec(positions, faces)
+}
+
+/// Sorted per-vertex distances between two meshes with the same vertices.
+fn distances(a: &PolygonMesh, b: &PolygonMesh) -> Vec<f64> {
+    let mut d: Vec<f64> = a
+        .positions
+        .iter()
+        .zip(&b.positions)
+        .map(|(p, q)| p.distance(*q))
+        .collect();
+    d.sort_by(f64::total_cmp);
+    d
+}
+
+fn p99(sorted: &[f64]) -> f64 {
+    sorted[(sorted.len() - 1) * 99 / 100]
+}
+
+#[test]
+fn a_filter_on_a_hierarchy_of_sixteen_blocks_adds_no_spikes_at_their_borders() {
+    // Issue 47's spike bound on a small scan cut into 16 blocks (4 merge levels): the largest
+    // |partitioned − input| stays within 1.5 × the largest |one process − input| under the
+    // README's enhancement. The partitioned result differs from the one-process one by less
+    // than the filter's own displacement (p99); issue 47's agreement bound, 0.25 of it, is
+    // not met yet (docs/partitioned.md, "How close it is").
+    let scan = bumpy_scan(160);
+    let n = scan.n_vertices();
+    let filter = Filter::new().gain(n / 32, n / 2, 2.0);
+    let filtered = |pm: PmOptions| {
+        let options = PyramidOptions {
+            pm,
+            ..PyramidOptions::default()
+        };
+        Pyramid::build_with(scan.clone(), &options, &NoProgress)
+            .unwrap()
+            .filter(&filter)
+    };
+    let whole = filtered(PmOptions::default());
+    let parts = filtered(blocks(1600));
+    let moved = distances(&whole, &scan);
+    let apart = distances(&parts, &whole);
+    let parts_moved = distances(&parts, &scan);
+    assert!(p99(&moved) > 0.0);
+    assert!(
+        p99(&apart) < p99(&moved),
+        "p99 |partitioned − one process| = {:.3e}, p99 |one process − input| = {:.3e}",
+        p99(&apart),
+        p99(&moved)
+    );
+    let (max_parts, max_whole) = (parts_moved[n - 1], moved[n - 1]);
+    assert!(
+        max_parts <= 1.5 * max_whole,
+        "max |partitioned − input| = {max_parts:.3e}, max |one process − input| = {max_whole:.3e}"
+    );
 }
 
 /// An open grid with jitter and holes (some faces left out), in several copies side by side.

@@ -737,6 +737,10 @@ impl std::fmt::Display for Stop {
     }
 }
 
+/// Passes of the decimator one at a time, for blocks that take them in step.
+#[path = "partition/passes.rs"]
+pub(crate) mod passes;
+
 /// What a decimation did besides its collapses.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub(crate) struct Outcome {

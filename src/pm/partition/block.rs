@@ -67,15 +67,33 @@ pub(crate) struct BlockResult {
 
 /// Runs one block task.
 pub(crate) fn decimate_block(task: BlockTask) -> BlockResult {
+    let run = Run {
+        input_faces: task.input_faces,
+        relax: task.last,
+    };
+    let params = task.params;
+    let (block, mesh, quadric) = working_mesh(task);
+    let (collapses, mesh, outcome, quadric) =
+        decimate_from(mesh, quadric, run, &params, &NoProgress);
+    block.result(collapses, &mesh, &quadric, outcome.stop)
+}
+
+/// What a block keeps while its working mesh is decimated: its vertices (local index →
+/// input index) and which are pinned.
+pub(crate) struct Block {
+    vertices: Vec<u32>,
+    pinned: Vec<bool>,
+}
+
+/// The working mesh and quadrics of a task (steps 1 and 2), its vertices pinned.
+pub(crate) fn working_mesh(task: BlockTask) -> (Block, FlatMesh, Quadrics) {
     let BlockTask {
         faces,
         vertices,
         positions,
         quadrics,
         pinned,
-        input_faces,
-        params,
-        last,
+        ..
     } = task;
     let local = |v: u32| vertices.binary_search(&v).map_or(NONE, |i| i as u32);
     let corner_vertex: Vec<u32> = faces.iter().flatten().map(|&v| local(v)).collect();
@@ -89,55 +107,61 @@ pub(crate) fn decimate_block(task: BlockTask) -> BlockResult {
         .filter_map(|v| quadrics[v as usize].rim.map(|r| (v, r)))
         .collect();
     let planes = quadrics.iter().map(|q| q.planes).collect();
-    let run = Run {
-        input_faces,
-        relax: last,
-    };
-    let (collapses, mesh, outcome, quadric) = decimate_from(
+    (
+        Block { vertices, pinned },
         mesh,
         Quadrics::new(planes, &rims),
-        run,
-        &params,
-        &NoProgress,
-    );
-    let global = |v: u32| {
-        if v == NONE {
-            NONE
-        } else {
-            vertices[v as usize]
-        }
-    };
-    let collapses = collapses
-        .into_iter()
-        .map(|c| Collapse {
-            from: global(c.from),
-            to: global(c.to),
-            left: global(c.left),
-            right: global(c.right),
-            error_sq: c.error_sq,
-        })
-        .collect();
-    let quadrics = mesh
-        .survivors()
-        .into_iter()
-        .filter(|&v| !pinned[v as usize])
-        .map(|v| {
-            let q = VertexQuadric {
-                planes: quadric.faces[v as usize],
-                rim: quadric.rim(v).copied(),
-            };
-            (global(v), q)
-        })
-        .collect();
-    BlockResult {
-        collapses,
-        faces: mesh
-            .triangles()
+    )
+}
+
+impl Block {
+    /// The task's result from its decimation (step 4).
+    pub(crate) fn result(
+        &self,
+        collapses: Vec<Collapse>,
+        mesh: &FlatMesh,
+        quadric: &Quadrics,
+        stop: Stop,
+    ) -> BlockResult {
+        let global = |v: u32| {
+            if v == NONE {
+                NONE
+            } else {
+                self.vertices[v as usize]
+            }
+        };
+        let collapses = collapses
             .into_iter()
-            .map(|t| t.map(global))
-            .collect(),
-        quadrics,
-        stop: outcome.stop,
+            .map(|c| Collapse {
+                from: global(c.from),
+                to: global(c.to),
+                left: global(c.left),
+                right: global(c.right),
+                error_sq: c.error_sq,
+            })
+            .collect();
+        let quadrics = mesh
+            .survivors()
+            .into_iter()
+            .filter(|&v| !self.pinned[v as usize])
+            .map(|v| {
+                let q = VertexQuadric {
+                    planes: quadric.faces[v as usize],
+                    rim: quadric.rim(v).copied(),
+                };
+                (global(v), q)
+            })
+            .collect();
+        BlockResult {
+            collapses,
+            faces: mesh
+                .triangles()
+                .into_iter()
+                .map(|t| t.map(global))
+                .collect(),
+            quadrics,
+            stop,
+        }
     }
 }
 

@@ -27,6 +27,7 @@
 
 mod block;
 mod cells;
+mod lockstep;
 mod order;
 mod tree;
 
@@ -36,6 +37,7 @@ use super::progressive::Decimated;
 use crate::progress::Progress;
 use block::{BlockResult, BlockTask, VertexQuadric, decimate_block};
 use glam::DVec3;
+use lockstep::Level;
 use rayon::prelude::*;
 use tree::MergeTree;
 
@@ -71,11 +73,24 @@ pub(crate) fn decimate_in_blocks(
     };
     let mut below: Vec<Vec<[u32; 3]>> = Vec::new();
     let mut collapses = Vec::new();
+    let mut vertices = totals.0;
     for j in 0..=tree.depth {
-        let results: Vec<BlockResult> = (0..tree.nodes_at(j))
-            .into_par_iter()
-            .map(|k| decimate_block(input.task(j, k, &below, &quadrics)))
-            .collect();
+        let tasks = (0..tree.nodes_at(j)).into_par_iter();
+        let tasks: Vec<BlockTask> = tasks.map(|k| input.task(j, k, &below, &quadrics)).collect();
+        // The input faces outside every block of the level join above it, untouched.
+        let pending_faces = totals.1 - tasks.iter().map(|t| t.input_faces).sum::<usize>();
+        let results: Vec<BlockResult> = if j == tree.depth {
+            tasks.into_iter().map(decimate_block).collect()
+        } else {
+            let level = Level {
+                input_faces: totals.1,
+                pending_faces,
+                vertices,
+                target_vertices: (totals.0 >> (j + 1)).max(params.target_vertices),
+            };
+            lockstep::decimate_in_step(tasks, &level, params)
+        };
+        vertices -= results.iter().map(|r| r.collapses.len()).sum::<usize>();
         let mut level = Vec::with_capacity(results.len());
         below = Vec::with_capacity(results.len());
         for r in results {
