@@ -9,18 +9,19 @@
 //! 1. the whole mesh's quadrics, once (a vertex's quadric sums its whole star's planes);
 //! 2. the vertices cut into `2^depth` cells of at most the block size (`cells.rs`), the
 //!    leaves of a complete binary merge tree (`tree.rs`);
-//! 3. level by level from the leaves, every node's block decimated by itself, its border
-//!    pinned (`block.rs`), the blocks of a level in parallel; a node's block is what its two
-//!    children left plus the input faces across their border, whose vertices are free now;
+//! 3. level by level from the leaves, every node's block decimated with its border pinned
+//!    (`block.rs`); a node's block is what its two children left plus the input faces across
+//!    their border, whose vertices are free now. Below the root the blocks of a level take
+//!    their passes in step, one cost cut per pass for the whole mesh (`lockstep.rs`), down to
+//!    `2^-(j+1)` of the input's vertices at level `j`; the root decimates alone to the base;
 //! 4. each level's collapses interleaved by cost (`order.rs`) and the levels concatenated:
 //!    one collapse sequence of the whole mesh, put into PM order like the one-process
 //!    build's.
 //!
-//! Below the root a block is decimated to half the input vertices its cells hold per level
-//! (`2^-(j+1)` of them at level `j`), so each level of the merge tree is a level of detail
-//! of the whole mesh and every block a task holds stays about the block size. A block never
-//! relaxes the shape rules; only the root, whose result is the base, does, as the
-//! one-process build does at its end.
+//! Each level of the merge tree is a level of detail of the whole mesh, and a block holds
+//! about the block size at every level. A block below the root never relaxes the shape
+//! rules; only the root, whose result is the base, does, as the one-process build does at
+//! its end.
 //!
 //! Results depend on the input and the block size only: each task is a function of its
 //! inputs, tasks of a level are collected in node order, and the merge breaks ties by node.
@@ -69,7 +70,6 @@ pub(crate) fn decimate_in_blocks(
         faces: &faces,
         tree: &tree,
         params,
-        totals,
     };
     let mut below: Vec<Vec<[u32; 3]>> = Vec::new();
     let mut collapses = Vec::new();
@@ -123,8 +123,6 @@ struct Input<'a> {
     faces: &'a [[u32; 3]],
     tree: &'a MergeTree,
     params: &'a DecimateParams,
-    /// Referenced vertices and faces of the whole mesh.
-    totals: (usize, usize),
 }
 
 impl Input<'_> {
@@ -158,29 +156,8 @@ impl Input<'_> {
             faces,
             vertices,
             input_faces: self.tree.faces_in(j, k),
-            params: self.block_params(j, k),
+            params: *self.params,
             last: j == self.tree.depth,
-        }
-    }
-
-    /// The decimator's parameters of node `k` at level `j`: below the root, down to half
-    /// the vertices its cells hold per level, and no further than its share of the user's
-    /// targets.
-    fn block_params(&self, j: u32, k: usize) -> DecimateParams {
-        let p = *self.params;
-        if j == self.tree.depth {
-            return p;
-        }
-        let (n_vertices, n_faces) = self.totals;
-        let held = self.tree.vertices_in(j, k);
-        let share = |target: usize, part: usize, whole: usize| {
-            (target as f64 * part as f64 / whole.max(1) as f64).ceil() as usize
-        };
-        let faces_in = self.tree.faces_in(j, k);
-        DecimateParams {
-            target_vertices: (held >> (j + 1)).max(share(p.target_vertices, held, n_vertices)),
-            target_faces: share(p.target_faces, faces_in, n_faces),
-            ..p
         }
     }
 }

@@ -22,8 +22,6 @@ pub(crate) struct MergeTree {
     /// `joined[j][k]`: the input faces that first lie inside node `k` of level `j`, in input
     /// order.
     joined: Vec<Vec<Vec<u32>>>,
-    /// Referenced vertices per cell.
-    cell_vertices: Vec<usize>,
 }
 
 impl MergeTree {
@@ -45,17 +43,10 @@ impl MergeTree {
             let level = 32 - (lo ^ hi).leading_zeros();
             joined[level as usize][(lo >> level) as usize].push(t as u32);
         }
-        let mut cell_vertices = vec![0usize; n_cells];
-        for (v, &c) in cell_of.iter().enumerate() {
-            if star[v].0 != u32::MAX {
-                cell_vertices[c as usize] += 1;
-            }
-        }
         MergeTree {
             depth,
             star,
             joined,
-            cell_vertices,
         }
     }
 
@@ -80,11 +71,6 @@ impl MergeTree {
         let (lo, hi) = self.star[v as usize];
         let cells = self.cells(j, k);
         !(cells.contains(&(lo as usize)) && cells.contains(&(hi as usize)))
-    }
-
-    /// Number of input vertices in the cells of node `k` of level `j`.
-    pub(crate) fn vertices_in(&self, j: u32, k: usize) -> usize {
-        self.cell_vertices[self.cells(j, k)].iter().sum()
     }
 
     /// Number of input faces inside node `k` of level `j` (its own and its descendants').
@@ -134,6 +120,5 @@ mod tests {
         assert!(t.is_pinned(1, 0, 1)); // its star reaches cell 2
         assert!(!t.is_pinned(1, 1, 5));
         assert!(!t.is_pinned(2, 0, 2));
-        assert_eq!(t.vertices_in(1, 1), 3);
     }
 }
