@@ -42,6 +42,9 @@ use crate::machine::cgroup_limit;
 pub use crate::machine::{parse_cgroup_limit, parse_meminfo};
 use crate::subdiv::Refinement;
 
+mod build_path;
+pub use build_path::{BuildPath, choose_build_path, parse_memory_size};
+
 /// The environment variable that turns the check off (`off`, `0` or `no`).
 pub const CHECK_ENV: &str = "MESHPYR_MEMORY_CHECK";
 

@@ -2,13 +2,14 @@
 //! its detail pyramid and save them with the exact input as a `.pyr` file (see
 //! `formats/pyr.md`).
 
+use super::blocks::PathOptions;
 use super::input::read_input_mesh_for;
 use super::{BarProgress, Global};
 use anyhow::Context;
 use meshpyr::format;
 use meshpyr::io;
 use meshpyr::memory::Job;
-use meshpyr::pm::ProgressiveMesh;
+use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::pyramid::{PyrContent, Pyramid, PyramidOptions};
 use meshpyr::relax::RelaxKind;
 use std::path::PathBuf;
@@ -30,14 +31,12 @@ pub(crate) struct BuildArgs {
     /// the detail analysis every time they open it.
     #[arg(long)]
     pub(crate) no_details: bool,
+    #[command(flatten)]
+    pub(crate) path: PathOptions,
 }
 
 /// Runs `meshpyr build`.
 pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
-    let options = PyramidOptions {
-        relaxation: args.relax.spec(),
-        ..PyramidOptions::default()
-    };
     super::output::check_output_folder(&args.output)?;
     // Without details: the progressive mesh only, a pyramid's worth of memory at most.
     let job = if args.no_details {
@@ -46,6 +45,16 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
         Job::SavePyramid
     };
     let input = read_input_mesh_for(&args.input, job)?;
+    let options = PyramidOptions {
+        relaxation: args.relax.spec(),
+        pm: PmOptions {
+            block_vertices: args
+                .path
+                .choose(&args.input, job, &input, global)
+                .block_vertices(),
+            ..PmOptions::default()
+        },
+    };
     let n_input = input.n_vertices();
     let start = Instant::now();
     let (encoded, pm) = if args.no_details {

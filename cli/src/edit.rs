@@ -3,8 +3,9 @@
 //! the finer details follow.
 
 use super::Global;
+use super::blocks::PathOptions;
 use super::filter::{FilterOptions, say_band_warnings};
-use super::input::load_pyramid;
+use super::input::load_pyramid_by;
 use anyhow::Context;
 use glam::DVec3;
 use meshpyr::io;
@@ -77,6 +78,8 @@ pub(crate) struct EditArgs {
     /// them; with them, saving analyses the edited positions).
     #[arg(long)]
     pub(crate) no_details: bool,
+    #[command(flatten)]
+    pub(crate) path: PathOptions,
 }
 
 /// Runs `meshpyr edit`.
@@ -93,7 +96,7 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
     if !(args.radius > 0.0 && args.radius.is_finite()) {
         anyhow::bail!("--radius must be a positive number, got {}", args.radius);
     }
-    let scan = load_pyramid(&args.input, args.relax, global)?;
+    let scan = load_pyramid_by(&args.input, args.relax, &args.path, global)?;
     let levels = scan.levels();
     if !levels.contains(&args.level) {
         anyhow::bail!(

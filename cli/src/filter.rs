@@ -4,7 +4,8 @@
 //! Also holds the filter options and their resolution on a pyramid, which `edit` shares.
 
 use super::Global;
-use super::input::load_pyramid;
+use super::blocks::PathOptions;
+use super::input::load_pyramid_by;
 use meshpyr::pyramid::{Filter, GainBand, GainParseError, LevelSpec};
 use meshpyr::relax::RelaxKind;
 use meshpyr::wording::Count;
@@ -88,6 +89,8 @@ pub(crate) struct FilterArgs {
     /// uses the one it was built with).
     #[arg(long, value_parser = crate::choices::named::<RelaxKind>())]
     pub(crate) relax: Option<RelaxKind>,
+    #[command(flatten)]
+    pub(crate) path: PathOptions,
 }
 
 /// Runs `meshpyr filter`.
@@ -99,7 +102,7 @@ pub(crate) fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
             "no filter given: use --lowpass N, --stopband A:B, --enhance A:B=G or --gain A:B=G"
         );
     }
-    let scan = load_pyramid(&args.input, args.relax, global)?;
+    let scan = load_pyramid_by(&args.input, args.relax, &args.path, global)?;
     let start = Instant::now();
     let levels = scan.levels();
     let filtered = scan.into_filtered(&filter);

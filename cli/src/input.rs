@@ -1,13 +1,14 @@
 //! The input of the commands: a mesh file or a `.pyr` file (recognised by its signature,
 //! whatever its name), read as a mesh or turned into a detail pyramid.
 
+use super::blocks::PathOptions;
 use super::{BarProgress, Global};
 use anyhow::Context;
 use meshpyr::format;
 use meshpyr::io;
 use meshpyr::memory::{self, InputSize, Job};
 use meshpyr::mesh::{MissingSurface, PolygonMesh};
-use meshpyr::pm::ProgressiveMesh;
+use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::{NoProgress, Progress};
 use meshpyr::pyramid::{self, DetailSource, Pyramid, PyramidOptions};
 use meshpyr::relax::{RelaxKind, RelaxationSpec};
@@ -150,18 +151,34 @@ pub(crate) fn load_pyramid(
     relax: Option<RelaxKind>,
     global: &Global,
 ) -> anyhow::Result<Pyramid> {
+    load_pyramid_by(path, relax, &PathOptions::default(), global)
+}
+
+/// [`load_pyramid`], a mesh input's hierarchy built on the path `options` choose (said
+/// unless `--quiet`; a `.pyr` file's hierarchy is read, not built).
+pub(crate) fn load_pyramid_by(
+    path: &Path,
+    relax: Option<RelaxKind>,
+    options: &PathOptions,
+    global: &Global,
+) -> anyhow::Result<Pyramid> {
     let wanted = relax.map(RelaxKind::spec);
     if is_pyr_file(path) {
         check_memory(path, Job::Pyramid)?;
         return load_pyr_scan(path, wanted, global);
     }
     let input = read_input_mesh_for(path, Job::Pyramid)?;
-    build_pyramid(
-        input,
-        wanted.unwrap_or_default(),
-        &path.display().to_string(),
-        global,
-    )
+    let options = PyramidOptions {
+        relaxation: wanted.unwrap_or_default(),
+        pm: PmOptions {
+            block_vertices: options
+                .choose(path, Job::Pyramid, &input, global)
+                .block_vertices(),
+            ..PmOptions::default()
+        },
+    };
+    let name = path.display().to_string();
+    build_pyramid_with(input, &options, &name, global, &NoProgress, &mut |_| {})
 }
 
 /// Loads a `.pyr` file and its pyramid (with `relaxation`, default the file's), from its
@@ -280,14 +297,26 @@ pub(crate) fn build_pyramid_watched(
     also: &dyn Progress,
     hierarchy_built: &mut dyn FnMut(&ProgressiveMesh),
 ) -> anyhow::Result<Pyramid> {
-    let start = Instant::now();
-    let bar = global.progress("pyramid");
     let options = PyramidOptions {
         relaxation,
         ..PyramidOptions::default()
     };
+    build_pyramid_with(input, &options, name, global, also, hierarchy_built)
+}
+
+/// [`build_pyramid_watched`] with all the build options.
+fn build_pyramid_with(
+    input: PolygonMesh,
+    options: &PyramidOptions,
+    name: &str,
+    global: &Global,
+    also: &dyn Progress,
+    hierarchy_built: &mut dyn FnMut(&ProgressiveMesh),
+) -> anyhow::Result<Pyramid> {
+    let start = Instant::now();
+    let bar = global.progress("pyramid");
     let progress = Both(&BarProgress(&bar), also);
-    let scan = Pyramid::build_staged(input, &options, &progress, hierarchy_built)
+    let scan = Pyramid::build_staged(input, options, &progress, hierarchy_built)
         .with_context(|| format!("cannot build the detail pyramid of {name}"))?;
     bar.finish_and_clear();
     let p = &scan.pyramid;

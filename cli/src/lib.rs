@@ -15,6 +15,7 @@ macro_rules! outln {
     };
 }
 
+mod blocks;
 mod build;
 mod choices;
 mod compare;

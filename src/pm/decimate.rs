@@ -83,7 +83,9 @@ const BOUNDARY: u32 = 1 << 31;
 /// The survivor of a collapse in the current pass: its quadric changed, so its edges wait for
 /// the next pass.
 const LOCKED: u32 = 1 << 30;
-const VALENCE: u32 = LOCKED - 1;
+/// A vertex on a block border of a partitioned build (`block.rs`): no edge at it collapses.
+const PINNED: u32 = 1 << 29;
+const VALENCE: u32 = PINNED - 1;
 
 /// A corner: its vertex and the twin of the half-edge that leaves it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -181,6 +183,19 @@ impl FlatMesh {
         twin: Vec<u32>,
         slot: Option<Vec<u32>>,
     ) -> FlatMesh {
+        let mut mesh = FlatMesh::at_positions(positions, corner_vertex, twin, slot);
+        mesh.recentre();
+        mesh
+    }
+
+    /// [`Self::with_vertex_state`] without moving the positions to the bounding box's centre
+    /// (the blocks of a partitioned build share the whole mesh's frame: `block.rs`).
+    pub(crate) fn at_positions(
+        positions: Vec<DVec3>,
+        corner_vertex: &[u32],
+        twin: Vec<u32>,
+        slot: Option<Vec<u32>>,
+    ) -> FlatMesh {
         let nh = corner_vertex.len();
         let mut vertices: Vec<Vertex> = positions
             .iter()
@@ -204,19 +219,6 @@ impl FlatMesh {
             }
         }
         let n_vertices = vertices.iter().filter(|x| x.corner != NONE).count();
-        // Work relative to the centre of the mesh's bounding box. Plane quadrics in absolute
-        // coordinates carry `d² = (n·p)²` terms that cancel in every error evaluation: a scan
-        // in georeferenced units (offsets of 1e5–1e7 from the origin are common) would lose
-        // most of the error's digits and collapse in a nearly random order. Errors, normals
-        // and shapes are translation-invariant, and collapses create no positions, so the
-        // hierarchy only gains digits.
-        let used = vertices.iter().filter(|x| x.corner != NONE);
-        if let Some(bounds) = BoundingBox::of(used.map(|x| x.position)) {
-            let origin = bounds.centre();
-            for x in &mut vertices {
-                x.position -= origin;
-            }
-        }
         let corners = corner_vertex
             .iter()
             .zip(&twin)
@@ -232,8 +234,32 @@ impl FlatMesh {
         }
     }
 
+    /// Moves the positions to the centre of the used vertices' bounding box.
+    fn recentre(&mut self) {
+        let vertices = &mut self.vertices;
+        // Work relative to the centre of the mesh's bounding box. Plane quadrics in absolute
+        // coordinates carry `d² = (n·p)²` terms that cancel in every error evaluation: a scan
+        // in georeferenced units (offsets of 1e5–1e7 from the origin are common) would lose
+        // most of the error's digits and collapse in a nearly random order. Errors, normals
+        // and shapes are translation-invariant, and collapses create no positions, so the
+        // hierarchy only gains digits.
+        let used = vertices.iter().filter(|x| x.corner != NONE);
+        if let Some(bounds) = BoundingBox::of(used.map(|x| x.position)) {
+            let origin = bounds.centre();
+            for x in vertices.iter_mut() {
+                x.position -= origin;
+            }
+        }
+    }
+
+    /// The positions of all vertices, in the working frame (recentred unless built
+    /// [`at_positions`](Self::at_positions)).
+    pub(crate) fn positions(&self) -> Vec<DVec3> {
+        self.vertices.iter().map(|x| x.position).collect()
+    }
+
     /// Number of live triangles.
-    pub(super) fn n_faces(&self) -> usize {
+    pub(crate) fn n_faces(&self) -> usize {
         self.n_faces
     }
 
@@ -245,7 +271,7 @@ impl FlatMesh {
     }
 
     /// The live triangles in triangle order, each starting at its first corner.
-    pub(super) fn triangles(&self) -> Vec<[u32; 3]> {
+    pub(crate) fn triangles(&self) -> Vec<[u32; 3]> {
         self.corners
             .chunks_exact(3)
             .filter(|t| t[0].vertex != NONE)
@@ -342,6 +368,16 @@ impl FlatMesh {
         self.vertices[v as usize].valence_flags & LOCKED != 0
     }
 
+    /// Pins vertex `v`: no edge at it collapses (a block border of a partitioned build).
+    pub(crate) fn pin(&mut self, v: u32) {
+        self.vertices[v as usize].valence_flags |= PINNED;
+    }
+
+    #[inline]
+    fn is_pinned(&self, v: u32) -> bool {
+        self.vertices[v as usize].valence_flags & PINNED != 0
+    }
+
     #[inline]
     fn set_locked(&mut self, v: u32, locked: bool) {
         let x = &mut self.vertices[v as usize].valence_flags;
@@ -412,6 +448,9 @@ impl FlatMesh {
     ) -> (Option<f64>, Option<f64>) {
         let boundary_edge = self.is_boundary_halfedge(h) || self.is_boundary_halfedge(o);
         let (a, b) = (self.tail_vertex(h), self.head_vertex(h));
+        if self.is_pinned(a) || self.is_pinned(b) {
+            return (None, None);
+        }
         let q = quadric.merged(a, b);
         let cost = |e: u32, p: DVec3| match seams {
             None => q.error(p),
@@ -650,7 +689,7 @@ fn by_cost(a: &Candidate, b: &Candidate) -> std::cmp::Ordering {
     a.cost.total_cmp(&b.cost).then(a.key.cmp(&b.key))
 }
 
-fn initial_quadrics(mesh: &FlatMesh, boundary_weight: f64) -> Quadrics {
+pub(crate) fn initial_quadrics(mesh: &FlatMesh, boundary_weight: f64) -> Quadrics {
     let mut q = vec![Quadric::default(); mesh.vertices.len()];
     for t in mesh.corners.chunks_exact(3) {
         let [a, b, c] = [t[0].vertex, t[1].vertex, t[2].vertex];
@@ -724,6 +763,10 @@ impl std::fmt::Display for Stop {
         }
     }
 }
+
+/// Passes of the decimator one at a time, for blocks that take them in step.
+#[path = "partition/passes.rs"]
+pub(crate) mod passes;
 
 /// What a decimation did besides its collapses.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -824,20 +867,49 @@ pub(crate) fn decimate(
 
 /// [`decimate`] keeping the seams of `seams` (whose wedges follow the collapses).
 pub(crate) fn decimate_with_seams(
-    mut mesh: FlatMesh,
+    mesh: FlatMesh,
     params: &DecimateParams,
     seams: Option<&mut Seams>,
     progress: &dyn Progress,
 ) -> (Vec<Collapse>, FlatMesh, Outcome) {
+    let quadric = initial_quadrics(&mesh, params.boundary_weight);
+    let run = Run {
+        input_faces: mesh.n_faces,
+        relax: true,
+    };
+    let (collapses, mesh, outcome, _) = decimate_from(mesh, quadric, run, params, seams, progress);
+    (collapses, mesh, outcome)
+}
+
+/// How a decimation relates to the whole build: a block of a partitioned build
+/// (`partition/block.rs`) starts from a mesh already decimated and stops where the whole
+/// mesh's build would relax its rules.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Run {
+    /// The faces the rules' coarseness is measured against (the input faces the mesh covers).
+    pub input_faces: usize,
+    /// Whether a pass that finds nothing relaxes the shape rules (else the decimation stops).
+    pub relax: bool,
+}
+
+/// [`decimate`] from the given quadrics; also returns the quadrics at the end.
+pub(crate) fn decimate_from(
+    mut mesh: FlatMesh,
+    quadric: Quadrics,
+    run: Run,
+    params: &DecimateParams,
+    seams: Option<&mut Seams>,
+    progress: &dyn Progress,
+) -> (Vec<Collapse>, FlatMesh, Outcome, Quadrics) {
     let mut state = Decimation {
-        quadric: initial_quadrics(&mesh, params.boundary_weight),
+        quadric,
         locked: Vec::new(),
         collapses: Vec::new(),
         seams,
     };
     let mut cands: Vec<Candidate> = Vec::new();
     let mut relaxed = [0usize; 3];
-    let start_faces = mesh.n_faces;
+    let start_faces = run.input_faces.max(mesh.n_faces);
     let work = start_faces.saturating_sub(params.target_faces).max(1);
     let mut schedule = Schedule::new();
     let mut stop = Stop::Target;
@@ -856,6 +928,8 @@ pub(crate) fn decimate_with_seams(
         if cands.is_empty() {
             stop = if params.max_error_sq.is_finite() {
                 Stop::ErrorBound
+            } else if !run.relax {
+                Stop::NoLegalCollapse(Vec::new())
             } else {
                 Stop::NoLegalCollapse(mesh.refusals(&state.quadric, state.seams.as_deref(), params))
             };
@@ -884,9 +958,14 @@ pub(crate) fn decimate_with_seams(
             ));
             break;
         }
+        if !run.relax && schedule.relaxation != Relaxation::None {
+            stop = Stop::NoLegalCollapse(Vec::new());
+            break;
+        }
     }
     progress.update(1.0);
-    (state.collapses, mesh, Outcome { stop, relaxed })
+    let outcome = Outcome { stop, relaxed };
+    (state.collapses, mesh, outcome, state.quadric)
 }
 
 /// What the boundary planes count for in a pass starting with `faces` of the input's

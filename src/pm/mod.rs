@@ -8,6 +8,8 @@
 //!   them ([`Relaxation`]).
 //! - `quadric`: area-weighted plane quadrics.
 //! - `decimate`: the greedy batched decimation loop, on a flat corner table.
+//! - `partition`: the same decimation in spatial blocks with pinned borders, merged up a tree
+//!   ([`PmOptions::block_vertices`]; `docs/partitioned.md`).
 //! - [`ProgressiveMesh`] / [`PmCursor`]: the hierarchy and its cursor.
 //! - [`FlatReplay`]: vertex splits replayed on flat arrays (reading and writing `.pyr` files).
 //! - [`simplify()`]: a file-level mesh cut at a level, attributes carried along;
@@ -22,6 +24,7 @@ mod decimate_reference;
 pub(crate) mod fuzz;
 mod goal;
 mod legality;
+mod partition;
 pub(crate) mod prefetch;
 mod progressive;
 pub(crate) mod quadric;
@@ -39,7 +42,7 @@ pub use goal::{SimplifyGoal, simplify_to_goal};
 pub use legality::Refusal;
 pub use legality::{Legality, Relaxation};
 pub use progressive::SplitReplay;
-pub use progressive::{PmCursor, PmOptions, PmParts, ProgressiveMesh};
+pub use progressive::{MIN_BLOCK_VERTICES, PmCursor, PmOptions, PmParts, ProgressiveMesh};
 pub use progressive::{PmError, VertexSplit};
 pub use replay::FlatReplay;
 pub(crate) use replay::{FaceBuckets, canonical_sorted};

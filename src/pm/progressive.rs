@@ -2,7 +2,7 @@
 //! that walks the levels one split at a time.
 
 use super::collapse::{half_edge_collapse, vertex_split};
-use super::decimate::{Collapse, DecimateParams, FlatMesh, Outcome, Stop, decimate};
+use super::decimate::{Collapse, DecimateParams, FlatMesh, Stop, decimate};
 use crate::mesh::{BoundingBox, CornerTable, Mesh, PolygonMesh, SlotIndex, SourceMap, VertexId};
 use crate::progress::Progress;
 use glam::DVec3;
@@ -40,6 +40,11 @@ pub struct PmOptions {
     pub min_quality: f64,
     /// Largest valence a collapse may create. Default 32.
     pub max_valence: usize,
+    /// Build the hierarchy in spatial blocks of at most this many vertices, their borders
+    /// pinned, merged pairwise until one block holds the base (`docs/partitioned.md`). Default
+    /// `None`: the whole mesh in one decimation. Not stored in `.pyr` files (the hierarchy
+    /// itself is).
+    pub block_vertices: Option<usize>,
     /// Weight λ of the boundary constraint planes (each boundary edge adds a plane through it,
     /// perpendicular to its face, scaled by λ·|e|²) while at least 5 % of the input's faces are
     /// left; at the coarse end (1 %) they count 0.3 λ, so that hole rims give up the vertices the
@@ -62,6 +67,7 @@ impl Default for PmOptions {
             max_normal_angle_degrees: 45.0,
             min_quality: 0.05,
             max_valence: 32,
+            block_vertices: None,
             boundary_weight: 10.0,
             uv_weight: 0.25,
         }
@@ -156,7 +162,7 @@ impl ProgressiveMesh {
         progress: &dyn Progress,
     ) -> Result<ProgressiveMesh, PmError> {
         let params = decimate_params(opts, mesh.bbox_diagonal())?;
-        let decimated = decimate(FlatMesh::from_mesh(mesh), &params, progress);
+        let decimated = decimate_flat(FlatMesh::from_mesh(mesh), &params, opts, progress)?;
         let n_slots = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
         let isolated: Vec<u32> = mesh
             .vertices()
@@ -227,7 +233,7 @@ impl ProgressiveMesh {
         let CornerTable {
             mut corner_vertex, ..
         } = corners;
-        let decimated = decimate(flat, &params, progress);
+        let decimated = decimate_flat(flat, &params, opts, progress)?;
         let faces = move |mesh_to_pm: &[u32]| {
             for v in &mut corner_vertex {
                 *v = mesh_to_pm[*v as usize];
@@ -250,15 +256,21 @@ impl ProgressiveMesh {
     /// position (the working mesh holds them recentred), `faces` the finest faces in face slot
     /// order, their vertices mapped by the slot → PM index map it is given.
     fn from_decimation(
-        (collapses, coarse, outcome): (Vec<Collapse>, FlatMesh, Outcome),
+        decimated: Decimated,
         (n_slots, n_vertices): (usize, usize),
         isolated: &[u32],
         position: impl Fn(u32) -> DVec3,
         faces: impl FnOnce(&[u32]) -> Vec<[u32; 3]>,
     ) -> Result<ProgressiveMesh, PmError> {
+        let Decimated {
+            collapses,
+            survivors,
+            n_base_faces,
+            stop,
+        } = decimated;
         let mut mesh_to_pm = vec![NONE; n_slots];
         let mut pm_to_mesh: Vec<u32> = Vec::with_capacity(n_vertices);
-        for v in coarse.survivors() {
+        for v in survivors {
             mesh_to_pm[v as usize] = pm_to_mesh.len() as u32;
             pm_to_mesh.push(v);
         }
@@ -306,9 +318,9 @@ impl ProgressiveMesh {
             mesh_to_pm,
             splits,
             faces,
-            n_base_faces: coarse.n_faces(),
+            n_base_faces,
             errors,
-            stop: Some(outcome.stop),
+            stop: Some(stop),
         })
     }
 
@@ -554,6 +566,38 @@ impl PmCursor<'_> {
     }
 }
 
+/// What a decimation of the whole mesh leaves: its collapses in order (vertex slots), the
+/// surviving vertices in slot order, the base level's face count and why it stopped.
+pub(crate) struct Decimated {
+    pub collapses: Vec<Collapse>,
+    pub survivors: Vec<u32>,
+    pub n_base_faces: usize,
+    pub stop: Stop,
+}
+
+/// Decimates the working mesh in one piece, or in blocks when `opts` asks for them.
+fn decimate_flat(
+    flat: FlatMesh,
+    params: &DecimateParams,
+    opts: &PmOptions,
+    progress: &dyn Progress,
+) -> Result<Decimated, PmError> {
+    if let Some(max) = opts.block_vertices {
+        return super::partition::decimate_in_blocks(flat, params, max, progress);
+    }
+    let (collapses, coarse, outcome) = decimate(flat, params, progress);
+    Ok(Decimated {
+        collapses,
+        survivors: coarse.survivors(),
+        n_base_faces: coarse.n_faces(),
+        stop: outcome.stop,
+    })
+}
+
+/// The smallest block a partitioned build accepts: a block must have room for an interior
+/// beside its border.
+pub const MIN_BLOCK_VERTICES: usize = 16;
+
 /// Checks `opts` and turns them into the decimator's parameters (the error bound relative to
 /// `bbox_diagonal`).
 pub(crate) fn decimate_params(
@@ -581,6 +625,11 @@ pub(crate) fn decimate_params(
         return Err(PmError::InvalidOption(
             "uv weight must be finite and >= 0".into(),
         ));
+    }
+    if opts.block_vertices.is_some_and(|n| n < MIN_BLOCK_VERTICES) {
+        return Err(PmError::InvalidOption(format!(
+            "block vertices must be at least {MIN_BLOCK_VERTICES}"
+        )));
     }
     if opts.max_valence < 3 {
         return Err(PmError::InvalidOption(

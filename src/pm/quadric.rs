@@ -178,7 +178,7 @@ impl Quadrics {
         }
     }
 
-    fn rim(&self, v: u32) -> Option<&Quadric> {
+    pub(crate) fn rim(&self, v: u32) -> Option<&Quadric> {
         match self.rim_slot[v as usize] {
             NO_RIM => None,
             s => Some(&self.rims[s as usize]),

@@ -133,6 +133,7 @@ pub(super) fn build_info(meta: &Meta) -> PyramidOptions {
             max_normal_angle_degrees: meta.max_normal_angle_degrees,
             min_quality: meta.min_quality,
             max_valence: meta.max_valence as usize,
+            block_vertices: None,
             boundary_weight: meta.boundary_weight,
             ..PmOptions::default()
         },

@@ -1,0 +1,56 @@
+//! `--block-vertices N` and `--memory SIZE` of `build`, `filter` and `edit`: which way the
+//! hierarchy of a mesh input is built (`meshpyr::memory::choose_build_path`), said on
+//! standard error unless `--quiet`.
+
+use super::Global;
+use meshpyr::memory::{self, Allowance, BuildPath, InputSize, Job};
+use meshpyr::mesh::PolygonMesh;
+use meshpyr::pm::MIN_BLOCK_VERTICES;
+use std::path::Path;
+
+fn parse_block_vertices(s: &str) -> Result<usize, String> {
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a vertex count"))?;
+    if n < MIN_BLOCK_VERTICES {
+        return Err(format!(
+            "blocks must hold at least {MIN_BLOCK_VERTICES} vertices"
+        ));
+    }
+    Ok(n)
+}
+
+/// The options that choose the build path.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub(crate) struct PathOptions {
+    /// Build the hierarchy in spatial blocks of at most N vertices, their borders pinned and
+    /// merged up a tree (docs/partitioned.md), whatever the memory.
+    #[arg(long, value_name = "N", value_parser = parse_block_vertices)]
+    pub(crate) block_vertices: Option<usize>,
+    /// The memory the build may use (8G, 3GB, 1.5GiB; default: what the machine and the
+    /// cgroup allow); a scan whose estimate exceeds it is built in blocks.
+    #[arg(long, value_name = "SIZE", value_parser = memory::parse_memory_size)]
+    pub(crate) memory: Option<u64>,
+}
+
+impl PathOptions {
+    /// The path for `job` on the mesh `input` read from `path`, said unless `--quiet`.
+    pub(crate) fn choose(
+        &self,
+        path: &Path,
+        job: Job,
+        input: &PolygonMesh,
+        global: &Global,
+    ) -> BuildPath {
+        let size = InputSize::mesh(input.n_vertices() as u64, input.n_faces() as u64);
+        let allowance = Allowance::of_this_process();
+        let chosen =
+            memory::choose_build_path(job, &size, self.block_vertices, self.memory, &allowance);
+        global.say(format_args!(
+            "{}: building the hierarchy {chosen}",
+            path.display()
+        ));
+        chosen
+    }
+}

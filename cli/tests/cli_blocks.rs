@@ -1,0 +1,120 @@
+//! `--block-vertices N` and `--memory SIZE` of `build`, `filter` and `edit`: the command says
+//! which path it took, forced blocks give a hierarchy every command reads, a tight memory
+//! allowance takes blocks by itself, and bad values are one-line errors.
+
+mod common;
+
+use common::{data_arg, error_line, meshpyr, ok, path, scratch};
+
+#[test]
+fn filter_says_it_builds_in_one_process_when_the_scan_fits() {
+    let out = scratch("blocks-fits", "out.ply");
+    let err = ok(&meshpyr(&[
+        "filter",
+        &data_arg("bunny.ply"),
+        "-o",
+        path(&out),
+        "--lowpass",
+        "1000",
+    ]));
+    assert!(
+        err.contains("building the hierarchy in one process"),
+        "{err}"
+    );
+}
+
+#[test]
+fn forced_blocks_are_said_and_their_pyr_file_filters_like_any_other() {
+    let pyr = scratch("blocks-forced", "bunny.pyr");
+    let err = ok(&meshpyr(&[
+        "build",
+        &data_arg("bunny.ply"),
+        "-o",
+        path(&pyr),
+        "--block-vertices",
+        "2000",
+    ]));
+    assert!(
+        err.contains(
+            "building the hierarchy in blocks of at most 2000 vertices (--block-vertices)"
+        ),
+        "{err}"
+    );
+    let out = scratch("blocks-forced", "out.ply");
+    ok(&meshpyr(&[
+        "filter",
+        path(&pyr),
+        "-o",
+        path(&out),
+        "--enhance",
+        "1000:10000=2",
+    ]));
+    let edited = scratch("blocks-forced", "edited.ply");
+    let err = ok(&meshpyr(&[
+        "edit",
+        &data_arg("bunny.ply"),
+        "-o",
+        path(&edited),
+        "--level",
+        "500",
+        "--move",
+        "0,0,0:0,0.001,0",
+        "--radius",
+        "0.05",
+        "--block-vertices",
+        "3000",
+    ]));
+    assert!(err.contains("in blocks of at most 3000 vertices"), "{err}");
+}
+
+#[test]
+fn a_tight_memory_allowance_takes_the_partitioned_path_by_itself() {
+    let out = scratch("blocks-memory", "out.ply");
+    let err = ok(&meshpyr(&[
+        "filter",
+        &data_arg("bunny.ply"),
+        "-o",
+        path(&out),
+        "--lowpass",
+        "1000",
+        "--memory",
+        "1M",
+    ]));
+    assert!(err.contains("in blocks of at most"), "{err}");
+    assert!(err.contains("1 MB allowed"), "{err}");
+    let quiet = ok(&meshpyr(&[
+        "filter",
+        &data_arg("bunny.ply"),
+        "-o",
+        path(&out),
+        "--lowpass",
+        "1000",
+        "--memory",
+        "1M",
+        "--quiet",
+    ]));
+    assert!(quiet.is_empty(), "{quiet}");
+}
+
+#[test]
+fn bad_block_sizes_and_memory_sizes_are_one_line_errors() {
+    let out = scratch("blocks-bad", "out.ply");
+    for (flag, value, needle) in [
+        ("--block-vertices", "3", "at least 16"),
+        ("--block-vertices", "many", "not a vertex count"),
+        ("--memory", "8X", "unknown unit"),
+        ("--memory", "0", "out of range"),
+    ] {
+        let err = error_line(&meshpyr(&[
+            "filter",
+            &data_arg("bunny.ply"),
+            "-o",
+            path(&out),
+            "--lowpass",
+            "1000",
+            flag,
+            value,
+        ]));
+        assert!(err.contains(needle), "{flag} {value}: {err}");
+    }
+}

@@ -1,0 +1,284 @@
+//! The partitioned build (`PmOptions::block_vertices`, docs/partitioned.md): small blocks make
+//! many borders on small meshes; the hierarchy must replay exactly, keep the topology, not
+//! depend on the thread count, and filter like the one-process hierarchy.
+
+use glam::DVec3;
+use meshpyr::io::read_mesh;
+use meshpyr::mesh::{Mesh, PolygonMesh};
+use meshpyr::pm::{MeshRecords, PmOptions, PmParts, ProgressiveMesh};
+use meshpyr::progress::NoProgress;
+use meshpyr::pyramid::{Filter, Pyramid, PyramidOptions};
+use proptest::prelude::*;
+
+mod common;
+
+fn blocks(n: usize) -> PmOptions {
+    PmOptions {
+        block_vertices: Some(n),
+        ..PmOptions::default()
+    }
+}
+
+/// The parts a `.pyr` file stores, rebuilt through the validating constructor: it replays
+/// every split on the base mesh and compares the result with the finest faces.
+fn replayed(pm: &ProgressiveMesh) -> ProgressiveMesh {
+    let parts = PmParts {
+        n_base: pm.n_base_vertices(),
+        positions: pm.original_positions().to_vec(),
+        pm_to_mesh: pm.pm_to_mesh().to_vec(),
+        splits: pm.splits().to_vec(),
+        faces: pm.finest_faces().to_vec(),
+        errors: pm.split_errors().to_vec(),
+    };
+    ProgressiveMesh::from_parts(parts).expect("the splits replay exactly to the input")
+}
+
+/// Walks the hierarchy down to the base and up again: every collapse is the inverse of its
+/// split, and the finest level comes back record for record.
+fn assert_walks_exactly(name: &str, pm: &ProgressiveMesh) {
+    let mut cursor = pm.cursor();
+    let finest = MeshRecords::of(cursor.mesh());
+    let mut steps = 0;
+    while cursor.collapse() {
+        steps += 1;
+        if steps % 97 == 0 {
+            cursor.mesh().validate().unwrap();
+        }
+    }
+    assert_eq!(cursor.level(), pm.n_base_vertices(), "{name}");
+    cursor.mesh().validate().unwrap();
+    while cursor.split() {}
+    assert_eq!(MeshRecords::of(cursor.mesh()), finest, "{name}");
+}
+
+fn load(name: &str) -> PolygonMesh {
+    read_mesh(common::data(name)).unwrap()
+}
+
+#[test]
+fn a_hierarchy_built_in_small_blocks_replays_exactly_and_keeps_the_topology() {
+    // Closed, open with holes, dirty with many components and repaired spots.
+    for (name, block) in [
+        ("bunny.ply", 500),
+        ("elephant_holes.ply", 300),
+        ("spider_assimp.ply", 64),
+        ("tripod.ply", 200),
+    ] {
+        let poly = load(name);
+        let (pm, _) = ProgressiveMesh::from_polygons(&poly, &blocks(block), &NoProgress).unwrap();
+        let (whole, _) =
+            ProgressiveMesh::from_polygons(&poly, &PmOptions::default(), &NoProgress).unwrap();
+        assert_eq!(pm.n_vertices(), whole.n_vertices(), "{name}");
+        let in_input = |pm: &ProgressiveMesh| -> Vec<[u32; 3]> {
+            let faces = pm.finest_faces().iter();
+            faces
+                .map(|t| t.map(|v| pm.pm_to_mesh()[v as usize]))
+                .collect()
+        };
+        assert!(in_input(&pm) == in_input(&whole), "{name}: finest faces");
+        let again = replayed(&pm);
+        assert_eq!(again.n_base_faces(), pm.n_base_faces(), "{name}");
+        assert_walks_exactly(name, &pm);
+        let (a, b) = (pm.base_mesh().topology(), whole.base_mesh().topology());
+        assert_eq!(a.components, b.components, "{name}: components");
+        assert_eq!(a.genus, b.genus, "{name}: genus");
+        assert_eq!(a.boundary_loops, b.boundary_loops, "{name}: holes");
+        // Blocks never relax the rules; the root does, as the one-process build at its end,
+        // so the base is as coarse as the whole mesh's up to a few vertices per component.
+        let slack = 8 * b.components + 16;
+        assert!(
+            pm.n_base_vertices() <= whole.n_base_vertices() + slack,
+            "{name}: base {} vertices, one process {}",
+            pm.n_base_vertices(),
+            whole.n_base_vertices()
+        );
+    }
+}
+
+#[test]
+fn a_partitioned_hierarchy_does_not_depend_on_the_thread_count() {
+    let poly = load("elephant_holes.ply");
+    let build = || {
+        let options = PyramidOptions {
+            pm: blocks(400),
+            ..PyramidOptions::default()
+        };
+        let p = Pyramid::build_with(poly.clone(), &options, &NoProgress).unwrap();
+        p.to_pyr_bytes().unwrap().0
+    };
+    let one = common::on_threads(1, build);
+    for threads in [2, 4] {
+        assert!(
+            common::on_threads(threads, build) == one,
+            "{threads} threads wrote other bytes"
+        );
+    }
+}
+
+#[test]
+fn a_mesh_that_fits_one_block_is_one_decimation_of_the_whole() {
+    let poly = load("bunny.ply");
+    let n = poly.n_vertices();
+    let (pm, _) = ProgressiveMesh::from_polygons(&poly, &blocks(n), &NoProgress).unwrap();
+    replayed(&pm);
+    let (whole, _) =
+        ProgressiveMesh::from_polygons(&poly, &PmOptions::default(), &NoProgress).unwrap();
+    assert_eq!(pm.n_base_vertices(), whole.n_base_vertices());
+}
+
+#[test]
+fn a_block_size_below_the_minimum_is_an_error() {
+    let poly = load("tripod.ply");
+    let err = ProgressiveMesh::from_polygons(&poly, &blocks(3), &NoProgress).unwrap_err();
+    assert!(err.to_string().contains("block vertices"), "{err}");
+}
+
+/// A scan-like open surface of `n × n` vertices: two scales of bumps, a hash noise a tenth of
+/// the spacing, and two round holes.
+fn bumpy_scan(n: usize) -> PolygonMesh {
+    let h = 1.0 / (n - 1) as f64;
+    let noise = |i: usize| {
+        let x = (i as u64)
+            .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+            .rotate_left(17);
+        (x % 10_000) as f64 / 10_000.0 - 0.5
+    };
+    let mut positions = Vec::with_capacity(n * n);
+    for y in 0..n {
+        for x in 0..n {
+            let (u, v) = (x as f64 * h, y as f64 * h);
+            let z = 0.08 * (6.0 * u).sin() * (5.0 * v).cos()
+                + 0.01 * (40.0 * u).sin() * (37.0 * v).sin()
+                + 0.1 * h * noise(positions.len());
+            positions.push(DVec3::new(u, v, z));
+        }
+    }
+    let hole = |u: f64, v: f64| {
+        let d = |cu: f64, cv: f64| (u - cu).hypot(v - cv);
+        d(0.3, 0.6) < 0.07 || d(0.7, 0.3) < 0.05
+    };
+    let id = |x: usize, y: usize| (y * n + x) as u32;
+    let mut faces = Vec::new();
+    for y in 0..n - 1 {
+        for x in 0..n - 1 {
+            if hole((x as f64 + 0.5) * h, (y as f64 + 0.5) * h) {
+                continue;
+            }
+            faces.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
+            faces.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
+        }
+    }
+    PolygonMesh::from_triangle_vec(positions, faces)
+}
+
+/// Sorted per-vertex distances between two meshes with the same vertices.
+fn distances(a: &PolygonMesh, b: &PolygonMesh) -> Vec<f64> {
+    let mut d: Vec<f64> = a
+        .positions
+        .iter()
+        .zip(&b.positions)
+        .map(|(p, q)| p.distance(*q))
+        .collect();
+    d.sort_by(f64::total_cmp);
+    d
+}
+
+fn p99(sorted: &[f64]) -> f64 {
+    sorted[(sorted.len() - 1) * 99 / 100]
+}
+
+#[test]
+fn a_filter_on_a_hierarchy_of_sixteen_blocks_adds_no_spikes_at_their_borders() {
+    // Issue 47's spike bound on a small scan cut into 16 blocks (4 merge levels): the largest
+    // |partitioned − input| stays within 1.5 × the largest |one process − input| under the
+    // README's enhancement. The partitioned result differs from the one-process one by less
+    // than the filter's own displacement (p99); issue 47's agreement bound, 0.25 of it, is
+    // not met yet (docs/partitioned.md, "How close it is").
+    let scan = bumpy_scan(160);
+    let n = scan.n_vertices();
+    let filter = Filter::new().gain(n / 32, n / 2, 2.0);
+    let filtered = |pm: PmOptions| {
+        let options = PyramidOptions {
+            pm,
+            ..PyramidOptions::default()
+        };
+        Pyramid::build_with(scan.clone(), &options, &NoProgress)
+            .unwrap()
+            .filter(&filter)
+    };
+    let whole = filtered(PmOptions::default());
+    let parts = filtered(blocks(1600));
+    let moved = distances(&whole, &scan);
+    let apart = distances(&parts, &whole);
+    let parts_moved = distances(&parts, &scan);
+    assert!(p99(&moved) > 0.0);
+    assert!(
+        p99(&apart) < p99(&moved),
+        "p99 |partitioned − one process| = {:.3e}, p99 |one process − input| = {:.3e}",
+        p99(&apart),
+        p99(&moved)
+    );
+    let (max_parts, max_whole) = (parts_moved[n - 1], moved[n - 1]);
+    assert!(
+        max_parts <= 1.5 * max_whole,
+        "max |partitioned − input| = {max_parts:.3e}, max |one process − input| = {max_whole:.3e}"
+    );
+}
+
+/// An open grid with jitter and holes (some faces left out), in several copies side by side.
+fn grid_scan(nx: usize, ny: usize, copies: usize, holes: &[bool], jitter: &[f64]) -> Mesh {
+    let mut positions = Vec::new();
+    let mut tris = Vec::new();
+    for copy in 0..copies {
+        let base = positions.len() as u32;
+        for y in 0..=ny {
+            for x in 0..=nx {
+                let i = positions.len();
+                let j = |k: usize| jitter[(i + k) % jitter.len()];
+                let offset = (copy * (nx + 2)) as f64;
+                positions.push(DVec3::new(
+                    offset + x as f64 + 0.3 * j(0),
+                    y as f64 + 0.3 * j(1),
+                    j(2),
+                ));
+            }
+        }
+        let id = |x: usize, y: usize| base + (y * (nx + 1) + x) as u32;
+        for y in 0..ny {
+            for x in 0..nx {
+                if holes[(y * nx + x + copy) % holes.len()] {
+                    continue;
+                }
+                tris.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
+                tris.push([id(x, y), id(x + 1, y + 1), id(x, y + 1)]);
+            }
+        }
+    }
+    Mesh::from_triangles(&positions, &tris).unwrap().mesh
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    /// Random open grids with holes, in one to three pieces, cut into blocks of 16 to 60
+    /// vertices: every split is the exact inverse of its collapse, on the half-edge mesh
+    /// (the cursor) and on the stored parts (the validating replay).
+    #[test]
+    fn splits_of_random_small_blocks_replay_exactly(
+        nx in 2usize..14,
+        ny in 2usize..14,
+        copies in 1usize..4,
+        block in 16usize..60,
+        holes in prop::collection::vec(prop::bool::weighted(0.1), 29),
+        jitter in prop::collection::vec(-1.0f64..1.0, 31),
+    ) {
+        let mesh = grid_scan(nx, ny, copies, &holes, &jitter);
+        prop_assume!(mesh.n_faces() > 0);
+        let pm = ProgressiveMesh::build(&mesh, &blocks(block), &NoProgress).unwrap();
+        replayed(&pm);
+        assert_walks_exactly("grid", &pm);
+        let (a, b) = (pm.base_mesh().topology(), mesh.topology());
+        prop_assert_eq!(a.components, b.components);
+        prop_assert_eq!(a.boundary_loops, b.boundary_loops);
+    }
+}
