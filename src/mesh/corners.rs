@@ -143,6 +143,30 @@ impl PolygonMesh {
         self.corner_attributes.iter().find(|a| a.name == name)
     }
 
+    /// The texture coordinates of a face corner (an index into `face_indices`): the corner
+    /// attribute [`TEXCOORD`], or else the vertex's `u`, `v` columns (where an OBJ file's `vt`
+    /// follow its `v` one to one, the reader keeps them per vertex). `None` when the mesh has
+    /// neither; the function gives `None` for a corner without a value.
+    pub fn corner_texcoords(&self) -> Option<impl Fn(usize) -> Option<[f32; 2]> + '_> {
+        let corner = self
+            .corner_attribute(TEXCOORD)
+            .filter(|a| a.columns.len() >= 2);
+        let vertex = self.vertex_attribute("u").zip(self.vertex_attribute("v"));
+        if corner.is_none() && vertex.is_none() {
+            return None;
+        }
+        Some(move |c: usize| match (corner, vertex) {
+            (Some(a), _) => a
+                .row(c)
+                .map(|r| [0, 1].map(|k| a.columns[k].data.get_f64(r) as f32)),
+            (None, Some((u, v))) => {
+                let i = self.face_indices[c] as usize;
+                Some([u.data.get_f64(i) as f32, v.data.get_f64(i) as f32])
+            }
+            (None, None) => None,
+        })
+    }
+
     /// Looks up a per-face attribute by name.
     pub fn face_attribute(&self, name: &str) -> Option<&Attribute> {
         self.face_attributes.iter().find(|a| a.name == name)

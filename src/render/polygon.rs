@@ -6,7 +6,7 @@ use super::scene::{Panel, render_scene};
 use super::texture::Textures;
 use super::{Image, RenderOptions, Triangles};
 use crate::mesh::PolygonMesh;
-use crate::mesh::corners::{MATERIAL_ATTRIBUTE, TEXCOORD};
+use crate::mesh::corners::MATERIAL_ATTRIBUTE;
 
 /// Why a picture cannot be drawn.
 #[derive(Debug, thiserror::Error, PartialEq)]
@@ -147,7 +147,7 @@ type FanTexture = (Vec<u32>, Vec<[f32; 2]>);
 /// face has none or a corner lacks texture coordinates) and its corners' texture coordinates;
 /// `None` when the mesh has no texture coordinates or no materials.
 fn fan_texture(mesh: &PolygonMesh) -> Option<FanTexture> {
-    let uv = corner_texcoords(mesh)?;
+    let uv = mesh.corner_texcoords()?;
     let material = mesh.face_attribute(MATERIAL_ATTRIBUTE)?;
     let mut materials = Vec::with_capacity(mesh.n_triangles());
     let mut uvs = Vec::with_capacity(3 * mesh.n_triangles());
@@ -165,32 +165,6 @@ fn fan_texture(mesh: &PolygonMesh) -> Option<FanTexture> {
         }
     }
     Some((materials, uvs))
-}
-
-/// The texture coordinates of a face corner (an index into `face_indices`): the corner
-/// attribute [`TEXCOORD`], or else the vertex's `u`, `v` columns (where an OBJ file's `vt`
-/// follow its `v` one to one, the reader keeps them per vertex).
-fn corner_texcoords(mesh: &PolygonMesh) -> Option<impl Fn(usize) -> Option<[f32; 2]> + '_> {
-    let corner = mesh
-        .corner_attribute(TEXCOORD)
-        .filter(|a| a.columns.len() >= 2);
-    let vertex = match (mesh.vertex_attribute("u"), mesh.vertex_attribute("v")) {
-        (Some(u), Some(v)) => Some((u, v)),
-        _ => None,
-    };
-    if corner.is_none() && vertex.is_none() {
-        return None;
-    }
-    Some(move |c: usize| match (corner, vertex) {
-        (Some(a), _) => a
-            .row(c)
-            .map(|r| [0, 1].map(|k| a.columns[k].data.get_f64(r) as f32)),
-        (None, Some((u, v))) => {
-            let i = mesh.face_indices[c] as usize;
-            Some([u.data.get_f64(i) as f32, v.data.get_f64(i) as f32])
-        }
-        (None, None) => None,
-    })
 }
 
 /// Each polygon as a fan of triangles around its first corner.

@@ -11,7 +11,7 @@
 //! scan costs nothing. Images are read once when the editor opens, like the mesh.
 
 use meshpyr::mesh::PolygonMesh;
-use meshpyr::mesh::corners::{MATERIAL_ATTRIBUTE, TEXCOORD};
+use meshpyr::mesh::corners::MATERIAL_ATTRIBUTE;
 use std::collections::HashMap;
 
 /// Largest image file served: larger ones are left out (the page draws their faces plain).
@@ -41,7 +41,7 @@ impl ViewTexture {
     /// The texture of `mesh`: `None` unless it has texture coordinates, a material per face
     /// and at least one image file that is there and is a PNG or JPEG.
     pub fn of(mesh: &PolygonMesh) -> Option<ViewTexture> {
-        texcoord_of(mesh).map(|_| ())?;
+        mesh.corner_texcoords().map(|_| ())?;
         mesh.face_attribute(MATERIAL_ATTRIBUTE)?;
         let folder = mesh.materials.folder.as_deref()?;
         let mut images: Vec<ViewImage> = Vec::new();
@@ -131,7 +131,7 @@ pub(crate) struct SplitLayout {
 /// face (stable within a group). A corner without coordinates draws at `(0, 0)`, its face
 /// without an image.
 pub(crate) fn split_layout(mesh: &PolygonMesh, image_of: impl Fn(usize) -> u32) -> SplitLayout {
-    let texcoord = texcoord_of(mesh);
+    let texcoord = mesh.corner_texcoords();
     let mut index: HashMap<(u32, [u32; 2]), u32> = HashMap::new();
     let (mut vertex_of, mut uvs) = (Vec::new(), Vec::new());
     let mut by_image: Vec<(u32, [u32; 3])> = Vec::with_capacity(mesh.n_triangles());
@@ -180,29 +180,6 @@ pub(crate) fn split_layout(mesh: &PolygonMesh, image_of: impl Fn(usize) -> u32) 
     }
 }
 
-/// The texture coordinates of a face corner: the corner attribute `texcoord`, or else the
-/// vertex's `u`, `v` columns (as the OBJ reader keeps `vt` that follow `v` one to one);
-/// `None` when the mesh has neither.
-fn texcoord_of(mesh: &PolygonMesh) -> Option<impl Fn(usize) -> Option<[f32; 2]> + '_> {
-    let corner = mesh
-        .corner_attribute(TEXCOORD)
-        .filter(|a| a.columns.len() >= 2);
-    let vertex = mesh.vertex_attribute("u").zip(mesh.vertex_attribute("v"));
-    if corner.is_none() && vertex.is_none() {
-        return None;
-    }
-    Some(move |c: usize| match (corner, vertex) {
-        (Some(a), _) => a
-            .row(c)
-            .map(|r| [0, 1].map(|k| a.columns[k].data.get_f64(r) as f32)),
-        (None, Some((u, v))) => {
-            let i = mesh.face_indices[c] as usize;
-            Some([u.data.get_f64(i) as f32, v.data.get_f64(i) as f32])
-        }
-        (None, None) => None,
-    })
-}
-
 /// The file's bytes, unless it is missing, unreadable or over [`MAX_IMAGE_BYTES`].
 fn read_capped(path: &std::path::Path) -> Option<Vec<u8>> {
     let size = std::fs::metadata(path).ok()?.len();
@@ -223,6 +200,7 @@ fn media_type(bytes: &[u8]) -> Option<&'static str> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use meshpyr::mesh::corners::TEXCOORD;
     use meshpyr::mesh::{Attribute, AttributeData, CornerAttribute};
 
     /// Two triangles sharing an edge whose ends have different coordinates on each side.
