@@ -1,7 +1,7 @@
 """Type stubs of the extension module; the package ``meshpyr`` re-exports every name."""
 
 from os import PathLike
-from typing import Any, Dict, Iterable, List, Literal, Optional, Sequence, Tuple, Union
+from typing import Any, Dict, Iterable, List, Literal, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -19,20 +19,30 @@ Level = Union[int, str]
 Band = Tuple[Level, Level]
 GainBand = Tuple[Level, Level, float]
 Vec3 = Sequence[float]
+Corners = Dict[str, Any]
+"""What a textured mesh holds per triangle of F: ``texcoord`` (m, 3, 2), ``normal`` (m, 3, 3),
+``material`` (m,) into ``materials``, ``material_libraries``, ``folder``, ``group`` (m,) into
+``groups``; see :func:`read`."""
 
 class FormatError(ValueError):
     """A mesh or .pyr file (or .pyr bytes) whose content is damaged, truncated or not in the
     format its name says."""
 
-def read(path: Path) -> Tuple[Vertices, Faces]:
-    """Reads a mesh file (.obj, .ply, .off, .stl, optionally .gz) as (V, F)."""
+@overload
+def read(path: Path, *, corners: Literal[False] = False) -> Tuple[Vertices, Faces]: ...
+@overload
+def read(path: Path, *, corners: Literal[True]) -> Tuple[Vertices, Faces, Corners]:
+    """Reads a mesh file (.obj, .ply, .off, .stl, optionally .gz) as (V, F), with
+    ``corners=True`` also its texture coordinates, corner normals, materials and groups."""
 
-def write(path: Path, v: ArrayLike, f: ArrayLike, /) -> None:
-    """Writes (V, F) to a mesh file, atomically; the extension chooses the format."""
+def write(path: Path, v: ArrayLike, f: ArrayLike, /, corners: Optional[Corners] = None) -> None:
+    """Writes (V, F) (and the corners dict) to a mesh file, atomically; the extension chooses
+    the format."""
 
-def info(v: ArrayLike, f: ArrayLike, /) -> Dict[str, object]:
+def info(v: ArrayLike, f: ArrayLike, /, corners: Optional[Corners] = None) -> Dict[str, object]:
     """Counts, topology and size, with the keys of ``meshpyr info --json``."""
 
+@overload
 def simplify(
     v: ArrayLike,
     f: ArrayLike,
@@ -41,11 +51,31 @@ def simplify(
     faces: Optional[int] = None,
     ratio: Optional[float] = None,
     error: Optional[float] = None,
+    prune: Optional[float] = None,
     max_angle: float = 45.0,
     min_quality: float = 0.05,
     boundary_weight: float = 10.0,
-) -> Tuple[Vertices, Faces, npt.NDArray[np.int64]]:
-    """Quadric-error simplification to one target; returns (V2, F2, vertex_map)."""
+    corners: None = None,
+    uv_weight: float = 0.25,
+) -> Tuple[Vertices, Faces, npt.NDArray[np.int64]]: ...
+@overload
+def simplify(
+    v: ArrayLike,
+    f: ArrayLike,
+    /,
+    *,
+    faces: Optional[int] = None,
+    ratio: Optional[float] = None,
+    error: Optional[float] = None,
+    prune: Optional[float] = None,
+    max_angle: float = 45.0,
+    min_quality: float = 0.05,
+    boundary_weight: float = 10.0,
+    corners: Corners,
+    uv_weight: float = 0.25,
+) -> Tuple[Vertices, Faces, npt.NDArray[np.int64], Corners]:
+    """Quadric-error simplification to one target; returns (V2, F2, vertex_map), and the
+    output's corners dict when ``corners`` is given (seams kept)."""
 
 def subdivide(
     v: ArrayLike,

@@ -1,6 +1,7 @@
 //! The free functions over `(V, F)`: files, counts, simplification, subdivision, comparison.
 
 use crate::arrays::{self, index_array, mesh_arrays, positions_array, triangles_array};
+use crate::corners::corners_dict;
 use crate::errors::{input_error, io_error, value_error};
 use meshpyr::MeshInfo;
 use meshpyr::choice::Choice;
@@ -11,18 +12,11 @@ use meshpyr::subdiv::{self, Refinement, Scheme, SolverChoice, SubdivSettings};
 use meshpyr::{NoProgress, PolygonMesh};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
 use std::path::PathBuf;
 
 /// `(V, F)` of a mesh: float64 (n, 3) and int64 (m, 3).
 pub(crate) type MeshPair<'py> = (Bound<'py, PyArray2<f64>>, Bound<'py, PyArray2<i64>>);
-
-/// `(V2, F2, vertex_map)` of `simplify`.
-pub(crate) type SimplifiedArrays<'py> = (
-    Bound<'py, PyArray2<f64>>,
-    Bound<'py, PyArray2<i64>>,
-    Bound<'py, PyArray1<i64>>,
-);
 
 /// The arrays of a file-level mesh.
 pub(crate) fn mesh_pair<'py>(py: Python<'py>, mesh: &PolygonMesh) -> MeshPair<'py> {
@@ -46,29 +40,63 @@ pub(crate) fn to_dict<'py>(
 /// as meshpyr's mesh builder does, so ``(V, F)`` gives the same results as the file itself.
 /// Vertices that no face uses are kept.
 ///
+/// ``corners=True`` returns ``(V, F, C)``: C is a dict of what a textured scan holds per
+/// triangle of F, with the keys present in the file: ``texcoord`` (m, 3, 2) and ``normal``
+/// (m, 3, 3) per corner (NaN where a corner has none; float32 when the file stores float32),
+/// ``material`` (m,) indices into ``materials`` (dicts with ``name`` and ``texture``) with
+/// ``material_libraries`` and ``folder``, ``group`` (m,) indices into ``groups``. ``write``,
+/// ``info`` and ``simplify`` take it back; filters and edits keep F, so it stays valid for
+/// their results.
+///
 /// Raises OSError (FileNotFoundError, PermissionError, ...) when the file cannot be read,
 /// FormatError when its content is damaged, ValueError for an unknown extension.
 #[pyfunction]
-pub(crate) fn read(py: Python<'_>, path: PathBuf) -> PyResult<MeshPair<'_>> {
+#[pyo3(signature = (path, *, corners = false))]
+pub(crate) fn read(py: Python<'_>, path: PathBuf, corners: bool) -> PyResult<Bound<'_, PyTuple>> {
     let mesh = py.detach(|| meshpyr::read_mesh(&path)).map_err(io_error)?;
-    Ok(mesh_pair(py, &mesh))
+    let (v, f) = mesh_pair(py, &mesh);
+    if corners {
+        let c = corners_dict(py, &mesh)?;
+        PyTuple::new(py, [v.into_any(), f.into_any(), c.into_any()])
+    } else {
+        PyTuple::new(py, [v.into_any(), f.into_any()])
+    }
+}
+
+/// `(V, F)` and an optional corners dict as a mesh.
+fn mesh_with_corners(
+    v: &Bound<'_, PyAny>,
+    f: &Bound<'_, PyAny>,
+    corners: Option<&Bound<'_, PyAny>>,
+) -> PyResult<PolygonMesh> {
+    let mut mesh = arrays::mesh(v, f)?;
+    if let Some(c) = corners {
+        crate::corners::apply(&mut mesh, c)?;
+    }
+    Ok(mesh)
 }
 
 /// Writes ``(V, F)`` to a mesh file; the extension chooses the format (.obj, .ply, .off, .stl,
 /// optionally followed by .gz). PLY is binary with double positions; OBJ and OFF hold every
 /// float64 exactly; STL holds float32 only. The file is replaced atomically: it appears complete or not at all.
 ///
+/// ``corners`` (the dict of ``read(path, corners=True)``) adds texture coordinates, corner
+/// normals, materials and groups: an OBJ gets ``vt``/``vn`` per corner, ``mtllib`` and
+/// ``usemtl``, a PLY a per-face ``texcoord`` list, ``texnumber`` and ``TextureFile`` comments.
+/// Relative material and image paths are rewritten to reach the same files from the new folder.
+///
 /// Raises ValueError for bad arrays or an unknown extension, OSError when the file cannot be
 /// written.
 #[pyfunction]
-#[pyo3(signature = (path, v, f, /))]
+#[pyo3(signature = (path, v, f, /, corners = None))]
 pub(crate) fn write(
     py: Python<'_>,
     path: PathBuf,
     v: &Bound<'_, PyAny>,
     f: &Bound<'_, PyAny>,
+    corners: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<()> {
-    let mut mesh = arrays::mesh(v, f)?;
+    let mut mesh = mesh_with_corners(v, f, corners)?;
     // The arrays are float64: PLY stores doubles and text formats print every float64 exactly,
     // whatever the values (else coordinates that happen to be float32 values would make a
     // float PLY, and commands reading it would write float32 results).
@@ -82,15 +110,18 @@ pub(crate) fn write(
 /// euler_characteristic, genus (None when not manifold), floor_vertices (the fewest vertices
 /// its topology can be simplified to), pm_base (None), manifold, bbox_diagonal,
 /// mean_edge_length, repairs (a dict of what the mesh builder would change to process it),
-/// vertex_attributes and face_attributes (empty lists for arrays), texture (None for arrays).
+/// vertex_attributes and face_attributes, texture (None without ``corners``: texture
+/// coordinates, seams, materials and images found or missing with the dict of
+/// ``read(path, corners=True)``).
 #[pyfunction]
-#[pyo3(signature = (v, f, /))]
+#[pyo3(signature = (v, f, /, corners = None))]
 pub(crate) fn info<'py>(
     py: Python<'py>,
     v: &Bound<'py, PyAny>,
     f: &Bound<'py, PyAny>,
+    corners: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let mesh = arrays::mesh(v, f)?;
+    let mesh = mesh_with_corners(v, f, corners)?;
     let info = py.detach(|| MeshInfo::of(&mesh)).map_err(input_error)?;
     to_dict(py, &info)
 }
@@ -112,8 +143,15 @@ pub(crate) fn info<'py>(
 /// the triangle quality (4√3·area / Σ edge², 1 = equilateral) below which a collapse that
 /// leaves a worse sliver pays a penalty, ``boundary_weight`` the weight of the planes that keep
 /// boundaries in place (0 lets them drift; it falls to 0.3 of this towards 1 % of the faces).
+///
+/// ``corners`` (the dict of ``read(path, corners=True)``) makes the simplification keep the
+/// texture: a vertex on a seam or material border collapses only along it, and each kept
+/// corner takes its vertex's value on the same side of every seam. ``uv_weight`` weighs the
+/// texture shift against distance (a texture error of ``1 / uv_weight`` costs as much as a
+/// distance of the bounding box's largest side; 0 keeps the seams and ignores the shift). The
+/// result is then ``(V2, F2, vertex_map, C2)``, C2 the corners dict of the output.
 #[pyfunction]
-#[pyo3(signature = (v, f, /, *, faces=None, ratio=None, error=None, prune=None, max_angle=PmOptions::default().max_normal_angle_degrees, min_quality=PmOptions::default().min_quality, boundary_weight=PmOptions::default().boundary_weight))]
+#[pyo3(signature = (v, f, /, *, faces=None, ratio=None, error=None, prune=None, max_angle=PmOptions::default().max_normal_angle_degrees, min_quality=PmOptions::default().min_quality, boundary_weight=PmOptions::default().boundary_weight, corners=None, uv_weight=PmOptions::default().uv_weight))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn simplify<'py>(
     py: Python<'py>,
@@ -126,14 +164,17 @@ pub(crate) fn simplify<'py>(
     max_angle: f64,
     min_quality: f64,
     boundary_weight: f64,
-) -> PyResult<SimplifiedArrays<'py>> {
+    corners: Option<&Bound<'py, PyAny>>,
+    uv_weight: f64,
+) -> PyResult<Bound<'py, PyTuple>> {
     let faces = faces.map(|n| arrays::count("faces", n)).transpose()?;
     let goal = SimplifyGoal::one_of(faces, ratio, error, prune).map_err(input_error)?;
-    let mesh = arrays::mesh(v, f)?;
+    let mesh = mesh_with_corners(v, f, corners)?;
     let options = PmOptions {
         max_normal_angle_degrees: max_angle,
         min_quality,
         boundary_weight,
+        uv_weight,
         ..PmOptions::default()
     };
     let (result, _pruned) = py
@@ -143,7 +184,12 @@ pub(crate) fn simplify<'py>(
         crate::warn(py, &shortfall)?;
     }
     let (v2, f2) = mesh_pair(py, &result.mesh);
-    Ok((v2, f2, index_array(py, &result.source_rows)))
+    let map = index_array(py, &result.source_rows);
+    let mut items = vec![v2.into_any(), f2.into_any(), map.into_any()];
+    if corners.is_some() {
+        items.push(corners_dict(py, &result.mesh)?.into_any());
+    }
+    PyTuple::new(py, items)
 }
 
 /// Subdivides a coarse mesh, as ``meshpyr subdivide`` (same options, same bits): ``scheme``

@@ -3,6 +3,7 @@
 //! library's front door. Every heavy call releases the GIL.
 
 mod arrays;
+mod corners;
 mod editor;
 mod errors;
 mod filters;
