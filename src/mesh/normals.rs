@@ -46,21 +46,33 @@ impl PolygonMesh {
     /// Whether the mesh stores normals that [`Self::refresh_normals`] would recompute: a
     /// caller that moves positions in place keeps the old ones only then.
     pub fn stores_normals(&self) -> bool {
-        let vertex = ["nx", "ny", "nz"]
+        self.has_vertex_normals() || self.corner_normals_slot().is_some()
+    }
+
+    /// Whether `nx`,`ny`,`nz` are all float vertex columns (integer ones are not normals to
+    /// recompute).
+    fn has_vertex_normals(&self) -> bool {
+        ["nx", "ny", "nz"]
             .iter()
-            .all(|n| is_float(self.vertex_attribute(n).map(|a| &a.data)));
-        vertex || self.corner_attributes.iter().any(|a| a.name == NORMAL)
+            .all(|n| is_float(self.vertex_attribute(n).map(|a| &a.data)))
+    }
+
+    /// The index of the corner attribute [`NORMAL`] when it has three float columns.
+    fn corner_normals_slot(&self) -> Option<usize> {
+        let k = self
+            .corner_attributes
+            .iter()
+            .position(|a| a.name == NORMAL)?;
+        let a = &self.corner_attributes[k];
+        (a.columns.len() == 3 && a.columns.iter().all(|c| is_float(Some(&c.data)))).then_some(k)
     }
 
     /// The per-vertex `nx`,`ny`,`nz` of every vertex of a moved face.
     fn refresh_vertex_normals(&mut self, face_moved: &[bool], areas: &[DVec3]) {
-        let names = ["nx", "ny", "nz"];
-        if names
-            .iter()
-            .any(|n| !is_float(self.vertex_attribute(n).map(|a| &a.data)))
-        {
+        if !self.has_vertex_normals() {
             return;
         }
+        let names = ["nx", "ny", "nz"];
         let mut sum = vec![DVec3::ZERO; self.n_vertices()];
         let mut touched = vec![false; self.n_vertices()];
         for (f, face) in self.faces().enumerate() {
@@ -82,14 +94,10 @@ impl PolygonMesh {
     /// The corner `normal` attribute: clusters of corners of one vertex sharing a stored
     /// normal get the normal of their polygons; the pool gets a row per cluster that moved.
     fn refresh_corner_normals(&mut self, face_moved: &[bool], areas: &[DVec3]) {
-        let Some(k) = self.corner_attributes.iter().position(|a| a.name == NORMAL) else {
+        let Some(k) = self.corner_normals_slot() else {
             return;
         };
         let mut attr = std::mem::take(&mut self.corner_attributes[k]);
-        if attr.columns.len() != 3 || !attr.columns.iter().all(|c| is_float(Some(&c.data))) {
-            self.corner_attributes[k] = attr;
-            return;
-        }
         // Cluster: (vertex, stored value's bits); its summed vector area, and whether it moved.
         let mut clusters: HashMap<(u32, [u64; 3]), (DVec3, bool, u32)> = HashMap::new();
         let key = |attr: &super::CornerAttribute, c: usize, v: u32| {
