@@ -21,7 +21,7 @@
 
 use std::path::PathBuf;
 
-use super::polygon::{Attribute, PolygonMesh};
+use super::polygon::{Attribute, AttributeData, PolygonMesh};
 
 /// The pool index of a corner that has no value.
 pub const NO_VALUE: u32 = u32::MAX;
@@ -51,6 +51,30 @@ pub struct CornerAttribute {
 }
 
 impl CornerAttribute {
+    /// The attribute `name` with `float` columns named `columns`, pool rows `rows` and one pool
+    /// row (or [`NO_VALUE`]) per corner in `indices`: e.g.
+    /// `CornerAttribute::from_rows(TEXCOORD, ["u", "v"], &[[0.0, 0.0], [1.0, 0.0]], indices)`.
+    pub fn from_rows<const N: usize>(
+        name: &str,
+        columns: [&str; N],
+        rows: &[[f32; N]],
+        indices: Vec<u32>,
+    ) -> CornerAttribute {
+        let columns = columns
+            .iter()
+            .enumerate()
+            .map(|(k, column)| Attribute {
+                name: (*column).into(),
+                data: AttributeData::F32(rows.iter().map(|r| r[k]).collect()),
+            })
+            .collect();
+        CornerAttribute {
+            name: name.into(),
+            columns,
+            indices,
+        }
+    }
+
     /// Number of pool rows.
     pub fn pool_len(&self) -> usize {
         self.columns.first().map_or(0, |c| c.data.len())

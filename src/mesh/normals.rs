@@ -186,26 +186,19 @@ fn drop_unused_rows(attr: &mut super::CornerAttribute) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::{Attribute, CornerAttribute};
+    use crate::mesh::CornerAttribute;
 
     /// Two triangles folded at 90° along the edge 0–1, with a hard edge there: each face's
     /// corners have the face's own normal.
     fn folded() -> PolygonMesh {
         let p = vec![DVec3::ZERO, DVec3::X, DVec3::Y, DVec3::Z];
         let mut m = PolygonMesh::from_triangles(p, &[[0, 1, 2], [1, 0, 3]]);
-        let col = |name: &str, v: Vec<f32>| Attribute {
-            name: name.into(),
-            data: AttributeData::F32(v),
-        };
-        m.corner_attributes.push(CornerAttribute {
-            name: NORMAL.into(),
-            columns: vec![
-                col("nx", vec![0.0, 0.0]),
-                col("ny", vec![0.0, 1.0]),
-                col("nz", vec![1.0, 0.0]),
-            ],
-            indices: vec![0, 0, 0, 1, 1, 1],
-        });
+        m.corner_attributes.push(CornerAttribute::from_rows(
+            NORMAL,
+            ["nx", "ny", "nz"],
+            &[[0.0, 0.0, 1.0], [0.0, 1.0, 0.0]],
+            vec![0, 0, 0, 1, 1, 1],
+        ));
         m
     }
 

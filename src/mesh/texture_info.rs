@@ -152,25 +152,20 @@ impl PolygonMesh {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::{Attribute, AttributeData};
     use glam::DVec3;
 
     #[test]
     fn a_square_cut_along_its_diagonal_in_texture_space_has_one_seam_edge_and_two_seam_vertices() {
         let p = vec![DVec3::ZERO, DVec3::X, DVec3::X + DVec3::Y, DVec3::Y];
         let mut m = PolygonMesh::from_triangles(p, &[[0, 1, 2], [0, 2, 3]]);
-        let col = |name: &str, v: Vec<f32>| Attribute {
-            name: name.into(),
-            data: AttributeData::F32(v),
-        };
-        m.corner_attributes.push(CornerAttribute {
-            name: TEXCOORD.into(),
-            columns: vec![
-                col("u", vec![0.0, 1.0, 1.0, 0.5, 0.5, 0.0]),
-                col("v", vec![0.0; 6]),
-            ],
-            indices: vec![0, 1, 2, 3, 4, 5],
-        });
+        let u = [0.0, 1.0, 1.0, 0.5, 0.5, 0.0];
+        let rows: Vec<[f32; 2]> = u.iter().map(|&u| [u, 0.0]).collect();
+        m.corner_attributes.push(CornerAttribute::from_rows(
+            TEXCOORD,
+            ["u", "v"],
+            &rows,
+            vec![0, 1, 2, 3, 4, 5],
+        ));
         assert_eq!(seams(&m, &m.corner_attributes[0]), (1, 2));
         let info = TextureInfo::of(&m).unwrap();
         assert_eq!(info.corner_attributes, [("texcoord".to_string(), 6, 6)]);

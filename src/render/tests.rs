@@ -172,18 +172,12 @@ fn textured_square() -> crate::PolygonMesh {
     let mut m = crate::PolygonMesh::new();
     m.positions = vec![DVec3::ZERO, DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y];
     m.push_face(&[0, 1, 2, 3]);
-    let column = |name: &str, v: Vec<f32>| Attribute {
-        name: name.into(),
-        data: AttributeData::F32(v),
-    };
-    m.corner_attributes.push(CornerAttribute {
-        name: TEXCOORD.into(),
-        columns: vec![
-            column("u", vec![0.0, 1.0, 1.0, 0.0]),
-            column("v", vec![0.0, 0.0, 1.0, 1.0]),
-        ],
-        indices: vec![0, 1, 2, 3],
-    });
+    m.corner_attributes.push(CornerAttribute::from_rows(
+        TEXCOORD,
+        ["u", "v"],
+        &[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+        vec![0, 1, 2, 3],
+    ));
     m.face_attributes.push(Attribute {
         name: MATERIAL_ATTRIBUTE.into(),
         data: AttributeData::I32(vec![0]),
