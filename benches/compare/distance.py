@@ -20,15 +20,21 @@ from plyio import read_ply
 K = 32
 
 
-def sample(pos, tris, n, rng):
+def sample_barycentric(pos, tris, n, rng):
+    """Area-uniform samples: points (n, 3), their triangles and barycentric weights (n, 3)."""
     a, b, c = pos[tris[:, 0]], pos[tris[:, 1]], pos[tris[:, 2]]
     area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
     idx = rng.choice(len(tris), size=n, p=area / area.sum())
     r1, r2 = rng.random(n), rng.random(n)
     s = np.sqrt(r1)
-    u, v = 1 - s, s * (1 - r2)
-    w = s * r2
-    pts = u[:, None] * a[idx] + v[:, None] * b[idx] + w[:, None] * c[idx]
+    bary = np.stack([1 - s, s * (1 - r2), s * r2], 1)
+    pts = bary[:, 0, None] * a[idx] + bary[:, 1, None] * b[idx] + bary[:, 2, None] * c[idx]
+    return pts, idx, bary
+
+
+def sample(pos, tris, n, rng):
+    """Area-uniform samples plus every vertex a triangle uses."""
+    pts, _, _ = sample_barycentric(pos, tris, n, rng)
     return np.concatenate([pts, pos[np.unique(tris)]])
 
 
@@ -78,39 +84,57 @@ def point_triangle_closest(p, a, b, c):
     return out
 
 
-def nearest_centroid_bound(points, pos, tris, tree, chunk=20000):
-    """Distance to the nearest of the K triangles with the nearest centroids: an upper bound."""
-    out = np.empty(len(points))
-    for s in range(0, len(points), chunk):
-        p = points[s:s + chunk]
-        _, nn = tree.query(p, k=min(K, len(tris)))
-        nn = nn.reshape(len(p), -1)
-        best = np.full(len(p), np.inf)
-        for j in range(nn.shape[1]):
-            t = tris[nn[:, j]]
-            best = np.minimum(best, point_triangle_dist2(p, pos[t[:, 0]], pos[t[:, 1]], pos[t[:, 2]]))
-        out[s:s + chunk] = np.sqrt(best)
-    return out
+class TriangleIndex:
+    """Triangles (pos, tris) behind a k-d tree of their centroids, with each one's bounding
+    sphere (centroid, circumradius bound), for exact nearest-triangle searches."""
+
+    def __init__(self, pos, tris):
+        self.pos, self.tris = pos, tris
+        self.cent = pos[tris].mean(axis=1)
+        self.radius = np.linalg.norm(pos[tris] - self.cent[:, None, :], axis=2).max(1)
+        self.tree = cKDTree(self.cent)
+
+    def corners(self, t):
+        """The corner positions (a, b, c) of triangles t."""
+        tri = self.tris[t]
+        return self.pos[tri[:, 0]], self.pos[tri[:, 1]], self.pos[tri[:, 2]]
+
+    def upper_bound(self, points, chunk=20000):
+        """Distance to the nearest of the K triangles with the nearest centroids: an upper
+        bound of the distance to the surface."""
+        out = np.empty(len(points))
+        for s in range(0, len(points), chunk):
+            p = points[s:s + chunk]
+            _, nn = self.tree.query(p, k=min(K, len(self.tris)))
+            nn = nn.reshape(len(p), -1)
+            best = np.full(len(p), np.inf)
+            for j in range(nn.shape[1]):
+                best = np.minimum(best, point_triangle_dist2(p, *self.corners(nn[:, j])))
+            out[s:s + chunk] = np.sqrt(best)
+        return out
+
+    def candidates(self, p, ub, slack=0.0):
+        """Pairs (point i, triangle j) whose bounding sphere comes within each point's bound
+        ub (times 1 + slack): every triangle that can be the nearest."""
+        near = self.tree.query_ball_point(p, ub + self.radius.max())
+        ii = np.repeat(np.arange(len(p)), [len(c) for c in near])
+        jj = np.concatenate([np.asarray(c, dtype=np.int64) for c in near])
+        keep = np.linalg.norm(p[ii] - self.cent[jj], axis=1) <= ub[ii] * (1 + slack) + self.radius[jj]
+        return ii[keep], jj[keep]
 
 
 def distances(points, pos, tris, chunk=5000, pairs=2_000_000):
     """Exact distance from each point to the triangle mesh (pos, tris)."""
-    cent = pos[tris].mean(axis=1)
-    radius = np.linalg.norm(pos[tris] - cent[:, None, :], axis=2).max(1)
-    tree = cKDTree(cent)
-    bound = nearest_centroid_bound(points, pos, tris, tree)
+    index = TriangleIndex(pos, tris)
+    bound = index.upper_bound(points)
     out = bound.copy()
     for s in range(0, len(points), chunk):
         p, ub = points[s:s + chunk], bound[s:s + chunk]
         best = ub ** 2
-        near = tree.query_ball_point(p, ub + radius.max())
-        ii = np.repeat(np.arange(len(p)), [len(c) for c in near])
-        jj = np.concatenate([np.asarray(c, dtype=np.int64) for c in near])
-        keep = np.linalg.norm(p[ii] - cent[jj], axis=1) <= ub[ii] + radius[jj]
-        ii, jj = ii[keep], jj[keep]
+        ii, jj = index.candidates(p, ub)
         for b in range(0, len(ii), pairs):
-            i2, t = ii[b:b + pairs], tris[jj[b:b + pairs]]
-            d = point_triangle_dist2(p[i2], pos[t[:, 0]], pos[t[:, 1]], pos[t[:, 2]])
+            i2 = ii[b:b + pairs]
+            d = point_triangle_dist2(p[i2], *index.corners(jj[b:b + pairs]))
             np.minimum.at(best, i2, d)
         out[s:s + chunk] = np.sqrt(best)
     return out

@@ -25,13 +25,13 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 sys.path.insert(0, str(Path(__file__).parent))
-from distance import compare_arrays, point_triangle_closest  # noqa: E402
+from distance import (  # noqa: E402
+    TriangleIndex, compare_arrays, point_triangle_closest, sample_barycentric,
+)
 
 TEXELS = 1024
-K = 32
 
 
 def read_obj(path):
@@ -68,44 +68,20 @@ def read_obj(path):
     return pos, np.array(tris, dtype=np.int64), uvs[np.array(tuv, dtype=np.int64)], np.array(mats), names
 
 
-def sample(pos, tris, n, rng):
-    """Area-uniform samples: points, triangle ids and barycentric weights (n, 3)."""
-    a, b, c = pos[tris[:, 0]], pos[tris[:, 1]], pos[tris[:, 2]]
-    area = 0.5 * np.linalg.norm(np.cross(b - a, c - a), axis=1)
-    idx = rng.choice(len(tris), size=n, p=area / area.sum())
-    r1, r2 = rng.random(n), rng.random(n)
-    s = np.sqrt(r1)
-    bary = np.stack([1 - s, s * (1 - r2), s * r2], 1)
-    pts = bary[:, 0, None] * a[idx] + bary[:, 1, None] * b[idx] + bary[:, 2, None] * c[idx]
-    return pts, idx, bary
-
-
 def nearest(points, pos, tris, chunk=5000, pairs=2_000_000):
-    """For each point, the nearest triangle of (pos, tris) and the closest point on it."""
-    cent = pos[tris].mean(axis=1)
-    radius = np.linalg.norm(pos[tris] - cent[:, None, :], axis=2).max(1)
-    tree = cKDTree(cent)
+    """For each point, the nearest triangle of (pos, tris) and the closest point on it (ties to
+    the lower triangle)."""
+    index = TriangleIndex(pos, tris)
+    bound = index.upper_bound(points)
     best_t = np.empty(len(points), dtype=np.int64)
     best_q = np.empty_like(points)
     for s in range(0, len(points), chunk):
         p = points[s:s + chunk]
-        _, nn = tree.query(p, k=min(K, len(tris)))
-        nn = nn.reshape(len(p), -1)
-        ub = np.full(len(p), np.inf)
-        for j in range(nn.shape[1]):
-            t = tris[nn[:, j]]
-            q = point_triangle_closest(p, pos[t[:, 0]], pos[t[:, 1]], pos[t[:, 2]])
-            ub = np.minimum(ub, ((p - q) ** 2).sum(1))
-        ub = np.sqrt(ub)
-        near = tree.query_ball_point(p, ub + radius.max())
-        ii = np.repeat(np.arange(len(p)), [len(c) for c in near])
-        jj = np.concatenate([np.asarray(c, dtype=np.int64) for c in near])
-        keep = np.linalg.norm(p[ii] - cent[jj], axis=1) <= ub[ii] * (1 + 1e-9) + radius[jj]
-        ii, jj = ii[keep], jj[keep]
+        ii, jj = index.candidates(p, bound[s:s + chunk], slack=1e-9)
         d_all, q_all = [], []
         for b in range(0, len(ii), pairs):
-            i2, t = ii[b:b + pairs], tris[jj[b:b + pairs]]
-            q = point_triangle_closest(p[i2], pos[t[:, 0]], pos[t[:, 1]], pos[t[:, 2]])
+            i2 = ii[b:b + pairs]
+            q = point_triangle_closest(p[i2], *index.corners(jj[b:b + pairs]))
             d_all.append(((p[i2] - q) ** 2).sum(1))
             q_all.append(q)
         d, q = np.concatenate(d_all), np.concatenate(q_all)
@@ -131,7 +107,7 @@ def measure(inp, res, n=200000, seed=1):
     ip, it, iuv, imat, inames = read_obj(inp)
     rp, rt, ruv, rmat, rnames = read_obj(res)
     rng = np.random.default_rng(seed)
-    pts, ridx, rbary = sample(rp, rt, n, rng)
+    pts, ridx, rbary = sample_barycentric(rp, rt, n, rng)
     uv_out = (rbary[:, :, None] * ruv[ridx]).sum(1)
     tid, q = nearest(pts, ip, it)
     t = it[tid]
