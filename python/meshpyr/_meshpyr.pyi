@@ -35,9 +35,18 @@ def read(path: Path, *, corners: Literal[True]) -> Tuple[Vertices, Faces, Corner
     """Reads a mesh file (.obj, .ply, .off, .stl, optionally .gz) as (V, F), with
     ``corners=True`` also its texture coordinates, corner normals, materials and groups."""
 
-def write(path: Path, v: ArrayLike, f: ArrayLike, /, corners: Optional[Corners] = None) -> None:
+def write(
+    path: Path,
+    v: ArrayLike,
+    f: ArrayLike,
+    /,
+    corners: Optional[Corners] = None,
+    *,
+    before: Optional[ArrayLike] = None,
+) -> None:
     """Writes (V, F) (and the corners dict) to a mesh file, atomically; the extension chooses
-    the format."""
+    the format; ``before`` (the positions the normals were stored for) makes stored normals
+    follow the moved surface."""
 
 def info(v: ArrayLike, f: ArrayLike, /, corners: Optional[Corners] = None) -> Dict[str, object]:
     """Counts, topology and size, with the keys of ``meshpyr info --json``."""

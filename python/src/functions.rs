@@ -84,19 +84,34 @@ fn mesh_with_corners(
 /// normals, materials and groups: an OBJ gets ``vt``/``vn`` per corner, ``mtllib`` and
 /// ``usemtl``, a PLY a per-face ``texcoord`` list, ``texnumber`` and ``TextureFile`` comments.
 /// Relative material and image paths are rewritten to reach the same files from the new folder.
+/// ``before`` (float64 (n, 3)) gives the positions the corners' normals were stored for (the
+/// input's V after a filter or edit): the normals around vertices that moved are recomputed from
+/// V, hard edges kept, as the command line does; without it they are written as given.
 ///
 /// Raises ValueError for bad arrays or an unknown extension, OSError when the file cannot be
 /// written.
 #[pyfunction]
-#[pyo3(signature = (path, v, f, /, corners = None))]
+#[pyo3(signature = (path, v, f, /, corners = None, *, before = None))]
 pub(crate) fn write(
     py: Python<'_>,
     path: PathBuf,
     v: &Bound<'_, PyAny>,
     f: &Bound<'_, PyAny>,
     corners: Option<&Bound<'_, PyAny>>,
+    before: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<()> {
     let mut mesh = mesh_with_corners(v, f, corners)?;
+    if let Some(before) = before {
+        let before = arrays::vertices(before)?;
+        if before.len() != mesh.n_vertices() {
+            return Err(value_error(format!(
+                "before has {} rows, V has {}: it must be the positions of the same vertices",
+                before.len(),
+                mesh.n_vertices()
+            )));
+        }
+        mesh.refresh_normals(&before);
+    }
     // The arrays are float64: PLY stores doubles and text formats print every float64 exactly,
     // whatever the values (else coordinates that happen to be float32 values would make a
     // float PLY, and commands reading it would write float32 results).

@@ -102,6 +102,26 @@ def test_filtered_positions_keep_the_corners_valid(tmp_path):
     assert_same_bits(c2["texcoord"], c["texcoord"])
 
 
+def test_normals_written_with_the_positions_before_follow_the_surface_like_the_cli(cli, tmp_path):
+    out = tmp_path / "cli.obj"
+    cli("filter", OBJ, "-o", out, "--lowpass", "100")
+    v, f, c = meshpyr.read(OBJ, corners=True)
+    assert "normal" in c
+    smooth = meshpyr.Pyramid(v, f).filter(lowpass=100)
+    ours = tmp_path / "ours.obj"
+    meshpyr.write(ours, smooth, f, c, before=v)
+    _, _, c_cli = meshpyr.read(out, corners=True)
+    _, _, c_ours = meshpyr.read(ours, corners=True)
+    assert_same_bits(c_ours["normal"], c_cli["normal"])
+    assert not np.array_equal(c_ours["normal"], c["normal"])
+
+
+def test_before_must_hold_the_same_vertices(tmp_path):
+    v, f, c = meshpyr.read(OBJ, corners=True)
+    with pytest.raises(ValueError, match="before has 3 rows"):
+        meshpyr.write(tmp_path / "x.obj", v, f, c, before=v[:3])
+
+
 def test_simplify_with_corners_keeps_every_corner_on_its_side_of_the_seams():
     v, f, c = meshpyr.read(OBJ, corners=True)
     v2, f2, v_map, c2 = meshpyr.simplify(v, f, ratio=0.3, corners=c)
