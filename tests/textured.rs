@@ -698,3 +698,69 @@ fn levels_below_the_seam_floor_are_refused_as_for_any_mesh() {
         "{err}"
     );
 }
+
+/// `bytes` re-written with minor version `minor`, its `OPTS` section dropped (`None`) or
+/// replaced by `opts`.
+fn with_options(bytes: &[u8], minor: u16, opts: Option<&[u8]>) -> Vec<u8> {
+    use meshpyr::format::container::{Container, Section, write_container};
+    let c = Container::parse(bytes).unwrap();
+    let sections: Vec<Section> = c
+        .sections
+        .iter()
+        .filter_map(|e| {
+            let mut b = bytes[e.offset as usize..(e.offset + e.length) as usize].to_vec();
+            if &e.tag == b"OPTS" {
+                b = opts?.to_vec();
+            }
+            Some(Section {
+                tag: e.tag,
+                flags: e.flags,
+                bytes: b,
+            })
+        })
+        .collect();
+    write_container(meshpyr::format::MAJOR, minor, &sections)
+}
+
+#[test]
+fn a_2_2_file_without_build_options_still_reads_with_its_coarse_levels_untextured() {
+    let input = read_mesh(data(OBJ)).unwrap();
+    let (bytes, _) = Pyramid::build(&input).unwrap().to_pyr_bytes().unwrap();
+    let old = meshpyr::format::decode(&with_options(&bytes, 2, None)).unwrap();
+    assert_eq!(old.input, input);
+    assert!(!old.pm.keeps_seams());
+    let level = old.level_mesh(old.pm.n_base_vertices()).unwrap();
+    assert!(level.corner_attributes.is_empty());
+    assert_eq!(face_materials(&level).len(), level.n_faces());
+}
+
+#[test]
+fn damaged_build_options_and_records_that_break_a_seam_are_typed_errors() {
+    let input = read_mesh(data(OBJ)).unwrap();
+    let (bytes, _) = Pyramid::build(&input).unwrap().to_pyr_bytes().unwrap();
+    let mut opts = 0.25f64.to_le_bytes().to_vec();
+    opts.push(2);
+    let err = meshpyr::format::decode(&with_options(&bytes, 3, Some(&opts))).unwrap_err();
+    assert!(
+        err.to_string().contains("seam flag must be 0 or 1"),
+        "{err}"
+    );
+    let err = meshpyr::format::decode(&with_options(&bytes, 3, Some(&[0u8; 3]))).unwrap_err();
+    assert!(err.to_string().contains("OPTS"), "{err}");
+    // A partitioned build's records break seams; a file claiming otherwise is refused where
+    // the replay meets the first such record.
+    let options = meshpyr::format::PyramidOptions {
+        pm: meshpyr::pm::PmOptions {
+            block_vertices: Some(128),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let blocks = Pyramid::build_with(input.clone(), &options, &meshpyr::NoProgress).unwrap();
+    let (bytes, _) = blocks.to_pyr_bytes().unwrap();
+    let mut claims = 0.25f64.to_le_bytes().to_vec();
+    claims.push(1);
+    let file = meshpyr::format::decode(&with_options(&bytes, 3, Some(&claims))).unwrap();
+    let err = file.level_mesh(file.pm.n_base_vertices()).unwrap_err();
+    assert!(err.to_string().contains("breaks a texture seam"), "{err}");
+}

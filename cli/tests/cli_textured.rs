@@ -126,9 +126,17 @@ fn converting_to_off_says_what_is_not_carried_and_simplifying_carries_it() {
 #[test]
 fn extract_of_a_coarse_level_writes_its_texture_coordinates_materials_and_groups() {
     let pyr = scratch_arg("cli_textured_levels", "scan.pyr");
-    ok(&meshpyr(&["build", &data(OBJ), "-o", &pyr]));
+    ok(&meshpyr(&[
+        "build",
+        &data(OBJ),
+        "-o",
+        &pyr,
+        "--uv-weight",
+        "0.5",
+    ]));
     let out = scratch_arg("cli_textured_levels", "level.obj");
     let info = meshpyr::format::decode(&std::fs::read(&pyr).unwrap()).unwrap();
+    assert_eq!(info.info.pm.uv_weight, 0.5, "the file records the weight");
     let (base, finest) = (info.pm.n_base_vertices(), info.pm.n_vertices());
     let level = (base + finest) / 2;
     let run = meshpyr(&["extract", &pyr, "-o", &out, "--level", &level.to_string()]);
@@ -169,7 +177,14 @@ fn extract_of_a_coarse_level_writes_its_texture_coordinates_materials_and_groups
 #[test]
 fn build_then_extract_gives_back_the_textured_obj() {
     let pyr = scratch_arg("cli_textured_pyr", "scan.pyr");
-    ok(&meshpyr(&["build", &data(OBJ), "-o", &pyr]));
+    ok(&meshpyr(&[
+        "build",
+        &data(OBJ),
+        "-o",
+        &pyr,
+        "--uv-weight",
+        "0.5",
+    ]));
     let back = scratch_arg("cli_textured_pyr", "back.obj");
     ok(&meshpyr(&["extract", &pyr, "-o", &back]));
     let direct = scratch_arg("cli_textured_pyr", "direct.obj");
