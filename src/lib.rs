@@ -94,7 +94,7 @@
 //! | [`memory`] | whether a job fits in the memory this process may use, told before the work |
 //! | [`mesh`] | the file-level [`PolygonMesh`], the half-edge [`mesh::Mesh`] and its repairs |
 //! | [`io`] | the mesh file formats |
-//! | [`pm`] | the progressive mesh and simplification |
+//! | [`pm`] | the progressive mesh, its levels (a textured scan's with their texture) and simplification |
 //! | [`pyramid`] | the detail pyramid, filters, edits and spectra |
 //! | [`relax`] | the relaxation operators that predict one level from the next |
 //! | [`format`](mod@format) | the `.pyr` file |

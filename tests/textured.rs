@@ -309,7 +309,12 @@ fn filter_edit_and_smooth_keep_every_corner_material_and_group_and_normals_follo
         displacement: DVec3::Y * 0.2,
         radius: 0.5,
     };
-    let edited = pyramid.edit(40, &[handle], &Filter::new()).unwrap();
+    // The hierarchy keeps the seams, so its coarsest level is the seam floor (about a fifth of
+    // the scan's vertices), not the few dozen vertices of the untextured anchor: edit between
+    // the base and the finest level.
+    let levels = pyramid.levels();
+    let level = (levels.start() + levels.end()) / 2;
+    let edited = pyramid.edit(level, &[handle], &Filter::new()).unwrap();
     assert_carried(&input, &edited, "edit");
     let method = meshpyr::SmoothMethod::default();
     let smoothed = meshpyr::smooth_mesh(&input, &method, &meshpyr::NoProgress)
@@ -371,12 +376,12 @@ fn writing_into_another_folder_points_at_the_same_library_with_a_relative_path()
 }
 
 #[test]
-fn build_then_extract_restores_the_textured_input_exactly_in_a_2_2_file() {
+fn build_then_extract_restores_the_textured_input_exactly_in_a_2_3_file() {
     let input = read_mesh(data(OBJ)).unwrap();
     let (bytes, _) = Pyramid::build(&input).unwrap().to_pyr_bytes().unwrap();
     assert_eq!(
         u16::from_le_bytes([bytes[10], bytes[11]]),
-        2,
+        3,
         "minor version"
     );
     let restored = meshpyr::format::decode(&bytes).unwrap().input;
@@ -551,4 +556,211 @@ fn simplify_keeps_corner_normals_of_the_surviving_corners() {
             "vertex {v} got a normal it did not have"
         );
     }
+}
+
+/// The input rows of level `n`'s vertices (PM vertices `0..n`).
+fn level_rows(pyramid: &Pyramid, n: usize) -> Vec<u32> {
+    pyramid.pm.pm_to_mesh()[..n]
+        .iter()
+        .map(|&v| pyramid.source.vertex_source[v as usize])
+        .collect()
+}
+
+#[test]
+fn every_level_of_a_textured_pyramid_keeps_each_triangle_inside_one_texture_chart() {
+    for name in [OBJ, PLY] {
+        let input = read_mesh(data(name)).unwrap();
+        let pyramid = Pyramid::build(&input).unwrap();
+        assert!(pyramid.pm.keeps_seams(), "{name}");
+        let levels = pyramid.levels();
+        let (base, finest) = (*levels.start(), *levels.end());
+        assert!(
+            base * 2 < finest,
+            "{name}: the hierarchy went far ({base} of {finest})"
+        );
+        for n in [base, base + 1, (base + finest) / 2, finest - 1, finest] {
+            let what = format!("{name} level {n}");
+            let level = pyramid.level_mesh(n).unwrap();
+            assert_eq!(level.n_vertices(), n, "{what}");
+            assert_eq!(level.n_faces(), pyramid.pm.n_faces_at(n), "{what}");
+            let tris: Vec<[u32; 3]> = level
+                .face_indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]])
+                .collect();
+            assert_eq!(tris, pyramid.pm.level_triangles(n), "{what}");
+            assert_eq!(level.materials, input.materials, "{what}");
+            assert_eq!(level.group_names, input.group_names, "{what}");
+            let seam =
+                assert_no_texture_across_seams(&input, &level, &level_rows(&pyramid, n), &what);
+            assert!(seam > 0, "{what}: no seam left to check");
+            if name == OBJ {
+                assert!(
+                    level.corner_attribute("normal").is_some(),
+                    "{what}: corner normals"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn the_base_level_of_a_textured_build_is_what_simplify_writes_for_the_same_target() {
+    let input = read_mesh(data(OBJ)).unwrap();
+    let target = input.n_faces() / 4;
+    let options = meshpyr::format::PyramidOptions {
+        pm: meshpyr::pm::PmOptions {
+            target_faces: target,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let pyramid = Pyramid::build_with(input.clone(), &options, &meshpyr::NoProgress).unwrap();
+    let simplified = meshpyr::simplify(
+        &input,
+        meshpyr::SimplifyTarget::Faces(target),
+        &Default::default(),
+        &meshpyr::NoProgress,
+    )
+    .unwrap();
+    // The replay of the records over the finest corners finds the wedges the decimator kept.
+    let base = pyramid.level_mesh(*pyramid.levels().start()).unwrap();
+    assert_eq!(base, simplified.mesh);
+}
+
+#[test]
+fn a_pyr_file_gives_the_same_level_bytes_as_the_pyramid_in_memory_and_records_the_uv_weight() {
+    let input = read_mesh(data(OBJ)).unwrap();
+    let options = meshpyr::format::PyramidOptions {
+        pm: meshpyr::pm::PmOptions {
+            uv_weight: 2.0,
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let pyramid = Pyramid::build_with(input.clone(), &options, &meshpyr::NoProgress).unwrap();
+    let (bytes, _) = pyramid.to_pyr_bytes().unwrap();
+    let file = meshpyr::format::decode(&bytes).unwrap();
+    assert_eq!(file.info.pm.uv_weight, 2.0);
+    assert!(file.pm.keeps_seams());
+    let (base, finest) = (*pyramid.levels().start(), *pyramid.levels().end());
+    for n in [base, (2 * base + finest) / 3, finest - 1] {
+        for format in [MeshFormat::Obj, MeshFormat::Ply] {
+            let in_memory = pyramid.level_mesh(n).unwrap();
+            let read = file.level_mesh(n).unwrap();
+            assert_eq!(
+                write_mesh_bytes(&read, format, &Default::default()).unwrap(),
+                write_mesh_bytes(&in_memory, format, &Default::default()).unwrap(),
+                "level {n} as {format:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_partitioned_build_does_not_claim_the_seams_and_its_levels_carry_no_corners() {
+    let input = read_mesh(data(OBJ)).unwrap();
+    let options = meshpyr::format::PyramidOptions {
+        pm: meshpyr::pm::PmOptions {
+            block_vertices: Some(128),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let pyramid = Pyramid::build_with(input.clone(), &options, &meshpyr::NoProgress).unwrap();
+    assert!(!pyramid.pm.keeps_seams());
+    let (bytes, _) = pyramid.to_pyr_bytes().unwrap();
+    let file = meshpyr::format::decode(&bytes).unwrap();
+    assert!(!file.pm.keeps_seams());
+    let level = file.level_mesh(*pyramid.levels().start()).unwrap();
+    assert!(level.corner_attributes.is_empty());
+    assert_eq!(
+        level.materials, input.materials,
+        "faces keep their materials"
+    );
+}
+
+#[test]
+fn levels_below_the_seam_floor_are_refused_as_for_any_mesh() {
+    let input = read_mesh(data(OBJ)).unwrap();
+    let pyramid = Pyramid::build(&input).unwrap();
+    let base = *pyramid.levels().start();
+    let handle = MoveHandle {
+        center: input.positions[0],
+        displacement: DVec3::Y * 0.2,
+        radius: 0.5,
+    };
+    let err = pyramid
+        .edit(base - 1, &[handle], &Filter::new())
+        .unwrap_err();
+    assert!(
+        err.to_string().contains("outside the pyramid's levels"),
+        "{err}"
+    );
+}
+
+/// `bytes` re-written with minor version `minor`, its `OPTS` section dropped (`None`) or
+/// replaced by `opts`.
+fn with_options(bytes: &[u8], minor: u16, opts: Option<&[u8]>) -> Vec<u8> {
+    use meshpyr::format::container::{Container, Section, write_container};
+    let c = Container::parse(bytes).unwrap();
+    let sections: Vec<Section> = c
+        .sections
+        .iter()
+        .filter_map(|e| {
+            let mut b = bytes[e.offset as usize..(e.offset + e.length) as usize].to_vec();
+            if &e.tag == b"OPTS" {
+                b = opts?.to_vec();
+            }
+            Some(Section {
+                tag: e.tag,
+                flags: e.flags,
+                bytes: b,
+            })
+        })
+        .collect();
+    write_container(meshpyr::format::MAJOR, minor, &sections)
+}
+
+#[test]
+fn a_2_2_file_without_build_options_still_reads_with_its_coarse_levels_untextured() {
+    let input = read_mesh(data(OBJ)).unwrap();
+    let (bytes, _) = Pyramid::build(&input).unwrap().to_pyr_bytes().unwrap();
+    let old = meshpyr::format::decode(&with_options(&bytes, 2, None)).unwrap();
+    assert_eq!(old.input, input);
+    assert!(!old.pm.keeps_seams());
+    let level = old.level_mesh(old.pm.n_base_vertices()).unwrap();
+    assert!(level.corner_attributes.is_empty());
+    assert_eq!(face_materials(&level).len(), level.n_faces());
+}
+
+#[test]
+fn damaged_build_options_and_records_that_break_a_seam_are_typed_errors() {
+    let input = read_mesh(data(OBJ)).unwrap();
+    let (bytes, _) = Pyramid::build(&input).unwrap().to_pyr_bytes().unwrap();
+    let mut opts = 0.25f64.to_le_bytes().to_vec();
+    opts.push(2);
+    let err = meshpyr::format::decode(&with_options(&bytes, 3, Some(&opts))).unwrap_err();
+    assert!(
+        err.to_string().contains("seam flag must be 0 or 1"),
+        "{err}"
+    );
+    let err = meshpyr::format::decode(&with_options(&bytes, 3, Some(&[0u8; 3]))).unwrap_err();
+    assert!(err.to_string().contains("OPTS"), "{err}");
+    // A partitioned build's records break seams; a file claiming otherwise is refused where
+    // the replay meets the first such record.
+    let options = meshpyr::format::PyramidOptions {
+        pm: meshpyr::pm::PmOptions {
+            block_vertices: Some(128),
+            ..Default::default()
+        },
+        ..Default::default()
+    };
+    let blocks = Pyramid::build_with(input.clone(), &options, &meshpyr::NoProgress).unwrap();
+    let (bytes, _) = blocks.to_pyr_bytes().unwrap();
+    let mut claims = 0.25f64.to_le_bytes().to_vec();
+    claims.push(1);
+    let file = meshpyr::format::decode(&with_options(&bytes, 3, Some(&claims))).unwrap();
+    let err = file.level_mesh(file.pm.n_base_vertices()).unwrap_err();
+    assert!(err.to_string().contains("breaks a texture seam"), "{err}");
 }

@@ -31,6 +31,10 @@ pub(crate) struct BuildArgs {
     /// the detail analysis every time they open it.
     #[arg(long)]
     pub(crate) no_details: bool,
+    /// For a textured input: weight of the texture-coordinate error against the geometric
+    /// error, as for `simplify` (recorded in the file; docs/seams.md).
+    #[arg(long, value_name = "W", default_value_t = PmOptions::default().uv_weight)]
+    pub(crate) uv_weight: f64,
     #[command(flatten)]
     pub(crate) path: PathOptions,
 }
@@ -52,6 +56,7 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
                 .path
                 .choose(&args.input, job, &input, global)
                 .block_vertices(),
+            uv_weight: args.uv_weight,
             ..PmOptions::default()
         },
     };

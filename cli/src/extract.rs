@@ -1,6 +1,8 @@
 //! `meshpyr extract F.pyr -o OUT [--level N]`: a level of the hierarchy as a mesh file. The
 //! finest level of a complete file is the user's original mesh, exactly (vertex order, faces,
-//! attributes, f32 bits); coarser levels and truncated files read only the progressive prefix.
+//! attributes, f32 bits); coarser levels and truncated files read only the progressive prefix,
+//! except a textured file's coarser levels, which keep the faces' materials and groups and the
+//! corners' texture coordinates (`docs/seams.md`) and so read the whole file.
 
 use super::Global;
 use anyhow::Context;
@@ -33,6 +35,12 @@ pub(crate) fn run(args: ExtractArgs, global: &Global) -> anyhow::Result<()> {
         if write_original(&args, global, &bytes, &name)?.is_none() {
             return Ok(());
         }
+    }
+    if let Some(n) = args.level
+        && format::is_textured(&bytes)
+        && let Some(()) = write_textured_level(&args, global, &bytes, &name, n)?
+    {
+        return Ok(());
     }
     let level =
         format::read_level(&bytes, args.level).with_context(|| format!("cannot read {name}"))?;
@@ -92,4 +100,44 @@ fn write_original(
         Err(e @ format::FormatError::Truncated { .. }) => Ok(Some(e)),
         Err(e) => Err(e).with_context(|| format!("cannot read {name}")),
     }
+}
+
+/// Writes level `n` of a complete textured file with its per-vertex attributes, materials,
+/// groups and per-corner data (`PyrData::level_mesh`). `None` when the file is truncated (the
+/// caller falls back to the progressive prefix, which has none of them) or for the finest
+/// level (the user's mesh, written as for any file).
+fn write_textured_level(
+    args: &ExtractArgs,
+    global: &Global,
+    bytes: &[u8],
+    name: &str,
+    n: usize,
+) -> anyhow::Result<Option<()>> {
+    let data = match format::decode(bytes) {
+        Ok(data) => data,
+        Err(format::FormatError::Truncated { .. }) => return Ok(None),
+        Err(e) => return Err(e).with_context(|| format!("cannot read {name}")),
+    };
+    let (base, finest) = (data.pm.n_base_vertices(), data.pm.n_vertices());
+    if !(base..=finest).contains(&n) {
+        anyhow::bail!("--level {n} is outside this file's levels {base}..={finest}");
+    }
+    if n == finest {
+        return Ok(None); // the user's mesh exactly, as for any file
+    }
+    if !data.pm.keeps_seams() && !data.input.corner_attributes.is_empty() {
+        eprintln!(
+            "warning: {name}: its hierarchy was built without keeping the texture seams (a .pyr file before format 2.3, or a partitioned build); level {n} is written without its corners' texture coordinates"
+        );
+    }
+    let mesh = data
+        .level_mesh(n)
+        .with_context(|| format!("cannot read {name}"))?;
+    super::output::write_mesh_output(&args.output, &mesh, &Default::default())?;
+    global.say(format_args!(
+        "wrote {}: level {n} ({})",
+        args.output.display(),
+        Count(mesh.n_faces(), "triangle", "triangles")
+    ));
+    Ok(Some(()))
 }

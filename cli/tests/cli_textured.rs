@@ -33,13 +33,15 @@ fn info_reports_texture_coordinates_seams_materials_and_files() {
 fn filter_writes_vt_usemtl_and_a_library_path_that_reaches_the_same_file() {
     let out = scratch("cli_textured_filter", "deep/er/low.obj");
     std::fs::create_dir_all(out.parent().unwrap()).unwrap();
+    // The hierarchy keeps the seams, so its coarsest level is the seam floor (104 of the 519
+    // vertices); a low-pass below it would act on the levels above only, with a warning.
     let run = meshpyr(&[
         "filter",
         &data(OBJ),
         "-o",
         out.to_str().unwrap(),
         "--lowpass",
-        "60",
+        "300",
     ]);
     assert!(!ok(&run).contains("warning"), "{}", stderr(&run));
     let text = std::fs::read_to_string(&out).unwrap();
@@ -122,9 +124,67 @@ fn converting_to_off_says_what_is_not_carried_and_simplifying_carries_it() {
 }
 
 #[test]
+fn extract_of_a_coarse_level_writes_its_texture_coordinates_materials_and_groups() {
+    let pyr = scratch_arg("cli_textured_levels", "scan.pyr");
+    ok(&meshpyr(&[
+        "build",
+        &data(OBJ),
+        "-o",
+        &pyr,
+        "--uv-weight",
+        "0.5",
+    ]));
+    let out = scratch_arg("cli_textured_levels", "level.obj");
+    let info = meshpyr::format::decode(&std::fs::read(&pyr).unwrap()).unwrap();
+    assert_eq!(info.info.pm.uv_weight, 0.5, "the file records the weight");
+    let (base, finest) = (info.pm.n_base_vertices(), info.pm.n_vertices());
+    let level = (base + finest) / 2;
+    let run = meshpyr(&["extract", &pyr, "-o", &out, "--level", &level.to_string()]);
+    assert!(!ok(&run).contains("warning"), "{}", stderr(&run));
+    let text = std::fs::read_to_string(&out).unwrap();
+    for what in [
+        "mtllib ",
+        "usemtl left",
+        "usemtl right",
+        "\nvt ",
+        "\nvn ",
+        "\ng high",
+    ] {
+        assert!(text.contains(what), "{what:?} missing");
+    }
+    let faces: Vec<&str> = text.lines().filter(|l| l.starts_with("f ")).collect();
+    assert_eq!(faces.len(), info.pm.n_faces_at(level));
+    assert!(
+        faces
+            .iter()
+            .all(|f| f.split(' ').skip(1).all(|c| c.split('/').count() == 3)),
+        "every corner has v/vt/vn"
+    );
+    // Below the seam floor there is no level, as below any file's base.
+    fails_with(
+        &meshpyr(&[
+            "extract",
+            &pyr,
+            "-o",
+            &out,
+            "--level",
+            &(base - 1).to_string(),
+        ]),
+        "outside this file's levels",
+    );
+}
+
+#[test]
 fn build_then_extract_gives_back_the_textured_obj() {
     let pyr = scratch_arg("cli_textured_pyr", "scan.pyr");
-    ok(&meshpyr(&["build", &data(OBJ), "-o", &pyr]));
+    ok(&meshpyr(&[
+        "build",
+        &data(OBJ),
+        "-o",
+        &pyr,
+        "--uv-weight",
+        "0.5",
+    ]));
     let back = scratch_arg("cli_textured_pyr", "back.obj");
     ok(&meshpyr(&["extract", &pyr, "-o", &back]));
     let direct = scratch_arg("cli_textured_pyr", "direct.obj");

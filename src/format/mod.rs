@@ -12,7 +12,6 @@ pub(crate) mod pyr;
 pub mod varint;
 
 pub use file::PyrFile;
-pub use pyr::is_pyr;
 pub use pyr::{
     EncodedPyr, FileDetails, LevelMesh, PyrData, PyramidOptions, SizeReport, StoredDetails,
 };
@@ -21,6 +20,7 @@ pub use pyr::{
     encode_with_details, read_level, read_level_within,
 };
 pub(crate) use pyr::{fix_checksums, fuzz_read_pyr, with_positions};
+pub use pyr::{is_pyr, is_textured};
 
 /// What can go wrong reading a `.pyr` file. Every variant says where.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

@@ -37,6 +37,7 @@ mod hierarchy;
 mod input_side;
 mod loaded;
 mod meta;
+mod options;
 mod positions;
 mod rice;
 mod split_block;
@@ -60,6 +61,7 @@ use input_side::{
 };
 pub(crate) use meta::head_counts;
 use meta::{build_info, describe, encode_meta};
+use options::{decode_options, encode_options};
 use positions::exactly_f32;
 
 /// Major version written. 2.0 codes the split errors as varint deltas of their bit patterns
@@ -69,9 +71,11 @@ pub const MAJOR: u16 = 2;
 pub const OLDEST_MAJOR: u16 = 1;
 /// Minor version written; readers accept any minor of their major (unknown optional sections
 /// are skipped). 2.1 adds the optional `DETL` section; 2.2 the required `CRNR` section of a
-/// textured input. A file without `CRNR` is written as 2.1 ([`MINOR_WITHOUT_CORNERS`]), byte
-/// for byte what a 2.1 writer wrote, so untextured files still open in 2.1 readers.
-pub const MINOR: u16 = 2;
+/// textured input; 2.3 the optional `OPTS` section (the uv weight, and whether the hierarchy
+/// kept the seams), written with `CRNR`. A file without either is written as 2.1
+/// ([`MINOR_WITHOUT_CORNERS`]), byte for byte what a 2.1 writer wrote, so untextured files
+/// still open in 2.1 readers.
+pub const MINOR: u16 = 3;
 /// The minor version of a file without a `CRNR` section.
 pub const MINOR_WITHOUT_CORNERS: u16 = 1;
 /// Vertex splits per block of the `SPLT` section.
@@ -86,7 +90,8 @@ const POLY: [u8; 4] = *b"POLY";
 const ATTR: [u8; 4] = *b"ATTR";
 const DETL: [u8; 4] = *b"DETL";
 const CRNR: [u8; 4] = *b"CRNR";
-const KNOWN: [[u8; 4]; 9] = [META, BASE, SPLT, ISOL, ORDR, POLY, ATTR, DETL, CRNR];
+const OPTS: [u8; 4] = *b"OPTS";
+const KNOWN: [[u8; 4]; 10] = [META, BASE, SPLT, ISOL, ORDR, POLY, ATTR, DETL, CRNR, OPTS];
 
 /// The `META` section (bincode 2 standard configuration). Fixed-size fields only: nothing in
 /// it allocates while decoding, so a damaged length cannot make bincode allocate.
@@ -283,13 +288,22 @@ pub fn encode_sections(
         bytes,
     })
     .collect();
-    let minor = if has_corner_data(input) {
+    let textured = has_corner_data(input);
+    if textured {
         let bytes = encode_corners(input);
         sizes.trailing += bytes.len();
         sections.push(Section {
             tag: CRNR,
             flags: REQUIRED,
             bytes,
+        });
+    }
+    let minor = if textured || pm.keeps_seams() {
+        // Optional: a 2.2 reader reads the hierarchy without knowing how it was built.
+        sections.push(Section {
+            tag: OPTS,
+            flags: 0,
+            bytes: encode_options(&info.pm, pm.keeps_seams()),
         });
         MINOR
     } else {
@@ -398,7 +412,8 @@ pub(super) fn decode_releasing(bytes: &[u8], release: Release<'_>) -> Result<Pyr
     } = input_side?;
     restore_input_positions(&mut input, &pm_to_mesh, &positions);
     let (faces, built) = finest_faces(&input, clean_faces, &replay, &mesh_to_pm, &positions)?;
-    let pm = ProgressiveMesh::from_checked_parts(
+    let options = c.section(OPTS)?.map(decode_options).transpose()?;
+    let mut pm = ProgressiveMesh::from_checked_parts(
         PmParts {
             n_base: meta.n_base as usize,
             positions,
@@ -412,11 +427,16 @@ pub(super) fn decode_releasing(bytes: &[u8], release: Release<'_>) -> Result<Pyr
     )
     .map_err(|e| corrupt(0, e.to_string()))?;
     let details = file_details(&c, detl?);
+    let mut info = build_info(&meta);
+    if let Some(o) = options {
+        info.pm.uv_weight = o.uv_weight;
+        pm.set_keeps_seams(o.keeps_seams);
+    }
     Ok(PyrData {
         input,
         built,
         pm,
-        info: build_info(&meta),
+        info,
         details,
     })
 }
@@ -434,6 +454,13 @@ fn check_complete(p: &Progressive, file_len: usize) -> Result<(), FormatError> {
         });
     }
     Ok(())
+}
+
+/// True when the file in `bytes` stores a textured input (a `CRNR` or `OPTS` section), whose
+/// levels carry per-corner data, materials and groups ([`PyrData::level_mesh`]); false for
+/// other files and for bytes that are not a `.pyr` file's head.
+pub fn is_textured(bytes: &[u8]) -> bool {
+    Container::parse(bytes).is_ok_and(|c| c.entry(CRNR).is_some() || c.entry(OPTS).is_some())
 }
 
 /// True when `bytes` start with the `.pyr` signature.

@@ -857,6 +857,7 @@ struct Decimation<'a> {
 }
 
 /// Decimates `mesh`; returns the collapses in order, the final mesh and why it stopped.
+#[cfg(test)]
 pub(crate) fn decimate(
     mesh: FlatMesh,
     params: &DecimateParams,

@@ -12,6 +12,8 @@
 //!   ([`PmOptions::block_vertices`]; `docs/partitioned.md`).
 //! - [`ProgressiveMesh`] / [`PmCursor`]: the hierarchy and its cursor.
 //! - [`FlatReplay`]: vertex splits replayed on flat arrays (reading and writing `.pyr` files).
+//! - [`level_corners()`] / [`level_mesh()`]: a level of a hierarchy that keeps texture seams
+//!   with the per-corner data of its faces, replayed from the finest corners.
 //! - [`simplify()`]: a file-level mesh cut at a level, attributes carried along;
 //!   [`simplify_to_goal`] takes the target as front ends give it, small pieces pruned first.
 //! - `fuzz`: the body of the `pm_ops` fuzz target (`meshpyr::fuzzing::fuzz_operations`).
@@ -24,6 +26,7 @@ mod decimate_reference;
 pub(crate) mod fuzz;
 mod goal;
 mod legality;
+mod level_corners;
 mod partition;
 pub(crate) mod prefetch;
 mod progressive;
@@ -41,6 +44,7 @@ pub(crate) use fuzz::fuzz_operations;
 pub use goal::{SimplifyGoal, simplify_to_goal};
 pub use legality::Refusal;
 pub use legality::{Legality, Relaxation};
+pub use level_corners::{LevelFaces, SeamBreak, level_corners, level_mesh};
 pub use progressive::SplitReplay;
 pub use progressive::{MIN_BLOCK_VERTICES, PmCursor, PmOptions, PmParts, ProgressiveMesh};
 pub use progressive::{PmError, VertexSplit};

@@ -252,6 +252,7 @@ impl ProgressiveMesh {
             n_base_faces: 0,
             errors,
             stop: None,
+            keeps_seams: false,
         })
     }
 }

@@ -2,7 +2,8 @@
 //! that walks the levels one split at a time.
 
 use super::collapse::{half_edge_collapse, vertex_split};
-use super::decimate::{Collapse, DecimateParams, FlatMesh, Stop, decimate};
+use super::decimate::{Collapse, DecimateParams, FlatMesh, Stop, decimate_with_seams};
+use super::seams::Seams;
 use crate::mesh::{BoundingBox, CornerTable, Mesh, PolygonMesh, SlotIndex, SourceMap, VertexId};
 use crate::progress::Progress;
 use glam::DVec3;
@@ -137,6 +138,9 @@ pub struct ProgressiveMesh {
     errors: Vec<f32>,
     /// Why the build stopped at the base level; `None` for a hierarchy loaded from parts.
     stop: Option<Stop>,
+    /// Whether every collapse kept the input's texture seams (`super::seams`), so that each
+    /// level's corners follow from the finest ones (`super::level_corners`).
+    keeps_seams: bool,
 }
 
 /// A corner table's vertex list as triangles, reusing its allocation when its capacity is a
@@ -162,7 +166,7 @@ impl ProgressiveMesh {
         progress: &dyn Progress,
     ) -> Result<ProgressiveMesh, PmError> {
         let params = decimate_params(opts, mesh.bbox_diagonal())?;
-        let decimated = decimate_flat(FlatMesh::from_mesh(mesh), &params, opts, progress)?;
+        let decimated = decimate_flat(FlatMesh::from_mesh(mesh), &params, opts, None, progress)?;
         let n_slots = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
         let isolated: Vec<u32> = mesh
             .vertices()
@@ -210,6 +214,7 @@ impl ProgressiveMesh {
         opts: &PmOptions,
         progress: &dyn Progress,
     ) -> Result<ProgressiveMesh, PmError> {
+        let face_source = &source.face_source;
         let source = &source.vertex_source;
         let positions: Vec<DVec3> = source
             .iter()
@@ -229,11 +234,27 @@ impl ProgressiveMesh {
         // The working mesh copies the table; of the table only the corners' vertices are read
         // again (they become the finest faces, in place), so the twins go before the
         // decimation's peak.
+        let extent = BoundingBox::of(positions.iter().copied()).map_or(0.0, |b| b.max_side());
         let flat = FlatMesh::from_corners(positions, &corners);
+        // A partitioned build decides its collapses in blocks that do not see the seams.
+        let mut seams = match opts.block_vertices {
+            None => Seams::of(
+                input,
+                &corners.corner_vertex,
+                face_source,
+                source,
+                &flat,
+                opts.uv_weight,
+                extent,
+            ),
+            Some(_) => None,
+        };
         let CornerTable {
             mut corner_vertex, ..
         } = corners;
-        let decimated = decimate_flat(flat, &params, opts, progress)?;
+        let keeps_seams = seams.is_some();
+        let decimated = decimate_flat(flat, &params, opts, seams.as_mut(), progress)?;
+        drop(seams);
         let faces = move |mesh_to_pm: &[u32]| {
             for v in &mut corner_vertex {
                 *v = mesh_to_pm[*v as usize];
@@ -241,13 +262,15 @@ impl ProgressiveMesh {
             triangles_of(corner_vertex)
         };
         let position = |v: u32| input.positions[source[v as usize] as usize];
-        Self::from_decimation(
+        let mut pm = Self::from_decimation(
             decimated,
             (source.len(), source.len()),
             &isolated,
             position,
             faces,
-        )
+        )?;
+        pm.keeps_seams = keeps_seams;
+        Ok(pm)
     }
 
     /// Puts a decimation of a mesh with `n_vertices` vertices in slots `0..n_slots` into PM
@@ -321,6 +344,7 @@ impl ProgressiveMesh {
             n_base_faces,
             errors,
             stop: Some(stop),
+            keeps_seams: false,
         })
     }
 
@@ -338,6 +362,20 @@ impl ProgressiveMesh {
     /// which rules refused); `None` for a hierarchy loaded from a file.
     pub fn stop(&self) -> Option<&Stop> {
         self.stop.as_ref()
+    }
+
+    /// Whether the hierarchy keeps the input's texture seams: built from a textured input
+    /// (per-corner data or several materials) in one piece, every collapse obeying the seam
+    /// rule (`docs/seams.md`), so that every level has the input's per-corner data
+    /// ([`crate::pm::level_corners`]).
+    pub fn keeps_seams(&self) -> bool {
+        self.keeps_seams
+    }
+
+    /// Marks a hierarchy read from a file as keeping the seams (the file says so; the level
+    /// replay checks it).
+    pub(crate) fn set_keeps_seams(&mut self, keeps: bool) {
+        self.keeps_seams = keeps;
     }
 
     /// One phrase describing the base level against the floor of its topology, and why the
@@ -580,12 +618,13 @@ fn decimate_flat(
     flat: FlatMesh,
     params: &DecimateParams,
     opts: &PmOptions,
+    seams: Option<&mut Seams>,
     progress: &dyn Progress,
 ) -> Result<Decimated, PmError> {
     if let Some(max) = opts.block_vertices {
         return super::partition::decimate_in_blocks(flat, params, max, progress);
     }
-    let (collapses, coarse, outcome) = decimate(flat, params, progress);
+    let (collapses, coarse, outcome) = decimate_with_seams(flat, params, seams, progress);
     Ok(Decimated {
         collapses,
         survivors: coarse.survivors(),

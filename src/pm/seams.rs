@@ -57,7 +57,7 @@ pub(crate) struct Seams {
 }
 
 /// The corners a collapse pairs up, as `(wedge at u, wedge at v)` per dying face.
-type Pairs = [Option<(u32, u32)>; 2];
+pub(crate) type Pairs = [Option<(u32, u32)>; 2];
 
 impl Seams {
     /// The wedges of `input` on the builder's triangles (`corner_vertex`, each triangle from
@@ -74,40 +74,11 @@ impl Seams {
         uv_weight: f64,
         extent: f64,
     ) -> Option<Seams> {
-        let material = input.face_attribute(MATERIAL_ATTRIBUTE);
-        let materials_differ = material.is_some_and(|m| {
-            let first = (!m.data.is_empty()).then(|| m.data.get_f64(0).to_bits());
-            (0..m.data.len()).any(|f| Some(m.data.get_f64(f).to_bits()) != first)
-        });
-        if input.corner_attributes.is_empty() && !materials_differ {
+        if !is_textured(input) {
             return None;
         }
         let source_corner = source_corners(input, corner_vertex, face_source, vertex_source);
-        let mut ids: HashMap<Vec<u64>, u32> = HashMap::new();
-        let mut wedge = Vec::with_capacity(corner_vertex.len());
-        let mut representative = Vec::new();
-        let mut key = Vec::new();
-        for (c, (&v, &pc)) in corner_vertex.iter().zip(&source_corner).enumerate() {
-            key.clear();
-            key.push(v as u64);
-            if materials_differ && let Some(m) = material {
-                key.push(m.data.get_f64(face_source[c / 3] as usize).to_bits());
-            }
-            for a in &input.corner_attributes {
-                match a.row(pc as usize) {
-                    None => key.push(u64::MAX),
-                    Some(r) => {
-                        key.extend(a.columns.iter().map(|col| col.data.get_f64(r).to_bits()))
-                    }
-                }
-            }
-            let next = representative.len() as u32;
-            let id = *ids.entry(key.clone()).or_insert(next);
-            if id == next {
-                representative.push(pc);
-            }
-            wedge.push(id);
-        }
+        let (wedge, representative) = wedges(input, corner_vertex, face_source, &source_corner);
         let mut seams = Seams {
             wedge,
             source_corner: representative,
@@ -192,12 +163,7 @@ impl Seams {
                 seam_edges += 1;
             }
         });
-        match (wedges.len(), self.pairs(mesh, h)) {
-            (1, [Some(l), Some(r)]) => l.1 == r.1,
-            (1, _) => true,
-            (2, [Some(l), Some(r)]) => l.0 != r.0 && l.1 != r.1 && seam_edges == 2,
-            _ => false,
-        }
+        seam_rule(wedges.len(), seam_edges, self.pairs(mesh, h))
     }
 
     /// The attribute part of the cost of collapsing `h = u → v`, `v` at `pv` (0 without texture
@@ -252,10 +218,74 @@ impl Seams {
     }
 }
 
+/// The seam rule (module docs) for a collapse `u → v`: `u` has `wedges` wedges and
+/// `seam_edges` interior edges whose two faces see different wedges at `u`; `pairs` holds the
+/// `(wedge at u, wedge at v)` of the face on the left of `u → v` and of the one on the right.
+pub(crate) fn seam_rule(wedges: usize, seam_edges: usize, pairs: Pairs) -> bool {
+    match (wedges, pairs) {
+        (1, [Some(l), Some(r)]) => l.1 == r.1,
+        (1, _) => true,
+        (2, [Some(l), Some(r)]) => l.0 != r.0 && l.1 != r.1 && seam_edges == 2,
+        _ => false,
+    }
+}
+
+/// Whether `input` has per-corner data or more than one material: then the decimator keeps
+/// its seams.
+pub(crate) fn is_textured(input: &PolygonMesh) -> bool {
+    !input.corner_attributes.is_empty() || materials_differ(input)
+}
+
+fn materials_differ(input: &PolygonMesh) -> bool {
+    input.face_attribute(MATERIAL_ATTRIBUTE).is_some_and(|m| {
+        let first = (!m.data.is_empty()).then(|| m.data.get_f64(0).to_bits());
+        (0..m.data.len()).any(|f| Some(m.data.get_f64(f).to_bits()) != first)
+    })
+}
+
+/// The wedge of every corner of the builder's triangles (`corner_vertex`, triangle `t` from
+/// input polygon `face_source[t]`, corner `c` from input polygon corner `source_corner[c]`),
+/// numbered in order of first corner, and per wedge the first such input corner: corners of
+/// one vertex share a wedge when their per-corner values and their faces' materials are equal.
+pub(crate) fn wedges(
+    input: &PolygonMesh,
+    corner_vertex: &[u32],
+    face_source: &[u32],
+    source_corner: &[u32],
+) -> (Vec<u32>, Vec<u32>) {
+    let material = input
+        .face_attribute(MATERIAL_ATTRIBUTE)
+        .filter(|_| materials_differ(input));
+    let mut ids: HashMap<Vec<u64>, u32> = HashMap::new();
+    let mut wedge = Vec::with_capacity(corner_vertex.len());
+    let mut representative = Vec::new();
+    let mut key = Vec::new();
+    for (c, (&v, &pc)) in corner_vertex.iter().zip(source_corner).enumerate() {
+        key.clear();
+        key.push(v as u64);
+        if let Some(m) = material {
+            key.push(m.data.get_f64(face_source[c / 3] as usize).to_bits());
+        }
+        for a in &input.corner_attributes {
+            match a.row(pc as usize) {
+                None => key.push(u64::MAX),
+                Some(r) => key.extend(a.columns.iter().map(|col| col.data.get_f64(r).to_bits())),
+            }
+        }
+        let next = representative.len() as u32;
+        let id = *ids.entry(key.clone()).or_insert(next);
+        if id == next {
+            representative.push(pc);
+        }
+        wedge.push(id);
+    }
+    (wedge, representative)
+}
+
 /// For every corner of the builder's triangles, the input polygon corner it came from: the
 /// corner of polygon `face_source[t]` at the same input vertex (the builder fans polygons from
 /// their first corner and may flip a triangle, so the position in the triangle says nothing).
-fn source_corners(
+pub(crate) fn source_corners(
     input: &PolygonMesh,
     corner_vertex: &[u32],
     face_source: &[u32],

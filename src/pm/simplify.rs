@@ -154,28 +154,17 @@ pub fn simplify(
         .iter()
         .map(|&v| repaired.source.vertex_source[v as usize])
         .collect();
-    let mut mesh = PolygonMesh::from_triangles(
-        source_rows
-            .iter()
-            .map(|&r| input.positions[r as usize])
-            .collect(),
-        &tris,
-    );
-    mesh.position_type = input.position_type;
-    mesh.comments = input.comments.clone();
-    mesh.vertex_attributes = input
-        .vertex_attributes
-        .iter()
-        .map(|a| a.gathered(&source_rows))
-        .collect();
     let live = live_triangles(&coarse);
-    carry_face_data(
-        input,
-        &mut mesh,
-        &live,
-        &repaired.source.face_source,
-        seams.as_ref(),
-    );
+    let faces: Vec<u32> = live
+        .iter()
+        .map(|&t| repaired.source.face_source[t as usize])
+        .collect();
+    let corners: Option<Vec<u32>> = seams.as_ref().map(|seams| {
+        live.iter()
+            .flat_map(|&t| (3 * t..3 * t + 3).map(|c| seams.source_corner(seams.wedge(c))))
+            .collect()
+    });
+    let mesh = cut_mesh(input, &source_rows, &tris, &faces, corners.as_deref());
     let short_of_target = match outcome.stop {
         Stop::NoLegalCollapse(_) => Some(Mesh::from_polygons(&mesh)?.mesh.topology()),
         _ => None,
@@ -190,43 +179,49 @@ pub fn simplify(
     })
 }
 
-/// Gives `out`, whose triangles are the input triangles `live` (of the builder's table, each
-/// from input polygon `face_source[t]`), the face attributes and face lists of their polygons,
-/// the materials and group names, and the per-corner data of their corners' wedges, each
+/// A mesh cut from `input`: the vertices at input rows `source_rows` with their per-vertex
+/// attributes, the triangles `tris` (over those vertices), each from input polygon `faces[i]`
+/// and keeping its face attributes, face lists, material and groups, and, with `corners` (the
+/// input polygon corner of each of the triangles' corners), their per-corner data, each
 /// attribute's pool reduced to the rows in use (in order of first use).
-fn carry_face_data(
+pub(crate) fn cut_mesh(
     input: &PolygonMesh,
-    out: &mut PolygonMesh,
-    live: &[u32],
-    face_source: &[u32],
-    seams: Option<&Seams>,
-) {
-    let faces: Vec<u32> = live.iter().map(|&t| face_source[t as usize]).collect();
+    source_rows: &[u32],
+    tris: &[[u32; 3]],
+    faces: &[u32],
+    corners: Option<&[u32]>,
+) -> PolygonMesh {
+    let mut out = PolygonMesh::from_triangles(
+        source_rows
+            .iter()
+            .map(|&r| input.positions[r as usize])
+            .collect(),
+        tris,
+    );
+    out.position_type = input.position_type;
+    out.comments = input.comments.clone();
+    out.vertex_attributes = input
+        .vertex_attributes
+        .iter()
+        .map(|a| a.gathered(source_rows))
+        .collect();
     out.face_attributes = input
         .face_attributes
         .iter()
-        .map(|a| a.gathered(&faces))
+        .map(|a| a.gathered(faces))
         .collect();
-    out.face_lists = input
-        .face_lists
-        .iter()
-        .map(|l| l.gathered(&faces))
-        .collect();
+    out.face_lists = input.face_lists.iter().map(|l| l.gathered(faces)).collect();
     out.materials = input.materials.clone();
     out.group_names = input.group_names.clone();
     out.object_names = input.object_names.clone();
-    let Some(seams) = seams else {
-        return;
-    };
-    let corners: Vec<u32> = live
-        .iter()
-        .flat_map(|&t| (3 * t..3 * t + 3).map(|c| seams.source_corner(seams.wedge(c))))
-        .collect();
-    out.corner_attributes = input
-        .corner_attributes
-        .iter()
-        .map(|a| compacted(a, &corners))
-        .collect();
+    if let Some(corners) = corners {
+        out.corner_attributes = input
+            .corner_attributes
+            .iter()
+            .map(|a| compacted(a, corners))
+            .collect();
+    }
+    out
 }
 
 /// `a` on the polygon corners `corners` (one per output corner), its pool reduced to the rows

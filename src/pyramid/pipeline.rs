@@ -165,6 +165,15 @@ impl Pyramid {
         self.pyramid.n_base_vertices()..=self.pyramid.n_vertices()
     }
 
+    /// Level `level` (clamped to [`Self::levels`]) of the hierarchy at the input's positions,
+    /// with its per-vertex attributes, its faces' attributes, materials and groups and, for a
+    /// textured input, its corners' texture coordinates and other per-corner data, each face
+    /// keeping one chart (`crate::pm::level_mesh`; a `.pyr` file of this pyramid gives the same
+    /// mesh through [`format::PyrData::level_mesh`]).
+    pub fn level_mesh(&self, level: usize) -> Result<PolygonMesh, crate::pm::SeamBreak> {
+        crate::pm::level_mesh(&self.pm, &self.input, &self.source, level)
+    }
+
     /// The input with `filter` applied to its details (unit gains give the input back
     /// exactly; synthesis with them would be within `√3/2` of a detail step, about 4e-7 of the
     /// bounding-box diagonal, because details are quantised). Bands beyond the levels act on

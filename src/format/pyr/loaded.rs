@@ -37,18 +37,36 @@ impl PyrData {
     pub(crate) fn into_scan_parts(
         self,
     ) -> (PolygonMesh, SourceMap, ProgressiveMesh, PyramidOptions) {
-        // A file whose input needed no repair was loaded without building the half-edge mesh
-        // (see `clean_triangle_faces`): its mesh is the input itself, vertex for vertex and
-        // face for face.
         let source = match self.built {
             Some(b) => b.source,
-            None => SourceMap {
-                vertex_source: (0..self.input.positions.len() as u32).collect(),
-                face_source: (0..self.input.n_faces() as u32).collect(),
-                input_vertices: self.input.positions.len(),
-            },
+            None => identity_source(&self.input),
         };
         (self.input, source, self.pm, self.info)
+    }
+
+    /// Level `level` of the hierarchy with everything of the input a level keeps: per-vertex
+    /// attributes, each face's attributes, material and groups, and, when the hierarchy kept
+    /// the texture seams ([`ProgressiveMesh::keeps_seams`]), each corner's texture
+    /// coordinates and other per-corner data (`crate::pm::level_mesh`; the same bytes as the
+    /// level of the hierarchy in memory). Without kept seams the corners' data is left out.
+    pub fn level_mesh(&self, level: usize) -> Result<PolygonMesh, FormatError> {
+        let source = match &self.built {
+            Some(b) => b.source.clone(),
+            None => identity_source(&self.input),
+        };
+        crate::pm::level_mesh(&self.pm, &self.input, &source, level)
+            .map_err(|e| corrupt(0, e.to_string()))
+    }
+}
+
+/// The map of an input that needed no repair: a file loaded without building the half-edge
+/// mesh (see `clean_triangle_faces`) has the input itself as its mesh, vertex for vertex and
+/// face for face.
+fn identity_source(input: &PolygonMesh) -> SourceMap {
+    SourceMap {
+        vertex_source: (0..input.positions.len() as u32).collect(),
+        face_source: (0..input.n_faces() as u32).collect(),
+        input_vertices: input.positions.len(),
     }
 }
 
