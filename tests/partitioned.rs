@@ -188,12 +188,12 @@ fn p99(sorted: &[f64]) -> f64 {
 }
 
 #[test]
-fn a_filter_on_a_hierarchy_of_sixteen_blocks_adds_no_spikes_at_their_borders() {
-    // Issue 47's spike bound on a small scan cut into 16 blocks (4 merge levels): the largest
+fn a_filter_on_a_hierarchy_of_small_blocks_adds_no_spikes_at_their_borders() {
+    // Issue 47's spike bound on a small scan cut into 16 and 64 blocks: the largest
     // |partitioned − input| stays within 1.5 × the largest |one process − input| under the
     // README's enhancement. The partitioned result differs from the one-process one by less
     // than the filter's own displacement (p99); issue 47's agreement bound, 0.25 of it, is
-    // not met yet (docs/partitioned.md, "How close it is").
+    // not met (docs/partitioned.md, "How close it is").
     let scan = bumpy_scan(160);
     let n = scan.n_vertices();
     let filter = Filter::new().gain(n / 32, n / 2, 2.0);
@@ -207,22 +207,26 @@ fn a_filter_on_a_hierarchy_of_sixteen_blocks_adds_no_spikes_at_their_borders() {
             .filter(&filter)
     };
     let whole = filtered(PmOptions::default());
-    let parts = filtered(blocks(1600));
     let moved = distances(&whole, &scan);
-    let apart = distances(&parts, &whole);
-    let parts_moved = distances(&parts, &scan);
     assert!(p99(&moved) > 0.0);
-    assert!(
-        p99(&apart) < p99(&moved),
-        "p99 |partitioned − one process| = {:.3e}, p99 |one process − input| = {:.3e}",
-        p99(&apart),
-        p99(&moved)
-    );
-    let (max_parts, max_whole) = (parts_moved[n - 1], moved[n - 1]);
-    assert!(
-        max_parts <= 1.5 * max_whole,
-        "max |partitioned − input| = {max_parts:.3e}, max |one process − input| = {max_whole:.3e}"
-    );
+    for block in [1600, 400] {
+        let parts = filtered(blocks(block));
+        let apart = distances(&parts, &whole);
+        let parts_moved = distances(&parts, &scan);
+        assert!(
+            p99(&apart) < p99(&moved),
+            "blocks of {block}: p99 |partitioned − one process| = {:.3e}, \
+             p99 |one process − input| = {:.3e}",
+            p99(&apart),
+            p99(&moved)
+        );
+        let (max_parts, max_whole) = (parts_moved[n - 1], moved[n - 1]);
+        assert!(
+            max_parts <= 1.5 * max_whole,
+            "blocks of {block}: max |partitioned − input| = {max_parts:.3e}, \
+             max |one process − input| = {max_whole:.3e}"
+        );
+    }
 }
 
 /// An open grid with jitter and holes (some faces left out), in several copies side by side.

@@ -2,16 +2,20 @@
 filters a scan once on each path and prints the issue's measures.
 
     python3 partition_agreement.py SCAN.ply --block-vertices 50000 [--enhance A:B=G]
-        [--meshpyr target/release/meshpyr] [--runs 3] [--keep DIR]
+        [--meshpyr target/release/meshpyr] [--runs 3] [--keep DIR] [--near-borders]
 
 - p99 of per-vertex |partitioned - one process| over p99 of |one process - input| (bound 0.25);
 - max |partitioned - input| over max |one process - input| (bound 1.5: no spikes at borders);
 - wall time of the partitioned run over the one-process run, medians of --runs runs each,
   alternated, on the same cores (bound 1.5).
 
+- with --near-borders: the same p99 ratio for the vertices at each ring distance from the
+  borders of the build's first pass (its k-d cells along the model's axes, as
+  src/pm/partition/cells.rs cuts them), to see whether the differences sit at the borders.
+
 The default filter is the README's scan enhancement, `--enhance V/32:V/2=2` with V the input's
 vertex count. Distances are in model units and also given relative to the bounding-box diagonal.
-Needs numpy; the runs use GNU time (/usr/bin/time) for wall time and peak resident memory.
+Needs numpy (and scipy for --near-borders); the runs use GNU time (/usr/bin/time) for wall time and peak resident memory.
 """
 import argparse
 import os
@@ -46,9 +50,10 @@ def main():
     ap.add_argument("--meshpyr", default=os.path.join(REPO, "target", "release", "meshpyr"))
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--keep", default=None, help="folder for the filtered meshes")
+    ap.add_argument("--near-borders", action="store_true")
     a = ap.parse_args()
 
-    pos, _ = read_ply(a.scan)
+    pos, tris = read_ply(a.scan)
     n = len(pos)
     enhance = a.enhance or f"{n // 32}:{n // 2}=2"
     folder = a.keep or tempfile.mkdtemp(prefix="partition_agreement_")
@@ -95,6 +100,53 @@ def main():
         f"partitioned {m_parts / 1024:.0f} MB ({m_parts * 1024 / n:.0f} B/vertex)"
     )
     np.save(os.path.join(folder, "apart.npy"), apart)
+    if a.near_borders:
+        by_rings(pos, tris, a.block_vertices, apart, p99_moved)
+
+
+def first_pass_cells(pos, tris, block):
+    """Each vertex's cell in the first pass (-1 if it has no face), as cells.rs cuts them."""
+    cell = np.full(len(pos), -1)
+    vertices = np.unique(tris)
+    depth = 0
+    while -(-len(vertices) // (1 << depth)) > block:
+        depth += 1
+
+    def cut(part, depth, first):
+        if depth == 0 or len(part) < 2:
+            cell[part] = first
+            return
+        p = pos[part]
+        axis = int(np.argmax(p.max(axis=0) - p.min(axis=0)))
+        part = part[np.lexsort((part, p[:, axis]))]
+        mid = len(part) // 2
+        cut(part[:mid], depth - 1, first)
+        cut(part[mid:], depth - 1, first + (1 << (depth - 1)))
+
+    cut(vertices, depth, 0)
+    return cell
+
+
+def by_rings(pos, tris, block, apart, p99_moved):
+    """Prints the p99 ratio by ring distance to the first pass's borders."""
+    import scipy.sparse as sparse
+    from scipy.sparse.csgraph import dijkstra
+
+    cell = first_pass_cells(pos, tris, block)[tris]
+    across = ~((cell[:, 0] == cell[:, 1]) & (cell[:, 1] == cell[:, 2]))
+    border = np.unique(tris[across])
+    edges = np.concatenate([tris[:, [0, 1]], tris[:, [1, 2]], tris[:, [2, 0]]])
+    n = len(pos)
+    graph = sparse.coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n, n))
+    graph = graph.tocsr()
+    rings = dijkstra(graph + graph.T, unweighted=True, indices=border, min_only=True, limit=64)
+    print(f"first pass: {len(border)} border vertices; p99 |partitioned - one process| over")
+    print("p99 |one process - input| by ring distance to them:")
+    for lo, hi in [(0, 1), (1, 3), (3, 8), (8, 16), (16, 32), (32, 64), (64, np.inf)]:
+        near = (rings >= lo) & (rings < hi)
+        if near.sum() >= 100:
+            ratio = np.percentile(apart[near], 99) / p99_moved
+            print(f"  rings {lo}..{hi}: {near.sum()} vertices, ratio {ratio:.3f}")
 
 
 if __name__ == "__main__":

@@ -24,8 +24,8 @@ fn parse_block_vertices(s: &str) -> Result<usize, String> {
 /// The options that choose the build path.
 #[derive(clap::Args, Debug, Clone, Default)]
 pub(crate) struct PathOptions {
-    /// Build the hierarchy in spatial blocks of at most N vertices, their borders pinned and
-    /// merged up a tree (docs/partitioned.md), whatever the memory.
+    /// Build the hierarchy in spatial blocks of at most N vertices, their borders pinned for
+    /// one pass at a time (docs/partitioned.md), whatever the memory.
     #[arg(long, value_name = "N", value_parser = parse_block_vertices)]
     pub(crate) block_vertices: Option<usize>,
     /// The memory the build may use (8G, 3GB, 1.5GiB; default: what the machine and the

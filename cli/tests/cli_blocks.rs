@@ -5,18 +5,28 @@
 mod common;
 
 use common::{data_arg, error_line, meshpyr, ok, path, scratch};
+use std::path::Path;
+use std::process::Output;
+
+/// `meshpyr COMMAND bunny.ply -o OUT ARGS…`.
+fn on_bunny(command: &str, out: &Path, args: &[&str]) -> Output {
+    let bunny = data_arg("bunny.ply");
+    let mut all = vec![command, &bunny, "-o", path(out)];
+    all.extend_from_slice(args);
+    meshpyr(&all)
+}
+
+/// `meshpyr filter bunny.ply -o OUT --lowpass 1000 ARGS…`.
+fn lowpass_bunny(out: &Path, args: &[&str]) -> Output {
+    let mut all = vec!["--lowpass", "1000"];
+    all.extend_from_slice(args);
+    on_bunny("filter", out, &all)
+}
 
 #[test]
 fn filter_says_it_builds_in_one_process_when_the_scan_fits() {
     let out = scratch("blocks-fits", "out.ply");
-    let err = ok(&meshpyr(&[
-        "filter",
-        &data_arg("bunny.ply"),
-        "-o",
-        path(&out),
-        "--lowpass",
-        "1000",
-    ]));
+    let err = ok(&lowpass_bunny(&out, &[]));
     assert!(
         err.contains("building the hierarchy in one process"),
         "{err}"
@@ -26,14 +36,7 @@ fn filter_says_it_builds_in_one_process_when_the_scan_fits() {
 #[test]
 fn forced_blocks_are_said_and_their_pyr_file_filters_like_any_other() {
     let pyr = scratch("blocks-forced", "bunny.pyr");
-    let err = ok(&meshpyr(&[
-        "build",
-        &data_arg("bunny.ply"),
-        "-o",
-        path(&pyr),
-        "--block-vertices",
-        "2000",
-    ]));
+    let err = ok(&on_bunny("build", &pyr, &["--block-vertices", "2000"]));
     assert!(
         err.contains(
             "building the hierarchy in blocks of at most 2000 vertices (--block-vertices)"
@@ -50,11 +53,7 @@ fn forced_blocks_are_said_and_their_pyr_file_filters_like_any_other() {
         "1000:10000=2",
     ]));
     let edited = scratch("blocks-forced", "edited.ply");
-    let err = ok(&meshpyr(&[
-        "edit",
-        &data_arg("bunny.ply"),
-        "-o",
-        path(&edited),
+    let edit = [
         "--level",
         "500",
         "--move",
@@ -63,36 +62,18 @@ fn forced_blocks_are_said_and_their_pyr_file_filters_like_any_other() {
         "0.05",
         "--block-vertices",
         "3000",
-    ]));
+    ];
+    let err = ok(&on_bunny("edit", &edited, &edit));
     assert!(err.contains("in blocks of at most 3000 vertices"), "{err}");
 }
 
 #[test]
 fn a_tight_memory_allowance_takes_the_partitioned_path_by_itself() {
     let out = scratch("blocks-memory", "out.ply");
-    let err = ok(&meshpyr(&[
-        "filter",
-        &data_arg("bunny.ply"),
-        "-o",
-        path(&out),
-        "--lowpass",
-        "1000",
-        "--memory",
-        "1M",
-    ]));
+    let err = ok(&lowpass_bunny(&out, &["--memory", "1M"]));
     assert!(err.contains("in blocks of at most"), "{err}");
     assert!(err.contains("1 MB allowed"), "{err}");
-    let quiet = ok(&meshpyr(&[
-        "filter",
-        &data_arg("bunny.ply"),
-        "-o",
-        path(&out),
-        "--lowpass",
-        "1000",
-        "--memory",
-        "1M",
-        "--quiet",
-    ]));
+    let quiet = ok(&lowpass_bunny(&out, &["--memory", "1M", "--quiet"]));
     assert!(quiet.is_empty(), "{quiet}");
 }
 
@@ -105,16 +86,7 @@ fn bad_block_sizes_and_memory_sizes_are_one_line_errors() {
         ("--memory", "8X", "unknown unit"),
         ("--memory", "0", "out of range"),
     ] {
-        let err = error_line(&meshpyr(&[
-            "filter",
-            &data_arg("bunny.ply"),
-            "-o",
-            path(&out),
-            "--lowpass",
-            "1000",
-            flag,
-            value,
-        ]));
+        let err = error_line(&lowpass_bunny(&out, &[flag, value]));
         assert!(err.contains(needle), "{flag} {value}: {err}");
     }
 }

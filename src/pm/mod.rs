@@ -8,8 +8,8 @@
 //!   them ([`Relaxation`]).
 //! - `quadric`: area-weighted plane quadrics.
 //! - `decimate`: the greedy batched decimation loop, on a flat corner table.
-//! - `partition`: the same decimation in spatial blocks with pinned borders, merged up a tree
-//!   ([`PmOptions::block_vertices`]; `docs/partitioned.md`).
+//! - `partition`: the same decimation in spatial blocks with pinned borders, the cells cut
+//!   differently from pass to pass ([`PmOptions::block_vertices`]; `docs/partitioned.md`).
 //! - [`ProgressiveMesh`] / [`PmCursor`]: the hierarchy and its cursor.
 //! - [`FlatReplay`]: vertex splits replayed on flat arrays (reading and writing `.pyr` files).
 //! - [`level_corners()`] / [`level_mesh()`]: a level of a hierarchy that keeps texture seams

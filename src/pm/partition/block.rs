@@ -1,7 +1,8 @@
-//! One task of a partitioned build: decimate one block with its border pinned.
+//! One task of a partitioned build: one block decimated with its border pinned, for one pass
+//! (`lockstep.rs`) or, for the last block, to the base.
 //!
 //! A task reads only its [`BlockTask`] — its triangles, the positions, quadrics and pinned
-//! flags of their vertices, its target — and returns a [`BlockResult`]: its collapses, its
+//! flags of their vertices, its rules — and returns a [`BlockResult`]: its collapses, its
 //! triangles afterwards and the quadrics its collapses changed. Everything is in the input's
 //! vertex numbering, so results of different tasks can be put together without knowing how
 //! each task numbered its working mesh; a task run twice gives the same result.
@@ -12,8 +13,9 @@
 //!    half-edge of the block, and both its ends are pinned);
 //! 2. pin the border, start the quadrics from the given ones (not from the block's faces: a
 //!    border edge is no hole rim, and a vertex's quadric sums the planes of its whole star);
-//! 3. decimate (`decimate_from`), relaxing no rule except in the last block, whose result is
-//!    the base;
+//! 3. decimate: one pass under the whole mesh's cut (`lockstep.rs`), or, for the last block,
+//!    which holds the whole mesh and pins nothing, to the end (`decimate_from`), relaxing the
+//!    rules where nothing else moves, as the one-process build ends;
 //! 4. map the collapses and the triangles back to input indices.
 
 use super::super::Stop;
@@ -48,7 +50,7 @@ pub(crate) struct BlockTask {
     pub input_faces: usize,
     /// The decimator's targets, bound and rules for this block.
     pub params: DecimateParams,
-    /// Whether this is the last block (the root of the merge tree): it may relax the rules.
+    /// Whether this is the last block (the whole mesh once it fits one): it may relax the rules.
     pub last: bool,
 }
 
@@ -61,12 +63,10 @@ pub(crate) struct BlockResult {
     pub faces: Vec<[u32; 3]>,
     /// The quadrics of the surviving free vertices (the only ones a collapse changes).
     pub quadrics: Vec<(u32, VertexQuadric)>,
-    /// Why the decimation stopped.
-    pub stop: Stop,
 }
 
-/// Runs one block task.
-pub(crate) fn decimate_block(task: BlockTask) -> BlockResult {
+/// Runs one block task to its end; also says why it stopped.
+pub(crate) fn decimate_block(task: BlockTask) -> (BlockResult, Stop) {
     let run = Run {
         input_faces: task.input_faces,
         relax: task.last,
@@ -75,7 +75,7 @@ pub(crate) fn decimate_block(task: BlockTask) -> BlockResult {
     let (block, mesh, quadric) = working_mesh(task);
     let (collapses, mesh, outcome, quadric) =
         decimate_from(mesh, quadric, run, &params, None, &NoProgress);
-    block.result(collapses, &mesh, &quadric, outcome.stop)
+    (block.result(collapses, &mesh, &quadric), outcome.stop)
 }
 
 /// What a block keeps while its working mesh is decimated: its vertices (local index →
@@ -121,7 +121,6 @@ impl Block {
         collapses: Vec<Collapse>,
         mesh: &FlatMesh,
         quadric: &Quadrics,
-        stop: Stop,
     ) -> BlockResult {
         let global = |v: u32| {
             if v == NONE {
@@ -160,7 +159,6 @@ impl Block {
                 .map(|t| t.map(global))
                 .collect(),
             quadrics,
-            stop,
         }
     }
 }

@@ -1,46 +1,50 @@
 //! The partitioned build of the progressive mesh: the same half-edge collapses, decided in
-//! spatial blocks with their borders pinned and merged pairwise up a tree until one block
-//! holds the base (`docs/partitioned.md`). The systems that scale mesh simplification work
-//! this way (Nexus's `nxsbuild`, meshoptimizer's clusterlod); Hoppe's view-dependent
-//! refinement (SIGGRAPH 1998) builds a large terrain's progressive mesh as a hierarchy of
-//! such block refinements.
+//! spatial blocks of bounded size with their borders pinned, pass by pass, the cells cut
+//! differently in consecutive passes so that no border stays pinned (`docs/partitioned.md`).
+//! The systems that scale mesh simplification work in blocks (Nexus's `nxsbuild`,
+//! meshoptimizer's clusterlod); Nexus moves its cut planes from level to level so that one
+//! level's borders lie inside the next level's cells, and Hoppe's view-dependent refinement
+//! (SIGGRAPH 1998) builds a large terrain's progressive mesh as a hierarchy of such block
+//! refinements.
 //!
 //! Steps ([`decimate_in_blocks`]):
 //! 1. the whole mesh's quadrics, once (a vertex's quadric sums its whole star's planes);
-//! 2. the vertices cut into `2^depth` cells of at most the block size (`cells.rs`), the
-//!    leaves of a complete binary merge tree (`tree.rs`);
-//! 3. level by level from the leaves, every node's block decimated with its border pinned
-//!    (`block.rs`); a node's block is what its two children left plus the input faces across
-//!    their border, whose vertices are free now. Below the root the blocks of a level take
-//!    their passes in step, one cost cut per pass for the whole mesh (`lockstep.rs`), down to
-//!    `2^-(j+1)` of the input's vertices at level `j`; the root decimates alone to the base;
-//! 4. each level's collapses interleaved by cost (`order.rs`) and the levels concatenated:
-//!    one collapse sequence of the whole mesh, put into PM order like the one-process
-//!    build's.
+//! 2. while the mesh has more vertices than a block holds, one pass:
+//!    - its vertices cut into cells of at most the block size along the axes of the pass's
+//!      frame, the frames taking turns (`cells.rs`);
+//!    - the faces sorted into the cells' blocks; a face across cells pins its vertices
+//!      (`split.rs`);
+//!    - every block collects its candidates, one cost cut is taken over all of them, every
+//!      block collapses under it (`lockstep.rs`, `block.rs`);
+//!    - the blocks' collapses interleaved by cost (`order.rs`), the whole mesh put back
+//!      together from the blocks' faces and the faces across cells;
+//! 3. the mesh that fits one block decimated to the base as one block, nothing pinned
+//!    (`block.rs`), relaxing the rules where nothing else moves, as the one-process build
+//!    ends.
 //!
-//! Each level of the merge tree is a level of detail of the whole mesh, and a block holds
-//! about the block size at every level. A block below the root never relaxes the shape
-//! rules; only the root, whose result is the base, does, as the one-process build does at
-//! its end.
+//! The collapse sequence, passes in order, is put into PM order like the one-process build's.
+//! A vertex pinned in one pass is at a border of the pass's cells; the next pass's cells cross
+//! those borders, so it is free there unless it also lies at a border of those — near the few
+//! spots where a border of one frame crosses one of the other.
 //!
 //! Results depend on the input and the block size only: each task is a function of its
-//! inputs, tasks of a level are collected in node order, and the merge breaks ties by node.
+//! inputs, the tasks of a pass are collected in cell order, and the merge breaks ties by cell.
 
 mod block;
 mod cells;
 mod lockstep;
 mod order;
-mod tree;
+mod split;
 
 use super::PmError;
 use super::decimate::{DecimateParams, FlatMesh, initial_quadrics};
 use super::progressive::Decimated;
 use crate::progress::Progress;
 use block::{BlockResult, BlockTask, VertexQuadric, decimate_block};
+use cells::FRAMES;
 use glam::DVec3;
-use lockstep::Level;
+use lockstep::Whole;
 use rayon::prelude::*;
-use tree::MergeTree;
 
 /// Decimates `flat` in blocks of at most `max_block` vertices (see the module docs).
 pub(crate) fn decimate_in_blocks(
@@ -51,8 +55,8 @@ pub(crate) fn decimate_in_blocks(
 ) -> Result<Decimated, PmError> {
     let quadric = initial_quadrics(&flat, params.boundary_weight);
     let positions = flat.positions();
-    let faces = flat.triangles();
-    let referenced = flat.survivors();
+    let mut faces = flat.triangles();
+    let mut vertices = flat.survivors();
     drop(flat);
     let mut quadrics: Vec<VertexQuadric> = (0..positions.len())
         .map(|v| VertexQuadric {
@@ -61,87 +65,98 @@ pub(crate) fn decimate_in_blocks(
         })
         .collect();
     drop(quadric);
-    let totals = (referenced.len(), faces.len());
-    let cells = cells::split_cells(&positions, referenced, max_block);
-    let tree = MergeTree::new(&cells.cell_of, cells.depth, &faces);
-    drop(cells);
     let input = Input {
         positions: &positions,
-        faces: &faces,
-        tree: &tree,
+        input_faces: faces.len(),
         params,
     };
-    let mut below: Vec<Vec<[u32; 3]>> = Vec::new();
+    let start = vertices.len();
+    let stop_at = max_block.max(params.target_vertices);
     let mut collapses = Vec::new();
-    let mut vertices = totals.0;
-    for j in 0..=tree.depth {
-        let tasks = (0..tree.nodes_at(j)).into_par_iter();
-        let tasks: Vec<BlockTask> = tasks.map(|k| input.task(j, k, &below, &quadrics)).collect();
-        // The input faces outside every block of the level join above it, untouched.
-        let pending_faces = totals.1 - tasks.iter().map(|t| t.input_faces).sum::<usize>();
-        let results: Vec<BlockResult> = if j == tree.depth {
-            tasks.into_iter().map(decimate_block).collect()
-        } else {
-            let level = Level {
-                input_faces: totals.1,
-                pending_faces,
-                vertices,
-                target_vertices: (totals.0 >> (j + 1)).max(params.target_vertices),
-            };
-            lockstep::decimate_in_step(tasks, &level, params)
+    let mut use_goal = true;
+    let mut idle = 0;
+    let mut pass = 0;
+    while vertices.len() > stop_at && faces.len() > params.target_faces && idle < FRAMES.len() {
+        let frame = &FRAMES[pass % FRAMES.len()];
+        pass += 1;
+        let cells = cells::split_cells(&positions, vertices, max_block, frame);
+        let split = split::split_faces(&faces, &cells.cell_of, cells.n_cells);
+        drop(cells);
+        let tasks: Vec<BlockTask> = (split.inside)
+            .into_par_iter()
+            .map(|f| input.task(f, &quadrics, |v| split.pinned[v as usize], false))
+            .collect();
+        let whole = Whole {
+            input_faces: input.input_faces,
+            faces: faces.len(),
+            use_goal,
         };
-        vertices -= results.iter().map(|r| r.collapses.len()).sum::<usize>();
-        let mut level = Vec::with_capacity(results.len());
-        below = Vec::with_capacity(results.len());
-        for r in results {
-            for &(v, q) in &r.quadrics {
-                quadrics[v as usize] = q;
-            }
-            level.push(r.collapses);
-            below.push(r.faces);
-            if j == tree.depth {
-                let base = below.pop().unwrap_or_default();
-                collapses.extend(order::merge_by_cost(level));
-                progress.update(1.0);
-                return Ok(Decimated {
-                    collapses,
-                    survivors: vertices_of(&base),
-                    n_base_faces: base.len(),
-                    stop: r.stop,
-                });
-            }
+        let (results, cut) = lockstep::pass_in_step(tasks, &whole, params);
+        faces = split.across;
+        let made = gather(results, &mut quadrics, &mut faces, &mut collapses);
+        vertices = vertices_of(&faces);
+        // A pass that collapses nothing is repeated without the cut, as in one process; once
+        // that finds nothing either, the other frames' cells get their turn before the mesh
+        // goes to the last block as it is.
+        if made > 0 {
+            (use_goal, idle) = (true, 0);
+        } else if use_goal && cut < params.max_error_sq {
+            use_goal = false;
+        } else {
+            idle += 1;
         }
-        collapses.extend(order::merge_by_cost(level));
-        progress.update(f64::from(j + 1) / f64::from(tree.depth + 1));
+        progress.update((start - vertices.len()) as f64 / start.max(1) as f64);
     }
-    Err(PmError::Internal("the merge tree has no root".into()))
+    let last = input.task(faces, &quadrics, |_| false, true);
+    let (result, stop) = decimate_block(last);
+    collapses.extend(result.collapses);
+    progress.update(1.0);
+    Ok(Decimated {
+        collapses,
+        survivors: vertices_of(&result.faces),
+        n_base_faces: result.faces.len(),
+        stop,
+    })
+}
+
+/// Takes a pass's results into the whole mesh: their quadrics into `quadrics`, their faces
+/// after `faces`, their collapses interleaved by cost after `collapses`; returns how many.
+fn gather(
+    results: Vec<BlockResult>,
+    quadrics: &mut [VertexQuadric],
+    faces: &mut Vec<[u32; 3]>,
+    collapses: &mut Vec<super::decimate::Collapse>,
+) -> usize {
+    let mut made = Vec::with_capacity(results.len());
+    for r in results {
+        for &(v, q) in &r.quadrics {
+            quadrics[v as usize] = q;
+        }
+        faces.extend_from_slice(&r.faces);
+        made.push(r.collapses);
+    }
+    let made = order::merge_by_cost(made);
+    let n = made.len();
+    collapses.extend(made);
+    n
 }
 
 /// What every task of a build reads from.
 struct Input<'a> {
     positions: &'a [DVec3],
-    faces: &'a [[u32; 3]],
-    tree: &'a MergeTree,
+    input_faces: usize,
     params: &'a DecimateParams,
 }
 
 impl Input<'_> {
-    /// The task of node `k` at level `j`: its children's triangles (`below`, the previous
-    /// level's results) and the input faces that join here.
+    /// The task of the block `faces`, whose vertices are pinned where `pinned` says.
     fn task(
         &self,
-        j: u32,
-        k: usize,
-        below: &[Vec<[u32; 3]>],
+        faces: Vec<[u32; 3]>,
         quadrics: &[VertexQuadric],
+        pinned: impl Fn(u32) -> bool,
+        last: bool,
     ) -> BlockTask {
-        let mut faces: Vec<[u32; 3]> = Vec::new();
-        if j > 0 {
-            faces.extend_from_slice(&below[2 * k]);
-            faces.extend_from_slice(&below[2 * k + 1]);
-        }
-        let joined = self.tree.joined(j, k).iter();
-        faces.extend(joined.map(|&t| self.faces[t as usize]));
         let vertices = vertices_of(&faces);
         BlockTask {
             positions: vertices
@@ -149,15 +164,12 @@ impl Input<'_> {
                 .map(|&v| self.positions[v as usize])
                 .collect(),
             quadrics: vertices.iter().map(|&v| quadrics[v as usize]).collect(),
-            pinned: vertices
-                .iter()
-                .map(|&v| self.tree.is_pinned(j, k, v))
-                .collect(),
+            pinned: vertices.iter().map(|&v| pinned(v)).collect(),
             faces,
             vertices,
-            input_faces: self.tree.faces_in(j, k),
+            input_faces: self.input_faces,
             params: *self.params,
-            last: j == self.tree.depth,
+            last,
         }
     }
 }

@@ -1,5 +1,5 @@
-//! The decimator run pass by pass on one block, so that the blocks of a merge-tree level can
-//! take their passes in step with one cost cut for the whole mesh (`partition/mod.rs`): a
+//! One pass of the decimator on one block, so that the blocks of a partitioned build can take
+//! their passes in step with one cost cut for the whole mesh (`partition/lockstep.rs`): a
 //! child of `decimate.rs`, whose pass steps it reuses.
 //!
 //! One pass of the one-process decimator collects every live edge's cost, cuts them at 1.5×
@@ -14,7 +14,7 @@ use super::{
 };
 use crate::pm::quadric::Quadrics;
 
-/// One block's decimation, a pass at a time.
+/// One block's pass: its candidates collected, then collapsed under the whole mesh's cut.
 pub(crate) struct Stepper {
     mesh: FlatMesh,
     state: Decimation<'static>,
@@ -37,11 +37,6 @@ impl Stepper {
             cands: Vec::new(),
             live,
         }
-    }
-
-    /// Live triangles.
-    pub(crate) fn n_faces(&self) -> usize {
-        self.mesh.n_faces
     }
 
     /// Collects this pass's candidates within `max_error_sq`, the boundary planes weighted by
