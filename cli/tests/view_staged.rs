@@ -114,7 +114,7 @@ fn a_staged_pyr_file_is_edited_before_its_whole_pyramid_is_recorded_and_answers_
         let why = answer.json()["error"].as_str().unwrap().to_string();
         assert!(why.contains("still being recorded"), "{path}: {why}");
     }
-    let version = before.header("X-Meshpyr-Version").unwrap().to_string();
+    let version: u64 = before.header("X-Meshpyr-Version").unwrap().parse().unwrap();
     assert_eq!(
         staged
             .api("GET", &format!("/api/exact?version={version}"), b"")
@@ -124,11 +124,15 @@ fn a_staged_pyr_file_is_edited_before_its_whole_pyramid_is_recorded_and_answers_
 
     release.send(()).unwrap();
     // The state previewed while pending gets its exact result once the pyramid is whole.
-    let status = staged.wait_status(|s| s["exact"].to_string() == version);
+    let status = staged.wait_status(|s| s["exact"] == version);
     assert_eq!(layout(&status)["whole"], true);
     let exact_after = staged.api("GET", &format!("/api/exact?version={version}"), b"");
-    let reference_version = expected.header("X-Meshpyr-Version").unwrap().to_string();
-    reference_api.wait_status(|s| s["exact"].to_string() == reference_version);
+    let reference_version: u64 = expected
+        .header("X-Meshpyr-Version")
+        .unwrap()
+        .parse()
+        .unwrap();
+    reference_api.wait_status(|s| s["exact"] == reference_version);
     let reference_exact = reference_api.api(
         "GET",
         &format!("/api/exact?version={reference_version}"),
