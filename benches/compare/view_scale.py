@@ -7,6 +7,9 @@ the bounding-box diagonal), per octave and gain.
 
     python3 benches/compare/view_scale.py MESHPYR SCAN [--budget N] [--gains 0,2,3] [--exact-path]
 
+Stage times are followed by the server's CPU-seconds so far (all threads), which say more
+than the wall clock on a loaded machine.
+
 MESHPYR is the binary (target/release/meshpyr). Latency is measured as a page measures it up to
 "positions ready": from sending the request to having the f32 positions (draw excluded; the
 browser test measures the draw). The exact comparison waits for the server's background
@@ -15,6 +18,7 @@ synthesis of each state.
 
 import argparse
 import json
+import os
 import re
 import statistics
 import struct
@@ -48,7 +52,7 @@ def main():
         if not m:
             sys.exit(f"no address in {line!r}")
         port, token = m.group(1), m.group(2)
-        vertices = run(args, port, token, serving, t0)
+        vertices = run(args, port, token, serving, t0, server.pid)
         print_peak_memory(server.pid, vertices)
     finally:
         server.terminate()
@@ -82,15 +86,39 @@ def print_peak_memory(pid, vertices):
     print(f"server peak resident size: {kb / 1e6:.2f} GB = {kb * 1e3 / vertices:.0f} B/vertex")
 
 
-def wait_opening(port, token, t0):
-    """Follows the opening: when each picture was ready to draw (fetched), and when the editor
-    was; times from the command's start."""
+def cpu_seconds(pid):
+    """User plus system CPU time of process `pid` so far, all threads (Linux; `None` elsewhere)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            fields = f.read().rsplit(")", 1)[1].split()
+        return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    except (OSError, IndexError, ValueError):
+        return None
+
+
+def stamp(t0, pid):
+    """Seconds since the command started, and the server's CPU-seconds (when known)."""
+    cpu = cpu_seconds(pid)
+    wall = f"{time.monotonic() - t0:.1f} s"
+    return wall if cpu is None else f"{wall} ({cpu:.1f} CPU-s)"
+
+
+def wait_opening(port, token, t0, pid):
+    """Follows the opening: when each picture was ready to draw (fetched), when the editor
+    was, and when the whole pyramid was in (a staged `.pyr` file's layout recorded after the
+    editor is ready); times from the command's start, with the server's CPU-seconds."""
     shown = 0
     while True:
         status = json.loads(call(port, token, "GET", "/api/status")[0])
         opening = status.get("opening")
         if opening is None:
-            print(f"editor ready after {time.monotonic() - t0:.1f} s")
+            print(f"editor ready after {stamp(t0, pid)}; load {os.getloadavg()[0]:.1f}")
+            while not status.get("layout", {"whole": True})["whole"]:
+                if status["layout"].get("error"):
+                    sys.exit(f"the whole pyramid failed: {status['layout']['error']}")
+                time.sleep(0.2)
+                status = json.loads(call(port, token, "GET", "/api/status")[0])
+            print(f"whole pyramid in after {stamp(t0, pid)}; load {os.getloadavg()[0]:.1f}")
             return
         if opening["picture"] != shown:
             try:
@@ -99,13 +127,13 @@ def wait_opening(port, token, t0):
                 continue  # opened meanwhile
             shown = int(headers["X-Meshpyr-Picture"])
             nt = struct.unpack("<I", data[4:8])[0]
-            print(f"picture {shown} ready after {time.monotonic() - t0:.1f} s: {opening['what']} "
+            print(f"picture {shown} ready after {stamp(t0, pid)}: {opening['what']} "
                   f"({nt} triangles, {len(data) / 1e6:.1f} MB); stage {opening['stage']}")
         time.sleep(0.05)
 
 
-def run(args, port, token, serving, t0):
-    wait_opening(port, token, t0)
+def run(args, port, token, serving, t0, pid):
+    wait_opening(port, token, t0, pid)
     info = json.loads(call(port, token, "GET", "/api/info")[0])
     disp = info["display"]
     octaves = info["octaves"]

@@ -10,7 +10,7 @@ use meshpyr::memory::{self, InputSize, Job};
 use meshpyr::mesh::{MissingSurface, PolygonMesh};
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::{NoProgress, Progress};
-use meshpyr::pyramid::{self, DetailSource, Pyramid, PyramidOptions};
+use meshpyr::pyramid::{self, DetailSource, Pyramid, PyramidOptions, Staged};
 use meshpyr::relax::{RelaxKind, RelaxationSpec};
 use meshpyr::wording::Count;
 use std::path::Path;
@@ -194,19 +194,42 @@ fn load_pyr_scan(
 }
 
 /// The pyramid of the `.pyr` file `path`, opened as `file` (with its relaxation and stored
-/// details), its progress also reported to `also`. The file is closed once decoded.
-pub(crate) fn pyramid_of_pyr_file(
+/// details), in two stages when the file allows ([`Staged`]): the pyramid of the levels up
+/// to `level_of(hierarchy)` from the stored details, and what records the rest. Progress also
+/// goes to `also`; the file is closed once decoded.
+pub(crate) fn staged_pyramid_of_pyr_file(
     path: &Path,
     file: format::PyrFile,
+    level_of: &dyn Fn(&ProgressiveMesh) -> usize,
     global: &Global,
     also: &dyn Progress,
-) -> anyhow::Result<Pyramid> {
+) -> anyhow::Result<Staged> {
     let start = Instant::now();
     let data = file
         .decode()
         .with_context(|| format!("cannot load {}", path.display()))?;
     drop(file);
-    pyramid_of_pyr(path, data, None, start, global, also)
+    let level = level_of(&data.pm);
+    let loaded = start.elapsed().as_secs_f64();
+    let bar = global.progress("analysis");
+    let staged = data
+        .into_pyramid_staged(level, &Both(&BarProgress(&bar), also))
+        .with_context(|| format!("cannot analyse {}", path.display()))?;
+    bar.finish_and_clear();
+    let took = start.elapsed().as_secs_f64() - loaded;
+    match &staged {
+        Staged::Whole(scan, from) => say_loaded(path, scan, from, loaded, took, global),
+        Staged::Prefix(s) => global.say(format_args!(
+            "{}: {} vertices, levels {}..={} (loaded in {loaded:.2} s, stored details, weights              and fans up to level {} computed in {took:.2} s, the rest in the background){}",
+            path.display(),
+            s.scan.input.n_vertices(),
+            s.scan.pm.n_base_vertices(),
+            s.scan.pm.n_vertices(),
+            s.scan.pyramid.n_vertices(),
+            extra_vertices_note(s.scan.input.n_vertices(), s.scan.pm.n_vertices()),
+        )),
+    }
+    Ok(staged)
 }
 
 /// The pyramid of a loaded `.pyr` file (`start`: when loading began), saying which path it
@@ -225,9 +248,23 @@ fn pyramid_of_pyr(
         .into_pyramid_with(relaxation, &Both(&BarProgress(&bar), also))
         .with_context(|| format!("cannot analyse {}", path.display()))?;
     bar.finish_and_clear();
-    let p = &scan.pyramid;
     let took = start.elapsed().as_secs_f64() - loaded;
-    let path_taken = match &from {
+    say_loaded(path, &scan, &from, loaded, took, global);
+    Ok(scan)
+}
+
+/// Says which path loading `path` took (`loaded`: seconds to decode, `took`: to make the
+/// pyramid).
+fn say_loaded(
+    path: &Path,
+    scan: &Pyramid,
+    from: &DetailSource,
+    loaded: f64,
+    took: f64,
+    global: &Global,
+) {
+    let p = &scan.pyramid;
+    let path_taken = match from {
         DetailSource::Stored => format!("stored details, weights and fans computed in {took:.2} s"),
         // A file without details says what it always said.
         DetailSource::Recomputed(why) if why == pyramid::NO_STORED_DETAILS => {
@@ -244,7 +281,6 @@ fn pyramid_of_pyr(
         loaded,
         extra_vertices_note(scan.input.n_vertices(), p.n_vertices()),
     ));
-    Ok(scan)
 }
 
 /// The detail spectrum of `path` (relaxation `relax`, default the file's or

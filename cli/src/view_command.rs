@@ -3,15 +3,16 @@
 
 use super::Global;
 use super::input::{
-    build_pyramid_watched, check_memory, decode_pyr, is_pyr_file, pyramid_of_pyr_file,
-    read_input_mesh_for,
+    build_pyramid_watched, check_memory, decode_pyr, is_pyr_file, read_input_mesh_for,
+    staged_pyramid_of_pyr_file,
 };
 use crate::view::limits::BUDGET;
-use crate::view::{Loader, Opening, Picture, ViewServer, first_picture};
+use crate::view::{EXACT_LEVELS, Loaded, Loader, Opening, Picture, ViewServer, first_picture};
 use anyhow::Context;
 use meshpyr::format;
 use meshpyr::memory::Job;
 use meshpyr::pm::ProgressiveMesh;
+use meshpyr::pyramid::Staged;
 use meshpyr::relax::RelaxationSpec;
 use std::path::{Path, PathBuf};
 
@@ -47,7 +48,7 @@ pub(crate) fn run(args: ViewArgs, global: &Global) -> anyhow::Result<()> {
         .unwrap_or_default();
     let budget = args.budget as usize;
     let (first, load) = open_in_stages(&args.input, budget, global)?;
-    let server = ViewServer::opening(first, load, args.port)?
+    let server = ViewServer::opening_loaded(first, load, args.port)?
         .with_name(&name)
         .with_budget(budget);
     let url = server.url();
@@ -62,7 +63,9 @@ pub(crate) fn run(args: ViewArgs, global: &Global) -> anyhow::Result<()> {
 
 /// Reads `path` and returns the first picture of it within `budget` triangles (a `.pyr`
 /// file's level read from its start, or the mesh clustered) and the loader of its pyramid,
-/// which shows the hierarchy's level as soon as a mesh file's progressive mesh is built.
+/// which shows the hierarchy's level as soon as a mesh file's progressive mesh is built. A
+/// `.pyr` file over the budget opens staged: the editor is ready on the levels its previews
+/// synthesise (up to [`EXACT_LEVELS`]) while the rest of the pyramid is recorded.
 fn open_in_stages(
     path: &Path,
     budget: usize,
@@ -86,7 +89,20 @@ fn open_in_stages(
         let first = Picture::new(what, &level.positions, level.triangles);
         let load: Loader = Box::new(move |opening: &Opening| {
             opening.stage("reading the hierarchy and its details");
-            pyramid_of_pyr_file(&path, file, &global, opening).map_err(|e| format!("{e:#}"))
+            // Within the budget the page shows the finest level: nothing to stage.
+            let level_of = |pm: &ProgressiveMesh| {
+                if pm.finest_faces().len() > budget {
+                    EXACT_LEVELS
+                } else {
+                    usize::MAX
+                }
+            };
+            let staged = staged_pyramid_of_pyr_file(&path, file, &level_of, &global, opening)
+                .map_err(|e| format!("{e:#}"))?;
+            Ok(match staged {
+                Staged::Whole(pyramid, _) => Loaded::Whole(pyramid),
+                Staged::Prefix(staged) => Loaded::Staged(staged),
+            })
         });
         return Ok((first, load));
     }
@@ -107,6 +123,7 @@ fn open_in_stages(
         let name = path.display().to_string();
         let relaxation = RelaxationSpec::default();
         build_pyramid_watched(input, relaxation, &name, &global, opening, &mut show_level)
+            .map(Loaded::Whole)
             .map_err(|e| format!("{e:#}"))
     });
     Ok((first, load))

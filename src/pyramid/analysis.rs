@@ -125,11 +125,27 @@ impl Layout {
         progress: &dyn Progress,
         placement: Option<Placement>,
     ) -> Result<Layout, PyramidError> {
+        Layout::record_prefix(pm, relaxation, progress, placement, pm.splits().len())
+    }
+
+    /// [`Self::record`] for the first `n_splits` splits only: the layout of the levels up to
+    /// `n0 + n_splits`, as if the hierarchy ended there, except that the surface area and
+    /// diagonal are the finest level's (they turn feature sizes into levels). Each split's
+    /// records are those of the whole layout: a split's records depend only on the splits
+    /// before it.
+    pub(crate) fn record_prefix(
+        pm: &ProgressiveMesh,
+        relaxation: &dyn Relaxation,
+        progress: &dyn Progress,
+        placement: Option<Placement>,
+        n_splits: usize,
+    ) -> Result<Layout, PyramidError> {
         let geometry = pm.original_positions();
         let n_base = pm.n_base_vertices();
-        let n_finest = pm.n_vertices();
-        let n_splits = n_finest - n_base;
-        let (surface_area, bbox_diagonal) = surface_stats(&geometry[..n_finest], pm.finest_faces());
+        let (surface_area, bbox_diagonal) =
+            surface_stats(&geometry[..pm.n_vertices()], pm.finest_faces());
+        let n_splits = n_splits.min(pm.splits().len());
+        let n_finest = n_base + n_splits;
         let cursor = relaxation.as_ring_stencils().is_none().then(|| pm.cursor());
         // Ring stencils replay up to each range's start; the cursor's seek is not modelled.
         let prefix_cost = if cursor.is_none() {

@@ -18,7 +18,8 @@
 //! * `pipeline`: file-level glue — polygon mesh in, polygon mesh out in the input's exact
 //!   vertex and face order; `.pyr` bytes out through the codec (`crate::format`).
 //! * `loaded`, `stored`: a decoded `.pyr` file's records turned into a pyramid, with the
-//!   stored details when they fit.
+//!   stored details when they fit; `staged`: the same in two stages (the levels a viewer
+//!   needs first, then the whole pyramid).
 //! * `reported`: the front door's results that carry their warnings and what was reached.
 //! * `fuzz`: the body of the `pyramid_ops` fuzz target (`meshpyr::fuzzing::fuzz_pyramid`).
 //!
@@ -57,6 +58,7 @@ mod quantise;
 mod reported;
 pub(crate) mod spectrum;
 mod spill;
+mod staged;
 mod stored;
 pub(crate) mod synthesis;
 pub(crate) mod waves;
@@ -74,6 +76,7 @@ pub(crate) use pipeline::{analyze_with, guide_share, relaxation_for};
 pub use reported::{Edited, Filtered};
 pub use spectrum::BandEnergy;
 pub use spectrum::Spectrum;
+pub use staged::{PendingLayout, Staged, StagedPyramid};
 
 use crate::pm::PmError;
 use glam::DVec3;

@@ -90,21 +90,49 @@ impl DetailPyramid {
         stored: &StoredDetails,
         progress: &dyn Progress,
     ) -> Result<DetailPyramid, PyramidError> {
+        Self::with_stored_prefix(pm, relaxation, stored, pm.splits().len(), progress)
+    }
+
+    /// [`Self::with_stored_details`] up to level `level` only (at least the base level, at
+    /// most the finest): the pyramid of the levels up to it, as if the hierarchy ended there,
+    /// with the whole hierarchy's surface area and diagonal. Its synthesis up to `level` gives
+    /// the bits of the whole pyramid's, and costs the splits up to `level` only (what a
+    /// viewer needs before the rest is recorded).
+    pub fn with_stored_details_up_to(
+        pm: &ProgressiveMesh,
+        relaxation: &dyn crate::relax::Relaxation,
+        stored: &StoredDetails,
+        level: usize,
+        progress: &dyn Progress,
+    ) -> Result<DetailPyramid, PyramidError> {
+        let n_splits = level.saturating_sub(pm.n_base_vertices());
+        Self::with_stored_prefix(pm, relaxation, stored, n_splits, progress)
+    }
+
+    /// The pyramid of the first `n_splits` splits with their stored details.
+    fn with_stored_prefix(
+        pm: &ProgressiveMesh,
+        relaxation: &dyn crate::relax::Relaxation,
+        stored: &StoredDetails,
+        n_splits: usize,
+        progress: &dyn Progress,
+    ) -> Result<DetailPyramid, PyramidError> {
         stored.check_counts_sum(pm)?;
-        let layout = Layout::record(pm, relaxation, progress, None)?;
-        if layout.n_details() != stored.n_details() {
+        let n_splits = n_splits.min(pm.splits().len());
+        let layout = Layout::record_prefix(pm, relaxation, progress, None, n_splits)?;
+        let expected: usize = stored.counts[..n_splits].iter().map(|&c| c as usize).sum();
+        if layout.n_details() != expected {
             return Err(mismatch(format!(
-                "{} details where the hierarchy has {}",
-                stored.n_details(),
+                "{expected} details where the hierarchy has {}",
                 layout.n_details()
             )));
         }
-        let mut details = vec![[0; 3]; stored.n_details()];
+        let mut details = vec![[0; 3]; expected];
         let mut mismatched = None;
         stored
-            .for_each_block(|first, counts, block| {
+            .for_each_block_up_to(n_splits, |first, counts, block| {
                 let mut at = 0;
-                for (k, &c) in (first..).zip(counts) {
+                for (k, &c) in (first..n_splits).zip(counts) {
                     let c = c as usize;
                     if layout.details_of_split(k) != c {
                         mismatched.get_or_insert(k);
@@ -124,9 +152,16 @@ impl DetailPyramid {
             )));
         }
         progress.update(1.0);
+        // A prefix's pyramid passes no vertex through: it ends at its last split's level.
+        let positions = pm.original_positions();
+        let signal = if n_splits == pm.splits().len() {
+            positions
+        } else {
+            &positions[..layout.n_finest]
+        };
         let pyramid = layout.into_pyramid(
             relaxation,
-            pm.original_positions(),
+            signal,
             stored.base.clone(),
             details,
             stored.step,

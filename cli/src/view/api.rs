@@ -78,6 +78,7 @@ pub(crate) fn dispatch(
             .find(|(k, _)| k == name)
             .map(|(_, v)| v.as_str())
     };
+    session.poll_layout();
     let result = match (method, path) {
         ("GET", "/api/info") => Ok(Reply::json(&session.info())),
         ("GET", "/api/faces") => Ok(Reply::binary(session.faces())),
@@ -106,17 +107,18 @@ pub(crate) fn dispatch(
                 Ok(Reply::json(&session.info()))
             }),
         ("GET", "/api/exact") => exact(session, param("version")),
-        ("POST", "/api/filter") => {
-            parse_state(session, body, false).and_then(|state| positions(session, state))
-        }
-        ("POST", "/api/edit") => {
-            parse_state(session, body, true).and_then(|state| positions(session, state))
-        }
-        ("GET", "/api/export") => {
+        ("POST", "/api/filter") => whole(session)
+            .and_then(|()| parse_state(session, body, false))
+            .and_then(|state| positions(session, state)),
+        ("POST", "/api/edit") => whole(session)
+            .and_then(|()| parse_state(session, body, true))
+            .and_then(|state| positions(session, state)),
+        ("GET", "/api/export") => whole(session).and_then(|()| {
             let last = session.last.clone();
             export(session, last, param("format"))
-        }
-        ("POST", "/api/export") => parse_state(session, body, true)
+        }),
+        ("POST", "/api/export") => whole(session)
+            .and_then(|()| parse_state(session, body, true))
             .and_then(|state| export(session, state, param("format"))),
         (_, "/api/info" | "/api/faces" | "/api/level" | "/api/filter" | "/api/edit")
         | (_, "/api/export" | "/api/display" | "/api/preview" | "/api/status" | "/api/exact")
@@ -144,6 +146,14 @@ pub(crate) fn while_opening(opening: &Opening, method: &str, path: &str) -> Repl
             503,
             format!("the scan is still opening ({})", opening.stage_name()),
         ),
+    }
+}
+
+/// `Err` with a 503 saying why while the session has only a staged pyramid's first stage.
+fn whole(session: &Session) -> Result<(), Reply> {
+    match session.pending() {
+        Some(why) => Err(Reply::error(503, why)),
+        None => Ok(()),
     }
 }
 
@@ -191,7 +201,7 @@ pub(crate) fn parse_state(
 }
 
 fn check_move(session: &Session, m: &MoveRequest) -> Result<LevelMove, Reply> {
-    let levels = session.pyramid.levels();
+    let levels = &session.levels;
     if !levels.contains(&m.level) {
         return Err(bad(format!(
             "move level {} is outside {}..={}",
@@ -316,7 +326,7 @@ fn exact(session: &mut Session, version: Option<&str>) -> Result<Reply, Reply> {
 }
 
 fn level(session: &Session, n: Option<&str>) -> Result<Reply, Reply> {
-    let levels = session.pyramid.levels();
+    let levels = &session.levels;
     let n: usize = n
         .and_then(|n| n.parse().ok())
         .filter(|n| levels.contains(n))
@@ -327,6 +337,9 @@ fn level(session: &Session, n: Option<&str>) -> Result<Reply, Reply> {
                 levels.end()
             ))
         })?;
+    if n > session.synthesised_levels() {
+        whole(session)?;
+    }
     Ok(Reply::binary(session.level(n)))
 }
 

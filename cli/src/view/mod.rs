@@ -29,6 +29,7 @@ mod clustered;
 mod editor;
 mod guard;
 mod http;
+mod layout;
 mod opening;
 mod preview;
 mod reply;
@@ -37,19 +38,19 @@ mod state;
 mod texture;
 
 use http::{HttpRequest, Message};
-use meshpyr::pyramid::Pyramid;
+use meshpyr::pyramid::{Pyramid, StagedPyramid};
 use reply::Reply;
 use session::Session;
 use std::net::TcpListener;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{Receiver, Sender};
+use std::sync::mpsc::{self, Receiver, Sender};
 
 pub use api::limits;
 pub use clustered::first_picture;
 pub use editor::{Answer, Editor, page_html};
 pub use opening::{Opening, Picture};
-pub use preview::DEFAULT_BUDGET;
+pub use preview::{DEFAULT_BUDGET, EXACT_LEVELS};
 
 /// Why the editor's server could not start.
 #[derive(Debug, thiserror::Error)]
@@ -82,10 +83,28 @@ pub struct ViewServer {
     budget: usize,
     requests: Receiver<Message>,
     stopper: Stopper,
+    /// When set, the rest of a staged pyramid is recorded only once this receives.
+    hold_layout: Option<mpsc::Receiver<()>>,
 }
 
 /// What the loader of a scan opening in stages runs: the pyramid, or one line saying why not.
-pub type Loader = Box<dyn FnOnce(&Opening) -> Result<Pyramid, String> + Send>;
+pub type Loader = Box<dyn FnOnce(&Opening) -> Result<Loaded, String> + Send>;
+
+/// What a loader makes: the whole pyramid, or a staged one ([`meshpyr::pyramid::Staged`]),
+/// whose editor is ready once the levels its previews synthesise are, while the rest of the
+/// pyramid is recorded (`docs/view-api.md`, "A layout still being recorded").
+pub enum Loaded {
+    /// The whole pyramid.
+    Whole(Pyramid),
+    /// The pyramid up to the previews' exact level, and what records the rest.
+    Staged(StagedPyramid),
+}
+
+impl From<Pyramid> for Loaded {
+    fn from(pyramid: Pyramid) -> Loaded {
+        Loaded::Whole(pyramid)
+    }
+}
 
 /// A scan still opening (its pictures and progress), or the editor's session.
 enum Stage {
@@ -128,8 +147,28 @@ impl ViewServer {
         load: impl FnOnce(&Opening) -> Result<Pyramid, String> + Send + 'static,
         port: u16,
     ) -> Result<ViewServer, ViewError> {
+        let load = |opening: &Opening| load(opening).map(Loaded::Whole);
+        ViewServer::opening_loaded(first, Box::new(load), port)
+    }
+
+    /// [`ViewServer::opening`] with a loader that may make a staged pyramid: the editor is
+    /// then ready on its first stage, and the rest is recorded after the loader returns, on
+    /// its thread; the calls that need the whole pyramid say it is pending until the session
+    /// swaps it in.
+    pub fn opening_loaded(
+        first: Picture,
+        load: Loader,
+        port: u16,
+    ) -> Result<ViewServer, ViewError> {
         let stage = Stage::Opening(Opening::new(first));
-        ViewServer::bind_stage(stage, Some(Box::new(load)), port)
+        ViewServer::bind_stage(stage, Some(load), port)
+    }
+
+    /// Holds the recording of a staged pyramid's rest until `until` receives (or its sender
+    /// is dropped): the editor can then be seen, and tested, before the whole pyramid is in.
+    pub fn holding_layout(mut self, until: mpsc::Receiver<()>) -> ViewServer {
+        self.hold_layout = Some(until);
+        self
     }
 
     fn bind_stage(
@@ -151,6 +190,7 @@ impl ViewServer {
             name: "mesh".into(),
             budget: preview::DEFAULT_BUDGET,
             requests,
+            hold_layout: None,
             stopper: Stopper {
                 port: bound,
                 stopped: Arc::new(AtomicBool::new(false)),
@@ -215,15 +255,24 @@ impl ViewServer {
             (Stage::Opening(opening), Some(load)) => {
                 let (opening, worker) = (opening.clone(), self.stopper.worker.clone());
                 let (name, budget) = (self.name.clone(), self.budget);
+                let hold = self.hold_layout.take();
                 std::thread::spawn(move || {
                     let open = || {
-                        load(&opening).map(|pyramid| {
+                        load(&opening).map(|loaded| {
                             opening.stage("making the level of detail");
-                            let mut session = Session::new(pyramid);
+                            let (mut session, rest) = match loaded {
+                                Loaded::Whole(pyramid) => (Session::new(pyramid), None),
+                                Loaded::Staged(staged) => {
+                                    let scan = Arc::new(staged.scan);
+                                    let (job, wait) =
+                                        layout::staged(Arc::clone(&scan), staged.rest, hold);
+                                    (Session::staged(scan, staged.spectrum, wait), Some(job))
+                                }
+                            };
                             session.name = name;
                             session.budget = budget;
                             session.lod();
-                            Box::new(session)
+                            (Box::new(session), rest)
                         })
                     };
                     // A bug while opening must end the server, not leave the page waiting.
@@ -231,7 +280,15 @@ impl ViewServer {
                         .unwrap_or_else(|_| {
                             Err("internal error while opening (please report)".into())
                         });
+                    let (opened, rest) = match opened {
+                        Ok((session, rest)) => (Ok(session), rest),
+                        Err(why) => (Err(why), None),
+                    };
                     let _ = worker.send(Message::Opened(opened));
+                    // The editor serves meanwhile; the session swaps the whole pyramid in.
+                    if let Some(rest) = rest {
+                        rest.run();
+                    }
                 });
             }
             // Over the budget, the level of detail is made now and its background work starts.

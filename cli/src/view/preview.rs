@@ -20,11 +20,13 @@
 //! The exact full-resolution result is computed in the background and replaces the preview
 //! when it arrives; exports use it.
 
+use super::session::hierarchy_levels;
 use super::state::{EditorState, ms_between};
 use glam::{DMat3, DVec3};
 use meshpyr::pyramid::{LevelGains, LevelMove, MoveHandle, Pyramid, SynthesisCache};
 use rayon::prelude::*;
 use std::borrow::Cow;
+use std::ops::RangeInclusive;
 
 /// The finest level synthesised exactly at every move: the splits up to it take a few tens of
 /// milliseconds on two cores.
@@ -47,6 +49,9 @@ pub(crate) struct Preview {
     pub shown: usize,
     /// The level up to which previews synthesise exactly.
     pub exact: usize,
+    /// Whether `exact` is lower than the whole pyramid's would be (made on a staged
+    /// pyramid's first stage that ends below it).
+    pub capped: bool,
     /// The triangles of level `shown`, PM indices.
     pub triangles: Vec<[u32; 3]>,
     exact_triangles: Vec<[u32; 3]>,
@@ -73,27 +78,35 @@ pub(crate) struct PreviewTiming {
     pub combine: f64,
 }
 
+/// The last octave start at most [`EXACT_LEVELS`] and `top` (at least the base level).
+fn exact_level(octaves: &[(usize, usize)], levels: RangeInclusive<usize>, top: usize) -> usize {
+    octaves
+        .iter()
+        .map(|o| o.0)
+        .filter(|&lo| lo <= EXACT_LEVELS.min(top))
+        .max()
+        .unwrap_or(*levels.start())
+        .max(*levels.start())
+}
+
 /// The most vertices whose level has at most `budget` triangles (at least the base level).
 pub(crate) fn shown_level(pyramid: &Pyramid, budget: usize) -> usize {
     pyramid
         .pm
         .level_for_faces(budget)
-        .min(*pyramid.levels().end())
+        .min(*hierarchy_levels(pyramid).end())
 }
 
 impl Preview {
     /// The preview of `pyramid` at level `shown`, its octaves `octaves` (coarse to fine).
+    /// `pyramid` may be a staged pyramid's first stage: it synthesises up to the exact level.
     pub fn new(pyramid: &Pyramid, octaves: &[(usize, usize)], shown: usize) -> Preview {
         let p = &pyramid.pyramid;
-        let levels = pyramid.levels();
+        let levels = hierarchy_levels(pyramid);
         let shown = shown.clamp(*levels.start(), *levels.end());
-        let exact = octaves
-            .iter()
-            .map(|o| o.0)
-            .filter(|&lo| lo <= EXACT_LEVELS.min(shown))
-            .max()
-            .unwrap_or(*levels.start())
-            .max(*levels.start());
+        // A staged pyramid's first stage synthesises up to its own finest level only.
+        let exact = exact_level(octaves, levels.clone(), shown.min(p.n_vertices()));
+        let capped = exact != exact_level(octaves, levels.clone(), shown);
         let pm = &pyramid.pm;
         let n0 = pm.n_base_vertices();
         let mut anchor: Vec<u32> = (0..shown as u32).collect();
@@ -137,6 +150,7 @@ impl Preview {
         Preview {
             shown,
             exact,
+            capped,
             triangles,
             exact_triangles,
             anchor,

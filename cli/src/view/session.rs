@@ -3,14 +3,16 @@
 //! the last result a client asked for (what a bare `GET /api/export` exports).
 
 use super::background::{Background, StateKey};
+use super::layout::LayoutWait;
 use super::preview::{self, Preview, PreviewTiming};
 use super::state::{EditorState, ms_between};
 use super::texture::ViewTexture;
 use glam::DVec3;
 use meshpyr::io::{MeshFormat, WriteOptions};
 use meshpyr::mesh::PolygonMesh;
-use meshpyr::pyramid::{Filter, LevelGains, Pyramid, SynthesisCache};
+use meshpyr::pyramid::{Filter, LevelGains, Pyramid, Spectrum, SynthesisCache};
 use serde_json::json;
+use std::ops::RangeInclusive;
 use std::sync::Arc;
 use std::time::Instant;
 
@@ -26,9 +28,12 @@ pub(crate) struct Timing {
 /// The level of detail of a scan over the display budget: the preview and the background work.
 pub(crate) struct Lod {
     pub preview: Preview,
-    background: Background,
+    /// The exact results and fine octaves; `None` while the whole pyramid is pending.
+    background: Option<Background>,
     /// Number of the latest previewed state.
     version: u64,
+    /// The latest previewed state, for the background once it starts.
+    wanted: Option<(u64, StateKey)>,
 }
 
 /// A preview: positions of the shown vertices, the state's number, where the time went, and
@@ -41,7 +46,17 @@ pub(crate) struct Previewed {
 }
 
 pub(crate) struct Session {
+    /// The scan and its pyramid: the whole pyramid, or while `layout` is pending the pyramid
+    /// of the levels up to the previews' exact level ([`meshpyr::pyramid::Staged`]).
     pub pyramid: Arc<Pyramid>,
+    /// The hierarchy's levels (those of the whole pyramid).
+    pub levels: RangeInclusive<usize>,
+    /// The spectrum, once asked for (or given with a staged pyramid).
+    spectrum: Option<Spectrum>,
+    /// The recording of the whole pyramid, while it is pending.
+    layout: Option<LayoutWait>,
+    /// Why the whole pyramid could not be made, if it could not.
+    layout_failed: Option<String>,
     pub name: String,
     /// The octave bands `(lo, hi]`, one slider each.
     pub octaves: Vec<(usize, usize)>,
@@ -59,6 +74,22 @@ impl Session {
     pub fn new(pyramid: impl Into<Arc<Pyramid>>) -> Session {
         let pyramid = pyramid.into();
         let octaves = pyramid.pyramid.levels_of_octaves();
+        Session::with_octaves(pyramid, octaves, None, None)
+    }
+
+    /// The session of a staged pyramid (`scan`: its first stage, `spectrum`: the whole
+    /// pyramid's) whose whole pyramid `layout` records.
+    pub fn staged(scan: Arc<Pyramid>, spectrum: Spectrum, layout: LayoutWait) -> Session {
+        let octaves = spectrum.bands.iter().map(|b| (b.lo, b.hi)).collect();
+        Session::with_octaves(scan, octaves, Some(spectrum), Some(layout))
+    }
+
+    fn with_octaves(
+        pyramid: Arc<Pyramid>,
+        octaves: Vec<(usize, usize)>,
+        spectrum: Option<Spectrum>,
+        layout: Option<LayoutWait>,
+    ) -> Session {
         let cache = SynthesisCache::octaves(&pyramid.pyramid);
         let texture = ViewTexture::of(&pyramid.input);
         let last = EditorState {
@@ -66,7 +97,11 @@ impl Session {
             ..Default::default()
         };
         Session {
+            levels: hierarchy_levels(&pyramid),
             pyramid,
+            spectrum,
+            layout,
+            layout_failed: None,
             name: "mesh".into(),
             octaves,
             cache,
@@ -92,28 +127,103 @@ impl Session {
         }
     }
 
-    /// The level of detail (made on first use), or `None` for a scan within the budget.
+    /// The level of detail (made on first use), or `None` for a scan within the budget. Its
+    /// background work starts once the whole pyramid is in.
     pub fn lod(&mut self) -> Option<&mut Lod> {
         if self.lod.is_none() && self.over_budget() {
             let shown = preview::shown_level(&self.pyramid, self.budget);
             let preview = Preview::new(&self.pyramid, &self.octaves, shown);
-            let octaves = preview
-                .missing_octaves()
-                .into_iter()
-                .map(|i| (i, self.octaves[i].0, self.octaves[i].1))
-                .collect();
-            let background = Background::start(Arc::clone(&self.pyramid), octaves, shown);
+            let background = self.whole().then(|| self.background_of(&preview));
             self.lod = Some(Lod {
                 preview,
                 background,
                 version: 0,
+                wanted: None,
             });
         }
         let lod = self.lod.as_mut()?;
-        for (octave, d) in lod.background.take_measured() {
-            lod.preview.set_displacement(octave, d);
+        if let Some(background) = &lod.background {
+            for (octave, d) in background.take_measured() {
+                lod.preview.set_displacement(octave, d);
+            }
         }
         Some(lod)
+    }
+
+    /// The background work of `preview`: exact results, and the fine octaves it misses.
+    fn background_of(&self, preview: &Preview) -> Background {
+        let octaves = preview
+            .missing_octaves()
+            .into_iter()
+            .map(|i| (i, self.octaves[i].0, self.octaves[i].1))
+            .collect();
+        Background::start(Arc::clone(&self.pyramid), octaves, preview.shown)
+    }
+
+    /// True when the session has the whole pyramid (not a staged one's first stage).
+    pub fn whole(&self) -> bool {
+        self.layout.is_none() && self.layout_failed.is_none()
+    }
+
+    /// Why a call that needs the whole pyramid cannot be answered yet (it is being recorded,
+    /// or could not be made); `None` when it can.
+    pub fn pending(&self) -> Option<String> {
+        if let Some(why) = &self.layout_failed {
+            return Some(format!("the whole pyramid could not be made: {why}"));
+        }
+        let layout = self.layout.as_ref()?;
+        Some(format!(
+            "the whole pyramid is still being recorded ({:.0} % done; /api/status says when)",
+            100.0 * layout.done()
+        ))
+    }
+
+    /// The finest level the pyramid in hand synthesises: the finest, or a staged pyramid's
+    /// first stage.
+    pub fn synthesised_levels(&self) -> usize {
+        self.pyramid.pyramid.n_vertices()
+    }
+
+    /// Swaps the whole pyramid in when its recording has ended, and starts the level of
+    /// detail's background work with the latest previewed state. The previews stay: up to
+    /// their exact level the first stage synthesises the whole pyramid's bits.
+    pub fn poll_layout(&mut self) {
+        let Some(result) = self.layout.as_ref().and_then(LayoutWait::take) else {
+            return;
+        };
+        self.layout = None;
+        let whole = match result {
+            Ok(whole) => whole,
+            Err(why) => {
+                self.layout_failed = Some(why);
+                return;
+            }
+        };
+        let Some(scan) = Arc::get_mut(&mut self.pyramid) else {
+            self.layout_failed = Some("internal error: the first stage is still in use".into());
+            return;
+        };
+        scan.pyramid = whole;
+        self.cache = SynthesisCache::octaves(&scan.pyramid);
+        // A preview capped by the first stage is made again; the others stay.
+        if let Some(mut lod) = self.lod.take() {
+            if lod.preview.capped {
+                let (version, wanted) = (lod.version, lod.wanted.take());
+                if let Some(new) = self.lod() {
+                    new.version = version;
+                    if let (Some(b), Some((v, key))) = (&new.background, wanted) {
+                        b.want(v, key);
+                    }
+                }
+                return;
+            }
+            let background = self.background_of(&lod.preview);
+            if let Some((version, key)) = lod.wanted.take() {
+                background.want(version, key);
+            }
+            lod.background = Some(background);
+            self.lod = Some(lod);
+        }
     }
 
     /// The preview of `state` at the shown vertices; asks the background for its exact result
@@ -125,13 +235,14 @@ impl Session {
         let (positions, timing, complete) = lod.preview.positions(&pyramid, &state, &gains);
         lod.version += 1;
         let version = lod.version;
-        lod.background.want(
-            version,
-            StateKey {
-                gains,
-                moves: state.moves.clone(),
-            },
-        );
+        let key = StateKey {
+            gains,
+            moves: state.moves.clone(),
+        };
+        match &lod.background {
+            Some(background) => background.want(version, key),
+            None => lod.wanted = Some((version, key)),
+        }
         self.last = state;
         Some(Previewed {
             positions,
@@ -145,23 +256,47 @@ impl Session {
     /// it for state number `version`.
     pub fn exact_shown(&mut self, version: u64) -> Option<Vec<DVec3>> {
         let lod = self.lod()?;
-        let exact = lod.background.exact().filter(|e| e.version == version)?;
+        let exact = lod
+            .background
+            .as_ref()?
+            .exact()
+            .filter(|e| e.version == version)?;
         Some(exact.signal[..lod.preview.shown].to_vec())
     }
 
-    /// `/api/status`: the latest state's number, the exact result's, the fine octaves measured.
+    /// `/api/status`: the latest state's number, the exact result's, the fine octaves
+    /// measured, and whether the whole pyramid is in.
     pub fn status(&mut self) -> serde_json::Value {
+        let layout = self.layout_status();
         let Some(lod) = self.lod() else {
-            return json!({"lod": false});
+            return json!({"lod": false, "layout": layout});
         };
-        let (measured, total, busy) = lod.background.progress();
-        let exact = lod.background.exact().map(|e| e.version);
+        let missing = lod.preview.missing_octaves();
+        let (measured, total, busy, exact) = match &lod.background {
+            Some(b) => {
+                let (measured, total, busy) = b.progress();
+                (measured, total, busy, b.exact().map(|e| e.version))
+            }
+            None => (0, missing.len(), None, None),
+        };
         json!({
             "lod": true,
             "version": lod.version,
             "exact": exact,
-            "octaves": {"measured": measured, "total": total, "missing": lod.preview.missing_octaves()},
+            "octaves": {"measured": measured, "total": total, "missing": missing},
             "busy": busy,
+            "layout": layout,
+        })
+    }
+
+    /// `/api/status`'s `layout`: whether the whole pyramid is in, how far its recording is,
+    /// and why it failed if it did.
+    fn layout_status(&self) -> serde_json::Value {
+        json!({
+            "whole": self.whole(),
+            "done": self.layout.as_ref().map_or(1.0, LayoutWait::done),
+            "levels": self.synthesised_levels(),
+            "error": self.layout_failed,
         })
     }
 
@@ -170,7 +305,7 @@ impl Session {
     pub fn exact_signal(&mut self, state: &EditorState) -> Result<Arc<Vec<DVec3>>, String> {
         let gains = self.gains_of(state);
         if let Some(lod) = self.lod.as_ref()
-            && let Some(exact) = lod.background.exact()
+            && let Some(exact) = lod.background.as_ref().and_then(Background::exact)
             && exact.key.gains == gains
             && exact.key.moves == state.moves
         {
@@ -236,7 +371,8 @@ impl Session {
     /// `/api/info`: counts, levels, octaves with feature sizes and energies, bounds.
     pub fn info(&mut self) -> serde_json::Value {
         self.lod();
-        let spectrum = self.pyramid.spectrum();
+        let pyramid = &self.pyramid;
+        let spectrum = self.spectrum.get_or_insert_with(|| pyramid.spectrum());
         let octaves: Vec<_> = spectrum
             .bands
             .iter()
@@ -247,7 +383,7 @@ impl Session {
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
             |(lo, hi), &p| (lo.min(p), hi.max(p)),
         );
-        let levels = self.pyramid.levels();
+        let levels = self.levels.clone();
         let display = match &self.lod {
             Some(lod) => json!({
                 "budget": self.budget, "lod": true, "shown": lod.preview.shown,
@@ -361,6 +497,12 @@ impl Session {
             meshpyr::io::write_mesh_bytes(&bare, format, &opts).map_err(|e| e.to_string())
         })
     }
+}
+
+/// The hierarchy's levels, from the base to the finest: those of the whole pyramid, also
+/// while a staged pyramid's first stage is in hand.
+pub(crate) fn hierarchy_levels(pyramid: &Pyramid) -> RangeInclusive<usize> {
+    pyramid.pm.n_base_vertices()..=pyramid.pm.n_vertices()
 }
 
 /// Appends `positions` to `out` as little-endian f32 triples.

@@ -172,19 +172,32 @@ impl StoredDetails {
     /// cores, so that only those blocks are held decoded.
     pub fn for_each_block(
         &self,
+        f: impl FnMut(usize, &[u32], &[[i32; 3]]),
+    ) -> Result<(), FormatError> {
+        self.for_each_block_up_to(usize::MAX, f)
+    }
+
+    /// [`Self::for_each_block`] for the runs that hold splits below `n_splits` only (the last
+    /// run may hold later splits too): the blocks after them are not decoded.
+    pub fn for_each_block_up_to(
+        &self,
+        n_splits: usize,
         mut f: impl FnMut(usize, &[u32], &[[i32; 3]]),
     ) -> Result<(), FormatError> {
         match &self.values {
             Values::Quantised(q) => {
                 let mut at = 0;
                 for (b, counts) in self.counts.chunks(SPLITS_PER_BLOCK).enumerate() {
+                    if b * SPLITS_PER_BLOCK >= n_splits {
+                        break;
+                    }
                     let n: usize = counts.iter().map(|&c| c as usize).sum();
                     f(b * SPLITS_PER_BLOCK, counts, &q[at..at + n]);
                     at += n;
                 }
                 Ok(())
             }
-            Values::Coded(coded) => coded.for_each_block(&mut f),
+            Values::Coded(coded) => coded.for_each_block(n_splits, &mut f),
         }
     }
 
@@ -210,15 +223,20 @@ impl StoredDetails {
 }
 
 impl CodedBlocks {
-    /// Decodes the blocks a few at a time on all cores and hands them to `f` in order.
+    /// Decodes the blocks a few at a time on all cores and hands them to `f` in order, up to
+    /// the batch that reaches split `n_splits`.
     fn for_each_block(
         &self,
+        n_splits: usize,
         f: &mut impl FnMut(usize, &[u32], &[[i32; 3]]),
     ) -> Result<(), FormatError> {
         use rayon::prelude::*;
         let batch = 4 * rayon::current_num_threads().max(1);
         let mut first = 0;
         for blocks in self.blocks.chunks(batch) {
+            if first >= n_splits {
+                break;
+            }
             let decoded: Vec<(Vec<u32>, Vec<[i32; 3]>)> = blocks
                 .par_iter()
                 .map(|(n, range, at)| {

@@ -537,10 +537,23 @@ async function checkStatus() {
         showProgress(status);
       }
     }
-    if (awaited || status.octaves.measured < status.octaves.total) pollExact();
+    if (awaited || status.octaves.measured < status.octaves.total || layoutPending(status)) pollExact();
   } catch (e) {
     showError(e);
   }
+}
+
+// A .pyr file opens staged: the editor is ready before the whole pyramid is recorded, and
+// exact results, export, the fine octaves and the finer levels wait for it.
+function layoutPending(status) {
+  return status.layout && !status.layout.whole && !status.layout.error;
+}
+
+function layoutText(status) {
+  const l = status.layout;
+  if (!l || l.whole) return '';
+  if (l.error) return ` · the whole pyramid failed: ${l.error}`;
+  return ` · recording the whole pyramid ${(100 * l.done).toFixed(0)} % (exact results and export then)`;
 }
 
 function showProgress(status) {
@@ -549,7 +562,8 @@ function showProgress(status) {
   const d = M.info.display;
   $('display-label').textContent = `level ${d.shown.toLocaleString()} of ${M.info.levels.max.toLocaleString()}` +
     ` vertices (${d.triangles.toLocaleString()} triangles) · ${M.exact ? 'exact result' : 'preview'}` +
-    (measured < total ? ` · measuring fine octaves ${measured}/${total}` : '');
+    (layoutPending(status) ? layoutText(status) : measured < total ? ` · measuring fine octaves ${measured}/${total}` : '') +
+    (status.layout && status.layout.error ? layoutText(status) : '');
   document.querySelectorAll('#bands .band').forEach((row, i) =>
     row.classList.toggle('pending', missing.includes(i)));
 }
