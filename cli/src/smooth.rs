@@ -20,7 +20,7 @@ use std::time::Instant;
                   it had to split gets the mean of its copies. auto/adaptive/anisotropic lengths \
                   are in units of the mean edge length L of the input (auto: of each face's \
                   local edge length), epsilon in L²; unset options take the method's defaults \
-                  (auto: adaptive with --scale local --vertex-updates 5 --passes 2; adaptive: \
+                  (auto: adaptive with --scale local --vertex-updates 5 --passes 2 --reach 3; adaptive: \
                   sigma 0.2..2.0; anisotropic: sigma 0.5..5.0 and rho). Options of another \
                   method are refused. Measure the result against a clean mesh with `meshpyr \
                   compare`."
@@ -51,6 +51,10 @@ pub(crate) struct SmoothArgs {
     /// lengthen distances.
     #[arg(long)]
     pub(crate) rho: Option<f64>,
+    /// auto/adaptive/anisotropic: where neighbourhoods are cut, in units of σ, in (0, 4]
+    /// [default: 3 for auto, else 4, the kernel's support]; the time grows with its square.
+    #[arg(long)]
+    pub(crate) reach: Option<f64>,
     /// auto/adaptive/anisotropic: variance estimate of the scale selection.
     #[arg(long, value_parser = named::<Variance>())]
     pub(crate) variance: Option<Variance>,
@@ -105,6 +109,7 @@ impl SmoothArgs {
             sigma_max: self.sigma_max,
             scales: self.scales,
             rho: self.rho,
+            reach: self.reach,
             variance: self.variance,
             scale: self.scale,
             vertex_updates: self.vertex_updates,

@@ -162,6 +162,8 @@ fn bad_input_exits_nonzero_with_one_line() {
         vec!["--method", "taubin", "--mu", "0.3"],
         vec!["--method", "mcf", "--time-step", "-1"],
         vec!["--method", "mcf", "--time-step", "nan"],
+        vec!["--reach", "0"],
+        vec!["--method", "adaptive", "--reach", "4.5"],
     ] {
         let o = smooth(&data("cone20.ply"), &tmp("never.ply"), &args);
         assert!(!o.status.success(), "{args:?}");
@@ -202,6 +204,11 @@ fn an_option_of_another_method_is_refused_before_any_work() {
         ),
         (vec!["--strength", "2"], "--strength", "auto"),
         (
+            vec!["--method", "taubin", "--reach", "3"],
+            "--reach",
+            "taubin",
+        ),
+        (
             vec!["--method", "pyramid", "--passes", "2"],
             "--passes",
             "pyramid",
@@ -237,6 +244,7 @@ fn options_of_the_chosen_method_are_accepted() {
         vec!["--method", "mcf", "--iterations", "2", "--time-step", "0.5"],
         vec!["--method", "anisotropic", "--epsilon", "0.5", "--rho", "3"],
         vec!["--method", "pyramid", "--strength", "0.5"],
+        vec!["--method", "adaptive", "--reach", "3"],
         vec![
             "--passes",
             "1",

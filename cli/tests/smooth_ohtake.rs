@@ -225,6 +225,18 @@ fn invalid_options_are_rejected() {
             step_cap: 0.0,
             ..DenoiseOptions::adaptive()
         },
+        DenoiseOptions {
+            reach: 0.0,
+            ..DenoiseOptions::adaptive()
+        },
+        DenoiseOptions {
+            reach: 4.5,
+            ..DenoiseOptions::automatic()
+        },
+        DenoiseOptions {
+            reach: f64::NAN,
+            ..DenoiseOptions::adaptive()
+        },
     ] {
         assert!(denoise(&mesh, &bad, &NoProgress).is_err(), "{bad:?}");
     }

@@ -113,6 +113,7 @@ def smooth(
     sigma_max: Optional[float] = None,
     scales: Optional[int] = None,
     rho: Optional[float] = None,
+    reach: Optional[float] = None,
     variance: Optional[Literal["unbiased", "biased"]] = None,
     scale: Optional[Literal["global", "local"]] = None,
     vertex_updates: Optional[int] = None,

@@ -27,7 +27,8 @@ fn optional_count(name: &str, n: Option<i64>) -> PyResult<Option<usize>> {
 /// - "adaptive": Ohtake, Belyaev and Seidel's feature-preserving smoothing, face
 ///   normals filtered at a scale chosen per face, then the vertices fitted to them;
 ///   ``epsilon`` (× L², larger smooths more), ``sigma_min``, ``sigma_max`` and ``scales`` (the
-///   filter scales, × L), ``rho`` (anisotropy, 0 = isotropic), ``variance`` ("unbiased" or
+///   filter scales, × L), ``rho`` (anisotropy, 0 = isotropic), ``reach`` (where
+///   neighbourhoods are cut, × σ, in (0, 4]: 3 for "auto", else 4), ``variance`` ("unbiased" or
 ///   "biased"), ``scale`` ("global": σ in units of the mean edge length L; "local": of each
 ///   face's own), ``passes`` of filter-then-fit, ``vertex_updates`` (rounds of local vertex
 ///   updates instead of the global fit, 0 for the global fit), ``fit_iterations`` and
@@ -45,7 +46,7 @@ fn optional_count(name: &str, n: Option<i64>) -> PyResult<Option<usize>> {
 /// Returns the new positions, float64 (n, 3), the input's vertices in the same order
 /// (vertices no face uses keep their positions).
 #[pyfunction]
-#[pyo3(signature = (v, f, /, *, method="auto", epsilon=None, sigma_min=None, sigma_max=None, scales=None, rho=None, variance=None, scale=None, vertex_updates=None, passes=None, fit_iterations=None, step_cap=None, iterations=None, weights=None, lambda_=None, mu=None, time_step=None, boundary=None, strength=None))]
+#[pyo3(signature = (v, f, /, *, method="auto", epsilon=None, sigma_min=None, sigma_max=None, scales=None, rho=None, reach=None, variance=None, scale=None, vertex_updates=None, passes=None, fit_iterations=None, step_cap=None, iterations=None, weights=None, lambda_=None, mu=None, time_step=None, boundary=None, strength=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn smooth<'py>(
     py: Python<'py>,
@@ -57,6 +58,7 @@ pub(crate) fn smooth<'py>(
     sigma_max: Option<f64>,
     scales: Option<i64>,
     rho: Option<f64>,
+    reach: Option<f64>,
     variance: Option<&str>,
     scale: Option<&str>,
     vertex_updates: Option<i64>,
@@ -78,6 +80,7 @@ pub(crate) fn smooth<'py>(
         sigma_max,
         scales: optional_count("scales", scales)?,
         rho,
+        reach,
         variance: named(variance)?,
         scale: named(scale)?,
         vertex_updates: optional_count("vertex_updates", vertex_updates)?,

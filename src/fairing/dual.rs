@@ -123,7 +123,6 @@ impl DualBall {
                 continue; // stale entry; p was reached more cheaply
             }
             self.ball.push((d, p));
-            let n_p = normals[pi];
             let nbrs = graph.neighbors[pi];
             let lens = graph.lengths[pi];
             for k in 0..3 {
@@ -132,7 +131,12 @@ impl DualBall {
                     continue;
                 }
                 let qi = q as usize;
-                let nd = d + edge_weight(lens[k], rho, n_o, n_p, normals[qi]);
+                // The isotropic metric reads no normals (the array is the largest one here).
+                let nd = d + if rho == 0.0 {
+                    lens[k]
+                } else {
+                    edge_weight(lens[k], rho, n_o, normals[pi], normals[qi])
+                };
                 if nd < radius && nd < self.dist[qi] {
                     self.dist[qi] = nd;
                     heap_push(&mut self.heap, heap_key(nd, q));
@@ -299,6 +303,34 @@ mod tests {
             d(&iso, across)
         );
         assert!((edge_weight(2.0, 20.0, DVec3::Z, DVec3::Z, DVec3::X) - 2.0 * 41.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_heap_pops_in_order_when_pushes_and_pops_interleave() {
+        // As in a search: pop the least, push a few larger ones, many duplicates of a distance.
+        let mut h = Vec::new();
+        let mut popped = Vec::new();
+        let mut x = 12345u64;
+        let mut next = |m: u64| {
+            x = x
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (x >> 33) % m
+        };
+        let mut face = 0u32;
+        heap_push(&mut h, heap_key(0.0, face));
+        while let Some(top) = heap_pop(&mut h) {
+            popped.push(top);
+            let (d, _) = heap_item(top);
+            for _ in 0..1 + next(3) {
+                face += 1;
+                if face < 5000 {
+                    heap_push(&mut h, heap_key(d + next(8) as f64 * 0.25, face));
+                }
+            }
+        }
+        assert!(popped.len() > 1000, "{}", popped.len());
+        assert!(popped.windows(2).all(|w| w[0] < w[1]));
     }
 
     #[test]

@@ -6,7 +6,9 @@
 //! geodesic ball of T, and its spread is the weighted variance `V_σ(T)` ([`local_variance`]).
 //! The scale kept is `σ_opt = argmin_σ [V_σ(T) + ε/σ²]`: small where normals vary (noise or
 //! features), large where the surface is flat. One Dijkstra to the largest support serves all
-//! scales, evaluated in one sweep over the distance-sorted ball.
+//! scales, evaluated in one sweep over the distance-sorted ball. The support may be cut short
+//! of the kernel's 4σ ([`ScaleGrid::reach`]): the ball's size, hence the time, goes with the
+//! square of its radius, and the kernel's tail beyond 3σ holds 0.5 % of its weight.
 
 use super::dual::{DualBall, DualGraph};
 use super::kernel;
@@ -28,6 +30,9 @@ pub(crate) struct ScaleGrid {
     pub epsilon: f64,
     /// ρ of the anisotropic metric ([`super::dual::edge_weight`]); 0 for the isotropic filter.
     pub rho: f64,
+    /// Where the neighbourhoods are cut, in units of σ: faces at `reach · σ` or farther get
+    /// no weight at that σ. At most the kernel's support [`kernel::SUPPORT`].
+    pub reach: f64,
     /// Which variance estimate the selection rule uses.
     pub variance: Variance,
     /// Per face, the factor its σ values are multiplied by (its local edge length over the
@@ -105,7 +110,8 @@ pub(crate) fn filter_normals(
     let n = graph.len();
     let k = grid.sigmas.len().min(MAX_SCALES);
     let sigmas = &grid.sigmas[..k];
-    let radius = sigmas.last().map_or(0.0, |s| kernel::SUPPORT * s);
+    let reach = grid.reach.clamp(0.0, kernel::SUPPORT);
+    let radius = sigmas.last().map_or(0.0, |s| reach * s);
     let inv: Vec<f64> = sigmas.iter().map(|s| 1.0 / s).collect();
     let penalty: Vec<f64> = sigmas.iter().map(|s| grid.epsilon / (s * s)).collect();
     let table = kernel::ShapeTable::new();
@@ -136,10 +142,13 @@ pub(crate) fn filter_normals(
                     &ball.ball,
                     normals,
                     areas,
-                    &inv_local[..k],
-                    &penalty,
-                    grid.variance,
-                    &table,
+                    &Sweep {
+                        inv_sigma: &inv_local[..k],
+                        reach,
+                        penalty: &penalty,
+                        variance: grid.variance,
+                        table: &table,
+                    },
                 );
                 let c = done.fetch_add(1, Ordering::Relaxed) + 1;
                 if c.is_multiple_of(step) {
@@ -151,17 +160,34 @@ pub(crate) fn filter_normals(
     filtered
 }
 
+/// What the sweep of one face needs besides its ball.
+#[derive(Clone, Copy)]
+struct Sweep<'a> {
+    /// 1/σ per scale, ascending σ (the face's local factor applied).
+    inv_sigma: &'a [f64],
+    /// Where the neighbourhoods are cut, in units of σ ([`ScaleGrid::reach`]).
+    reach: f64,
+    /// ε/σ² per scale.
+    penalty: &'a [f64],
+    variance: Variance,
+    table: &'a kernel::ShapeTable,
+}
+
 /// The sweep for one face: accumulate `Σw` and `S` for every scale over the sorted ball, then
 /// pick the scale minimising `V_σ + ε/σ²` (the smallest σ on ties).
 fn select_scale(
     ball: &[(f64, u32)],
     normals: &[DVec3],
     areas: &[f64],
-    inv_sigma: &[f64],
-    penalty: &[f64],
-    variance: Variance,
-    table: &kernel::ShapeTable,
+    sweep: &Sweep,
 ) -> (DVec3, u8) {
+    let Sweep {
+        inv_sigma,
+        reach,
+        penalty,
+        variance,
+        table,
+    } = *sweep;
     let k = inv_sigma.len();
     let mut w_sum = [0.0f64; MAX_SCALES];
     let mut w_sq = [0.0f64; MAX_SCALES];
@@ -171,7 +197,7 @@ fn select_scale(
     let mut first = 0;
     for &(d, j) in ball {
         let a = areas[j as usize];
-        while first < k && d * inv_sigma[first] >= kernel::SUPPORT {
+        while first < k && d * inv_sigma[first] >= reach {
             first += 1;
         }
         if first == k {
@@ -270,6 +296,7 @@ mod tests {
             sigmas: (1..=10).map(|i| 0.2 * i as f64).collect(),
             epsilon: 0.01,
             rho: 0.0,
+            reach: kernel::SUPPORT,
             variance: Variance::Biased,
             local: Vec::new(),
         }
@@ -292,6 +319,29 @@ mod tests {
         assert_eq!(local_variance(Unbiased, 1.0, 1.0, DVec3::Z), None);
         assert_eq!(local_variance(Biased, 0.0, 0.0, DVec3::ZERO), None);
         assert_eq!(local_variance(Biased, 1.0, 1.0, DVec3::ZERO), None);
+    }
+
+    #[test]
+    fn faces_at_the_reach_or_beyond_get_no_weight() {
+        let normals = [DVec3::Z, DVec3::X, DVec3::Y];
+        let areas = [1.0, 1.0, 1.0];
+        let table = kernel::ShapeTable::new();
+        let sweep = |ball: &[(f64, u32)], reach: f64| {
+            let sweep = Sweep {
+                inv_sigma: &[1.0],
+                reach,
+                penalty: &[0.0],
+                variance: Variance::Biased,
+                table: &table,
+            };
+            select_scale(ball, &normals, &areas, &sweep)
+        };
+        let near = [(0.0, 0), (1.0, 1)];
+        let far = [(0.0, 0), (1.0, 1), (3.5, 2)];
+        // Within the support, 3.5σ still counts; cut at 3σ it does not.
+        assert_ne!(sweep(&far, 4.0), sweep(&near, 4.0));
+        assert_eq!(sweep(&far, 3.0), sweep(&near, 3.0));
+        assert_ne!(sweep(&near, 1.0), sweep(&near, 3.0));
     }
 
     #[test]

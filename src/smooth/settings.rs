@@ -194,6 +194,9 @@ pub struct SmoothSettings {
     pub scales: Option<usize>,
     /// Ohtake: anisotropy ρ (0 = isotropic); how much normal differences lengthen distances.
     pub rho: Option<f64>,
+    /// Ohtake: where neighbourhoods are cut, in units of σ, in (0, 4] (default: 3 for auto,
+    /// else 4, the kernel's support); the work per face grows with its square.
+    pub reach: Option<f64>,
     /// Ohtake: variance estimate of the scale selection.
     pub variance: Option<Variance>,
     /// Ohtake: what σ is measured in.
@@ -235,6 +238,7 @@ impl SmoothSettings {
             ("sigma_max", self.sigma_max.is_some(), OHTAKE),
             ("scales", self.scales.is_some(), OHTAKE),
             ("rho", self.rho.is_some(), OHTAKE),
+            ("reach", self.reach.is_some(), OHTAKE),
             ("variance", self.variance.is_some(), OHTAKE),
             ("scale", self.scale.is_some(), OHTAKE),
             ("vertex_updates", self.vertex_updates.is_some(), OHTAKE),
@@ -318,6 +322,7 @@ impl SmoothSettings {
         o.sigma_max = self.sigma_max.unwrap_or(o.sigma_max);
         o.scales = self.scales.unwrap_or(o.scales);
         o.rho = self.rho.unwrap_or(o.rho);
+        o.reach = self.reach.unwrap_or(o.reach);
         o.variance = self.variance.unwrap_or(o.variance);
         o.max_iterations = self.fit_iterations.unwrap_or(o.max_iterations);
         o.step_cap = self.step_cap.unwrap_or(o.step_cap);
