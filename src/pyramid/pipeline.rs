@@ -427,12 +427,21 @@ pub(crate) fn guide_share(spec: &RelaxationSpec) -> f64 {
 }
 
 /// The PM's vertices (in PM order) at their positions after Ohtake's filter with its
-/// automatic preset ([`DenoiseOptions::automatic`]) on the finest level; vertices without faces keep theirs. `None` when the smoother refuses the
-/// mesh, and the operator then reads the normals of the positions themselves.
+/// automatic preset ([`DenoiseOptions::automatic`]) on the finest level, its neighbourhoods
+/// reaching the kernel's whole 4σ support; vertices without faces keep theirs. `None` when the
+/// smoother refuses the mesh, and the operator then reads the normals of the positions
+/// themselves.
 fn denoised_guide(pm: &ProgressiveMesh, progress: &dyn Progress) -> Option<Vec<DVec3>> {
     let positions = pm.original_positions();
     let built = Mesh::from_triangles(positions, pm.finest_faces()).ok()?;
-    let smoothed = denoise(&built.mesh, &DenoiseOptions::automatic(), progress).ok()?;
+    // The whole support, not the preset's faster 3σ cut: the normal operator and
+    // `smooth --method pyramid` were tuned and measured on this guide, and the 3σ guide moves
+    // the pyramid denoiser's noise estimate off its finest octave.
+    let options = DenoiseOptions {
+        reach: 4.0,
+        ..DenoiseOptions::automatic()
+    };
+    let smoothed = denoise(&built.mesh, &options, progress).ok()?;
     let mut guide = positions.to_vec();
     for (&source, &p) in built.source.vertex_source.iter().zip(&smoothed.positions) {
         if let Some(g) = guide.get_mut(source as usize) {
