@@ -5,7 +5,7 @@
 use glam::DVec3;
 use meshpyr::io::read_mesh;
 use meshpyr::mesh::{Mesh, PolygonMesh};
-use meshpyr::pm::{MeshRecords, PmOptions, PmParts, ProgressiveMesh};
+use meshpyr::pm::{MeshRecords, PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
 use meshpyr::pyramid::{Filter, Pyramid, PyramidOptions};
 use proptest::prelude::*;
@@ -22,15 +22,7 @@ fn blocks(n: usize) -> PmOptions {
 /// The parts a `.pyr` file stores, rebuilt through the validating constructor: it replays
 /// every split on the base mesh and compares the result with the finest faces.
 fn replayed(pm: &ProgressiveMesh) -> ProgressiveMesh {
-    let parts = PmParts {
-        n_base: pm.n_base_vertices(),
-        positions: pm.original_positions().to_vec(),
-        pm_to_mesh: pm.pm_to_mesh().to_vec(),
-        splits: pm.splits().to_vec(),
-        faces: pm.finest_faces().to_vec(),
-        errors: pm.split_errors().to_vec(),
-    };
-    ProgressiveMesh::from_parts(parts).expect("the splits replay exactly to the input")
+    ProgressiveMesh::from_parts(pm.to_parts()).expect("the splits replay exactly to the input")
 }
 
 /// Walks the hierarchy down to the base and up again: every collapse is the inverse of its

@@ -496,12 +496,8 @@ fn split_errors_round_trip_for_any_bits() {
         .map(|i| f32::from_bits(odd[i % odd.len()].wrapping_add(i as u32 / odd.len() as u32)))
         .collect();
     let parts = meshpyr::pm::PmParts {
-        n_base: pm.n_base_vertices(),
-        positions: pm.original_positions().to_vec(),
-        pm_to_mesh: pm.pm_to_mesh().to_vec(),
-        splits: pm.splits().to_vec(),
-        faces: pm.finest_faces().to_vec(),
         errors: errors.clone(),
+        ..pm.to_parts()
     };
     let odd_pm = ProgressiveMesh::from_parts(parts).unwrap();
     let (bytes, _) = format::encode(&input, &odd_pm, &PyramidOptions::default()).unwrap();

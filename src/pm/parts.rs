@@ -192,6 +192,19 @@ impl ProgressiveMesh {
         Ok(pm)
     }
 
+    /// A copy of the parts this hierarchy is made of (what a `.pyr` file stores of it):
+    /// [`Self::from_parts`] rebuilds the same hierarchy from them.
+    pub fn to_parts(&self) -> PmParts {
+        PmParts {
+            n_base: self.n_base_vertices(),
+            positions: self.original_positions().to_vec(),
+            pm_to_mesh: self.pm_to_mesh().to_vec(),
+            splits: self.splits().to_vec(),
+            faces: self.finest_faces().to_vec(),
+            errors: self.split_errors().to_vec(),
+        }
+    }
+
     /// The parts with every check that needs no replay (`inverse`: see
     /// [`Self::from_checked_parts`]).
     fn unreplayed(parts: PmParts, inverse: Option<Vec<u32>>) -> Result<ProgressiveMesh, PmError> {
@@ -270,22 +283,11 @@ mod tests {
         Mesh::from_triangles(&p, &t).unwrap().mesh
     }
 
-    fn parts_of(pm: &ProgressiveMesh) -> PmParts {
-        PmParts {
-            n_base: pm.n_base_vertices(),
-            positions: pm.original_positions().to_vec(),
-            pm_to_mesh: pm.pm_to_mesh().to_vec(),
-            splits: pm.splits().to_vec(),
-            faces: pm.finest_faces().to_vec(),
-            errors: pm.split_errors().to_vec(),
-        }
-    }
-
     #[test]
     fn parts_round_trip() {
         let pm = ProgressiveMesh::build(&grid(6), &PmOptions::default(), &NoProgress).unwrap();
-        let back = ProgressiveMesh::from_parts(parts_of(&pm)).unwrap();
-        assert_eq!(parts_of(&back), parts_of(&pm));
+        let back = ProgressiveMesh::from_parts(pm.to_parts()).unwrap();
+        assert_eq!(back.to_parts(), pm.to_parts());
         assert_eq!(back.n_base_faces(), pm.n_base_faces());
         assert_eq!(back.mesh_to_pm(), pm.mesh_to_pm());
     }
@@ -293,7 +295,7 @@ mod tests {
     #[test]
     fn damaged_parts_are_errors() {
         let pm = ProgressiveMesh::build(&grid(5), &PmOptions::default(), &NoProgress).unwrap();
-        let good = parts_of(&pm);
+        let good = pm.to_parts();
         let mut cases = Vec::new();
         let mut p = good.clone();
         p.splits[0].survivor = p.splits[0].vertex;
