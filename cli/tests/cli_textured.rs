@@ -98,17 +98,8 @@ fn converting_to_off_says_what_is_not_carried_and_simplifying_carries_it() {
     ]));
     assert!(!err.contains("does not carry"), "{err}");
     let text = std::fs::read_to_string(&simplified).unwrap();
-    for what in ["mtllib ", "usemtl ", "\nvt ", "\nvn ", "\ng "] {
-        assert!(text.contains(what), "{what:?} missing");
-    }
-    let faces: Vec<&str> = text.lines().filter(|l| l.starts_with("f ")).collect();
-    assert!(faces.len() < 600, "{} faces", faces.len());
-    assert!(
-        faces
-            .iter()
-            .all(|f| f.split(' ').skip(1).all(|c| c.split('/').count() == 3)),
-        "every corner has v/vt/vn"
-    );
+    let faces = textured_obj_faces(&text, &["mtllib ", "usemtl ", "\nvt ", "\nvn ", "\ng "]);
+    assert!(faces < 600, "{faces} faces");
     fails_with(
         &meshpyr(&[
             "simplify",
@@ -142,24 +133,18 @@ fn extract_of_a_coarse_level_writes_its_texture_coordinates_materials_and_groups
     let run = meshpyr(&["extract", &pyr, "-o", &out, "--level", &level.to_string()]);
     assert!(!ok(&run).contains("warning"), "{}", stderr(&run));
     let text = std::fs::read_to_string(&out).unwrap();
-    for what in [
-        "mtllib ",
-        "usemtl left",
-        "usemtl right",
-        "\nvt ",
-        "\nvn ",
-        "\ng high",
-    ] {
-        assert!(text.contains(what), "{what:?} missing");
-    }
-    let faces: Vec<&str> = text.lines().filter(|l| l.starts_with("f ")).collect();
-    assert_eq!(faces.len(), info.pm.n_faces_at(level));
-    assert!(
-        faces
-            .iter()
-            .all(|f| f.split(' ').skip(1).all(|c| c.split('/').count() == 3)),
-        "every corner has v/vt/vn"
+    let faces = textured_obj_faces(
+        &text,
+        &[
+            "mtllib ",
+            "usemtl left",
+            "usemtl right",
+            "\nvt ",
+            "\nvn ",
+            "\ng high",
+        ],
     );
+    assert_eq!(faces, info.pm.n_faces_at(level));
     // Below the seam floor there is no level, as below any file's base.
     fails_with(
         &meshpyr(&[
@@ -325,4 +310,20 @@ fn a_checker_on_a_square_shows_its_colours_at_their_quarters() {
         picture(&plain),
         "a missing image draws the clay"
     );
+}
+
+/// Checks that an OBJ text holds each of `markers` and that every corner of every face has
+/// `v/vt/vn` indices; returns the number of faces.
+fn textured_obj_faces(text: &str, markers: &[&str]) -> usize {
+    for what in markers {
+        assert!(text.contains(what), "{what:?} missing");
+    }
+    let faces: Vec<&str> = text.lines().filter(|l| l.starts_with("f ")).collect();
+    assert!(
+        faces
+            .iter()
+            .all(|f| f.split(' ').skip(1).all(|c| c.split('/').count() == 3)),
+        "every corner has v/vt/vn"
+    );
+    faces.len()
 }
