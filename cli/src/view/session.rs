@@ -422,10 +422,30 @@ impl Session {
     }
 
     /// `/api/texcoords`: the drawing layout of a textured scan's texture coordinates
-    /// ([`ViewTexture::layout`]); `None` for an untextured one.
-    pub fn texcoords(&self) -> Option<Vec<u8>> {
+    /// ([`ViewTexture::layout`]) on the triangles the page shows: the input's, or over the
+    /// budget the shown level's (its drawn vertices are then PM indices, as `/api/display`'s
+    /// triangles), whose corners follow from the finest ones ([`Pyramid::level_mesh`]).
+    /// `None` for an untextured scan; an error when the hierarchy has no texture below the
+    /// finest level (a partitioned build) or a collapse breaks a seam.
+    pub fn texcoords(&mut self) -> Option<Result<Vec<u8>, String>> {
+        self.texture.as_ref()?;
+        let shown = self.lod().map(|lod| lod.preview.shown);
         let texture = self.texture.as_ref()?;
-        Some(texture.layout(&self.pyramid.input))
+        let Some(shown) = shown else {
+            return Some(Ok(texture.layout(&self.pyramid.input)));
+        };
+        if !self.pyramid.pm.keeps_seams() {
+            return Some(Err(format!(
+                "the hierarchy was built without the texture seams (a partitioned build): \
+                 level {shown} on screen has no texture coordinates"
+            )));
+        }
+        Some(
+            self.pyramid
+                .level_mesh(shown)
+                .map(|level| texture.layout(&level))
+                .map_err(|e| e.to_string()),
+        )
     }
 
     /// `/api/level`: vertex and triangle counts (u32), positions (f32 triples, PM order) and
