@@ -248,7 +248,25 @@ fn export_after_an_edit_keeps_the_texture(server: &view_support::Running) {
         m.materials.list.iter().map(|x| x.name.clone()).collect()
     };
     assert_eq!(names(&exported), names(&input));
-    assert_eq!(exported.materials.libraries, input.materials.libraries);
+    // A download may be saved anywhere: its references are absolute, and from another
+    // folder the file finds its library and images without a warning.
+    let folder = input.materials.folder.clone().unwrap();
+    let absolute: Vec<String> = input
+        .materials
+        .libraries
+        .iter()
+        .map(|l| folder.join(l).to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(exported.materials.libraries, absolute);
+    let elsewhere = tempfile::tempdir().unwrap();
+    let saved = elsewhere.path().join("download.obj");
+    std::fs::write(&saved, &edited.body).unwrap();
+    let (reread, warnings) = meshpyr::io::read_mesh_reporting(&saved).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    for m in &reread.materials.list {
+        let image = m.texture.as_deref().expect("the library names the image");
+        assert!(std::path::Path::new(image).is_file(), "{image}");
+    }
     assert!(
         exported.face_attribute(MATERIAL_ATTRIBUTE) == input.face_attribute(MATERIAL_ATTRIBUTE),
         "the faces' usemtl differ"

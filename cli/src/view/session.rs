@@ -501,14 +501,16 @@ impl Session {
         Ok((bytes, format!("{}-view.{format}", safe_stem(&self.name))))
     }
 
-    /// The input with `positions` (stored normals following them); when the format cannot carry the input's other data (PLY
-    /// properties in an OBJ, say), the geometry alone.
+    /// The input with `positions` (stored normals following them); when the format cannot
+    /// carry the input's other data (PLY properties in an OBJ, say), the geometry alone. A
+    /// download may be saved in any folder, so its references to material libraries and
+    /// images are absolute ([`meshpyr::io::write_mesh_bytes_detached`]).
     fn mesh_bytes(&self, positions: Vec<DVec3>, format: MeshFormat) -> Result<Vec<u8>, String> {
         let mut mesh = self.pyramid.input.clone();
         mesh.positions = positions;
         mesh.refresh_normals(&self.pyramid.input.positions);
         let opts = WriteOptions::default();
-        meshpyr::io::write_mesh_bytes(&mesh, format, &opts).or_else(|_| {
+        meshpyr::io::write_mesh_bytes_detached(&mesh, format, &opts).or_else(|_| {
             let mut bare = PolygonMesh::new();
             bare.positions = mesh.positions;
             for f in self.pyramid.input.faces() {
