@@ -327,3 +327,42 @@ fn textured_obj_faces(text: &str, markers: &[&str]) -> usize {
     );
     faces.len()
 }
+
+/// The blocks of a partitioned build decide their collapses without the seams: a textured
+/// scan is never built in blocks without saying so. Forced blocks are refused; blocks chosen
+/// for a tight memory give way to one process, with a warning, and the file keeps the seams.
+#[test]
+fn a_textured_scan_is_built_in_one_process_or_refused_never_in_blocks_without_its_seams() {
+    let pyr = scratch_arg("cli_textured_blocks", "scan.pyr");
+    let forced = meshpyr(&["build", &data(OBJ), "-o", &pyr, "--block-vertices", "128"]);
+    fails_with(&forced, "does not keep its texture seams");
+    assert!(stderr(&forced).contains("leave --block-vertices out"));
+    assert!(!std::path::Path::new(&pyr).exists());
+    let tight = meshpyr(&["build", &data(OBJ), "-o", &pyr, "--memory", "1K"]);
+    let err = ok(&tight);
+    assert!(
+        err.contains("warning:") && err.contains("built in one process"),
+        "{err}"
+    );
+    assert!(
+        err.contains("building the hierarchy in one process"),
+        "{err}"
+    );
+    let file = meshpyr::format::decode(&std::fs::read(&pyr).unwrap()).unwrap();
+    assert!(file.pm.keeps_seams(), "the hierarchy keeps the seams");
+    // filter and edit choose their path the same way.
+    let out = scratch_arg("cli_textured_blocks", "low.obj");
+    fails_with(
+        &meshpyr(&[
+            "filter",
+            &data(OBJ),
+            "-o",
+            &out,
+            "--lowpass",
+            "200",
+            "--block-vertices",
+            "128",
+        ]),
+        "does not keep its texture seams",
+    );
+}
