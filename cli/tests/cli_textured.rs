@@ -366,3 +366,29 @@ fn a_textured_scan_is_built_in_one_process_or_refused_never_in_blocks_without_it
         "does not keep its texture seams",
     );
 }
+
+/// A low-pass below the seam floor acts on the levels above it: the warning says so, why the
+/// levels stop there, and what asks for the same without the warning.
+#[test]
+fn a_low_pass_below_the_seam_floor_warns_naming_the_floor_and_what_to_ask_instead() {
+    let out = scratch_arg("cli_textured_floor", "low.obj");
+    let run = meshpyr(&["filter", &data(OBJ), "-o", &out, "--lowpass", "50"]);
+    let err = ok(&run);
+    let warning = err
+        .lines()
+        .find(|l| l.starts_with("warning: "))
+        .unwrap_or_else(|| panic!("no warning in {err}"));
+    let pyramid = meshpyr::Pyramid::build(&meshpyr::read_mesh(common::data(OBJ)).unwrap()).unwrap();
+    let base = pyramid.levels().start().to_string();
+    for needle in [
+        "low-pass 50 reaches below the pyramid's coarsest level",
+        "the seam floor",
+        &format!("low-pass {base} does the same without this warning"),
+    ] {
+        assert!(warning.contains(needle), "{needle:?} not in {warning}");
+    }
+    let quiet = scratch_arg("cli_textured_floor", "quiet.obj");
+    let run = meshpyr(&["filter", &data(OBJ), "-o", &quiet, "--lowpass", &base]);
+    assert!(!ok(&run).contains("warning"), "{}", stderr(&run));
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&quiet).unwrap());
+}
