@@ -35,22 +35,57 @@ pub(crate) struct PathOptions {
 }
 
 impl PathOptions {
-    /// The path for `job` on the mesh `input` read from `path`, said unless `--quiet`.
+    /// The path for `job` on the mesh `input` read from `path`, said unless `--quiet`. A
+    /// textured input is never built in blocks ([`keeping_seams`]).
     pub(crate) fn choose(
         &self,
         path: &Path,
         job: Job,
         input: &PolygonMesh,
         global: &Global,
-    ) -> BuildPath {
+    ) -> anyhow::Result<BuildPath> {
         let size = InputSize::mesh(input.n_vertices() as u64, input.n_faces() as u64);
         let allowance = Allowance::of_this_process();
         let chosen =
             memory::choose_build_path(job, &size, self.block_vertices, self.memory, &allowance);
+        let chosen = keeping_seams(path, chosen, input)?;
         global.say(format_args!(
             "{}: building the hierarchy {chosen}",
             path.display()
         ));
-        chosen
+        Ok(chosen)
     }
+}
+
+/// `chosen` for `input`, read from `path`, when its hierarchy keeps texture seams: the blocks
+/// of a partitioned build decide their collapses without the seams (`docs/seams.md`), so its
+/// coarser levels would lose the texture. Forced blocks are refused; blocks chosen for memory
+/// give way to one process, with a warning that it may not fit.
+fn keeping_seams(path: &Path, chosen: BuildPath, input: &PolygonMesh) -> anyhow::Result<BuildPath> {
+    let BuildPath::Partitioned { by_memory, .. } = chosen else {
+        return Ok(chosen);
+    };
+    if !meshpyr::pm::keeps_texture_seams(input) {
+        return Ok(chosen);
+    }
+    let Some((need, allowed)) = by_memory else {
+        anyhow::bail!(
+            "{}: --block-vertices: the scan is textured and a partitioned build does not keep \
+             its texture seams (its coarser levels would lose the texture); leave \
+             --block-vertices out to build it in one process",
+            path.display()
+        );
+    };
+    eprintln!(
+        "warning: {}: the scan is textured and a partitioned build does not keep its texture \
+         seams, so its hierarchy is built in one process, estimated at {} with {} allowed; it \
+         may swap or be stopped by the system (a larger --memory says it may use more)",
+        path.display(),
+        memory::Bytes(need),
+        memory::Bytes(allowed)
+    );
+    Ok(BuildPath::OneProcess {
+        need,
+        allowed: Some(allowed),
+    })
 }

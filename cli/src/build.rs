@@ -54,7 +54,7 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
         pm: PmOptions {
             block_vertices: args
                 .path
-                .choose(&args.input, job, &input, global)
+                .choose(&args.input, job, &input, global)?
                 .block_vertices(),
             uv_weight: args.uv_weight,
             ..PmOptions::default()

@@ -172,7 +172,7 @@ pub(crate) fn load_pyramid_by(
         relaxation: wanted.unwrap_or_default(),
         pm: PmOptions {
             block_vertices: options
-                .choose(path, Job::Pyramid, &input, global)
+                .choose(path, Job::Pyramid, &input, global)?
                 .block_vertices(),
             ..PmOptions::default()
         },

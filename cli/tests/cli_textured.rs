@@ -327,3 +327,68 @@ fn textured_obj_faces(text: &str, markers: &[&str]) -> usize {
     );
     faces.len()
 }
+
+/// The blocks of a partitioned build decide their collapses without the seams: a textured
+/// scan is never built in blocks without saying so. Forced blocks are refused; blocks chosen
+/// for a tight memory give way to one process, with a warning, and the file keeps the seams.
+#[test]
+fn a_textured_scan_is_built_in_one_process_or_refused_never_in_blocks_without_its_seams() {
+    let pyr = scratch_arg("cli_textured_blocks", "scan.pyr");
+    let forced = meshpyr(&["build", &data(OBJ), "-o", &pyr, "--block-vertices", "128"]);
+    fails_with(&forced, "does not keep its texture seams");
+    assert!(stderr(&forced).contains("leave --block-vertices out"));
+    assert!(!std::path::Path::new(&pyr).exists());
+    let tight = meshpyr(&["build", &data(OBJ), "-o", &pyr, "--memory", "1K"]);
+    let err = ok(&tight);
+    assert!(
+        err.contains("warning:") && err.contains("built in one process"),
+        "{err}"
+    );
+    assert!(
+        err.contains("building the hierarchy in one process"),
+        "{err}"
+    );
+    let file = meshpyr::format::decode(&std::fs::read(&pyr).unwrap()).unwrap();
+    assert!(file.pm.keeps_seams(), "the hierarchy keeps the seams");
+    // filter and edit choose their path the same way.
+    let out = scratch_arg("cli_textured_blocks", "low.obj");
+    fails_with(
+        &meshpyr(&[
+            "filter",
+            &data(OBJ),
+            "-o",
+            &out,
+            "--lowpass",
+            "200",
+            "--block-vertices",
+            "128",
+        ]),
+        "does not keep its texture seams",
+    );
+}
+
+/// A low-pass below the seam floor acts on the levels above it: the warning says so, why the
+/// levels stop there, and what asks for the same without the warning.
+#[test]
+fn a_low_pass_below_the_seam_floor_warns_naming_the_floor_and_what_to_ask_instead() {
+    let out = scratch_arg("cli_textured_floor", "low.obj");
+    let run = meshpyr(&["filter", &data(OBJ), "-o", &out, "--lowpass", "50"]);
+    let err = ok(&run);
+    let warning = err
+        .lines()
+        .find(|l| l.starts_with("warning: "))
+        .unwrap_or_else(|| panic!("no warning in {err}"));
+    let pyramid = meshpyr::Pyramid::build(&meshpyr::read_mesh(common::data(OBJ)).unwrap()).unwrap();
+    let base = pyramid.levels().start().to_string();
+    for needle in [
+        "low-pass 50 reaches below the pyramid's coarsest level",
+        "the seam floor",
+        &format!("low-pass {base} does the same without this warning"),
+    ] {
+        assert!(warning.contains(needle), "{needle:?} not in {warning}");
+    }
+    let quiet = scratch_arg("cli_textured_floor", "quiet.obj");
+    let run = meshpyr(&["filter", &data(OBJ), "-o", &quiet, "--lowpass", &base]);
+    assert!(!ok(&run).contains("warning"), "{}", stderr(&run));
+    assert_eq!(std::fs::read(&out).unwrap(), std::fs::read(&quiet).unwrap());
+}

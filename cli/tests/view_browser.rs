@@ -475,6 +475,29 @@ fn the_editor_shows_the_texture_of_a_textured_scan_and_its_toggle_hides_it() {
     let server = serve("textured/anchor_tex.obj");
     driver.navigate(&server.url);
     driver.wait_for("window.meshpyr && window.meshpyr.ready && window.meshpyr.idle()");
+    assert_eq!(driver.script("return window.meshpyr.lod;"), json!(false));
+    page_shows_the_texture_and_its_toggle_hides_it(&driver);
+}
+
+/// Over its display budget (anchor_tex's 1,050 triangles shown within 500) the page draws a
+/// coarser level, textured with the level's own corners.
+#[test]
+fn over_the_budget_the_editor_shows_the_coarse_level_textured() {
+    let Some(driver) = driver_or_skip("over_the_budget_the_editor_shows_the_coarse_level_textured")
+    else {
+        return;
+    };
+    let server = serve_with_budget("textured/anchor_tex.obj", 500);
+    driver.navigate(&server.url);
+    driver.wait_for("window.meshpyr && window.meshpyr.ready && window.meshpyr.settled()");
+    assert_eq!(driver.script("return window.meshpyr.lod;"), json!(true));
+    let shown = driver.script("return window.meshpyr.shownLevel;");
+    assert!(shown.as_u64().is_some_and(|n| n < 519), "{shown}");
+    page_shows_the_texture_and_its_toggle_hides_it(&driver);
+}
+
+/// The page draws the scan's images (two of them), and unchecking `texture` draws the clay.
+fn page_shows_the_texture_and_its_toggle_hides_it(driver: &Driver) {
     let texture = driver.script("return window.meshpyr.texture;");
     assert_eq!(texture["images"], 2, "{texture}");
     let (drawn, coloured) = texture_coloured(&driver.canvas_pixels());

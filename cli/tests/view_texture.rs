@@ -1,15 +1,59 @@
 //! A textured scan in `meshpyr view`'s API: the page gets the images as their files hold them
-//! and a drawing layout whose split vertices carry the input's texture coordinates, an
-//! untextured scan gets none of it, and exports after an edit keep the per-corner data and
-//! materials.
+//! and a drawing layout whose split vertices carry the input's texture coordinates (over the
+//! display budget, those of the shown level's corners), an untextured scan gets none of it,
+//! and exports after an edit keep the per-corner data and materials, also over the budget.
 
 mod view_support;
 
 use meshpyr::io::MeshFormat;
 use meshpyr::mesh::corners::{MATERIAL_ATTRIBUTE, TEXCOORD};
-use view_support::{data, octaves_of, serve};
+use view_support::{data, octaves_of, serve, serve_with_budget};
 
 const OBJ: &str = "textured/anchor_tex.obj";
+
+/// A display budget under anchor_tex's 1,050 triangles: the page shows a coarser level.
+const COARSE_BUDGET: usize = 500;
+
+/// `/api/texcoords` decoded: per drawn vertex the vertex it draws and its coordinates, the
+/// triangles over drawn vertices, and the groups `[image, first, count]`.
+struct Layout {
+    vertex_of: Vec<u32>,
+    uvs: Vec<[f32; 2]>,
+    triangles: Vec<[u32; 3]>,
+    groups: Vec<[u32; 3]>,
+}
+
+fn layout_of(bytes: &[u8]) -> Layout {
+    let head: Vec<u32> = u32s(&bytes[..12]).collect();
+    let (nd, nt, ng) = (head[0] as usize, head[1] as usize, head[2] as usize);
+    let mut at = 12;
+    let mut take = |n: usize| {
+        let part = &bytes[at..at + 4 * n];
+        at += 4 * n;
+        part
+    };
+    let vertex_of: Vec<u32> = u32s(take(nd)).collect();
+    let uvs: Vec<[f32; 2]> = take(2 * nd)
+        .chunks_exact(8)
+        .map(|c| {
+            let x = |k: usize| f32::from_le_bytes(c[k..k + 4].try_into().unwrap());
+            [x(0), x(4)]
+        })
+        .collect();
+    let triples = |part: &[u8]| -> Vec<[u32; 3]> {
+        let flat: Vec<u32> = u32s(part).collect();
+        flat.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect()
+    };
+    let triangles = triples(take(3 * nt));
+    let groups = triples(take(3 * ng));
+    assert_eq!(at, bytes.len());
+    Layout {
+        vertex_of,
+        uvs,
+        triangles,
+        groups,
+    }
+}
 
 fn u32s(bytes: &[u8]) -> impl Iterator<Item = u32> + '_ {
     bytes
@@ -52,23 +96,8 @@ fn the_layout_splits_vertices_by_texture_coordinates_for_drawing_only() {
     let server = serve(OBJ);
     let input = meshpyr::read_mesh(data(OBJ)).unwrap();
     let uv = input.corner_attribute(TEXCOORD).unwrap();
-    let bytes = server.api("GET", "/api/texcoords", b"").body;
-    let head: Vec<u32> = u32s(&bytes[..12]).collect();
-    let (nd, nt, ng) = (head[0] as usize, head[1] as usize, head[2] as usize);
-    let mut at = 12;
-    let mut take = |n: usize| {
-        let part = &bytes[at..at + 4 * n];
-        at += 4 * n;
-        part
-    };
-    let vertex_of: Vec<u32> = u32s(take(nd)).collect();
-    let uvs: Vec<f32> = take(2 * nd)
-        .chunks_exact(4)
-        .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
-        .collect();
-    let triangles: Vec<u32> = u32s(take(3 * nt)).collect();
-    let groups: Vec<u32> = u32s(take(3 * ng)).collect();
-    assert_eq!(at, bytes.len());
+    let layout = layout_of(&server.api("GET", "/api/texcoords", b"").body);
+    let (nd, nt) = (layout.vertex_of.len(), layout.triangles.len());
     assert_eq!(nt, input.n_triangles());
     // As many drawn vertices as distinct (vertex, coordinates) pairs: more than the vertices
     // (seams), no more than the corners.
@@ -77,14 +106,13 @@ fn the_layout_splits_vertices_by_texture_coordinates_for_drawing_only() {
         "{nd}"
     );
     // Every corner of the input appears, at its vertex, with its coordinates.
-    let mut drawn: Vec<(u32, [u32; 2])> = triangles
+    let mut drawn: Vec<(u32, [u32; 2])> = layout
+        .triangles
         .iter()
+        .flatten()
         .map(|&d| {
             let d = d as usize;
-            (
-                vertex_of[d],
-                [uvs[2 * d].to_bits(), uvs[2 * d + 1].to_bits()],
-            )
+            (layout.vertex_of[d], layout.uvs[d].map(f32::to_bits))
         })
         .collect();
     let mut corners: Vec<(u32, [u32; 2])> = (0..input.face_indices.len())
@@ -102,10 +130,68 @@ fn the_layout_splits_vertices_by_texture_coordinates_for_drawing_only() {
     corners.dedup();
     assert_eq!(drawn, corners);
     // Two materials, each with its image: two groups covering every triangle.
-    assert_eq!(ng, 2);
-    assert_eq!((groups[0], groups[1]), (0, 0));
-    assert_eq!((groups[3], groups[4]), (1, groups[2]));
-    assert_eq!(groups[2] + groups[5], nt as u32);
+    let groups = &layout.groups;
+    assert_eq!(groups.len(), 2);
+    assert_eq!((groups[0][0], groups[0][1]), (0, 0));
+    assert_eq!((groups[1][0], groups[1][1]), (1, groups[0][2]));
+    assert_eq!(groups[0][2] + groups[1][2], nt as u32);
+}
+
+/// Over the budget the page draws the shown level: the layout covers exactly its triangles
+/// (`/api/display`, PM indices), and every drawn corner is a corner the input has at that
+/// vertex, so each triangle keeps one chart of the texture.
+#[test]
+fn over_the_budget_the_layout_textures_the_shown_level_with_the_inputs_corners() {
+    let server = serve_with_budget(OBJ, COARSE_BUDGET);
+    let info = server.api("GET", "/api/info", b"").json();
+    assert_eq!(info["display"]["lod"], true);
+    let display = server.api("GET", "/api/display", b"").body;
+    let shown = u32s(&display[..4]).next().unwrap();
+    let shown_triangles: Vec<u32> = u32s(&display[8..]).collect();
+    let layout = layout_of(&server.api("GET", "/api/texcoords", b"").body);
+    assert!(layout.vertex_of.iter().all(|&v| v < shown));
+    let drawn: Vec<u32> = layout
+        .triangles
+        .iter()
+        .flatten()
+        .map(|&d| layout.vertex_of[d as usize])
+        .collect();
+    let sorted = |flat: &[u32]| {
+        let mut t: Vec<&[u32]> = flat.chunks_exact(3).collect();
+        t.sort_unstable();
+        t.into_iter().map(<[u32]>::to_vec).collect::<Vec<_>>()
+    };
+    assert_eq!(sorted(&drawn), sorted(&shown_triangles));
+    // The shown level's vertex `i` is PM vertex `i`, at its input position.
+    let input = meshpyr::read_mesh(data(OBJ)).unwrap();
+    let pyramid = meshpyr::Pyramid::build(&input).unwrap();
+    let pm = pyramid.pm.original_positions();
+    let uv = input.corner_attribute(TEXCOORD).unwrap();
+    let input_corners: std::collections::HashSet<([u64; 3], [u32; 2])> =
+        (0..input.face_indices.len())
+            .map(|c| {
+                let p = input.positions[input.face_indices[c] as usize];
+                let value = uv.value(c).unwrap();
+                (
+                    p.to_array().map(f64::to_bits),
+                    [(value[0] as f32).to_bits(), (value[1] as f32).to_bits()],
+                )
+            })
+            .collect();
+    for (d, &v) in layout.vertex_of.iter().enumerate() {
+        let key = (
+            pm[v as usize].to_array().map(f64::to_bits),
+            layout.uvs[d].map(f32::to_bits),
+        );
+        assert!(input_corners.contains(&key), "drawn vertex {d} (PM {v})");
+    }
+    // More drawn vertices than shown vertices: the level keeps seams.
+    assert!(layout.vertex_of.len() > shown as usize, "no seam split");
+    assert_eq!(layout.groups.len(), 2);
+    assert_eq!(
+        layout.groups.iter().map(|g| g[2]).sum::<u32>() as usize,
+        layout.triangles.len()
+    );
 }
 
 #[test]
@@ -120,7 +206,19 @@ fn an_untextured_scan_has_no_texture_and_no_layout() {
 
 #[test]
 fn an_export_after_an_edit_keeps_the_texture_coordinates_and_materials() {
-    let server = serve(OBJ);
+    export_after_an_edit_keeps_the_texture(&serve(OBJ));
+}
+
+/// Over the budget the page shows a coarse level, but the export is the whole result.
+#[test]
+fn over_the_budget_an_export_after_an_edit_keeps_the_texture_coordinates_and_materials() {
+    let server = serve_with_budget(OBJ, COARSE_BUDGET);
+    let info = server.api("GET", "/api/info", b"").json();
+    assert_eq!(info["display"]["lod"], true);
+    export_after_an_edit_keeps_the_texture(&server);
+}
+
+fn export_after_an_edit_keeps_the_texture(server: &view_support::Running) {
     let info = server.api("GET", "/api/info", b"").json();
     let gains = vec![1.0; octaves_of(&info).len()];
     let (min, max) = (&info["bbox"]["min"], &info["bbox"]["max"]);
@@ -150,7 +248,25 @@ fn an_export_after_an_edit_keeps_the_texture_coordinates_and_materials() {
         m.materials.list.iter().map(|x| x.name.clone()).collect()
     };
     assert_eq!(names(&exported), names(&input));
-    assert_eq!(exported.materials.libraries, input.materials.libraries);
+    // A download may be saved anywhere: its references are absolute, and from another
+    // folder the file finds its library and images without a warning.
+    let folder = input.materials.folder.clone().unwrap();
+    let absolute: Vec<String> = input
+        .materials
+        .libraries
+        .iter()
+        .map(|l| folder.join(l).to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(exported.materials.libraries, absolute);
+    let elsewhere = tempfile::tempdir().unwrap();
+    let saved = elsewhere.path().join("download.obj");
+    std::fs::write(&saved, &edited.body).unwrap();
+    let (reread, warnings) = meshpyr::io::read_mesh_reporting(&saved).unwrap();
+    assert!(warnings.is_empty(), "{warnings:?}");
+    for m in &reread.materials.list {
+        let image = m.texture.as_deref().expect("the library names the image");
+        assert!(std::path::Path::new(image).is_file(), "{image}");
+    }
     assert!(
         exported.face_attribute(MATERIAL_ATTRIBUTE) == input.face_attribute(MATERIAL_ATTRIBUTE),
         "the faces' usemtl differ"

@@ -11,12 +11,17 @@ use numpy::{
 };
 use pyo3::prelude::*;
 
-/// `np.asarray(obj)` as an untyped array (lists and other array-likes are accepted too).
-fn as_array<'py>(obj: &Bound<'py, PyAny>, name: &str) -> PyResult<Bound<'py, PyUntypedArray>> {
+/// `np.asarray(obj)` as an untyped array (lists and other array-likes are accepted too); the
+/// errors name it `name`, of shape `shape`.
+pub(crate) fn as_array<'py>(
+    obj: &Bound<'py, PyAny>,
+    name: &str,
+    shape: &str,
+) -> PyResult<Bound<'py, PyUntypedArray>> {
     let numpy = obj.py().import("numpy")?;
     let array = numpy
         .call_method1("asarray", (obj,))
-        .map_err(|e| value_error(format!("{name} must be an array of shape (n, 3): {e}")))?;
+        .map_err(|e| value_error(format!("{name} must be an array of shape {shape}: {e}")))?;
     array
         .cast_into::<PyUntypedArray>()
         .map_err(|_| value_error(format!("{name} must be a numpy array")))
@@ -54,7 +59,7 @@ fn converted<'py, T: numpy::Element>(
 /// The vertex positions `V`: float64 (float32 and float16 are widened exactly), shape `(n, 3)`,
 /// every coordinate finite.
 pub(crate) fn vertices(obj: &Bound<'_, PyAny>) -> PyResult<Vec<DVec3>> {
-    let array = as_array(obj, "V")?;
+    let array = as_array(obj, "V", "(n, 3)")?;
     rows_of_three(&array, "V")?;
     let dtype = array.dtype();
     if dtype.kind() != b'f' {
@@ -82,7 +87,7 @@ pub(crate) fn vertices(obj: &Bound<'_, PyAny>) -> PyResult<Vec<DVec3>> {
 
 /// The triangles `F`: any integer dtype, shape `(m, 3)`, every index in `0..n_vertices`.
 pub(crate) fn triangles(obj: &Bound<'_, PyAny>, n_vertices: usize) -> PyResult<Vec<[u32; 3]>> {
-    let array = as_array(obj, "F")?;
+    let array = as_array(obj, "F", "(n, 3)")?;
     rows_of_three(&array, "F")?;
     let dtype = array.dtype();
     let out_of_range = |i: usize, index: String| {

@@ -16,12 +16,13 @@
 //! Floats keep their stored type (float32 or float64), so a file read and written back holds
 //! the same bits; corners that share a value share one stored value, as OBJ's `vt` do.
 
+use crate::arrays::as_array;
 use crate::errors::value_error;
 use meshpyr::PolygonMesh;
 use meshpyr::mesh::corners::{GROUP_ATTRIBUTE, MATERIAL_ATTRIBUTE, NORMAL, TEXCOORD};
 use meshpyr::mesh::{Attribute, AttributeData, CornerAttribute, Material, NO_VALUE};
 use numpy::ndarray::{Array1, Array3};
-use numpy::{PyArray1, PyArray3, PyArrayDescrMethods, PyArrayMethods, PyUntypedArray};
+use numpy::{PyArray1, PyArray3, PyArrayDescrMethods, PyArrayMethods};
 use numpy::{PyUntypedArrayMethods, ToPyArray};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -261,14 +262,6 @@ fn materials(list: &Bound<'_, PyAny>) -> PyResult<Vec<Material>> {
     Ok(out)
 }
 
-/// `np.asarray(obj)` as an untyped array.
-fn untyped<'py>(obj: &Bound<'py, PyAny>, key: &str) -> PyResult<Bound<'py, PyUntypedArray>> {
-    let array = obj.py().import("numpy")?.call_method1("asarray", (obj,))?;
-    array
-        .cast_into::<PyUntypedArray>()
-        .map_err(|_| value_error(format!("corners[{key:?}] must be a numpy array")))
-}
-
 /// A pooled corner attribute from an (m, 3, width) float array: equal values (bit for bit)
 /// share a pool row, NaN rows have none.
 fn corner_attribute(
@@ -278,8 +271,12 @@ fn corner_attribute(
     columns: &[&str],
     m: usize,
 ) -> PyResult<CornerAttribute> {
-    let array = untyped(obj, key)?;
     let width = columns.len();
+    let array = as_array(
+        obj,
+        &format!("corners[{key:?}]"),
+        &format!("(m, 3, {width})"),
+    )?;
     if array.shape() != [m, 3, width] {
         return Err(value_error(format!(
             "corners[{key:?}] must have shape ({m}, 3, {width}) (a value per corner of F), got {:?}",
@@ -353,7 +350,7 @@ fn table_indices(
     n: usize,
     m: usize,
 ) -> PyResult<AttributeData> {
-    let array = untyped(obj, key)?;
+    let array = as_array(obj, &format!("corners[{key:?}]"), "(m,)")?;
     if array.shape() != [m] {
         return Err(value_error(format!(
             "corners[{key:?}] must have shape ({m},) (one per triangle of F), got {:?}",

@@ -64,7 +64,7 @@ pub(crate) fn read(py: Python<'_>, path: PathBuf, corners: bool) -> PyResult<Bou
 }
 
 /// `(V, F)` and an optional corners dict as a mesh.
-fn mesh_with_corners(
+pub(crate) fn mesh_with_corners(
     v: &Bound<'_, PyAny>,
     f: &Bound<'_, PyAny>,
     corners: Option<&Bound<'_, PyAny>>,

@@ -1,15 +1,19 @@
 //! `meshpyr.Pyramid`: a mesh with its progressive mesh and detail pyramid; filters, edits,
 //! spectra, and the `.pyr` file as a file, as bytes and as a pickle.
 
-use crate::arrays::{self, mesh_arrays, positions_array, triangles_array};
+use crate::arrays::{mesh_arrays, positions_array, triangles_array};
+use crate::corners::corners_dict;
 use crate::errors::{input_error, pyr_error, pyramid_error, value_error};
 use crate::filters::FilterArgs;
+use crate::functions::{mesh_pair, mesh_with_corners};
 use glam::DVec3;
+use meshpyr::pm::PmOptions;
 use meshpyr::relax::RelaxKind;
 use meshpyr::{MoveHandle, NoProgress, PyramidOptions};
 use numpy::{PyArray1, PyArray2};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyRange, PyTuple, PyType};
+use std::ops::RangeInclusive;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -23,6 +27,12 @@ use std::sync::Arc;
 /// predicts each level from the coarser one: "second-difference" (Guskov's), "mcm" (one step
 /// of implicit mean-curvature motion) or "normal" (second differences that stop at creases,
 /// so low-passes keep sharp edges).
+///
+/// ``corners=C`` (the dict of ``read(path, corners=True)``) builds the hierarchy of a textured
+/// scan as the command line does for its file: collapses keep the texture seams and weigh the
+/// texture shift by ``uv_weight`` (as ``meshpyr build --uv-weight``), so filters give the
+/// positions ``meshpyr filter`` writes, and ``level(n, corners=True)`` gives each level's
+/// corners.
 ///
 /// Every array it returns holds the input's vertices in the input's order. A Pyramid is
 /// immutable, safe to share between threads, and pickles as its .pyr bytes (so
@@ -80,21 +90,52 @@ fn move_handles(moves: &Bound<'_, PyAny>, radius: f64) -> PyResult<Vec<MoveHandl
     Ok(handles)
 }
 
+/// `n` as a level of `levels`, else a `ValueError` naming them.
+pub(crate) fn level_in(n: i64, levels: &RangeInclusive<usize>) -> PyResult<usize> {
+    match usize::try_from(n) {
+        Ok(n) if levels.contains(&n) => Ok(n),
+        _ => Err(value_error(format!(
+            "level {n} is outside this mesh's levels {}..={}",
+            levels.start(),
+            levels.end()
+        ))),
+    }
+}
+
+/// `(V, F)` of `mesh`, with its corners dict when `corners` (as `read(path, corners=True)`).
+pub(crate) fn mesh_tuple<'py>(
+    py: Python<'py>,
+    mesh: &meshpyr::PolygonMesh,
+    corners: bool,
+) -> PyResult<Bound<'py, PyTuple>> {
+    let (v, f) = mesh_pair(py, mesh);
+    let mut items = vec![v.into_any(), f.into_any()];
+    if corners {
+        items.push(corners_dict(py, mesh)?.into_any());
+    }
+    PyTuple::new(py, items)
+}
+
 #[pymethods]
 impl Pyramid {
     #[new]
-    #[pyo3(signature = (v, f, /, *, relax="second-difference"))]
+    #[pyo3(signature = (v, f, /, *, relax="second-difference", corners=None, uv_weight=PmOptions::default().uv_weight))]
     fn new(
         py: Python<'_>,
         v: &Bound<'_, PyAny>,
         f: &Bound<'_, PyAny>,
         relax: &str,
+        corners: Option<&Bound<'_, PyAny>>,
+        uv_weight: f64,
     ) -> PyResult<Self> {
         let kind: RelaxKind = relax.parse().map_err(input_error)?;
-        let mesh = arrays::mesh(v, f)?;
+        let mesh = mesh_with_corners(v, f, corners)?;
         let options = PyramidOptions {
             relaxation: kind.spec(),
-            ..PyramidOptions::default()
+            pm: PmOptions {
+                uv_weight,
+                ..PmOptions::default()
+            },
         };
         let inner = py
             .detach(|| meshpyr::Pyramid::build_with(mesh, &options, &NoProgress))
@@ -124,6 +165,29 @@ impl Pyramid {
     fn faces<'py>(&self, py: Python<'py>) -> Bound<'py, PyArray2<i64>> {
         let (_, f) = mesh_arrays(&self.inner.input);
         triangles_array(py, &f)
+    }
+
+    /// The input's corners dict (as ``read(path, corners=True)`` gives it): empty for a
+    /// pyramid built without corners from an untextured mesh.
+    #[getter]
+    fn corners<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        corners_dict(py, &self.inner.input)
+    }
+
+    /// Level ``n`` (a vertex count in ``levels``) of the hierarchy at the input's positions,
+    /// as ``(V_n, F_n)``, or with ``corners=True`` ``(V_n, F_n, C_n)``: C_n is the corners
+    /// dict of the level, each triangle keeping the material and the texture coordinates of
+    /// its vertices on its own side of every seam (empty for an untextured mesh). A pyramid
+    /// whose hierarchy was built without the seams (a .pyr of a partitioned build) has no
+    /// texture coordinates below the finest level.
+    #[pyo3(signature = (n, /, *, corners=false))]
+    fn level<'py>(&self, py: Python<'py>, n: i64, corners: bool) -> PyResult<Bound<'py, PyTuple>> {
+        let levels = self.inner.levels();
+        let n = level_in(n, &levels)?;
+        let mesh = py
+            .detach(|| self.inner.level_mesh(n))
+            .map_err(|e| value_error(e.to_string()))?;
+        mesh_tuple(py, &mesh, corners)
     }
 
     /// The relaxation operator's name: "second-difference", "mcm" or "normal".
@@ -198,15 +262,7 @@ impl Pyramid {
                 "radius must be a positive number, got {radius}"
             )));
         }
-        let levels = self.inner.levels();
-        if !usize::try_from(level).is_ok_and(|l| levels.contains(&l)) {
-            return Err(value_error(format!(
-                "level {level} is outside this mesh's levels {}..={}",
-                levels.start(),
-                levels.end()
-            )));
-        }
-        let level = level as usize;
+        let level = level_in(level, &self.inner.levels())?;
         let handles = move_handles(moves, radius)?;
         let filter = FilterArgs {
             lowpass,

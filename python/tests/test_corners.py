@@ -188,3 +188,66 @@ def test_a_mesh_without_texture_reads_an_empty_corners_dict(tmp_path):
     v, f = meshpyr.read(tmp_path / "bunny.ply")
     meshpyr.write(source, v, f)
     assert meshpyr.read(source, corners=True)[2] == {}
+
+
+def as_float32(v):
+    """Positions rounded as the command line writes a float32 file's (anchor_tex.obj)."""
+    return v.astype(np.float32).astype(np.float64)
+
+
+def test_a_pyramid_with_corners_filters_like_the_cli_on_the_textured_file(cli, tmp_path):
+    """The command line builds a seam-keeping hierarchy for a textured file; so does
+    Pyramid(V, F, corners=C): the bindings' float64 result rounds to the very positions the
+    command line writes (float32, as the file stores them)."""
+    theirs = tmp_path / "cli.obj"
+    cli("filter", OBJ, "-o", theirs, "--lowpass", "200")
+    v, f, c = meshpyr.read(OBJ, corners=True)
+    filtered = meshpyr.Pyramid(v, f, corners=c).filter(lowpass=200)
+    cli_v, cli_f, cli_c = meshpyr.read(theirs, corners=True)
+    assert_same_bits(cli_f, f)
+    assert_same_bits(as_float32(filtered), cli_v)
+    assert_same_bits(cli_c["texcoord"], c["texcoord"])
+    # Without the corners the hierarchy ignores the seams, and the result differs.
+    plain = meshpyr.Pyramid(v, f).filter(lowpass=200)
+    assert not np.array_equal(as_float32(plain), cli_v)
+
+
+def test_a_level_of_a_pyramid_with_corners_is_the_level_the_cli_extracts(cli, tmp_path):
+    pyr, theirs = tmp_path / "scan.pyr", tmp_path / "level.obj"
+    cli("build", OBJ, "-o", pyr)
+    cli("extract", pyr, "-o", theirs, "--level", "200")
+    v, f, c = meshpyr.read(OBJ, corners=True)
+    pyramid = meshpyr.Pyramid(v, f, corners=c)
+    assert pyramid.corners["materials"] == c["materials"]
+    v2, f2, c2 = pyramid.level(200, corners=True)
+    cli_v, cli_f, cli_c = meshpyr.read(theirs, corners=True)
+    assert_same_bits(cli_v, v2)
+    assert_same_bits(cli_f, f2)
+    assert_same_bits(cli_c["texcoord"], c2["texcoord"])
+    assert_same_bits(cli_c["material"], c2["material"])
+    assert f2.shape[0] < f.shape[0]
+    assert len(pyramid.level(200)) == 2
+
+
+def test_a_progressive_mesh_with_corners_keeps_every_corner_on_its_side_of_the_seams():
+    v, f, c = meshpyr.read(OBJ, corners=True)
+    pm = meshpyr.ProgressiveMesh(v, f, corners=c)
+    identity = np.arange(v.shape[0])
+    for n in (pm.levels[0], 200, pm.levels[-1]):
+        v_n, f_n, c_n = pm.mesh(n, corners=True)
+        assert_same_bits(v_n, v[pm.vertex_map[:n]])
+        assert_same_bits(f_n, pm.mesh(n)[1])
+        assert c_n["texcoord"].shape == (f_n.shape[0], 3, 2)
+        kept = corner_values(pm.vertex_map, f_n, c_n["texcoord"])
+        assert kept <= corner_values(identity, f, c["texcoord"])
+        assert set(np.unique(c_n["material"])) == {0, 1}
+    # The same hierarchy as the pyramid's: its levels are the pyramid's.
+    v_p, f_p, c_p = meshpyr.Pyramid(v, f, corners=c).level(200, corners=True)
+    v_n, f_n, c_n = pm.mesh(200, corners=True)
+    assert_same_bits(v_p, v_n)
+    assert_same_bits(f_p, f_n)
+    assert_same_bits(c_p["texcoord"], c_n["texcoord"])
+    # Built without corners, a level has none, and the seams were not kept.
+    plain = meshpyr.ProgressiveMesh(v, f)
+    assert plain.mesh(200, corners=True)[2] == {}
+    assert not np.array_equal(plain.vertex_map, pm.vertex_map)

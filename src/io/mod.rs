@@ -431,6 +431,19 @@ pub fn write_mesh_bytes(
     encode(mesh, &mesh.materials, format, opts)
 }
 
+/// [`write_mesh_bytes`] for bytes whose file's folder is not known (a download): relative
+/// references to material libraries and images are written absolute (from the folder the
+/// mesh was read from), so that they reach the same files wherever the bytes are saved on
+/// this machine. A mesh with materials but no library (read from PLY) gets no `mtllib` in an
+/// OBJ: there is no file beside it to hold one.
+pub fn write_mesh_bytes_detached(
+    mesh: &PolygonMesh,
+    format: MeshFormat,
+    opts: &WriteOptions,
+) -> Result<Vec<u8>, IoError> {
+    encode(mesh, &references::anchored(&mesh.materials), format, opts)
+}
+
 /// [`write_mesh_bytes`] with `materials` in place of the mesh's.
 fn encode(
     mesh: &PolygonMesh,

@@ -2,7 +2,8 @@
 //!
 //! Policy: they are referenced, never copied or rewritten. A mesh read from a path records
 //! its folder ([`Materials::folder`]); a mesh written into another folder gets its relative
-//! references rewritten to reach the same files from there (absolute ones stay as they are).
+//! references rewritten to reach the same files from there (absolute ones stay as they are);
+//! bytes whose folder is not known (the editor's downloads) get them absolute.
 //! A mesh with materials but no library (read from PLY) gets `NAME.mtl` written beside an OBJ
 //! output, naming each material's image. A missing library or image, or a `usemtl` that no
 //! library defines, is a warning: exporters often write such files, and the mesh is whole
@@ -132,22 +133,36 @@ fn relative(to: &Path, from: &Path) -> PathBuf {
 
 /// The mesh's materials with their relative paths rewritten for a file written at `out`.
 pub(crate) fn rebased(materials: &Materials, out: &Path) -> Materials {
+    rebased_to(materials, Some(absolute_folder(out)))
+}
+
+/// The mesh's materials with their relative paths made absolute, for bytes whose folder is
+/// not known (a download): they reach the same files from any folder on this machine.
+pub(crate) fn anchored(materials: &Materials) -> Materials {
+    rebased_to(materials, None)
+}
+
+/// The materials' relative paths rewritten to reach the same files from the folder `to`, or
+/// absolute without one.
+fn rebased_to(materials: &Materials, to: Option<PathBuf>) -> Materials {
     let Some(from) = &materials.folder else {
         return materials.clone();
     };
-    let to = absolute_folder(out);
     let rebase = |p: &String| -> String {
-        if Path::new(p).is_absolute() || *from == to {
+        if Path::new(p).is_absolute() || Some(from) == to.as_ref() {
             return p.clone();
         }
-        slashed(&relative(&normalized(&from.join(p)), &to))
+        let file = normalized(&from.join(p));
+        slashed(&to.as_ref().map_or(file.clone(), |to| relative(&file, to)))
     };
     let mut m = materials.clone();
     m.libraries = m.libraries.iter().map(rebase).collect();
     for mat in &mut m.list {
         mat.texture = mat.texture.as_ref().map(rebase);
     }
-    m.folder = Some(to);
+    if to.is_some() {
+        m.folder = to;
+    }
     m
 }
 
@@ -195,5 +210,29 @@ mod tests {
             Some("../../scans/tex/skin.png")
         );
         assert_eq!(rebased(&m, Path::new("/data/scans/b.obj")), m);
+    }
+
+    #[test]
+    fn anchoring_makes_relative_references_absolute_and_keeps_absolute_ones() {
+        let m = Materials {
+            libraries: vec!["../lib/scan.mtl".into(), "/abs/lib.mtl".into()],
+            list: vec![crate::mesh::Material {
+                name: "skin".into(),
+                texture: Some("./tex/skin.png".into()),
+            }],
+            folder: Some(PathBuf::from("/data/scans")),
+        };
+        let a = anchored(&m);
+        assert_eq!(a.libraries, ["/data/lib/scan.mtl", "/abs/lib.mtl"]);
+        assert_eq!(
+            a.list[0].texture.as_deref(),
+            Some("/data/scans/tex/skin.png")
+        );
+        assert_eq!(a.folder, m.folder);
+        let unread = Materials {
+            folder: None,
+            ..m.clone()
+        };
+        assert_eq!(anchored(&unread), unread);
     }
 }

@@ -46,6 +46,7 @@ pub use legality::Refusal;
 pub use legality::{Legality, Relaxation};
 pub use level_corners::{LevelFaces, SeamBreak, level_corners, level_mesh};
 pub use progressive::SplitReplay;
+pub use progressive::keeps_texture_seams;
 pub use progressive::{MIN_BLOCK_VERTICES, PmCursor, PmOptions, PmParts, ProgressiveMesh};
 pub use progressive::{PmError, VertexSplit};
 pub use replay::FlatReplay;

@@ -633,6 +633,13 @@ fn decimate_flat(
     })
 }
 
+/// Whether a hierarchy of `input` built in one piece keeps texture seams: it has per-corner
+/// data or more than one material (`docs/seams.md`). A partitioned build
+/// ([`PmOptions::block_vertices`]) does not keep them.
+pub fn keeps_texture_seams(input: &PolygonMesh) -> bool {
+    super::seams::is_textured(input)
+}
+
 /// The smallest block a partitioned build accepts: a block must have room for an interior
 /// beside its border.
 pub const MIN_BLOCK_VERTICES: usize = 16;

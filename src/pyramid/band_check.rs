@@ -9,6 +9,11 @@ impl DetailPyramid {
     /// reaches below the coarsest level (a low-pass to fewer vertices than the base has), which
     /// would otherwise silently do less. Bands with gain 1 are never reported.
     pub fn band_warnings(&self, filter: &Filter) -> Vec<String> {
+        self.band_warnings_below(filter, "no legal collapse goes further")
+    }
+
+    /// [`Self::band_warnings`], saying why no level lies below the base with `floor`.
+    pub(crate) fn band_warnings_below(&self, filter: &Filter, floor: &str) -> Vec<String> {
         let gains = filter.resolve(self.surface_area());
         // Splits create the levels (base, finest]; a band (a, b] reaches them when it is not
         // empty and overlaps them.
@@ -37,10 +42,14 @@ impl DetailPyramid {
                     base + 1
                 ));
             } else if a < base {
+                let same = match band.to {
+                    Some(to) => format!("band {base}:{to}"),
+                    None => format!("low-pass {base}"),
+                };
                 warnings.push(format!(
-                    "{what} reaches below the pyramid's coarsest level, {base} vertices (no legal \
-                     collapse goes further); levels {}..={base} do not exist, so it acts on \
-                     levels {}..={} only",
+                    "{what} reaches below the pyramid's coarsest level, {base} vertices \
+                     ({floor}); levels {}..={base} do not exist, so it acts on levels {}..={} \
+                     only ({same} does the same without this warning; `smooth` smooths further)",
                     a + 1,
                     base + 1,
                     b.min(finest)

@@ -36,9 +36,16 @@ pub struct Edited {
 
 impl Pyramid {
     /// One sentence per band of `filter` that changes nothing on this pyramid (empty, or
-    /// outside its levels) or less than it says (partly outside them).
+    /// outside its levels) or less than it says (partly outside them). Below a textured scan's
+    /// base it names the seam floor (`docs/seams.md`).
     pub fn band_warnings(&self, filter: &Filter) -> Vec<String> {
-        self.pyramid.band_warnings(filter)
+        let floor = if self.pm.keeps_seams() {
+            "the seam floor: vertices where texture seams meet or end on a boundary never move, \
+             docs/seams.md"
+        } else {
+            "no legal collapse goes further"
+        };
+        self.pyramid.band_warnings_below(filter, floor)
     }
 
     /// [`Pyramid::filter`], with the warnings of `filter`'s bands.

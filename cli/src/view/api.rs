@@ -82,10 +82,11 @@ pub(crate) fn dispatch(
     let result = match (method, path) {
         ("GET", "/api/info") => Ok(Reply::json(&session.info())),
         ("GET", "/api/faces") => Ok(Reply::binary(session.faces())),
-        ("GET", "/api/texcoords") => session
-            .texcoords()
-            .map(Reply::binary)
-            .ok_or_else(untextured),
+        ("GET", "/api/texcoords") => match session.texcoords() {
+            Some(Ok(layout)) => Ok(Reply::binary(layout)),
+            Some(Err(why)) => Err(Reply::error(409, why)),
+            None => Err(untextured()),
+        },
         ("GET", "/api/texture") => texture_image(session, param("image")),
         ("GET", "/api/level") => level(session, param("n")),
         ("GET", "/api/display") => session

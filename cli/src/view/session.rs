@@ -422,10 +422,30 @@ impl Session {
     }
 
     /// `/api/texcoords`: the drawing layout of a textured scan's texture coordinates
-    /// ([`ViewTexture::layout`]); `None` for an untextured one.
-    pub fn texcoords(&self) -> Option<Vec<u8>> {
+    /// ([`ViewTexture::layout`]) on the triangles the page shows: the input's, or over the
+    /// budget the shown level's (its drawn vertices are then PM indices, as `/api/display`'s
+    /// triangles), whose corners follow from the finest ones ([`Pyramid::level_mesh`]).
+    /// `None` for an untextured scan; an error when the hierarchy has no texture below the
+    /// finest level (a partitioned build) or a collapse breaks a seam.
+    pub fn texcoords(&mut self) -> Option<Result<Vec<u8>, String>> {
+        self.texture.as_ref()?;
+        let shown = self.lod().map(|lod| lod.preview.shown);
         let texture = self.texture.as_ref()?;
-        Some(texture.layout(&self.pyramid.input))
+        let Some(shown) = shown else {
+            return Some(Ok(texture.layout(&self.pyramid.input)));
+        };
+        if !self.pyramid.pm.keeps_seams() {
+            return Some(Err(format!(
+                "the hierarchy was built without the texture seams (a partitioned build): \
+                 level {shown} on screen has no texture coordinates"
+            )));
+        }
+        Some(
+            self.pyramid
+                .level_mesh(shown)
+                .map(|level| texture.layout(&level))
+                .map_err(|e| e.to_string()),
+        )
     }
 
     /// `/api/level`: vertex and triangle counts (u32), positions (f32 triples, PM order) and
@@ -481,14 +501,16 @@ impl Session {
         Ok((bytes, format!("{}-view.{format}", safe_stem(&self.name))))
     }
 
-    /// The input with `positions` (stored normals following them); when the format cannot carry the input's other data (PLY
-    /// properties in an OBJ, say), the geometry alone.
+    /// The input with `positions` (stored normals following them); when the format cannot
+    /// carry the input's other data (PLY properties in an OBJ, say), the geometry alone. A
+    /// download may be saved in any folder, so its references to material libraries and
+    /// images are absolute ([`meshpyr::io::write_mesh_bytes_detached`]).
     fn mesh_bytes(&self, positions: Vec<DVec3>, format: MeshFormat) -> Result<Vec<u8>, String> {
         let mut mesh = self.pyramid.input.clone();
         mesh.positions = positions;
         mesh.refresh_normals(&self.pyramid.input.positions);
         let opts = WriteOptions::default();
-        meshpyr::io::write_mesh_bytes(&mesh, format, &opts).or_else(|_| {
+        meshpyr::io::write_mesh_bytes_detached(&mesh, format, &opts).or_else(|_| {
             let mut bare = PolygonMesh::new();
             bare.positions = mesh.positions;
             for f in self.pyramid.input.faces() {

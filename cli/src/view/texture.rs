@@ -200,8 +200,8 @@ fn media_type(bytes: &[u8]) -> Option<&'static str> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use meshpyr::mesh::CornerAttribute;
     use meshpyr::mesh::corners::TEXCOORD;
-    use meshpyr::mesh::{Attribute, AttributeData, CornerAttribute};
 
     /// Two triangles sharing an edge whose ends have different coordinates on each side.
     fn seamed() -> PolygonMesh {
@@ -212,19 +212,15 @@ mod tests {
             glam::DVec3::ONE,
         ];
         let mut m = PolygonMesh::from_triangles(p, &[[0, 1, 2], [2, 1, 3]]);
-        let col = |name: &str, v: Vec<f32>| Attribute {
-            name: name.into(),
-            data: AttributeData::F32(v),
-        };
-        m.corner_attributes.push(CornerAttribute {
-            name: TEXCOORD.into(),
-            columns: vec![
-                col("u", vec![0.0, 1.0, 0.0, 0.5, 0.5]),
-                col("v", vec![0.0, 0.0, 1.0, 0.5, 0.0]),
-            ],
-            // Vertex 1 is at (1, 0) on both sides; vertex 2 at (0, 1), then (0.5, 0.5).
-            indices: vec![0, 1, 2, 3, 1, 4],
-        });
+        let rows = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0], [0.5, 0.5], [0.5, 0.0]];
+        // Vertex 1 is at (1, 0) on both sides; vertex 2 at (0, 1), then (0.5, 0.5).
+        let indices = vec![0, 1, 2, 3, 1, 4];
+        m.corner_attributes.push(CornerAttribute::from_rows(
+            TEXCOORD,
+            ["u", "v"],
+            &rows,
+            indices,
+        ));
         m
     }
 

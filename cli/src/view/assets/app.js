@@ -60,8 +60,7 @@ const M = window.meshpyr = {
   opening: null,      // while the scan opens: the server's stage, progress and picture
   firstPictureMs: null, // performance.now() when the first picture (of the opening) was drawn
   pictures: [],       // the opening's pictures drawn: {what, triangles, ms}
-  texture: null,      // a textured scan shown whole: {images: decoded count, groups} (null:
-                      // untextured, or over the budget, where the level has no coordinates)
+  texture: null,      // a textured scan: {images: decoded count, groups} (null: untextured)
 };
 
 // ---- camera ---------------------------------------------------------------------------------
@@ -950,16 +949,17 @@ async function openScan() {
   }
   finest.setTriangles(M.faces);
   M.texture = null;
-  $('texture-row').hidden = !(i.texture && !M.lod);
+  $('texture-row').hidden = !i.texture;
   // Without its texture the scan is still the scan: a failure here leaves it plain.
-  if (i.texture && !M.lod) await loadTexture(i.texture).catch(showError);
+  if (i.texture) await loadTexture(i.texture).catch(showError);
   M.showingResult = false;
   showFinest();
 }
 
-// A textured scan shown whole: its split vertices and grouped triangles, and its images as
-// WebGL textures (repeating, mipmapped). An image the browser cannot decode leaves its faces
-// plain.
+// A textured scan: the split vertices and grouped triangles of what is on screen (the input,
+// or over the budget the shown level, whose corners the server derives from the finest), and
+// its images as WebGL textures (repeating, mipmapped). An image the browser cannot decode
+// leaves its faces plain.
 async function loadTexture(info) {
   const bytes = await (await api('/api/texcoords')).arrayBuffer();
   const [nd, nt, ng] = new Uint32Array(bytes, 0, 3);
