@@ -107,6 +107,61 @@ fn a_partitioned_hierarchy_does_not_depend_on_the_thread_count() {
     }
 }
 
+/// A scratch directory of this test process under the system's temporary directory.
+fn scratch(name: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("meshpyr-test-{}-{name}", std::process::id()))
+}
+
+fn pyr_bytes(poly: &PolygonMesh, pm: PmOptions) -> Vec<u8> {
+    let options = PyramidOptions {
+        pm,
+        ..PyramidOptions::default()
+    };
+    let p = Pyramid::build_with(poly.clone(), &options, &NoProgress).unwrap();
+    p.to_pyr_bytes().unwrap().0
+}
+
+#[test]
+fn passes_run_through_task_files_write_the_same_pyr_bytes_as_passes_in_memory() {
+    for (name, block, threads) in [
+        ("elephant_holes.ply", 400, 1),
+        ("elephant_holes.ply", 400, 3),
+        ("bunny.ply", 500, 2),
+        ("spider_assimp.ply", 64, 2),
+        ("tripod.ply", 1000, 1),
+    ] {
+        let poly = load(name);
+        let dir = scratch(&format!("files-{block}-{threads}"));
+        let in_memory = common::on_threads(threads, || pyr_bytes(&poly, blocks(block)));
+        let through_files = PmOptions {
+            block_scratch: Some(dir.clone()),
+            ..blocks(block)
+        };
+        let files = common::on_threads(threads, || pyr_bytes(&poly, through_files));
+        assert!(
+            files == in_memory,
+            "{name}, blocks of {block}, {threads} threads"
+        );
+        let left = std::fs::read_dir(&dir).unwrap().count();
+        assert_eq!(left, 0, "{name}: the task files are removed");
+        std::fs::remove_dir(&dir).unwrap();
+    }
+}
+
+#[test]
+fn a_scratch_directory_that_cannot_be_made_is_an_error_naming_it() {
+    let file = scratch("not-a-directory");
+    std::fs::write(&file, b"x").unwrap();
+    let options = PmOptions {
+        block_scratch: Some(file.join("under")),
+        ..blocks(400)
+    };
+    let poly = load("tripod.ply");
+    let err = ProgressiveMesh::from_polygons(&poly, &options, &NoProgress).unwrap_err();
+    std::fs::remove_file(&file).unwrap();
+    assert!(err.to_string().contains("not-a-directory"), "{err}");
+}
+
 #[test]
 fn a_mesh_that_fits_one_block_is_one_decimation_of_the_whole() {
     let poly = load("bunny.ply");

@@ -45,6 +45,8 @@ pub use goal::{SimplifyGoal, simplify_to_goal};
 pub use legality::Refusal;
 pub use legality::{Legality, Relaxation};
 pub use level_corners::{LevelFaces, SeamBreak, level_corners, level_mesh};
+pub(crate) use partition::read_any as fuzz_read_block_file;
+pub use partition::taskfile::BlockFileError;
 pub use progressive::SplitReplay;
 pub use progressive::{MIN_BLOCK_VERTICES, PmCursor, PmOptions, PmParts, ProgressiveMesh};
 pub use progressive::{PmError, VertexSplit};
