@@ -51,6 +51,9 @@ pub struct PmOptions {
     /// passes through files"); the hierarchy is the same bit for bit. Default `None`: the passes
     /// run in memory.
     pub block_scratch: Option<std::path::PathBuf>,
+    /// With `block_scratch`: what runs each round's tasks (`None`: this process's threads,
+    /// [`crate::pm::blocks::RayonRunner`]). Any runner gives the same hierarchy.
+    pub block_runner: Option<super::blocks::SharedRunner>,
     /// Weight λ of the boundary constraint planes (each boundary edge adds a plane through it,
     /// perpendicular to its face, scaled by λ·|e|²) while at least 5 % of the input's faces are
     /// left; at the coarse end (1 %) they count 0.3 λ, so that hole rims give up the vertices the
@@ -75,6 +78,7 @@ impl Default for PmOptions {
             max_valence: 32,
             block_vertices: None,
             block_scratch: None,
+            block_runner: None,
             boundary_weight: 10.0,
             uv_weight: 0.25,
         }
@@ -633,8 +637,13 @@ fn decimate_flat(
 ) -> Result<Decimated, PmError> {
     if let Some(max) = opts.block_vertices {
         if let Some(scratch) = &opts.block_scratch {
-            let p = super::partition::decimate_through_files(flat, params, max, scratch, progress);
-            return p;
+            let runner = opts.block_runner.as_ref().map_or(
+                &super::blocks::RayonRunner as &dyn super::blocks::TaskRunner,
+                |r| &*r.0,
+            );
+            return super::partition::decimate_through_files(
+                flat, params, max, scratch, runner, progress,
+            );
         }
         return super::partition::decimate_in_blocks(flat, params, max, progress);
     }

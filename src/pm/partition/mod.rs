@@ -35,6 +35,7 @@ mod cells;
 mod contents;
 mod lockstep;
 mod order;
+pub mod runner;
 mod split;
 pub mod taskfile;
 pub mod tasks;

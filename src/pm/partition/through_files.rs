@@ -17,6 +17,7 @@
 
 use super::cells::{Cells, FRAMES, split_cells_of};
 use super::contents::{self, PassInfo, Record};
+use super::runner::{Task, TaskOutput, TaskRunner};
 use super::taskfile::BlockFileError;
 use super::tasks;
 use super::{VertexQuadric, vertices_of};
@@ -51,17 +52,39 @@ fn round<T: Send>(
 }
 
 /// Decimates `flat` in blocks of at most `max_block` vertices, every pass through task files in
-/// a new directory under `scratch`.
+/// a new directory under `scratch`, each round's tasks run by `runner`.
 pub(crate) fn decimate_through_files(
     flat: FlatMesh,
     params: &DecimateParams,
     max_block: usize,
     scratch: &Path,
+    runner: &dyn TaskRunner,
     progress: &dyn Progress,
 ) -> Result<Decimated, PmError> {
     let dir = unique_dir(scratch)?;
     let dir = Scratch(dir);
-    Ok(run(flat, params, max_block, &dir, progress)?)
+    let driver = Driver {
+        runner,
+        dir: &dir,
+        max_block,
+    };
+    Ok(driver.run(flat, params, progress)?)
+}
+
+/// What every step of the driver uses.
+struct Driver<'a> {
+    runner: &'a dyn TaskRunner,
+    dir: &'a Scratch,
+    max_block: usize,
+}
+
+/// The counts a round's tasks hand back, in order.
+fn counts(outputs: Vec<TaskOutput>) -> Vec<u64> {
+    let count = |o| match o {
+        TaskOutput::Count(n) => n,
+        _ => 0,
+    };
+    outputs.into_iter().map(count).collect()
 }
 
 /// A new directory under `scratch`, named by the process and a counter.
@@ -88,113 +111,153 @@ struct State {
     vertices: usize,
 }
 
-fn run(
-    flat: FlatMesh,
-    params: &DecimateParams,
-    max_block: usize,
-    dir: &Scratch,
-    progress: &dyn Progress,
-) -> Result<Decimated, BlockFileError> {
-    let n_vertices = flat.positions().len() as u64;
-    let input_faces = flat.n_faces() as u64;
-    let mut state = first_pieces(flat, params, max_block, dir)?;
-    let start = state.vertices;
-    let stop_at = max_block.max(params.target_vertices);
-    let mut sequences = Vec::new();
-    let (mut use_goal, mut idle, mut pass) = (true, 0, 0u32);
-    while state.vertices > stop_at && state.faces > params.target_faces && idle < FRAMES.len() {
-        let frame = &FRAMES[pass as usize % FRAMES.len()];
+impl Driver<'_> {
+    fn run(
+        &self,
+        flat: FlatMesh,
+        params: &DecimateParams,
+        progress: &dyn Progress,
+    ) -> Result<Decimated, BlockFileError> {
+        let (dir, max_block) = (self.dir, self.max_block);
+        let n_vertices = flat.positions().len() as u64;
+        let input_faces = flat.n_faces() as u64;
+        let mut state = first_pieces(flat, params, max_block, dir)?;
+        let start = state.vertices;
+        let stop_at = max_block.max(params.target_vertices);
+        let mut sequences = Vec::new();
+        let (mut use_goal, mut idle, mut pass) = (true, 0, 0u32);
+        while state.vertices > stop_at && state.faces > params.target_faces && idle < FRAMES.len() {
+            let frame = &FRAMES[pass as usize % FRAMES.len()];
+            let info = PassInfo {
+                pass,
+                n_cells: 0,
+                last: false,
+                n_vertices,
+                input_faces,
+                whole_faces: state.faces as u64,
+                params: *params,
+            };
+            let pass_file = cut_cells(&state, info, |p| split_cells_of(p, max_block, frame), dir)?;
+            let blocks = self.split_and_gather(&pass_file, &mut state)?;
+            let costs: Vec<PathBuf> = (0..blocks.inputs.len())
+                .map(|k| dir.file(format!("p{pass}.costs{k}")))
+                .collect();
+            let round = (blocks.inputs.iter().zip(&costs)).map(|(input, out)| Task::Candidates {
+                pass: pass_file.clone(),
+                input: input.clone(),
+                costs_out: out.clone(),
+            });
+            self.runner.run_round(round.collect())?;
+            let faces_left = state.faces - params.target_faces.min(state.faces);
+            let goal = (faces_left / 2).max(1) as u64;
+            let nth = match use_goal {
+                true => tasks::select_cost(&costs, goal, &|c, prefix, shift| {
+                    self.histograms(c, prefix, shift)
+                })?,
+                false => None,
+            };
+            let cut = nth
+                .map_or(f64::INFINITY, |c| 1.5 * c)
+                .min(params.max_error_sq);
+            remove(&costs);
+            let results: Vec<PathBuf> = (0..blocks.inputs.len())
+                .map(|k| dir.file(format!("p{pass}.result{k}")))
+                .collect();
+            let round = (blocks.inputs.iter().zip(&results)).map(|(input, out)| Task::Collapse {
+                pass: pass_file.clone(),
+                input: input.clone(),
+                cut,
+                result_out: out.clone(),
+            });
+            self.runner.run_round(round.collect())?;
+            remove(&blocks.inputs);
+            remove(&[pass_file]);
+            let sequence = dir.file(format!("p{pass}.sequence"));
+            let assemble = Task::Assemble {
+                results: results.clone(),
+                n_vertices,
+                sequence_out: sequence.clone(),
+            };
+            let made = counts(self.runner.run_round(vec![assemble])?)[0];
+            sequences.push(sequence);
+            state.pieces = [vec![blocks.across], results, blocks.held].concat();
+            count(&mut state)?;
+            pass += 1;
+            // As in `decimate_in_blocks`: a pass that collapses nothing is repeated without the
+            // cut; once that finds nothing either, the other frame gets its turn.
+            if made > 0 {
+                (use_goal, idle) = (true, 0);
+            } else if use_goal && cut < params.max_error_sq {
+                use_goal = false;
+            } else {
+                idle += 1;
+            }
+            progress.update((start - state.vertices) as f64 / start.max(1) as f64);
+        }
         let info = PassInfo {
             pass,
-            n_cells: 0,
-            last: false,
+            n_cells: 1,
+            last: true,
             n_vertices,
             input_faces,
             whole_faces: state.faces as u64,
             params: *params,
         };
-        let pass_file = cut_cells(&state, info, |p| split_cells_of(p, max_block, frame), dir)?;
-        let blocks = split_and_gather(&pass_file, &mut state, dir)?;
-        let costs = round(blocks.inputs.len(), |k| {
-            let out = dir.file(format!("p{pass}.costs{k}"));
-            tasks::candidates(&pass_file, &blocks.inputs[k], &out)?;
-            Ok(out)
-        })?;
-        let faces_left = state.faces - params.target_faces.min(state.faces);
-        let goal = (faces_left / 2).max(1) as u64;
-        let nth = match use_goal {
-            true => tasks::select_cost(&costs, goal, &histograms)?,
-            false => None,
+        let pass_file = cut_cells(
+            &state,
+            info,
+            |p| Cells {
+                cell_of: vec![0; p.len()],
+                n_cells: 1,
+            },
+            dir,
+        )?;
+        let blocks = self.split_and_gather(&pass_file, &mut state)?;
+        let last = dir.file("last.result".into());
+        let finish = Task::Finish {
+            pass: pass_file,
+            input: blocks.inputs[0].clone(),
+            result_out: last.clone(),
         };
-        let cut = nth
-            .map_or(f64::INFINITY, |c| 1.5 * c)
-            .min(params.max_error_sq);
-        remove(&costs);
-        let results = round(blocks.inputs.len(), |k| {
-            let out = dir.file(format!("p{pass}.result{k}"));
-            tasks::collapse(&pass_file, &blocks.inputs[k], cut, &out)?;
-            Ok(out)
-        })?;
-        remove(&blocks.inputs);
-        remove(&[pass_file]);
-        let sequence = dir.file(format!("p{pass}.sequence"));
-        let made = tasks::assemble(&results, n_vertices, &sequence)?;
-        sequences.push(sequence);
-        state.pieces = [vec![blocks.across], results, blocks.held].concat();
-        count(&mut state)?;
-        pass += 1;
-        // As in `decimate_in_blocks`: a pass that collapses nothing is repeated without the
-        // cut; once that finds nothing either, the other frame gets its turn.
-        if made > 0 {
-            (use_goal, idle) = (true, 0);
-        } else if use_goal && cut < params.max_error_sq {
-            use_goal = false;
-        } else {
-            idle += 1;
+        self.runner.run_round(vec![finish])?;
+        let mut collapses: Vec<Collapse> = Vec::new();
+        for s in sequences.iter().chain([&last]) {
+            collapses.extend(contents::read_collapses(s, n_vertices)?);
         }
-        progress.update((start - state.vertices) as f64 / start.max(1) as f64);
+        let (faces, _) = contents::read_piece(&last)?;
+        let stop = contents::read_stop(&last)?;
+        progress.update(1.0);
+        Ok(Decimated {
+            collapses,
+            survivors: vertices_of(&faces),
+            n_base_faces: faces.len(),
+            stop,
+        })
     }
-    let info = PassInfo {
-        pass,
-        n_cells: 1,
-        last: true,
-        n_vertices,
-        input_faces,
-        whole_faces: state.faces as u64,
-        params: *params,
-    };
-    let pass_file = cut_cells(
-        &state,
-        info,
-        |p| Cells {
-            cell_of: vec![0; p.len()],
-            n_cells: 1,
-        },
-        dir,
-    )?;
-    let blocks = split_and_gather(&pass_file, &mut state, dir)?;
-    let last = dir.file("last.result".into());
-    tasks::finish(&pass_file, &blocks.inputs[0], &last)?;
-    let mut collapses: Vec<Collapse> = Vec::new();
-    for s in sequences.iter().chain([&last]) {
-        collapses.extend(contents::read_collapses(s, n_vertices)?);
-    }
-    let (faces, _) = contents::read_piece(&last)?;
-    let stop = contents::read_stop(&last)?;
-    progress.update(1.0);
-    Ok(Decimated {
-        collapses,
-        survivors: vertices_of(&faces),
-        n_base_faces: faces.len(),
-        stop,
-    })
-}
 
-/// One round of [`tasks::cost_histogram`] over `costs`.
-fn histograms(costs: &[PathBuf], prefix: u64, shift: u32) -> Result<Vec<Vec<u64>>, BlockFileError> {
-    round(costs.len(), |k| {
-        tasks::cost_histogram(&costs[k], prefix, shift)
-    })
+    /// One round of [`tasks::cost_histogram`] over `costs`.
+    fn histograms(
+        &self,
+        costs: &[PathBuf],
+        prefix: u64,
+        shift: u32,
+    ) -> Result<Vec<Vec<u64>>, BlockFileError> {
+        let round = costs.iter().map(|c| Task::CostHistogram {
+            costs: c.clone(),
+            prefix,
+            shift,
+        });
+        let bins = |o| match o {
+            TaskOutput::Histogram(b) => b,
+            _ => Vec::new(),
+        };
+        Ok(self
+            .runner
+            .run_round(round.collect())?
+            .into_iter()
+            .map(bins)
+            .collect())
+    }
 }
 
 /// The whole mesh's faces, positions and initial quadrics as pieces: the faces in order, cut
@@ -286,39 +349,60 @@ struct Blocks {
     held: Vec<PathBuf>,
 }
 
-/// Rounds 1 and 2: the state's pieces split into the pass's cells and gathered into block
-/// inputs; the consumed pieces are removed.
-fn split_and_gather(
-    pass_file: &Path,
-    state: &mut State,
-    dir: &Scratch,
-) -> Result<Blocks, BlockFileError> {
-    let info = contents::read_pass_info(pass_file)?;
-    let p = info.pass;
-    let split = round(state.pieces.len(), |i| {
-        let across = dir.file(format!("p{p}.across{i}"));
-        let routed = dir.file(format!("p{p}.routed{i}"));
-        tasks::split(pass_file, &state.pieces[i], &across, &routed)?;
-        Ok((across, routed))
-    })?;
-    remove(&state.pieces);
-    let (across_parts, routed): (Vec<_>, Vec<_>) = split.into_iter().unzip();
-    let across = dir.file(format!("p{p}.across"));
-    tasks::concat(&across_parts, &across)?;
-    remove(&across_parts);
-    let gathered = round(info.n_cells as usize, |k| {
-        let input = dir.file(format!("p{p}.input{k}"));
-        let held = dir.file(format!("p{p}.held{k}"));
-        tasks::gather(&routed, k as u32, &input, &held)?;
-        Ok((input, held))
-    })?;
-    remove(&routed);
-    let (inputs, held) = gathered.into_iter().unzip();
-    Ok(Blocks {
-        inputs,
-        across,
-        held,
-    })
+impl Driver<'_> {
+    /// Rounds 1 and 2: the state's pieces split into the pass's cells and gathered into block
+    /// inputs; the consumed pieces are removed.
+    fn split_and_gather(
+        &self,
+        pass_file: &Path,
+        state: &mut State,
+    ) -> Result<Blocks, BlockFileError> {
+        let dir = self.dir;
+        let info = contents::read_pass_info(pass_file)?;
+        let p = info.pass;
+        let n = state.pieces.len();
+        let across_parts: Vec<PathBuf> = (0..n)
+            .map(|i| dir.file(format!("p{p}.across{i}")))
+            .collect();
+        let routed: Vec<PathBuf> = (0..n)
+            .map(|i| dir.file(format!("p{p}.routed{i}")))
+            .collect();
+        let round = (0..n).map(|i| Task::Split {
+            pass: pass_file.to_path_buf(),
+            piece: state.pieces[i].clone(),
+            across_out: across_parts[i].clone(),
+            routed_out: routed[i].clone(),
+        });
+        self.runner.run_round(round.collect())?;
+        remove(&state.pieces);
+        let across = dir.file(format!("p{p}.across"));
+        let concat = Task::Concat {
+            pieces: across_parts.clone(),
+            out: across.clone(),
+        };
+        self.runner.run_round(vec![concat])?;
+        remove(&across_parts);
+        let cells = info.n_cells;
+        let inputs: Vec<PathBuf> = (0..cells)
+            .map(|k| dir.file(format!("p{p}.input{k}")))
+            .collect();
+        let held: Vec<PathBuf> = (0..cells)
+            .map(|k| dir.file(format!("p{p}.held{k}")))
+            .collect();
+        let round = (0..cells as usize).map(|k| Task::Gather {
+            routed: routed.clone(),
+            cell: k as u32,
+            input_out: inputs[k].clone(),
+            held_out: held[k].clone(),
+        });
+        self.runner.run_round(round.collect())?;
+        remove(&routed);
+        Ok(Blocks {
+            inputs,
+            across,
+            held,
+        })
+    }
 }
 
 fn remove(files: &[PathBuf]) {
