@@ -26,6 +26,13 @@ pub fn fix_checksums(bytes: &[u8]) -> Vec<u8> {
     crate::format::fix_checksums(bytes)
 }
 
+/// Body of the `read_blocks` target: every reader of the task files of a partitioned build run
+/// through files (`formats/blocks.md`) on arbitrary bytes, as given and with their checksums
+/// fixed, returns an error or a value and never panics.
+pub fn fuzz_read_block_file(data: &[u8]) {
+    crate::pm::fuzz_read_block_file(data)
+}
+
 /// Body of the `pm_ops` target: a small mesh, progressive-mesh build options and a sequence of
 /// collapses, splits and level jumps from `data`, with every invariant checked after each step.
 pub fn fuzz_operations(data: &[u8]) {

@@ -5,10 +5,12 @@
 use glam::DVec3;
 use meshpyr::io::read_mesh;
 use meshpyr::mesh::{Mesh, PolygonMesh};
+use meshpyr::pm::blocks::{BlockFileError, SharedRunner, Task, TaskOutput, TaskRunner, run_task};
 use meshpyr::pm::{MeshRecords, PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
 use meshpyr::pyramid::{Filter, Pyramid, PyramidOptions};
 use proptest::prelude::*;
+use std::sync::Arc;
 
 mod common;
 
@@ -105,6 +107,122 @@ fn a_partitioned_hierarchy_does_not_depend_on_the_thread_count() {
             "{threads} threads wrote other bytes"
         );
     }
+}
+
+/// A scratch directory of this test process under the system's temporary directory.
+fn scratch(name: &str) -> std::path::PathBuf {
+    std::env::temp_dir().join(format!("meshpyr-test-{}-{name}", std::process::id()))
+}
+
+fn pyr_bytes(poly: &PolygonMesh, pm: PmOptions) -> Vec<u8> {
+    let options = PyramidOptions {
+        pm,
+        ..PyramidOptions::default()
+    };
+    let p = Pyramid::build_with(poly.clone(), &options, &NoProgress).unwrap();
+    p.to_pyr_bytes().unwrap().0
+}
+
+#[test]
+fn passes_run_through_task_files_write_the_same_pyr_bytes_as_passes_in_memory() {
+    for (name, block, threads) in [
+        ("elephant_holes.ply", 400, 1),
+        ("elephant_holes.ply", 400, 3),
+        ("bunny.ply", 500, 2),
+        ("spider_assimp.ply", 64, 2),
+        ("tripod.ply", 1000, 1),
+    ] {
+        let poly = load(name);
+        let dir = scratch(&format!("files-{block}-{threads}"));
+        let in_memory = common::on_threads(threads, || pyr_bytes(&poly, blocks(block)));
+        let through_files = PmOptions {
+            block_scratch: Some(dir.clone()),
+            ..blocks(block)
+        };
+        let files = common::on_threads(threads, || pyr_bytes(&poly, through_files));
+        assert!(
+            files == in_memory,
+            "{name}, blocks of {block}, {threads} threads"
+        );
+        let left = std::fs::read_dir(&dir).unwrap().count();
+        assert_eq!(left, 0, "{name}: the task files are removed");
+        std::fs::remove_dir(&dir).unwrap();
+    }
+}
+
+/// Runs each round's tasks last first, one at a time, each twice (a retried task), and checks
+/// that the second run wrote the same bytes as the first.
+struct ReversedTwice;
+
+impl TaskRunner for ReversedTwice {
+    fn run_round(&self, tasks: Vec<Task>) -> Result<Vec<TaskOutput>, BlockFileError> {
+        let mut outputs = Vec::with_capacity(tasks.len());
+        for task in tasks.iter().rev() {
+            let first = run_task(task)?;
+            let written = written_files(task);
+            let bytes: Vec<Vec<u8>> = written.iter().map(|f| std::fs::read(f).unwrap()).collect();
+            assert_eq!(run_task(task)?, first, "{task:?}");
+            for (f, b) in written.iter().zip(bytes) {
+                assert!(
+                    std::fs::read(f).unwrap() == b,
+                    "{} changed when run again",
+                    f.display()
+                );
+            }
+            outputs.push(first);
+        }
+        outputs.reverse();
+        Ok(outputs)
+    }
+}
+
+fn written_files(task: &Task) -> Vec<std::path::PathBuf> {
+    match task {
+        Task::Split {
+            across_out,
+            routed_out,
+            ..
+        } => vec![across_out.clone(), routed_out.clone()],
+        Task::Concat { out, .. } => vec![out.clone()],
+        Task::Gather {
+            input_out,
+            held_out,
+            ..
+        } => vec![input_out.clone(), held_out.clone()],
+        Task::Candidates { costs_out, .. } => vec![costs_out.clone()],
+        Task::CostHistogram { .. } => vec![],
+        Task::Collapse { result_out, .. } | Task::Finish { result_out, .. } => {
+            vec![result_out.clone()]
+        }
+        Task::Assemble { sequence_out, .. } => vec![sequence_out.clone()],
+    }
+}
+
+#[test]
+fn any_order_of_a_rounds_tasks_and_retried_tasks_give_the_same_pyr_bytes() {
+    let poly = load("elephant_holes.ply");
+    let in_memory = pyr_bytes(&poly, blocks(300));
+    let options = PmOptions {
+        block_scratch: Some(scratch("reversed")),
+        block_runner: Some(SharedRunner(Arc::new(ReversedTwice))),
+        ..blocks(300)
+    };
+    assert!(pyr_bytes(&poly, options) == in_memory);
+    std::fs::remove_dir(scratch("reversed")).unwrap();
+}
+
+#[test]
+fn a_scratch_directory_that_cannot_be_made_is_an_error_naming_it() {
+    let file = scratch("not-a-directory");
+    std::fs::write(&file, b"x").unwrap();
+    let options = PmOptions {
+        block_scratch: Some(file.join("under")),
+        ..blocks(400)
+    };
+    let poly = load("tripod.ply");
+    let err = ProgressiveMesh::from_polygons(&poly, &options, &NoProgress).unwrap_err();
+    std::fs::remove_file(&file).unwrap();
+    assert!(err.to_string().contains("not-a-directory"), "{err}");
 }
 
 #[test]

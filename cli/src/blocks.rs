@@ -32,6 +32,10 @@ pub(crate) struct PathOptions {
     /// cgroup allow); a scan whose estimate exceeds it is built in blocks.
     #[arg(long, value_name = "SIZE", value_parser = memory::parse_memory_size)]
     pub(crate) memory: Option<u64>,
+    /// When the hierarchy is built in blocks: run every pass through task files in a new
+    /// folder under DIR, removed afterwards (the same hierarchy; formats/blocks.md).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) block_files: Option<std::path::PathBuf>,
 }
 
 impl PathOptions {

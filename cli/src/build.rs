@@ -56,6 +56,7 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
                 .path
                 .choose(&args.input, job, &input, global)?
                 .block_vertices(),
+            block_scratch: args.path.block_files.clone(),
             uv_weight: args.uv_weight,
             ..PmOptions::default()
         },

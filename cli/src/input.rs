@@ -174,6 +174,7 @@ pub(crate) fn load_pyramid_by(
             block_vertices: options
                 .choose(path, Job::Pyramid, &input, global)?
                 .block_vertices(),
+            block_scratch: options.block_files.clone(),
             ..PmOptions::default()
         },
     };

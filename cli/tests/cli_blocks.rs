@@ -90,3 +90,15 @@ fn bad_block_sizes_and_memory_sizes_are_one_line_errors() {
         assert!(err.contains(needle), "{flag} {value}: {err}");
     }
 }
+
+#[test]
+fn blocks_run_through_task_files_write_the_same_pyr_file_and_leave_no_files() {
+    let memory = scratch("blocks-files", "memory.pyr");
+    let files = scratch("blocks-files", "files.pyr");
+    let folder = scratch("blocks-files", "tasks");
+    ok(&on_bunny("build", &memory, &["--block-vertices", "2000"]));
+    let args = ["--block-vertices", "2000", "--block-files", path(&folder)];
+    ok(&on_bunny("build", &files, &args));
+    assert!(std::fs::read(&memory).unwrap() == std::fs::read(&files).unwrap());
+    assert_eq!(std::fs::read_dir(&folder).unwrap().count(), 0);
+}

@@ -9,7 +9,8 @@
 //! - `quadric`: area-weighted plane quadrics.
 //! - `decimate`: the greedy batched decimation loop, on a flat corner table.
 //! - `partition`: the same decimation in spatial blocks with pinned borders, the cells cut
-//!   differently from pass to pass ([`PmOptions::block_vertices`]; `docs/partitioned.md`).
+//!   differently from pass to pass ([`PmOptions::block_vertices`]; `docs/partitioned.md`);
+//!   [`blocks`]: its passes' tasks as functions of files.
 //! - [`ProgressiveMesh`] / [`PmCursor`]: the hierarchy and its cursor.
 //! - [`FlatReplay`]: vertex splits replayed on flat arrays (reading and writing `.pyr` files).
 //! - [`level_corners()`] / [`level_mesh()`]: a level of a hierarchy that keeps texture seams
@@ -28,6 +29,21 @@ mod goal;
 mod legality;
 mod level_corners;
 mod partition;
+pub mod blocks {
+    //! The tasks of a partitioned build run through files (`docs/partitioned.md`, "Running
+    //! the passes through files"; the files: `formats/blocks.md`), one function per task, and
+    //! what runs a round of them. A scheduler that runs [`Task`]s on other processes (with
+    //! [`run_task`] there) and hands their outputs back gives the same hierarchy as this
+    //! process's threads.
+    pub use super::partition::runner::{
+        RayonRunner, SharedRunner, Task, TaskOutput, TaskRunner, run_task,
+    };
+    pub use super::partition::taskfile::BlockFileError;
+    pub use super::partition::tasks::{
+        HISTOGRAM_BITS, HistogramRound, assemble, candidates, collapse, concat, cost_histogram,
+        finish, gather, select_cost, split,
+    };
+}
 pub(crate) mod prefetch;
 mod progressive;
 pub(crate) mod quadric;
@@ -45,6 +61,8 @@ pub use goal::{SimplifyGoal, simplify_to_goal};
 pub use legality::Refusal;
 pub use legality::{Legality, Relaxation};
 pub use level_corners::{LevelFaces, SeamBreak, level_corners, level_mesh};
+pub(crate) use partition::read_any as fuzz_read_block_file;
+pub use partition::taskfile::BlockFileError;
 pub use progressive::SplitReplay;
 pub use progressive::keeps_texture_seams;
 pub use progressive::{MIN_BLOCK_VERTICES, PmCursor, PmOptions, PmParts, ProgressiveMesh};

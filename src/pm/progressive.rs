@@ -46,6 +46,14 @@ pub struct PmOptions {
     /// `None`: the whole mesh in one decimation. Not stored in `.pyr` files (the hierarchy
     /// itself is).
     pub block_vertices: Option<usize>,
+    /// With `block_vertices`: run every pass of the partitioned build through task files in a
+    /// new directory under this one, removed afterwards (`docs/partitioned.md`, "Running the
+    /// passes through files"); the hierarchy is the same bit for bit. Default `None`: the passes
+    /// run in memory.
+    pub block_scratch: Option<std::path::PathBuf>,
+    /// With `block_scratch`: what runs each round's tasks (`None`: this process's threads,
+    /// [`crate::pm::blocks::RayonRunner`]). Any runner gives the same hierarchy.
+    pub block_runner: Option<super::blocks::SharedRunner>,
     /// Weight λ of the boundary constraint planes (each boundary edge adds a plane through it,
     /// perpendicular to its face, scaled by λ·|e|²) while at least 5 % of the input's faces are
     /// left; at the coarse end (1 %) they count 0.3 λ, so that hole rims give up the vertices the
@@ -69,6 +77,8 @@ impl Default for PmOptions {
             min_quality: 0.05,
             max_valence: 32,
             block_vertices: None,
+            block_scratch: None,
+            block_runner: None,
             boundary_weight: 10.0,
             uv_weight: 0.25,
         }
@@ -87,6 +97,10 @@ pub enum PmError {
     /// A broken internal invariant; please report.
     #[error("internal error in the progressive mesh (please report): {0}")]
     Internal(String),
+    /// A task file of a partitioned build run through files
+    /// ([`PmOptions::block_scratch`]) could not be written or read back.
+    #[error("{0}")]
+    BlockFile(#[from] super::BlockFileError),
 }
 
 /// One vertex split: the exact inverse of one half-edge collapse. Split `i` of a
@@ -622,6 +636,15 @@ fn decimate_flat(
     progress: &dyn Progress,
 ) -> Result<Decimated, PmError> {
     if let Some(max) = opts.block_vertices {
+        if let Some(scratch) = &opts.block_scratch {
+            let runner = opts.block_runner.as_ref().map_or(
+                &super::blocks::RayonRunner as &dyn super::blocks::TaskRunner,
+                |r| &*r.0,
+            );
+            return super::partition::decimate_through_files(
+                flat, params, max, scratch, runner, progress,
+            );
+        }
         return super::partition::decimate_in_blocks(flat, params, max, progress);
     }
     let (collapses, coarse, outcome) = decimate_with_seams(flat, params, seams, progress);

@@ -58,6 +58,24 @@ pub(crate) fn split_cells(
     }
 }
 
+/// [`split_cells`] of the points `points`, given in ascending vertex order: the same cells
+/// (ties go to the lower index either way), labelled by position in `points`.
+pub(crate) fn split_cells_of(points: &[DVec3], max_block: usize, frame: &[DVec3; 3]) -> Cells {
+    let max_block = max_block.max(1);
+    let mut depth = 0u32;
+    while points.len().div_ceil(1 << depth) > max_block {
+        depth += 1;
+    }
+    let mut cell_of = vec![u32::MAX; points.len()];
+    let along = |v: u32, axis: usize| points[v as usize].dot(frame[axis]);
+    let mut part: Vec<u32> = (0..points.len() as u32).collect();
+    cut(&along, &mut part, depth, 0, &mut cell_of);
+    Cells {
+        cell_of,
+        n_cells: 1 << depth,
+    }
+}
+
 /// Cuts `part` (the vertices of cells `first .. first + 2^depth`) in two at its median until
 /// `depth` is used up, then labels it. `along(v, axis)` is `v`'s coordinate on a frame axis.
 fn cut(
@@ -135,6 +153,26 @@ mod tests {
         let cells = split_cells(&p, (0..9).rev().collect(), 3, &FRAMES[1]);
         assert_eq!(cells.n_cells, 4);
         assert_eq!(cells.cell_of, vec![0, 0, 1, 1, 2, 2, 3, 3, 3]);
+    }
+
+    #[test]
+    fn cells_of_the_current_points_are_the_cells_of_their_vertices() {
+        let p: Vec<DVec3> = (0..500)
+            .map(|i| {
+                let t = i as f64;
+                DVec3::new((t * 0.37).sin(), (t * 0.11).cos(), (t * 0.05).floor())
+            })
+            .collect();
+        let vertices: Vec<u32> = (0..500).filter(|v| v % 3 != 1).collect();
+        for frame in &FRAMES {
+            let whole = split_cells(&p, vertices.clone(), 40, frame);
+            let points: Vec<DVec3> = vertices.iter().map(|&v| p[v as usize]).collect();
+            let current = split_cells_of(&points, 40, frame);
+            assert_eq!(current.n_cells, whole.n_cells);
+            for (i, &v) in vertices.iter().enumerate() {
+                assert_eq!(current.cell_of[i], whole.cell_of[v as usize]);
+            }
+        }
     }
 
     #[test]

@@ -32,9 +32,14 @@
 
 mod block;
 mod cells;
+mod contents;
 mod lockstep;
 mod order;
+pub mod runner;
 mod split;
+pub mod taskfile;
+pub mod tasks;
+mod through_files;
 
 use super::PmError;
 use super::decimate::{DecimateParams, FlatMesh, initial_quadrics};
@@ -42,9 +47,11 @@ use super::progressive::Decimated;
 use crate::progress::Progress;
 use block::{BlockResult, BlockTask, VertexQuadric, decimate_block};
 use cells::FRAMES;
+pub(crate) use contents::read_any;
 use glam::DVec3;
 use lockstep::Whole;
 use rayon::prelude::*;
+pub(crate) use through_files::decimate_through_files;
 
 /// Decimates `flat` in blocks of at most `max_block` vertices (see the module docs).
 pub(crate) fn decimate_in_blocks(

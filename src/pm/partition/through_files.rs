@@ -1,0 +1,412 @@
+//! The partitioned build with every pass run through task files in a scratch directory
+//! (`docs/partitioned.md`, "Running the passes through files"): the same passes, cells, cut
+//! and collapses as [`super::decimate_in_blocks`], so the same hierarchy bit for bit, but each
+//! round's tasks read and write only files (`tasks.rs`), as the tasks of a distributed engine
+//! would.
+//!
+//! Steps:
+//! 1. the whole mesh's quadrics, written with the faces and positions as the first pieces;
+//! 2. per pass: the cells cut from the current vertices' positions (read from the pieces) and
+//!    written with the pass's parameters; then the rounds of `tasks.rs` — split, gather,
+//!    candidates, the exact cut, collapse, assemble — the next state being the faces across
+//!    cells, the blocks' results and the cells' pinned records;
+//! 3. the last block from the last state, as one cell;
+//! 4. the passes' collapse sequences read back in order.
+//!
+//! The directory is removed at the end, and on error.
+
+use super::cells::{Cells, FRAMES, split_cells_of};
+use super::contents::{self, PassInfo, Record};
+use super::runner::{Task, TaskOutput, TaskRunner};
+use super::taskfile::BlockFileError;
+use super::tasks;
+use super::{VertexQuadric, vertices_of};
+use crate::pm::PmError;
+use crate::pm::decimate::{Collapse, DecimateParams, FlatMesh, initial_quadrics};
+use crate::pm::progressive::Decimated;
+use crate::progress::Progress;
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// A scratch directory, removed when dropped.
+struct Scratch(PathBuf);
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+impl Scratch {
+    fn file(&self, name: String) -> PathBuf {
+        self.0.join(name)
+    }
+}
+
+/// Runs `f` over `0..n` on rayon, results in order, the first error returned.
+fn round<T: Send>(
+    n: usize,
+    f: impl Fn(usize) -> Result<T, BlockFileError> + Sync + Send,
+) -> Result<Vec<T>, BlockFileError> {
+    (0..n).into_par_iter().map(f).collect()
+}
+
+/// Decimates `flat` in blocks of at most `max_block` vertices, every pass through task files in
+/// a new directory under `scratch`, each round's tasks run by `runner`.
+pub(crate) fn decimate_through_files(
+    flat: FlatMesh,
+    params: &DecimateParams,
+    max_block: usize,
+    scratch: &Path,
+    runner: &dyn TaskRunner,
+    progress: &dyn Progress,
+) -> Result<Decimated, PmError> {
+    let dir = unique_dir(scratch)?;
+    let dir = Scratch(dir);
+    let driver = Driver {
+        runner,
+        dir: &dir,
+        max_block,
+    };
+    Ok(driver.run(flat, params, progress)?)
+}
+
+/// What every step of the driver uses.
+struct Driver<'a> {
+    runner: &'a dyn TaskRunner,
+    dir: &'a Scratch,
+    max_block: usize,
+}
+
+/// The counts a round's tasks hand back, in order.
+fn counts(outputs: Vec<TaskOutput>) -> Vec<u64> {
+    let count = |o| match o {
+        TaskOutput::Count(n) => n,
+        _ => 0,
+    };
+    outputs.into_iter().map(count).collect()
+}
+
+/// A new directory under `scratch`, named by the process and a counter.
+fn unique_dir(scratch: &Path) -> Result<PathBuf, PmError> {
+    let failed = |e: std::io::Error| {
+        BlockFileError::new(scratch, 0, format!("cannot make a scratch directory: {e}"))
+    };
+    std::fs::create_dir_all(scratch).map_err(|e| PmError::from(failed(e)))?;
+    for n in 0.. {
+        let dir = scratch.join(format!("meshpyr-blocks-{}-{n}", std::process::id()));
+        match std::fs::create_dir(&dir) {
+            Ok(()) => return Ok(dir),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+            Err(e) => return Err(failed(e).into()),
+        }
+    }
+    unreachable!("a free name among u64 counters")
+}
+
+/// The state of the whole mesh between passes: the pieces, in the order of its face list.
+struct State {
+    pieces: Vec<PathBuf>,
+    faces: usize,
+    vertices: usize,
+}
+
+impl Driver<'_> {
+    fn run(
+        &self,
+        flat: FlatMesh,
+        params: &DecimateParams,
+        progress: &dyn Progress,
+    ) -> Result<Decimated, BlockFileError> {
+        let (dir, max_block) = (self.dir, self.max_block);
+        let n_vertices = flat.positions().len() as u64;
+        let input_faces = flat.n_faces() as u64;
+        let mut state = first_pieces(flat, params, max_block, dir)?;
+        let start = state.vertices;
+        let stop_at = max_block.max(params.target_vertices);
+        let mut sequences = Vec::new();
+        let (mut use_goal, mut idle, mut pass) = (true, 0, 0u32);
+        while state.vertices > stop_at && state.faces > params.target_faces && idle < FRAMES.len() {
+            let frame = &FRAMES[pass as usize % FRAMES.len()];
+            let info = PassInfo {
+                pass,
+                n_cells: 0,
+                last: false,
+                n_vertices,
+                input_faces,
+                whole_faces: state.faces as u64,
+                params: *params,
+            };
+            let pass_file = cut_cells(&state, info, |p| split_cells_of(p, max_block, frame), dir)?;
+            let blocks = self.split_and_gather(&pass_file, &mut state)?;
+            let costs: Vec<PathBuf> = (0..blocks.inputs.len())
+                .map(|k| dir.file(format!("p{pass}.costs{k}")))
+                .collect();
+            let round = (blocks.inputs.iter().zip(&costs)).map(|(input, out)| Task::Candidates {
+                pass: pass_file.clone(),
+                input: input.clone(),
+                costs_out: out.clone(),
+            });
+            self.runner.run_round(round.collect())?;
+            let faces_left = state.faces - params.target_faces.min(state.faces);
+            let goal = (faces_left / 2).max(1) as u64;
+            let nth = match use_goal {
+                true => tasks::select_cost(&costs, goal, &|c, prefix, shift| {
+                    self.histograms(c, prefix, shift)
+                })?,
+                false => None,
+            };
+            let cut = nth
+                .map_or(f64::INFINITY, |c| 1.5 * c)
+                .min(params.max_error_sq);
+            remove(&costs);
+            let results: Vec<PathBuf> = (0..blocks.inputs.len())
+                .map(|k| dir.file(format!("p{pass}.result{k}")))
+                .collect();
+            let round = (blocks.inputs.iter().zip(&results)).map(|(input, out)| Task::Collapse {
+                pass: pass_file.clone(),
+                input: input.clone(),
+                cut,
+                result_out: out.clone(),
+            });
+            self.runner.run_round(round.collect())?;
+            remove(&blocks.inputs);
+            remove(&[pass_file]);
+            let sequence = dir.file(format!("p{pass}.sequence"));
+            let assemble = Task::Assemble {
+                results: results.clone(),
+                n_vertices,
+                sequence_out: sequence.clone(),
+            };
+            let made = counts(self.runner.run_round(vec![assemble])?)[0];
+            sequences.push(sequence);
+            state.pieces = [vec![blocks.across], results, blocks.held].concat();
+            count(&mut state)?;
+            pass += 1;
+            // As in `decimate_in_blocks`: a pass that collapses nothing is repeated without the
+            // cut; once that finds nothing either, the other frame gets its turn.
+            if made > 0 {
+                (use_goal, idle) = (true, 0);
+            } else if use_goal && cut < params.max_error_sq {
+                use_goal = false;
+            } else {
+                idle += 1;
+            }
+            progress.update((start - state.vertices) as f64 / start.max(1) as f64);
+        }
+        let info = PassInfo {
+            pass,
+            n_cells: 1,
+            last: true,
+            n_vertices,
+            input_faces,
+            whole_faces: state.faces as u64,
+            params: *params,
+        };
+        let pass_file = cut_cells(
+            &state,
+            info,
+            |p| Cells {
+                cell_of: vec![0; p.len()],
+                n_cells: 1,
+            },
+            dir,
+        )?;
+        let blocks = self.split_and_gather(&pass_file, &mut state)?;
+        let last = dir.file("last.result".into());
+        let finish = Task::Finish {
+            pass: pass_file,
+            input: blocks.inputs[0].clone(),
+            result_out: last.clone(),
+        };
+        self.runner.run_round(vec![finish])?;
+        let mut collapses: Vec<Collapse> = Vec::new();
+        for s in sequences.iter().chain([&last]) {
+            collapses.extend(contents::read_collapses(s, n_vertices)?);
+        }
+        let (faces, _) = contents::read_piece(&last)?;
+        let stop = contents::read_stop(&last)?;
+        progress.update(1.0);
+        Ok(Decimated {
+            collapses,
+            survivors: vertices_of(&faces),
+            n_base_faces: faces.len(),
+            stop,
+        })
+    }
+
+    /// One round of [`tasks::cost_histogram`] over `costs`.
+    fn histograms(
+        &self,
+        costs: &[PathBuf],
+        prefix: u64,
+        shift: u32,
+    ) -> Result<Vec<Vec<u64>>, BlockFileError> {
+        let round = costs.iter().map(|c| Task::CostHistogram {
+            costs: c.clone(),
+            prefix,
+            shift,
+        });
+        let bins = |o| match o {
+            TaskOutput::Histogram(b) => b,
+            _ => Vec::new(),
+        };
+        Ok(self
+            .runner
+            .run_round(round.collect())?
+            .into_iter()
+            .map(bins)
+            .collect())
+    }
+}
+
+/// The whole mesh's faces, positions and initial quadrics as pieces: the faces in order, cut
+/// into runs of about a block's faces, the records of the vertices with faces in runs of a
+/// block's vertices.
+fn first_pieces(
+    flat: FlatMesh,
+    params: &DecimateParams,
+    max_block: usize,
+    dir: &Scratch,
+) -> Result<State, BlockFileError> {
+    let quadric = initial_quadrics(&flat, params.boundary_weight);
+    let positions = flat.positions();
+    let faces = flat.triangles();
+    let vertices = flat.survivors();
+    drop(flat);
+    let records: Vec<Record> = vertices
+        .iter()
+        .map(|&v| Record {
+            vertex: v,
+            position: positions[v as usize],
+            quadric: VertexQuadric {
+                planes: quadric.faces[v as usize],
+                rim: quadric.rim(v).copied(),
+            },
+        })
+        .collect();
+    drop(quadric);
+    let face_runs: Vec<_> = faces.chunks(2 * max_block.max(1)).collect();
+    let record_runs: Vec<_> = records.chunks(max_block.max(1)).collect();
+    let n = face_runs.len().max(record_runs.len());
+    let pieces = round(n, |i| {
+        let out = dir.file(format!("first.piece{i}"));
+        let f = face_runs.get(i).copied().unwrap_or_default();
+        let r = record_runs.get(i).copied().unwrap_or_default();
+        contents::write_piece(&out, f, r)?;
+        Ok(out)
+    })?;
+    Ok(State {
+        pieces,
+        faces: faces.len(),
+        vertices: vertices.len(),
+    })
+}
+
+/// The state's face and vertex counts from its pieces' section tables.
+fn count(state: &mut State) -> Result<(), BlockFileError> {
+    let counts = round(state.pieces.len(), |i| {
+        contents::piece_counts(&state.pieces[i])
+    })?;
+    state.faces = counts.iter().map(|c| c.0 as usize).sum();
+    state.vertices = counts.iter().map(|c| c.1 as usize).sum();
+    Ok(())
+}
+
+/// The pass's cells from the current vertices' positions (`cells_of` labels positions given
+/// in ascending vertex order), written with `info` to the pass's file.
+fn cut_cells(
+    state: &State,
+    mut info: PassInfo,
+    cells_of: impl Fn(&[glam::DVec3]) -> Cells,
+    dir: &Scratch,
+) -> Result<PathBuf, BlockFileError> {
+    let parts = round(state.pieces.len(), |i| {
+        contents::read_positions(&state.pieces[i])
+    })?;
+    let mut points: Vec<(u32, glam::DVec3)> = parts.into_iter().flatten().collect();
+    points.sort_unstable_by_key(|p| p.0);
+    let positions: Vec<glam::DVec3> = points.iter().map(|p| p.1).collect();
+    let cells = cells_of(&positions);
+    drop(positions);
+    info.n_cells = cells.n_cells as u32;
+    let mut labels = vec![u32::MAX; info.n_vertices as usize];
+    for ((v, _), c) in points.iter().zip(cells.cell_of) {
+        let slot = labels.get_mut(*v as usize);
+        let slot =
+            slot.ok_or_else(|| BlockFileError::new(&dir.0, 0, format!("vertex {v} out of range")))?;
+        *slot = c;
+    }
+    let out = dir.file(format!("p{}.pass", info.pass));
+    contents::write_pass(&out, &info, &labels)?;
+    Ok(out)
+}
+
+/// The blocks of a pass, as files.
+struct Blocks {
+    inputs: Vec<PathBuf>,
+    across: PathBuf,
+    held: Vec<PathBuf>,
+}
+
+impl Driver<'_> {
+    /// Rounds 1 and 2: the state's pieces split into the pass's cells and gathered into block
+    /// inputs; the consumed pieces are removed.
+    fn split_and_gather(
+        &self,
+        pass_file: &Path,
+        state: &mut State,
+    ) -> Result<Blocks, BlockFileError> {
+        let dir = self.dir;
+        let info = contents::read_pass_info(pass_file)?;
+        let p = info.pass;
+        let n = state.pieces.len();
+        let across_parts: Vec<PathBuf> = (0..n)
+            .map(|i| dir.file(format!("p{p}.across{i}")))
+            .collect();
+        let routed: Vec<PathBuf> = (0..n)
+            .map(|i| dir.file(format!("p{p}.routed{i}")))
+            .collect();
+        let round = (0..n).map(|i| Task::Split {
+            pass: pass_file.to_path_buf(),
+            piece: state.pieces[i].clone(),
+            across_out: across_parts[i].clone(),
+            routed_out: routed[i].clone(),
+        });
+        self.runner.run_round(round.collect())?;
+        remove(&state.pieces);
+        let across = dir.file(format!("p{p}.across"));
+        let concat = Task::Concat {
+            pieces: across_parts.clone(),
+            out: across.clone(),
+        };
+        self.runner.run_round(vec![concat])?;
+        remove(&across_parts);
+        let cells = info.n_cells;
+        let inputs: Vec<PathBuf> = (0..cells)
+            .map(|k| dir.file(format!("p{p}.input{k}")))
+            .collect();
+        let held: Vec<PathBuf> = (0..cells)
+            .map(|k| dir.file(format!("p{p}.held{k}")))
+            .collect();
+        let round = (0..cells as usize).map(|k| Task::Gather {
+            routed: routed.clone(),
+            cell: k as u32,
+            input_out: inputs[k].clone(),
+            held_out: held[k].clone(),
+        });
+        self.runner.run_round(round.collect())?;
+        remove(&routed);
+        Ok(Blocks {
+            inputs,
+            across,
+            held,
+        })
+    }
+}
+
+fn remove(files: &[PathBuf]) {
+    for f in files {
+        let _ = std::fs::remove_file(f);
+    }
+}
