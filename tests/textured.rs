@@ -541,10 +541,8 @@ fn with_grid_charts(mut mesh: PolygonMesh, cells: usize) -> PolygonMesh {
     let corner_position = |c: usize| mesh.positions[mesh.face_indices[c] as usize];
     let cell_of = |f: usize| {
         let centroid = corners(f).map(corner_position).sum::<DVec3>() / corners(f).len() as f64;
-        let k = ((centroid - lo) / size)
-            .as_uvec3()
-            .min(glam::UVec3::splat(cells as u32 - 1));
-        [k.x as usize, k.y as usize, k.z as usize]
+        let k = ((centroid - lo) / size).to_array();
+        k.map(|x| (x as usize).min(cells - 1))
     };
     let mut normal: HashMap<[usize; 3], DVec3> = HashMap::new();
     for f in 0..mesh.n_faces() {
@@ -569,7 +567,7 @@ fn with_grid_charts(mut mesh: PolygonMesh, cells: usize) -> PolygonMesh {
         let (tx, ty) = ((tile % side) as f64, (tile / side) as f64);
         for c in corners(f) {
             let local = (corner_position(c) - corner) / size;
-            let fit = |x: f64| (x.clamp(-0.5, 1.5) * 0.5 + 0.25);
+            let fit = |x: f64| x.clamp(-0.5, 1.5) * 0.5 + 0.25;
             let u = (tx + fit(local[a])) / side as f64;
             let v = (ty + fit(local[b])) / side as f64;
             rows.push([u as f32, v as f32]);
