@@ -16,6 +16,8 @@
 //! legal collapse is repeated without the cost cut, then with the shape rules relaxed step by
 //! step ([`Schedule`]; `docs/pm-legality.md`); the build ends when even that finds none, so "no
 //! legal collapse left" really means none, and [`Stop`] says which rules refused what is left.
+//! A decimation that keeps texture seams relaxes nothing: its floor is the seam floor, where
+//! the relaxed rules would fold faces across the charts (`docs/seams.md`).
 //!
 //! **Why a corner table.** The collapses visit the mesh in cost order, i.e. at random, so the
 //! time goes into cache misses on the records a legality test walks. The decimator therefore
@@ -738,8 +740,9 @@ pub enum Stop {
     Target,
     /// Every collapse left would exceed the error bound.
     ErrorBound,
-    /// No legal collapse is left, even with every shape rule relaxed: for each rule, how many
-    /// of the remaining edges it refused (in their cheaper direction), most first.
+    /// No legal collapse is left, even with every shape rule relaxed (a seam-keeping
+    /// decimation relaxes none): for each rule, how many of the remaining edges it refused (in
+    /// their cheaper direction), most first.
     NoLegalCollapse(Vec<(Refusal, usize)>),
 }
 
@@ -786,13 +789,17 @@ pub(crate) struct Outcome {
 pub(crate) struct Schedule {
     pub use_goal: bool,
     pub relaxation: Relaxation,
+    /// The furthest relaxation step this decimation may take.
+    pub last: Relaxation,
 }
 
 impl Schedule {
-    pub(super) fn new() -> Schedule {
+    /// A schedule whose relaxation stops at step `last`.
+    pub(super) fn up_to(last: Relaxation) -> Schedule {
         Schedule {
             use_goal: true,
             relaxation: Relaxation::None,
+            last,
         }
     }
 
@@ -819,14 +826,14 @@ impl Schedule {
         params: &DecimateParams,
     ) -> bool {
         if collapsed {
-            *self = Schedule::new();
+            *self = Schedule::up_to(self.last);
             return false;
         }
         if self.use_goal && error_cut.is_finite() && error_cut < params.max_error_sq {
             self.use_goal = false;
             return false;
         }
-        match self.relaxation.next() {
+        match self.relaxation.next().filter(|&r| r <= self.last) {
             Some(r) => {
                 self.relaxation = r;
                 self.use_goal = false;
@@ -912,7 +919,14 @@ pub(crate) fn decimate_from(
     let mut relaxed = [0usize; 3];
     let start_faces = run.input_faces.max(mesh.n_faces);
     let work = start_faces.saturating_sub(params.target_faces).max(1);
-    let mut schedule = Schedule::new();
+    // Keeping seams, the floor is the seam floor: there the relaxed rules would only fold
+    // faces across the charts around it (docs/seams.md), so a seam-keeping decimation ends
+    // where the full rules find nothing left.
+    let mut schedule = Schedule::up_to(if state.seams.is_some() {
+        Relaxation::None
+    } else {
+        Relaxation::Normals
+    });
     let mut stop = Stop::Target;
     let mut live = live_triangles(&mesh);
     while !is_done(&mesh, params) {
@@ -932,7 +946,12 @@ pub(crate) fn decimate_from(
             } else if !run.relax {
                 Stop::NoLegalCollapse(Vec::new())
             } else {
-                Stop::NoLegalCollapse(mesh.refusals(&state.quadric, state.seams.as_deref(), params))
+                Stop::NoLegalCollapse(mesh.refusals(
+                    &state.quadric,
+                    state.seams.as_deref(),
+                    params,
+                    schedule.last,
+                ))
             };
             break;
         }
@@ -956,6 +975,7 @@ pub(crate) fn decimate_from(
                 &state.quadric,
                 state.seams.as_deref(),
                 params,
+                schedule.last,
             ));
             break;
         }
@@ -1177,16 +1197,17 @@ fn collect_candidates(
 }
 
 impl FlatMesh {
-    /// For each rule, how many live edges within the error bound it refuses under the most
-    /// relaxed rules (each edge counted once, in its cheaper allowed direction; an interior
+    /// For each rule, how many live edges within the error bound it refuses under the rules
+    /// relaxed up to step `last` (each edge counted once, in its cheaper allowed direction; an interior
     /// edge between two boundary vertices has none and counts as `Boundary`), most first.
     fn refusals(
         &self,
         quadric: &Quadrics,
         seams: Option<&Seams>,
         params: &DecimateParams,
+        last: Relaxation,
     ) -> Vec<(Refusal, usize)> {
-        let legality = params.legality.relaxed(Relaxation::Normals);
+        let legality = params.legality.relaxed(last);
         let mut counts = std::collections::BTreeMap::<Refusal, usize>::new();
         for c in 0..self.n_corners() {
             let t = self.corners[c as usize].twin;

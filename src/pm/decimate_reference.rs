@@ -6,6 +6,7 @@ use super::collapse::{
     Marks, half_edge_collapse, is_collapse_geometrically_legal, is_collapse_topologically_legal,
 };
 use super::decimate::{Collapse, DecimateParams, Pass, Schedule};
+use super::legality::Relaxation;
 use super::quadric::{POINT_REGULARISATION, Quadric, Quadrics};
 use crate::mesh::{BoundingBox, HalfedgeId, Mesh, SlotIndex};
 use crate::progress::Progress;
@@ -132,7 +133,7 @@ pub(crate) fn decimate(
     let done = |m: &Mesh| {
         m.n_faces() <= params.target_faces || m.n_vertices() - isolated <= params.target_vertices
     };
-    let mut schedule = Schedule::new();
+    let mut schedule = Schedule::up_to(Relaxation::Normals);
     while !done(&mesh) {
         drop_dead_edges(&mesh, &hid, &mut edges);
         state.quadric.rim_scale = super::decimate::rim_scale_at_level(mesh.n_faces(), start_faces);
