@@ -1031,15 +1031,10 @@ fn cut_at_goal(
     schedule: &Schedule,
     params: &DecimateParams,
 ) -> f64 {
-    let faces_left = n_faces - params.target_faces.min(n_faces);
-    let goal = (faces_left / 2).max(1);
-    let error_cut = if schedule.use_goal && goal < cands.len() {
-        let (_, nth, _) = cands.select_nth_unstable_by(goal, by_cost);
-        1.5 * nth.cost
-    } else {
-        f64::INFINITY
-    }
-    .min(params.max_error_sq);
+    let goal = passes::pass_goal(n_faces, params.target_faces);
+    let nth = (schedule.use_goal && goal < cands.len())
+        .then(|| cands.select_nth_unstable_by(goal, by_cost).1.cost);
+    let error_cut = passes::cut_at(nth, params.max_error_sq);
     if error_cut < f64::INFINITY {
         cands.retain(|c| c.cost <= error_cut);
     }

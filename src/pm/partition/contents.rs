@@ -703,7 +703,7 @@ pub(crate) fn read_any(bytes: &[u8]) {
     let thread = format!("{:?}", std::thread::current().id());
     let path = dir.join(thread.replace(|c: char| !c.is_ascii_alphanumeric(), ""));
     for bytes in [bytes.to_vec(), super::taskfile::fix_checksums(bytes)] {
-        if let Ok(mut f) = TaskFile::from_bytes(&path, bytes.clone(), &ALL_KINDS) {
+        if let Ok(mut f) = TaskFile::from_bytes(&path, bytes.clone(), &Kind::ALL) {
             for e in f.entries.clone().iter().take(64) {
                 let _ = f.section(e.tag, e.cell);
             }
@@ -729,13 +729,3 @@ pub(crate) fn read_any(bytes: &[u8]) {
     }
     let _ = std::fs::remove_file(&path);
 }
-
-const ALL_KINDS: [Kind; 7] = [
-    Kind::Piece,
-    Kind::Routed,
-    Kind::Input,
-    Kind::Costs,
-    Kind::Result,
-    Kind::Pass,
-    Kind::Sequence,
-];

@@ -11,7 +11,7 @@
 //! inside each block, the collapses the pass over the whole mesh makes there; only the edges
 //! at pinned vertices wait, for the next pass, whose cells are cut differently.
 
-use super::super::decimate::passes::{Stepper, pass_cut};
+use super::super::decimate::passes::{Stepper, pass_cut, pass_goal};
 use super::super::decimate::{DecimateParams, rim_scale_at_level};
 use super::block::{BlockResult, BlockTask, working_mesh};
 use rayon::prelude::*;
@@ -48,8 +48,8 @@ pub(crate) fn pass_in_step(
         })
         .collect();
     let mut costs: Vec<f64> = blocks.iter().flat_map(|b| b.1.costs()).collect();
-    let faces_left = whole.faces - params.target_faces.min(whole.faces);
-    let cut = pass_cut(&mut costs, faces_left, whole.use_goal, params.max_error_sq);
+    let goal = pass_goal(whole.faces, params.target_faces);
+    let cut = pass_cut(&mut costs, goal, whole.use_goal, params.max_error_sq);
     drop(costs);
     let legality = params.legality.at_level(whole.faces, whole.input_faces);
     let results = blocks

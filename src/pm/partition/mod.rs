@@ -42,6 +42,7 @@ pub mod tasks;
 mod through_files;
 
 use super::PmError;
+use super::decimate::passes::Turns;
 use super::decimate::{DecimateParams, FlatMesh, initial_quadrics};
 use super::progressive::Decimated;
 use crate::progress::Progress;
@@ -80,10 +81,10 @@ pub(crate) fn decimate_in_blocks(
     let start = vertices.len();
     let stop_at = max_block.max(params.target_vertices);
     let mut collapses = Vec::new();
-    let mut use_goal = true;
-    let mut idle = 0;
+    let mut turns = Turns::START;
     let mut pass = 0;
-    while vertices.len() > stop_at && faces.len() > params.target_faces && idle < FRAMES.len() {
+    while vertices.len() > stop_at && faces.len() > params.target_faces && turns.idle < FRAMES.len()
+    {
         let frame = &FRAMES[pass % FRAMES.len()];
         pass += 1;
         let cells = cells::split_cells(&positions, vertices, max_block, frame);
@@ -96,22 +97,14 @@ pub(crate) fn decimate_in_blocks(
         let whole = Whole {
             input_faces: input.input_faces,
             faces: faces.len(),
-            use_goal,
+            use_goal: turns.use_goal,
         };
         let (results, cut) = lockstep::pass_in_step(tasks, &whole, params);
         faces = split.across;
         let made = gather(results, &mut quadrics, &mut faces, &mut collapses);
         vertices = vertices_of(&faces);
-        // A pass that collapses nothing is repeated without the cut, as in one process; once
-        // that finds nothing either, the other frames' cells get their turn before the mesh
-        // goes to the last block as it is.
-        if made > 0 {
-            (use_goal, idle) = (true, 0);
-        } else if use_goal && cut < params.max_error_sq {
-            use_goal = false;
-        } else {
-            idle += 1;
-        }
+        // When no frame's cells find anything, the mesh goes to the last block as it is.
+        turns.after(made > 0, cut, params.max_error_sq);
         progress.update((start - vertices.len()) as f64 / start.max(1) as f64);
     }
     let last = input.task(faces, &quadrics, |_| false, true);

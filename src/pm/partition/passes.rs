@@ -89,21 +89,52 @@ impl Stepper {
     }
 }
 
+/// How many collapses a pass over a mesh of `faces` aims at: each removes about two faces, so
+/// half of the faces left above `target_faces` (at least one).
+pub(crate) fn pass_goal(faces: usize, target_faces: usize) -> usize {
+    ((faces - target_faces.min(faces)) / 2).max(1)
+}
+
+/// A pass's cost cut from `nth`, the cost of the candidate that would meet its goal (`None`:
+/// no cut, there are fewer candidates or the pass goes without one): 1.5× that cost, since
+/// many candidates get locked, and never above `max_error_sq`.
+pub(crate) fn cut_at(nth: Option<f64>, max_error_sq: f64) -> f64 {
+    nth.map_or(f64::INFINITY, |c| 1.5 * c).min(max_error_sq)
+}
+
 /// The cut of a pass over all blocks, as the one-process decimator makes it from all
-/// candidates: 1.5× the cost of the candidate that would meet the pass's share of the target
-/// (`faces_left / 2` collapses), none when `use_goal` is off, never above `max_error_sq`.
-pub(crate) fn pass_cut(
-    costs: &mut [f64],
-    faces_left: usize,
-    use_goal: bool,
-    max_error_sq: f64,
-) -> f64 {
-    let goal = (faces_left / 2).max(1);
-    let cut = if use_goal && goal < costs.len() {
-        let (_, nth, _) = costs.select_nth_unstable_by(goal, f64::total_cmp);
-        1.5 * *nth
-    } else {
-        f64::INFINITY
+/// candidates ([`pass_goal`], [`cut_at`]), none when `use_goal` is off.
+pub(crate) fn pass_cut(costs: &mut [f64], goal: usize, use_goal: bool, max_error_sq: f64) -> f64 {
+    let nth = (use_goal && goal < costs.len())
+        .then(|| *costs.select_nth_unstable_by(goal, f64::total_cmp).1);
+    cut_at(nth, max_error_sq)
+}
+
+/// Whether the next partitioned pass takes a cost cut, and how many passes in a row found
+/// nothing (after as many as there are frames, every frame's cells have had their turn).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Turns {
+    pub use_goal: bool,
+    pub idle: usize,
+}
+
+impl Turns {
+    /// Before the first pass: with the cut, nothing idle.
+    pub(crate) const START: Turns = Turns {
+        use_goal: true,
+        idle: 0,
     };
-    cut.min(max_error_sq)
+
+    /// After a pass under `cut` that `collapsed` something or not: a pass that collapses
+    /// nothing is repeated without the cut, as in one process; once that finds nothing either,
+    /// the next frame's cells get their turn.
+    pub(crate) fn after(&mut self, collapsed: bool, cut: f64, max_error_sq: f64) {
+        if collapsed {
+            *self = Turns::START;
+        } else if self.use_goal && cut < max_error_sq {
+            self.use_goal = false;
+        } else {
+            self.idle += 1;
+        }
+    }
 }

@@ -51,18 +51,19 @@ pub(crate) enum Kind {
 }
 
 impl Kind {
+    /// Every kind of task file.
+    pub(crate) const ALL: [Kind; 7] = [
+        Kind::Piece,
+        Kind::Routed,
+        Kind::Input,
+        Kind::Costs,
+        Kind::Result,
+        Kind::Pass,
+        Kind::Sequence,
+    ];
+
     fn from_code(code: u16) -> Option<Kind> {
-        [
-            Kind::Piece,
-            Kind::Routed,
-            Kind::Input,
-            Kind::Costs,
-            Kind::Result,
-            Kind::Pass,
-            Kind::Sequence,
-        ]
-        .into_iter()
-        .find(|k| *k as u16 == code)
+        Kind::ALL.into_iter().find(|k| *k as u16 == code)
     }
 }
 

@@ -22,6 +22,7 @@ use super::taskfile::BlockFileError;
 use super::tasks;
 use super::{VertexQuadric, vertices_of};
 use crate::pm::PmError;
+use crate::pm::decimate::passes::{Turns, cut_at, pass_goal};
 use crate::pm::decimate::{Collapse, DecimateParams, FlatMesh, initial_quadrics};
 use crate::pm::progressive::Decimated;
 use crate::progress::Progress;
@@ -125,8 +126,11 @@ impl Driver<'_> {
         let start = state.vertices;
         let stop_at = max_block.max(params.target_vertices);
         let mut sequences = Vec::new();
-        let (mut use_goal, mut idle, mut pass) = (true, 0, 0u32);
-        while state.vertices > stop_at && state.faces > params.target_faces && idle < FRAMES.len() {
+        let (mut turns, mut pass) = (Turns::START, 0u32);
+        while state.vertices > stop_at
+            && state.faces > params.target_faces
+            && turns.idle < FRAMES.len()
+        {
             let frame = &FRAMES[pass as usize % FRAMES.len()];
             let info = PassInfo {
                 pass,
@@ -148,17 +152,14 @@ impl Driver<'_> {
                 costs_out: out.clone(),
             });
             self.runner.run_round(round.collect())?;
-            let faces_left = state.faces - params.target_faces.min(state.faces);
-            let goal = (faces_left / 2).max(1) as u64;
-            let nth = match use_goal {
+            let goal = pass_goal(state.faces, params.target_faces) as u64;
+            let nth = match turns.use_goal {
                 true => tasks::select_cost(&costs, goal, &|c, prefix, shift| {
                     self.histograms(c, prefix, shift)
                 })?,
                 false => None,
             };
-            let cut = nth
-                .map_or(f64::INFINITY, |c| 1.5 * c)
-                .min(params.max_error_sq);
+            let cut = cut_at(nth, params.max_error_sq);
             remove(&costs);
             let results: Vec<PathBuf> = (0..blocks.inputs.len())
                 .map(|k| dir.file(format!("p{pass}.result{k}")))
@@ -183,15 +184,7 @@ impl Driver<'_> {
             state.pieces = [vec![blocks.across], results, blocks.held].concat();
             count(&mut state)?;
             pass += 1;
-            // As in `decimate_in_blocks`: a pass that collapses nothing is repeated without the
-            // cut; once that finds nothing either, the other frame gets its turn.
-            if made > 0 {
-                (use_goal, idle) = (true, 0);
-            } else if use_goal && cut < params.max_error_sq {
-                use_goal = false;
-            } else {
-                idle += 1;
-            }
+            turns.after(made > 0, cut, params.max_error_sq);
             progress.update((start - state.vertices) as f64 / start.max(1) as f64);
         }
         let info = PassInfo {
