@@ -114,9 +114,10 @@ fn converting_to_off_says_what_is_not_carried_and_simplifying_carries_it() {
     );
 }
 
-#[test]
-fn extract_of_a_coarse_level_writes_its_texture_coordinates_materials_and_groups() {
-    let pyr = scratch_arg("cli_textured_levels", "scan.pyr");
+/// The `.pyr` of the textured OBJ built in `dir` with `--uv-weight 0.5` (not the default, so
+/// that the file shows it records the weight), as a path argument.
+fn built_with_uv_weight_half(dir: &str) -> String {
+    let pyr = scratch_arg(dir, "scan.pyr");
     ok(&meshpyr(&[
         "build",
         &data(OBJ),
@@ -125,6 +126,12 @@ fn extract_of_a_coarse_level_writes_its_texture_coordinates_materials_and_groups
         "--uv-weight",
         "0.5",
     ]));
+    pyr
+}
+
+#[test]
+fn extract_of_a_coarse_level_writes_its_texture_coordinates_materials_and_groups() {
+    let pyr = built_with_uv_weight_half("cli_textured_levels");
     let out = scratch_arg("cli_textured_levels", "level.obj");
     let info = meshpyr::format::decode(&std::fs::read(&pyr).unwrap()).unwrap();
     assert_eq!(info.info.pm.uv_weight, 0.5, "the file records the weight");
@@ -161,15 +168,7 @@ fn extract_of_a_coarse_level_writes_its_texture_coordinates_materials_and_groups
 
 #[test]
 fn build_then_extract_gives_back_the_textured_obj() {
-    let pyr = scratch_arg("cli_textured_pyr", "scan.pyr");
-    ok(&meshpyr(&[
-        "build",
-        &data(OBJ),
-        "-o",
-        &pyr,
-        "--uv-weight",
-        "0.5",
-    ]));
+    let pyr = built_with_uv_weight_half("cli_textured_pyr");
     let back = scratch_arg("cli_textured_pyr", "back.obj");
     ok(&meshpyr(&["extract", &pyr, "-o", &back]));
     let direct = scratch_arg("cli_textured_pyr", "direct.obj");
