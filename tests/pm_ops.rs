@@ -68,7 +68,8 @@ fn append(
             let id = |x: usize, y: usize| base + (y * (nx + 1) + x) as u32;
             for y in 0..*ny {
                 for x in 0..*nx {
-                    if holes[(y * nx + x) % holes.len()] && nx * ny > 1 {
+                    // The first cell is never a hole, so that every grid is a surface.
+                    if holes[(y * nx + x) % holes.len()] && (x, y) != (0, 0) {
                         continue;
                     }
                     tris.push([id(x, y), id(x + 1, y), id(x + 1, y + 1)]);
