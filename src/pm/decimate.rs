@@ -484,19 +484,31 @@ impl FlatMesh {
             return None;
         };
         let (ch, co) = self.edge_costs(quadric, seams, h, o);
-        let (cost, h, alt_cost) = match (ch, co) {
-            (Some(a), Some(b)) if b < a => (b, o, a),
-            (Some(a), Some(b)) => (a, h, b),
-            (Some(a), None) => (a, h, f64::INFINITY),
-            (None, Some(b)) => (b, o, f64::INFINITY),
+        let (cost, h) = match (ch, co) {
+            (Some(a), Some(b)) if b < a => (b, o),
+            (Some(a), _) => (a, h),
+            (None, Some(b)) => (b, o),
             (None, None) => return None,
         };
         (cost <= max_error_sq).then(|| Candidate {
             cost,
-            alt_cost,
             key: self.slot_of(h),
             h,
         })
+    }
+
+    /// The cost of collapsing `h` in its own direction, `None` if that is never allowed:
+    /// [`Self::edge_costs`] taken from the half-edge with the smaller slot, as
+    /// [`Self::candidate`] takes it, so the value is the one the candidate's collection saw as
+    /// long as neither end has collapsed since.
+    #[inline]
+    fn direction_cost(&self, quadric: &Quadrics, seams: Option<&Seams>, h: u32) -> Option<f64> {
+        let o = self.twin(h);
+        if self.slot_of(h) < self.slot_of(o) {
+            self.edge_costs(quadric, seams, h, o).0
+        } else {
+            self.edge_costs(quadric, seams, o, h).1
+        }
     }
 
     /// The topological rules of [`super::is_collapse_topologically_legal`] on the corner
@@ -677,11 +689,12 @@ impl FlatMesh {
 }
 
 /// A candidate collapse: the cheaper allowed direction of an edge (half-edge id `h`, its slot
-/// `key` for ties), and the other direction's cost (`f64::INFINITY` if not allowed).
+/// `key` for ties). The other direction's cost is recomputed on the rare turns that need it
+/// ([`FlatMesh::direction_cost`]): the list holds every live edge, the decimation's largest
+/// array, and 16 bytes a record instead of 24 keep it a third smaller.
 #[derive(Clone, Copy)]
 struct Candidate {
     cost: f64,
-    alt_cost: f64,
     key: u32,
     h: u32,
 }
@@ -1097,11 +1110,12 @@ fn perform_collapses(
             within_cut(mesh.legal(h0, &pass.legality, seams.as_deref()), c.cost)
         {
             (h0, c.cost, val)
-        } else if c.alt_cost <= pass.error_cut
+        } else if let Some(alt_cost) = mesh.direction_cost(quadric, seams.as_deref(), o0)
+            && alt_cost <= pass.error_cut
             && let Some(val) =
-                within_cut(mesh.legal(o0, &pass.legality, seams.as_deref()), c.alt_cost)
+                within_cut(mesh.legal(o0, &pass.legality, seams.as_deref()), alt_cost)
         {
-            (o0, c.alt_cost, val)
+            (o0, alt_cost, val)
         } else {
             continue;
         };
