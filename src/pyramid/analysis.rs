@@ -635,6 +635,12 @@ struct Records {
 /// The range record holding split `k` (ranges are contiguous and in split order), and the
 /// split's position in it.
 fn record_of(records: &[Records], k: usize) -> (&Records, usize) {
+    let (r, i) = record_index(records, k);
+    (&records[r], i)
+}
+
+/// [`record_of`] as the index of the range record.
+fn record_index(records: &[Records], k: usize) -> (usize, usize) {
     let r = records.partition_point(|r| r.range.end <= k);
     let rec = &records[r];
     let i = if rec.reversed {
@@ -642,7 +648,7 @@ fn record_of(records: &[Records], k: usize) -> (&Records, usize) {
     } else {
         k - rec.range.start
     };
-    (rec, i)
+    (r, i)
 }
 
 /// Splits whose recorded locals [`Waves::schedule`] reads before their pages are handed back.
@@ -707,7 +713,7 @@ impl Slotted {
             &offsets,
             placement,
             |r| &r.locals,
-            |r| r.locals.release_all(),
+            |r, x| r.locals.release(x),
             |o| o.locals,
         )?;
         for r in &mut ranges {
@@ -719,7 +725,7 @@ impl Slotted {
             &offsets,
             placement,
             |r| &r.weights,
-            |r| r.weights.release_all(),
+            |r, x| r.weights.release(x),
             |o| o.weights,
         )?;
         for r in &mut ranges {
@@ -835,7 +841,7 @@ fn slotted_codes<T: CodeWidth + Send + Sync>(
         offsets,
         placement,
         |r| T::of(&r.codes),
-        |r| with_codes!(&r.codes, c => c.release_all()),
+        |r, x| r.codes.release(x),
         |o| o.codes,
     )?;
     Ok(T::wrap(stream))
@@ -845,87 +851,72 @@ fn slotted_codes<T: CodeWidth + Send + Sync>(
 /// (small in unit tests, so that their meshes take several batches).
 const GATHER_BATCH: usize = if cfg!(test) { 1 << 12 } else { 1 << 22 };
 
+/// Elements of a range's stream [`gather_stream`] reads past before handing their pages back.
+const GATHER_RELEASE: usize = if cfg!(test) { 1 << 8 } else { 1 << 16 };
+
 /// One stream of the records in slot order ([`Slotted::new`]): `data` of the range record
 /// holding each slot's split, its part found at `pos` of the range's offsets, copied to `pos`
-/// of the slot's new `offsets`. Batch by batch: the slots of a batch are gathered on rayon's
-/// threads into a buffer (the reads are scattered, so one thread would mostly wait for
-/// memory), which is then appended to the output; after each batch the ranges' pages are
-/// handed back (`release`), since read out of order they would otherwise all stay resident.
-fn gather_stream<T: bytemuck::Pod + Send + Sync>(
+/// of the slot's new `offsets`. Batch by batch: a batch's records are read in the order they
+/// lie in the ranges' streams, not in slot order, and the pages behind the read are handed
+/// back as it goes (`release`). Slot order scatters the reads over the whole stream, so read
+/// in slot order every page a batch touches stayed resident until the batch ended (with the
+/// kernel mapping the neighbours of each faulted page too, the whole stream on a scanner-class
+/// mesh); read in stream order, only the pages near the read are.
+fn gather_stream<T: bytemuck::Pod>(
     ranges: &[Records],
     waves: &Waves,
     offsets: &[SplitOffsets],
     placement: Placement,
-    data: impl Fn(&Records) -> &[T] + Sync,
-    release: impl Fn(&Records),
+    data: impl Fn(&Records) -> &[T],
+    release: impl Fn(&Records, std::ops::Range<usize>),
     pos: fn(&SplitOffsets) -> usize,
 ) -> Result<Stream<T>, PyramidError> {
     let n_slots = offsets.len() - 1;
     let mut out = Writer::new(placement, pos(&offsets[n_slots]))?;
-    let chunks = 4 * rayon::current_num_threads();
     let mut buffer: Vec<T> = Vec::new();
+    let mut reads: Vec<(usize, usize, usize)> = Vec::new();
     let mut first = 0;
     while first < n_slots {
         // The slots whose records fit in a batch (at least one).
         let limit = pos(&offsets[first]) + GATHER_BATCH;
         let last = first + 1 + offsets[first + 1..n_slots].partition_point(|o| pos(o) <= limit);
-        let cuts: Vec<usize> = (0..=chunks)
-            .map(|c| first + (last - first) * c / chunks)
-            .collect();
-        gather(
-            &cuts,
-            |slot| pos(&offsets[slot]),
-            |slot| {
-                let (r, i) = record_of(ranges, waves.split_at(slot));
-                &data(r)[pos(&r.offsets[i])..pos(&r.offsets[i + 1])]
-            },
-            &mut buffer,
-        );
+        reads.clear();
+        reads.extend((first..last).map(|slot| {
+            let (r, i) = record_index(ranges, waves.split_at(slot));
+            (r, i, slot)
+        }));
+        reads.sort_unstable();
+        let base = pos(&offsets[first]);
+        buffer.clear();
+        buffer.resize(pos(&offsets[last]) - base, T::zeroed());
+        // Per range: how far its data and offsets were handed back.
+        let mut behind = (usize::MAX, 0, 0);
+        for &(r, i, slot) in &reads {
+            let rec = &ranges[r];
+            let (a, b) = (pos(&rec.offsets[i]), pos(&rec.offsets[i + 1]));
+            if behind.0 != r {
+                behind = (r, a, i);
+            } else if a - behind.1 >= GATHER_RELEASE {
+                release(rec, behind.1..a);
+                rec.offsets.release(behind.2..i);
+                behind = (r, a, i);
+            }
+            let dst = pos(&offsets[slot]) - base;
+            assert_eq!(
+                b - a,
+                pos(&offsets[slot + 1]) - pos(&offsets[slot]),
+                "record lengths disagree with their offsets"
+            );
+            buffer[dst..dst + (b - a)].copy_from_slice(&data(rec)[a..b]);
+        }
         out.extend_from_slice(&buffer)?;
         for r in ranges {
-            release(r);
+            release(r, 0..usize::MAX);
             r.offsets.release_all();
         }
         first = last;
     }
     Ok(out.finish()?)
-}
-
-/// The slices `record(slot)` of all slots `cuts[0]..cuts[last]`, concatenated into `to`
-/// (replacing its contents); slot `s` lands at `start(s) − start(cuts[0])`. The chunks
-/// `cuts[c]..cuts[c + 1]` are copied on rayon's threads, each into its own part of the output.
-fn gather<'r, T: Copy + Send + Sync + 'r>(
-    cuts: &[usize],
-    start: impl Fn(usize) -> usize,
-    record: impl Fn(usize) -> &'r [T] + Sync,
-    to: &mut Vec<T>,
-) {
-    use rayon::prelude::*;
-    let (first, last) = (cuts[0], cuts[cuts.len() - 1]);
-    let total = start(last) - start(first);
-    to.clear();
-    to.reserve(total);
-    let mut rest = &mut to.spare_capacity_mut()[..total];
-    let mut parts = Vec::with_capacity(cuts.len());
-    for w in cuts.windows(2) {
-        let (part, tail) = rest.split_at_mut(start(w[1]) - start(w[0]));
-        parts.push((w[0]..w[1], part));
-        rest = tail;
-    }
-    parts.into_par_iter().for_each(|(slots, part)| {
-        let mut at = 0;
-        for slot in slots {
-            let src = record(slot);
-            for (d, &x) in part[at..at + src.len()].iter_mut().zip(src) {
-                d.write(x);
-            }
-            at += src.len();
-        }
-        assert_eq!(at, part.len(), "record lengths disagree with their offsets");
-    });
-    // SAFETY: the parts tile `to`'s first `total` elements, and each part was written in full
-    // (asserted above; a failed assertion unwinds before this line and leaves `to` empty).
-    unsafe { to.set_len(total) };
 }
 
 /// Total area and bounding-box diagonal of a mesh.
