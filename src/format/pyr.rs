@@ -21,7 +21,7 @@ use super::container::{
     Container, REQUIRED, Release, Section, container_len, write_container, write_container_to,
 };
 use super::varint::ByteReader;
-use crate::mesh::{Built, PolygonMesh, ScalarType};
+use crate::mesh::{PolygonMesh, ScalarType, SourceMap};
 use crate::pm::{PmOptions, PmParts, ProgressiveMesh};
 use crate::relax::RelaxationSpec;
 use glam::DVec3;
@@ -132,10 +132,10 @@ pub struct PyramidOptions {
 pub struct PyrData {
     /// The user's mesh exactly as it was read when the file was built.
     pub input: PolygonMesh,
-    /// The repaired half-edge mesh of `input` when loading needed it (an input the builder
-    /// repairs); `None` for a clean triangle mesh, whose half-edge mesh is built only when a
-    /// command needs it ([`Self::into_pyramid`], [`Self::built`]).
-    built: Option<Built>,
+    /// Where each vertex and face of the repaired mesh of `input` came from, when loading
+    /// needed the builder (an input it repairs); `None` for a clean triangle mesh, whose
+    /// repaired mesh is `input` itself.
+    source: Option<SourceMap>,
     /// The hierarchy.
     pub pm: ProgressiveMesh,
     /// Build options.
@@ -411,7 +411,7 @@ pub(super) fn decode_releasing(bytes: &[u8], release: Release<'_>) -> Result<Pyr
         clean_faces,
     } = input_side?;
     restore_input_positions(&mut input, &pm_to_mesh, &positions);
-    let (faces, built) = finest_faces(&input, clean_faces, &replay, &mesh_to_pm, &positions)?;
+    let (faces, source) = finest_faces(&input, clean_faces, &replay, &mesh_to_pm, &positions)?;
     let options = c.section(OPTS)?.map(decode_options).transpose()?;
     let mut pm = ProgressiveMesh::from_checked_parts(
         PmParts {
@@ -434,7 +434,7 @@ pub(super) fn decode_releasing(bytes: &[u8], release: Release<'_>) -> Result<Pyr
     }
     Ok(PyrData {
         input,
-        built,
+        source,
         pm,
         info,
         details,

@@ -65,6 +65,7 @@ pub(crate) use partition::read_any as fuzz_read_block_file;
 pub use partition::taskfile::BlockFileError;
 pub use progressive::SplitReplay;
 pub use progressive::keeps_texture_seams;
+pub(crate) use progressive::triangles_of;
 pub use progressive::{MIN_BLOCK_VERTICES, PmCursor, PmOptions, PmParts, ProgressiveMesh};
 pub use progressive::{PmError, VertexSplit};
 pub use replay::FlatReplay;

@@ -159,7 +159,7 @@ pub struct ProgressiveMesh {
 
 /// A corner table's vertex list as triangles, reusing its allocation when its capacity is a
 /// whole number of triangles (else copied).
-fn triangles_of(corner_vertex: Vec<u32>) -> Vec<[u32; 3]> {
+pub(crate) fn triangles_of(corner_vertex: Vec<u32>) -> Vec<[u32; 3]> {
     match bytemuck::allocation::try_cast_vec(corner_vertex) {
         Ok(triangles) => triangles,
         Err((_, corner_vertex)) => corner_vertex

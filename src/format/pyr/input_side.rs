@@ -5,8 +5,8 @@
 use crate::format::FormatError;
 use crate::format::container::Container;
 use crate::format::varint::{ByteReader, put_ivarint, put_uvarint};
-use crate::mesh::{Built, Mesh, PolygonMesh, SlotIndex};
-use crate::pm::{FaceBuckets, FlatReplay, ProgressiveMesh, canonical_sorted};
+use crate::mesh::{CornerTable, PolygonMesh, SourceMap};
+use crate::pm::{FaceBuckets, FlatReplay, ProgressiveMesh, canonical_sorted, triangles_of};
 use glam::DVec3;
 
 use super::attributes::decode_attributes;
@@ -189,23 +189,24 @@ pub(super) fn restore_input_positions(
 }
 
 /// The finest faces in PM indices, checked to be exactly what the splits rebuild in `replay`:
-/// read off a clean triangle input, else from the builder's repaired mesh (returned too).
+/// read off a clean triangle input, else from the builder's repaired triangles (with their
+/// map back onto the input, returned too).
 pub(super) fn finest_faces(
     input: &PolygonMesh,
     clean_faces: Option<CleanFaces>,
     replay: &FlatReplay,
     mesh_to_pm: &[u32],
     positions: &[DVec3],
-) -> Result<(Vec<[u32; 3]>, Option<Built>), FormatError> {
+) -> Result<(Vec<[u32; 3]>, Option<SourceMap>), FormatError> {
     if let Some(clean) = clean_faces.filter(|c| replay.has_faces(&c.buckets)) {
         return Ok((clean.faces, None));
     }
     let n_total = positions.len();
-    let (faces, built) = built_faces(input, mesh_to_pm, n_total, positions)?;
+    let (faces, source) = repaired_faces(input, mesh_to_pm, positions)?;
     if canonical_sorted(&faces, n_total) != replay.canonical_faces() {
         return Err(corrupt(0, "the splits do not rebuild the finest faces"));
     }
-    Ok((faces, Some(built)))
+    Ok((faces, Some(source)))
 }
 
 /// The finest faces in PM indices read straight off the input, when the input is a clean
@@ -236,36 +237,39 @@ fn clean_triangle_faces(
     Some(CleanFaces { faces, buckets })
 }
 
-/// The finest faces in PM indices from the repaired half-edge mesh of `input` (any polygons,
-/// any repairs), checking that the builder's vertices are the stored ones.
-fn built_faces(
+/// The finest faces in PM indices from the builder's corner table of `input` (any polygons,
+/// any repairs), checking that the builder's vertices are the stored ones. The half-edge mesh
+/// would have the same faces (`CornerTable` docs: face slot `t` is triangle `t`, starting at
+/// its first corner) at several times the memory, held for the whole load.
+fn repaired_faces(
     input: &PolygonMesh,
     mesh_to_pm: &[u32],
-    n_total: usize,
     positions: &[DVec3],
-) -> Result<(Vec<[u32; 3]>, Built), FormatError> {
-    let built = Mesh::from_polygons(input).map_err(|e| corrupt(0, e.to_string()))?;
-    if built.mesh.n_vertices() != n_total {
-        return Err(corrupt(0, "the polygons do not build the stored hierarchy"));
+) -> Result<(Vec<[u32; 3]>, SourceMap), FormatError> {
+    let repaired = CornerTable::from_polygons(input).map_err(|e| corrupt(0, e.to_string()))?;
+    let source = repaired.source;
+    let foreign = || corrupt(0, "the polygons do not build the stored hierarchy");
+    if source.vertex_source.len() != positions.len() {
+        return Err(foreign());
     }
-    let mut faces = Vec::with_capacity(built.mesh.n_faces());
-    for f in built.mesh.faces() {
-        let t = built
-            .mesh
-            .face_vertices(f)
-            .map(|v| mesh_to_pm.get(v.slot()).copied().unwrap_or(u32::MAX));
-        faces.push(t);
-    }
-    // The positions of the built mesh (including the builder's vertex copies) must be the
-    // stored ones.
-    for v in built.mesh.vertices() {
-        let i = mesh_to_pm.get(v.slot()).copied().unwrap_or(u32::MAX) as usize;
+    // The builder's vertices (including its vertex copies) must sit where the stored ones do.
+    for (v, &s) in source.vertex_source.iter().enumerate() {
+        let i = mesh_to_pm.get(v).copied().unwrap_or(u32::MAX) as usize;
         let same = positions.get(i).is_some_and(|p| {
-            p.to_array().map(f64::to_bits) == built.mesh.position(v).to_array().map(f64::to_bits)
+            p.to_array().map(f64::to_bits)
+                == input.positions[s as usize].to_array().map(f64::to_bits)
         });
         if !same {
-            return Err(corrupt(0, "the polygons do not build the stored hierarchy"));
+            return Err(foreign());
         }
     }
-    Ok((faces, built))
+    let CornerTable {
+        mut corner_vertex,
+        mate,
+    } = repaired.corners;
+    drop(mate);
+    for v in &mut corner_vertex {
+        *v = mesh_to_pm.get(*v as usize).copied().unwrap_or(u32::MAX);
+    }
+    Ok((triangles_of(corner_vertex), source))
 }

@@ -24,12 +24,9 @@ pub enum FileDetails {
 
 impl PyrData {
     /// The repaired half-edge mesh of [`Self::input`] and its map back (the one `build` made;
-    /// deterministic). Built on demand unless loading already needed it.
+    /// deterministic), built on demand.
     pub fn built(&self) -> Result<Built, FormatError> {
-        match &self.built {
-            Some(b) => Ok(b.clone()),
-            None => Mesh::from_polygons(&self.input).map_err(|e| corrupt(0, e.to_string())),
-        }
+        Mesh::from_polygons(&self.input).map_err(|e| corrupt(0, e.to_string()))
     }
 
     /// The input, where each vertex of its repaired mesh came from, the hierarchy and the build
@@ -37,10 +34,7 @@ impl PyrData {
     pub(crate) fn into_scan_parts(
         self,
     ) -> (PolygonMesh, SourceMap, ProgressiveMesh, PyramidOptions) {
-        let source = match self.built {
-            Some(b) => b.source,
-            None => identity_source(&self.input),
-        };
+        let source = self.source.unwrap_or_else(|| identity_source(&self.input));
         (self.input, source, self.pm, self.info)
     }
 
@@ -50,11 +44,15 @@ impl PyrData {
     /// coordinates and other per-corner data (`crate::pm::level_mesh`; the same bytes as the
     /// level of the hierarchy in memory). Without kept seams the corners' data is left out.
     pub fn level_mesh(&self, level: usize) -> Result<PolygonMesh, FormatError> {
-        let source = match &self.built {
-            Some(b) => b.source.clone(),
-            None => identity_source(&self.input),
+        let identity;
+        let source = match &self.source {
+            Some(s) => s,
+            None => {
+                identity = identity_source(&self.input);
+                &identity
+            }
         };
-        crate::pm::level_mesh(&self.pm, &self.input, &source, level)
+        crate::pm::level_mesh(&self.pm, &self.input, source, level)
             .map_err(|e| corrupt(0, e.to_string()))
     }
 }
