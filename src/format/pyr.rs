@@ -411,7 +411,8 @@ pub(super) fn decode_releasing(bytes: &[u8], release: Release<'_>) -> Result<Pyr
         clean_faces,
     } = input_side?;
     restore_input_positions(&mut input, &pm_to_mesh, &positions);
-    let (faces, source) = finest_faces(&input, clean_faces, &replay, &mesh_to_pm, &positions)?;
+    let n_base_faces = replay.n_base_faces();
+    let (faces, source) = finest_faces(&input, clean_faces, replay, &mesh_to_pm, &positions)?;
     let options = c.section(OPTS)?.map(decode_options).transpose()?;
     let mut pm = ProgressiveMesh::from_checked_parts(
         PmParts {
@@ -422,7 +423,7 @@ pub(super) fn decode_releasing(bytes: &[u8], release: Release<'_>) -> Result<Pyr
             faces,
             errors,
         },
-        replay.n_base_faces(),
+        n_base_faces,
         permutation.then_some(mesh_to_pm),
     )
     .map_err(|e| corrupt(0, e.to_string()))?;

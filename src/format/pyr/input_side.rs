@@ -194,16 +194,20 @@ pub(super) fn restore_input_positions(
 pub(super) fn finest_faces(
     input: &PolygonMesh,
     clean_faces: Option<CleanFaces>,
-    replay: &FlatReplay,
+    replay: FlatReplay,
     mesh_to_pm: &[u32],
     positions: &[DVec3],
 ) -> Result<(Vec<[u32; 3]>, Option<SourceMap>), FormatError> {
     if let Some(clean) = clean_faces.filter(|c| replay.has_faces(&c.buckets)) {
         return Ok((clean.faces, None));
     }
+    // The replay's rings (about 160 B per vertex) go before the builder's repair, whose
+    // temporaries are as large: only the faces they rebuilt are compared.
+    let rebuilt = replay.canonical_faces();
+    drop(replay);
     let n_total = positions.len();
     let (faces, source) = repaired_faces(input, mesh_to_pm, positions)?;
-    if canonical_sorted(&faces, n_total) != replay.canonical_faces() {
+    if canonical_sorted(&faces, n_total) != rebuilt {
         return Err(corrupt(0, "the splits do not rebuild the finest faces"));
     }
     Ok((faces, Some(source)))
