@@ -38,6 +38,7 @@ pub mod blocks {
     pub use super::partition::runner::{
         RayonRunner, SharedRunner, Task, TaskOutput, TaskRunner, run_task,
     };
+    pub use super::partition::task_memory::{block_vertices_for, memory_estimate};
     pub use super::partition::taskfile::BlockFileError;
     pub use super::partition::tasks::{
         HISTOGRAM_BITS, HistogramRound, assemble, candidates, collapse, concat, cost_histogram,
