@@ -176,7 +176,10 @@ pub fn run_with_block_runner(
     let program = std::iter::once(std::ffi::OsString::from("meshpyr"));
     let mut cli = match Cli::try_parse_from(program.chain(args)) {
         Ok(cli) => cli,
-        Err(e) if !e.use_stderr() => return Ok(e.print()?),
+        Err(e) if !e.use_stderr() => {
+            e.print()?;
+            return Ok(());
+        }
         Err(e) => {
             let text = e.to_string();
             let first = text.lines().next().unwrap_or_default();

@@ -3,7 +3,7 @@
 //! its [`TaskOutput`] a small value. The driver hands each round's tasks to a [`TaskRunner`]:
 //! [`RayonRunner`] runs them on this process's threads; another runner may send them to other
 //! processes or machines (`meshpyr.dask` sends them to Dask workers, each declaring
-//! [`super::task_memory::memory_estimate`]), since a task depends on its files only and writes
+//! `memory_estimate`), since a task depends on its files only and writes
 //! the same bytes when run twice.
 
 use super::taskfile::BlockFileError;
