@@ -6,6 +6,7 @@ use super::Global;
 use meshpyr::memory::{self, Allowance, BuildPath, InputSize, Job};
 use meshpyr::mesh::PolygonMesh;
 use meshpyr::pm::MIN_BLOCK_VERTICES;
+use meshpyr::pm::blocks::SharedRunner;
 use std::path::Path;
 
 fn parse_block_vertices(s: &str) -> Result<usize, String> {
@@ -36,6 +37,10 @@ pub(crate) struct PathOptions {
     /// folder under DIR, removed afterwards (the same hierarchy; formats/blocks.md).
     #[arg(long, value_name = "DIR")]
     pub(crate) block_files: Option<std::path::PathBuf>,
+    /// With `--block-files`: what runs each round's tasks, set by [`crate::run_with_block_runner`]
+    /// (`None`: this process's threads).
+    #[arg(skip)]
+    pub(crate) runner: Option<SharedRunner>,
 }
 
 impl PathOptions {

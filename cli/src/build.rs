@@ -57,6 +57,7 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
                 .choose(&args.input, job, &input, global)?
                 .block_vertices(),
             block_scratch: args.path.block_files.clone(),
+            block_runner: args.path.runner.clone(),
             uv_weight: args.uv_weight,
             ..PmOptions::default()
         },

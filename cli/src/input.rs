@@ -175,6 +175,7 @@ pub(crate) fn load_pyramid_by(
                 .choose(path, Job::Pyramid, &input, global)?
                 .block_vertices(),
             block_scratch: options.block_files.clone(),
+            block_runner: options.runner.clone(),
             ..PmOptions::default()
         },
     };

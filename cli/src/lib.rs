@@ -163,6 +163,38 @@ fn run(command: Command, global: &Global) -> anyhow::Result<()> {
     }
 }
 
+/// Runs `meshpyr ARGS` (`args`: what follows the program's name) in this process as the
+/// command line would, except that the rounds of tasks of a hierarchy built in blocks through
+/// task files (`build`, `filter` and `edit` with `--block-vertices N --block-files DIR`) are
+/// run by `runner`: how `meshpyr.dask` runs them on a Dask cluster, with the command's very
+/// options and output bytes. Help and version are printed to standard output; an error (bad
+/// arguments as clap's first line) comes back to be printed as `error: {e:#}`.
+pub fn run_with_block_runner(
+    args: Vec<std::ffi::OsString>,
+    runner: meshpyr::pm::blocks::SharedRunner,
+) -> anyhow::Result<()> {
+    let program = std::iter::once(std::ffi::OsString::from("meshpyr"));
+    let mut cli = match Cli::try_parse_from(program.chain(args)) {
+        Ok(cli) => cli,
+        Err(e) if !e.use_stderr() => {
+            e.print()?;
+            return Ok(());
+        }
+        Err(e) => {
+            let text = e.to_string();
+            let first = text.lines().next().unwrap_or_default();
+            anyhow::bail!("{}", first.trim_start_matches("error: "));
+        }
+    };
+    match &mut cli.command {
+        Command::Build(a) => a.path.runner = Some(runner),
+        Command::Filter(a) => a.path.runner = Some(runner),
+        Command::Edit(a) => a.path.runner = Some(runner),
+        _ => {}
+    }
+    run(cli.command, &cli.global)
+}
+
 /// Test hook, not an interface: when set to a number of milliseconds, every output file
 /// announces its temporary file on standard error and waits that long before its rename, so
 /// that a test can interrupt a write reliably.

@@ -102,3 +102,51 @@ fn blocks_run_through_task_files_write_the_same_pyr_file_and_leave_no_files() {
     assert!(std::fs::read(&memory).unwrap() == std::fs::read(&files).unwrap());
     assert_eq!(std::fs::read_dir(&folder).unwrap().count(), 0);
 }
+
+/// Runs each round's tasks in reverse order, as another scheduler might, and counts them.
+struct CountingRunner(std::sync::atomic::AtomicUsize);
+
+impl meshpyr::pm::blocks::TaskRunner for CountingRunner {
+    fn run_round(
+        &self,
+        tasks: Vec<meshpyr::pm::blocks::Task>,
+    ) -> Result<Vec<meshpyr::pm::blocks::TaskOutput>, meshpyr::pm::blocks::BlockFileError> {
+        use std::sync::atomic::Ordering;
+        self.0.fetch_add(tasks.len(), Ordering::Relaxed);
+        let mut outputs = tasks
+            .iter()
+            .rev()
+            .map(meshpyr::pm::blocks::run_task)
+            .collect::<Result<Vec<_>, _>>()?;
+        outputs.reverse();
+        Ok(outputs)
+    }
+}
+
+#[test]
+fn a_command_run_in_process_with_another_runner_writes_the_same_bytes() {
+    use meshpyr::pm::blocks::SharedRunner;
+    use std::sync::Arc;
+    let elephant = data_arg("elephant_holes.ply");
+    let folder = scratch("blocks-runner", "tasks");
+    let binary = scratch("blocks-runner", "binary.pyr");
+    let args = ["--block-vertices", "400", "--block-files", path(&folder)];
+    let mut all = vec!["build", &elephant, "-o", path(&binary)];
+    all.extend_from_slice(&args);
+    ok(&meshpyr(&all));
+    let counting = Arc::new(CountingRunner(Default::default()));
+    let in_process = scratch("blocks-runner", "in-process.pyr");
+    all[3] = path(&in_process);
+    let argv: Vec<std::ffi::OsString> = std::iter::once("--quiet")
+        .chain(all.iter().copied())
+        .map(Into::into)
+        .collect();
+    meshpyr_cli::run_with_block_runner(argv, SharedRunner(counting.clone())).unwrap();
+    assert!(std::fs::read(&binary).unwrap() == std::fs::read(&in_process).unwrap());
+    assert!(counting.0.load(std::sync::atomic::Ordering::Relaxed) > 20);
+    assert_eq!(std::fs::read_dir(&folder).unwrap().count(), 0);
+    let bad = ["build", &elephant, "-o", "x.pyr", "--block-vertices", "3"].map(Into::into);
+    let err = meshpyr_cli::run_with_block_runner(bad.to_vec(), SharedRunner(counting)).unwrap_err();
+    let err = format!("{err:#}");
+    assert!(!err.contains('\n') && err.contains("at least 16"), "{err}");
+}

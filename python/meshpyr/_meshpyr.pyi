@@ -1,7 +1,7 @@
 """Type stubs of the extension module; the package ``meshpyr`` re-exports every name."""
 
 from os import PathLike
-from typing import Any, Dict, Iterable, List, Literal, Optional, Sequence, Tuple, Union, overload
+from typing import Any, Callable, Dict, Iterable, List, Literal, Optional, Sequence, Tuple, Union, overload
 
 import numpy as np
 import numpy.typing as npt
@@ -236,3 +236,10 @@ class _Server:
     def stop(self) -> None: ...
 
 def _page_html(script: str) -> str: ...
+
+# meshpyr.dask's task layer: a block task as a dict of str, int and float values.
+def _run_task(task: Dict[str, Any]) -> Union[None, int, bytes]: ...
+def _run_command(
+    args: List[str], round: Callable[[List[Dict[str, Any]]], List[Union[None, int, bytes]]]
+) -> None: ...
+def _block_vertices_for(memory: int) -> int: ...

@@ -3,6 +3,7 @@
 //! library's front door. Every heavy call releases the GIL.
 
 mod arrays;
+mod blocks;
 mod corners;
 mod editor;
 mod errors;
@@ -38,5 +39,8 @@ fn _meshpyr(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<editor::Editor>()?;
     m.add_class::<editor::Server>()?;
     m.add_function(wrap_pyfunction!(editor::_page_html, m)?)?;
+    m.add_function(wrap_pyfunction!(blocks::_run_task, m)?)?;
+    m.add_function(wrap_pyfunction!(blocks::_run_command, m)?)?;
+    m.add_function(wrap_pyfunction!(blocks::_block_vertices_for, m)?)?;
     Ok(())
 }

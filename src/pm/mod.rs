@@ -34,10 +34,12 @@ pub mod blocks {
     //! the passes through files"; the files: `formats/blocks.md`), one function per task, and
     //! what runs a round of them. A scheduler that runs [`Task`]s on other processes (with
     //! [`run_task`] there) and hands their outputs back gives the same hierarchy as this
-    //! process's threads.
+    //! process's threads. [`memory_estimate`] is the memory a task declares to such a
+    //! scheduler (`meshpyr.dask`: the Dask resource `MEMORY`).
     pub use super::partition::runner::{
         RayonRunner, SharedRunner, Task, TaskOutput, TaskRunner, run_task,
     };
+    pub use super::partition::task_memory::{block_vertices_for, memory_estimate};
     pub use super::partition::taskfile::BlockFileError;
     pub use super::partition::tasks::{
         HISTOGRAM_BITS, HistogramRound, assemble, candidates, collapse, concat, cost_histogram,

@@ -338,6 +338,15 @@ pub(crate) fn read_routed(path: &Path, cell: u32) -> Result<Bucket, BlockFileErr
     read_bucket(&mut f, cell)
 }
 
+/// The bytes of cell `cell`'s sections in the routed piece `path`, from its section table.
+pub(crate) fn share_len(path: &Path, cell: u32) -> Result<u64, BlockFileError> {
+    let f = TaskFile::open(path, &[Kind::Routed])?;
+    Ok((f.entries.iter())
+        .filter(|e| e.cell == cell)
+        .map(|e| e.length)
+        .sum())
+}
+
 /// Writes a block's input.
 pub(crate) fn write_input(path: &Path, block: &Bucket) -> Result<(), BlockFileError> {
     write(path, Kind::Input, &bucket_sections(block, 0))

@@ -37,6 +37,7 @@ mod lockstep;
 mod order;
 pub mod runner;
 mod split;
+pub mod task_memory;
 pub mod taskfile;
 pub mod tasks;
 mod through_files;

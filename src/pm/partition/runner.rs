@@ -2,8 +2,9 @@
 //! [`Task`] (which function, which files), run by [`run_task`] anywhere the files are seen,
 //! its [`TaskOutput`] a small value. The driver hands each round's tasks to a [`TaskRunner`]:
 //! [`RayonRunner`] runs them on this process's threads; another runner may send them to other
-//! processes or machines (`meshpyr.dask` is to be one), since a task depends on its files only
-//! and writes the same bytes when run twice.
+//! processes or machines (`meshpyr.dask` sends them to Dask workers, each declaring
+//! `memory_estimate`), since a task depends on its files only and writes
+//! the same bytes when run twice.
 
 use super::taskfile::BlockFileError;
 use super::tasks;
