@@ -528,6 +528,7 @@ const REFUSALS: [Refusal; 8] = [
     Refusal::Normal,
     Refusal::Degenerate,
     Refusal::Seam,
+    Refusal::Costly,
 ];
 
 fn stop_bytes(stop: &Stop) -> Vec<u8> {
