@@ -519,7 +519,7 @@ pub(crate) fn write_result(path: &Path, out: &BlockOutput) -> Result<(), BlockFi
 }
 
 /// The refusals in the order of their codes in a `STOP` section.
-const REFUSALS: [Refusal; 8] = [
+const REFUSALS: [Refusal; 9] = [
     Refusal::Boundary,
     Refusal::DanglingFace,
     Refusal::Pillow,
