@@ -17,7 +17,9 @@
 //! step ([`Schedule`]; `docs/pm-legality.md`); the build ends when even that finds none, so "no
 //! legal collapse left" really means none, and [`Stop`] says which rules refused what is left.
 //! A decimation that keeps texture seams relaxes nothing: its floor is the seam floor, where
-//! the relaxed rules would fold faces across the charts (`docs/seams.md`).
+//! the relaxed rules would fold faces across the charts (`docs/seams.md`). Nor does it take
+//! every legal collapse there for a target it cannot reach: a pass without the cost cut takes
+//! none dearer than [`SEAM_FLOOR_COST_FACTOR`] times the dearest one made under a cut.
 //!
 //! **Why a corner table.** The collapses visit the mesh in cost order, i.e. at random, so the
 //! time goes into cache misses on the records a legality test walks. The decimator therefore
@@ -754,7 +756,8 @@ pub enum Stop {
     /// Every collapse left would exceed the error bound.
     ErrorBound,
     /// No legal collapse is left, even with every shape rule relaxed (a seam-keeping
-    /// decimation relaxes none): for each rule, how many of the remaining edges it refused (in
+    /// decimation relaxes none, and counts one far dearer than those it made as refused,
+    /// [`Refusal::Costly`]): for each rule, how many of the remaining edges it refused (in
     /// their cheaper direction), most first.
     NoLegalCollapse(Vec<(Refusal, usize)>),
 }
@@ -942,6 +945,7 @@ pub(crate) fn decimate_from(
     });
     let mut stop = Stop::Target;
     let mut live = live_triangles(&mesh);
+    let mut floor = SeamFloor::default();
     while !is_done(&mesh, params) {
         drop_dead_triangles(&mesh, &mut live);
         state.quadric.rim_scale = rim_scale_at_level(mesh.n_faces, start_faces);
@@ -964,11 +968,18 @@ pub(crate) fn decimate_from(
                     state.seams.as_deref(),
                     params,
                     schedule.last,
+                    f64::INFINITY,
                 ))
             };
             break;
         }
-        let error_cut = cut_at_goal(&mut cands, mesh.n_faces, &schedule, params);
+        let mut error_cut = cut_at_goal(&mut cands, mesh.n_faces, &schedule, params);
+        let cap = floor.cap(state.seams.is_some() && !schedule.use_goal);
+        if cap < error_cut {
+            error_cut = cap;
+            cands.retain(|c| c.cost <= error_cut);
+        }
+        let first_new = state.collapses.len();
         rank_candidates(&mut cands);
         let pass = Pass {
             error_cut,
@@ -978,6 +989,9 @@ pub(crate) fn decimate_from(
             budget: schedule.budget(mesh.n_faces),
         };
         let made = perform_collapses(&mut mesh, &mut state, &cands, &pass, params);
+        if schedule.use_goal {
+            floor.took(&state.collapses[first_new..]);
+        }
         unlock_survivors(&mut mesh, &mut state.locked);
         if schedule.relaxation != Relaxation::None {
             relaxed[schedule.relaxation as usize - 1] += made;
@@ -989,6 +1003,7 @@ pub(crate) fn decimate_from(
                 state.seams.as_deref(),
                 params,
                 schedule.last,
+                floor.cap(state.seams.is_some()),
             ));
             break;
         }
@@ -1000,6 +1015,37 @@ pub(crate) fn decimate_from(
     progress.update(1.0);
     let outcome = Outcome { stop, relaxed };
     (state.collapses, mesh, outcome, state.quadric)
+}
+
+/// How much dearer than the dearest collapse made under a pass's cost cut a collapse at the
+/// seam floor may be. There, with the target out of reach, a pass without the cut would take
+/// every legal collapse however dear, such as a hole's rim losing the tip of a strip one face
+/// wide, which the boundary planes barely charge (docs/seams.md, docs/performance.md).
+pub(crate) const SEAM_FLOOR_COST_FACTOR: f64 = 4.0;
+
+/// The dearest collapse a seam-keeping decimation made under a cost cut, which caps its passes
+/// without one ([`SEAM_FLOOR_COST_FACTOR`]).
+#[derive(Clone, Copy, Debug, Default)]
+struct SeamFloor {
+    dearest: f64,
+}
+
+impl SeamFloor {
+    /// Records the collapses of a pass made under a cost cut.
+    fn took(&mut self, collapses: &[Collapse]) {
+        for c in collapses {
+            self.dearest = self.dearest.max(c.error_sq);
+        }
+    }
+
+    /// The cost cap of a pass: none unless `capped` and some collapse cost anything yet.
+    fn cap(&self, capped: bool) -> f64 {
+        if capped && self.dearest > 0.0 {
+            SEAM_FLOOR_COST_FACTOR * self.dearest
+        } else {
+            f64::INFINITY
+        }
+    }
 }
 
 /// What the boundary planes count for in a pass starting with `faces` of the input's
@@ -1208,13 +1254,15 @@ fn collect_candidates(
 impl FlatMesh {
     /// For each rule, how many live edges within the error bound it refuses under the rules
     /// relaxed up to step `last` (each edge counted once, in its cheaper allowed direction; an interior
-    /// edge between two boundary vertices has none and counts as `Boundary`), most first.
+    /// edge between two boundary vertices has none and counts as `Boundary`; a legal one dearer
+    /// than `cap` counts as `Costly`), most first.
     fn refusals(
         &self,
         quadric: &Quadrics,
         seams: Option<&Seams>,
         params: &DecimateParams,
         last: Relaxation,
+        cap: f64,
     ) -> Vec<(Refusal, usize)> {
         let legality = params.legality.relaxed(last);
         let mut counts = std::collections::BTreeMap::<Refusal, usize>::new();
@@ -1226,7 +1274,10 @@ impl FlatMesh {
             }
             let refusal = match self.candidate(quadric, seams, c, f64::INFINITY) {
                 None => Some(Refusal::Boundary),
-                Some(x) if x.cost <= params.max_error_sq => self.legal(x.h, &legality, seams).err(),
+                Some(x) if x.cost <= params.max_error_sq => self
+                    .legal(x.h, &legality, seams)
+                    .err()
+                    .or((x.cost > cap).then_some(Refusal::Costly)),
                 Some(_) => None,
             };
             if let Some(r) = refusal {

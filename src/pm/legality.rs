@@ -166,6 +166,9 @@ pub enum Refusal {
     Degenerate,
     /// A texture seam or material border would be broken (`docs/seams.md`).
     Seam,
+    /// Legal, but at the seam floor it would cost more than four times the dearest collapse
+    /// made under a pass's cost cut (`docs/seams.md`).
+    Costly,
 }
 
 impl Refusal {
@@ -180,6 +183,7 @@ impl Refusal {
             Refusal::Normal => "normal would fold",
             Refusal::Degenerate => "face would degenerate",
             Refusal::Seam => "seam would break",
+            Refusal::Costly => "dearer than the seam floor allows",
         }
     }
 }

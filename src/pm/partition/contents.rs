@@ -528,7 +528,7 @@ pub(crate) fn write_result(path: &Path, out: &BlockOutput) -> Result<(), BlockFi
 }
 
 /// The refusals in the order of their codes in a `STOP` section.
-const REFUSALS: [Refusal; 8] = [
+const REFUSALS: [Refusal; 9] = [
     Refusal::Boundary,
     Refusal::DanglingFace,
     Refusal::Pillow,
@@ -537,6 +537,7 @@ const REFUSALS: [Refusal; 8] = [
     Refusal::Normal,
     Refusal::Degenerate,
     Refusal::Seam,
+    Refusal::Costly,
 ];
 
 fn stop_bytes(stop: &Stop) -> Vec<u8> {
