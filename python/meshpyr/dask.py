@@ -141,8 +141,10 @@ def build(
     and ``--uv-weight``. ``quiet=False`` prints what the command prints. ``run``: the function the
     workers call with each task dict (default :func:`run_task`; a wrapper may time or log them).
 
-    Raises OSError when a file cannot be read or written, ValueError for bad options, and
-    whatever Dask raises when a task fails for good (its message names the file).
+    Raises OSError when a file cannot be read or written, ValueError for bad options,
+    MemoryError when a task is estimated above the largest worker's ``MEMORY`` (no worker would
+    ever take it), and whatever Dask raises when a task fails for good (its message names the
+    file).
     """
     flags = []
     if relax is not None:

@@ -147,3 +147,22 @@ def test_workers_without_the_memory_resource_are_refused():
 def test_a_block_size_is_chosen_from_the_workers_memory():
     small, large = (meshpyr.dask.block_vertices_for(m) for m in (1e8, 3e9))
     assert 16 <= small < large
+
+
+def test_a_task_larger_than_every_worker_is_refused_before_it_runs(tmp_path):
+    """A worker would never accept a task declaring more MEMORY than it holds, so the run
+    would wait for ever: it is refused with the task's estimate, and nothing is written."""
+    small = 1_000_000  # below any block task's estimate
+    out = tmp_path / "scan.pyr"
+    with LocalCluster(
+        n_workers=1,
+        threads_per_worker=1,
+        processes=True,
+        memory_limit=MEMORY,
+        resources={"MEMORY": small},
+        dashboard_address=":0",
+    ) as c, Client(c) as client:
+        with pytest.raises(MemoryError, match="more than the largest worker's MEMORY"):
+            meshpyr.dask.build(SCAN, out, client=client, block_vertices=BLOCK, quiet=True)
+    assert not out.exists()
+    assert list(tmp_path.iterdir()) == []
