@@ -2,7 +2,7 @@
 """Texture-space error of a simplified textured mesh (issue 46), and meshoptimizer's baseline.
 
     python3 uv_error.py measure INPUT.obj RESULT.obj [SAMPLES=200000] [SEED=1]
-    python3 uv_error.py meshopt INPUT.obj OUT.obj FACES [UV_WEIGHT=1]
+    python3 uv_error.py meshopt INPUT.obj OUT.obj FACES [UV_WEIGHT=1] [normals]
 
 `measure` samples RESULT's surface area-uniformly; at each sample it compares the texture
 coordinate interpolated in RESULT's triangle with the one interpolated at the nearest point of
@@ -15,7 +15,9 @@ input face has another material; and the geometric Hausdorff and RMS distances o
 vertex per distinct position, texture coordinate and material, as a renderer would hold it) with
 the texture coordinates as attributes of weight UV_WEIGHT, stopping at FACES triangles
 (target_error 1, so that only the count stops it), and writes the result as OBJ with `vt`
-and `usemtl`.
+and `usemtl`. With `normals`, a vertex is also split by its corner normal (`f v/vt/vn`), as a
+renderer holds a mesh with hard edges: meshoptimizer then keeps the hard edges as seams, as
+meshpyr's wedges do (docs/seams.md); without it, it sees the texture seams and materials only.
 
 Both read OBJ files with `v`, `vt`, `usemtl` and `f v/vt[/vn]` (polygons fanned from their first
 corner); meshpyr converts a PLY scan (`meshpyr convert IN.ply OUT.obj`).
@@ -66,6 +68,22 @@ def read_obj(path):
     pos = np.array(pos, dtype=np.float64)
     uvs = np.array(uvs + [[np.nan, np.nan]], dtype=np.float64)  # index -1: no vt
     return pos, np.array(tris, dtype=np.int64), uvs[np.array(tuv, dtype=np.int64)], np.array(mats), names
+
+
+def corner_normal_indices(path):
+    """The `vn` index of every corner of read_obj's triangles (-1 without), fanned as there."""
+    out = []
+    for line in open(path):
+        w = line.split()
+        if not w or w[0] != "f":
+            continue
+        corners = []
+        for c in w[1:]:
+            parts = c.split("/")
+            corners.append(int(parts[2]) if len(parts) > 2 and parts[2] else -1)
+        for k in range(1, len(corners) - 1):
+            out.append([corners[0], corners[k], corners[k + 1]])
+    return np.array(out, dtype=np.int64).reshape(-1, 3)
 
 
 def nearest(points, pos, tris, chunk=5000, pairs=2_000_000):
@@ -131,12 +149,15 @@ def measure(inp, res, n=200000, seed=1):
     }
 
 
-def meshopt(inp, out, faces, uv_weight=1.0):
+def meshopt(inp, out, faces, uv_weight=1.0, split_normals=False):
     from meshoptimizer._loader import lib
 
     ip, it, iuv, imat, inames = read_obj(inp)
-    keys = np.concatenate([it.reshape(-1, 1).astype(np.float64), iuv.reshape(-1, 2),
-                           np.repeat(imat, 3).reshape(-1, 1).astype(np.float64)], 1)
+    columns = [it.reshape(-1, 1).astype(np.float64), iuv.reshape(-1, 2),
+               np.repeat(imat, 3).reshape(-1, 1).astype(np.float64)]
+    if split_normals:
+        columns.append(corner_normal_indices(inp).reshape(-1, 1).astype(np.float64))
+    keys = np.concatenate(columns, 1)
     keys = np.nan_to_num(keys, nan=-1e30)
     uniq, inverse = np.unique(keys, axis=0, return_inverse=True)
     inverse = inverse.reshape(-1)
@@ -169,7 +190,8 @@ def meshopt(inp, out, faces, uv_weight=1.0):
     used = np.unique(res)
     new = {int(v): i + 1 for i, v in enumerate(used)}
     with open(out, "w") as o:
-        o.write(f"# meshoptimizer (python 0.2.30a0) simplifyWithAttributes, uv weight {uv_weight}\n")
+        split = ", split by corner normals" if split_normals else ""
+        o.write(f"# meshoptimizer (python 0.2.30a0) simplifyWithAttributes, uv weight {uv_weight}{split}\n")
         for v in used:
             o.write("v %.9g %.9g %.9g\n" % tuple(vpos[v]))
         for v in used:
@@ -197,6 +219,9 @@ if __name__ == "__main__":
               f"hausdorff {r['hausdorff']:.4e} rms {r['rms']:.4e}")
     elif sys.argv[1] == "meshopt":
         w = float(sys.argv[5]) if len(sys.argv) > 5 else 1.0
-        meshopt(sys.argv[2], sys.argv[3], int(sys.argv[4]), w)
+        split = len(sys.argv) > 6 and sys.argv[6] == "normals"
+        if len(sys.argv) > 6 and not split:
+            sys.exit(__doc__)
+        meshopt(sys.argv[2], sys.argv[3], int(sys.argv[4]), w, split)
     else:
         sys.exit(__doc__)
