@@ -104,7 +104,7 @@ impl StoredDetails {
                 total = total.saturating_add(s);
                 entries.next();
             }
-            let sum = (total < EXACT).then(|| total as f64 * step2)?;
+            let sum = (total < EXACT).then_some(total as f64 * step2)?;
             sums.push(sum.is_finite().then_some(sum)?);
         }
         entries.next().is_none().then_some(sums)

@@ -194,8 +194,11 @@ mod tests {
         crate::io::read_mesh(path.join(name)).unwrap()
     }
 
+    /// Faces in PM indices and the map back onto the input.
+    type ReadOff = Option<(Vec<[u32; 3]>, SourceMap)>;
+
     /// The faces and map back read off the input and the replay, as a reader finds them.
-    fn read_off(input: &PolygonMesh) -> (Option<(Vec<[u32; 3]>, SourceMap)>, ProgressiveMesh) {
+    fn read_off(input: &PolygonMesh) -> (ReadOff, ProgressiveMesh) {
         let built = Mesh::from_polygons(input).unwrap();
         let pm = ProgressiveMesh::build(&built.mesh, &PmOptions::default(), &NoProgress).unwrap();
         let positions = pm.original_positions();
