@@ -28,6 +28,7 @@ use glam::DVec3;
 use serde::{Deserialize, Serialize};
 
 mod attributes;
+mod copied_faces;
 mod corners;
 mod decode_ahead;
 mod details;
@@ -412,7 +413,8 @@ pub(super) fn decode_releasing(bytes: &[u8], release: Release<'_>) -> Result<Pyr
     } = input_side?;
     restore_input_positions(&mut input, &pm_to_mesh, &positions);
     let n_base_faces = replay.n_base_faces();
-    let (faces, source) = finest_faces(&input, clean_faces, replay, &mesh_to_pm, &positions)?;
+    let order = (&pm_to_mesh[..], &mesh_to_pm[..], permutation);
+    let (faces, source) = finest_faces(&input, clean_faces, replay, order, &positions)?;
     let options = c.section(OPTS)?.map(decode_options).transpose()?;
     let mut pm = ProgressiveMesh::from_checked_parts(
         PmParts {

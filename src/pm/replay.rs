@@ -729,6 +729,21 @@ impl FlatReplay {
         seen == Some(expected.faces.len())
     }
 
+    /// Whether the current mesh has the face `f`, oriented as listed (from any corner).
+    pub(crate) fn has_face(&self, f: [u32; 3]) -> bool {
+        let [v, a, b] = f;
+        if v as usize >= self.rings.len() {
+            return false;
+        }
+        let e = self.rings.get(v);
+        let skip_first = self.rings.boundary(v);
+        // The face left of v → x is (v, x, next neighbour); none left of a boundary out-edge.
+        e.iter().enumerate().any(|(k, x)| {
+            let next = e[if k + 1 == e.len() { 0 } else { k + 1 }].nbr;
+            x.nbr == a && next == b && !(k == 0 && skip_first)
+        })
+    }
+
     /// [`Self::has_faces`] on the faces whose smallest corner is in `vertices`: how many
     /// there are, or `None` when they differ from `expected`'s buckets.
     fn faces_match(&self, expected: &FaceBuckets, vertices: std::ops::Range<u32>) -> Option<usize> {

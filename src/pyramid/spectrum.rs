@@ -71,7 +71,6 @@ pub(crate) fn octave_spectrum<D: ExactSizeIterator<Item = glam::DVec3>>(
     diagonal: f64,
     per_split: impl Iterator<Item = D>,
 ) -> Spectrum {
-    let diag2 = (diagonal * diagonal).max(f64::MIN_POSITIVE);
     let mut bands: Vec<BandEnergy> = Vec::new();
     let mut sums: Vec<f64> = Vec::new();
     for (k, details) in per_split.enumerate() {
@@ -80,15 +79,7 @@ pub(crate) fn octave_spectrum<D: ExactSizeIterator<Item = glam::DVec3>>(
         let hi = (level).next_power_of_two();
         let lo = (hi / 2).max(n_base);
         if bands.last().is_none_or(|b| b.hi != hi.min(n_finest)) {
-            bands.push(BandEnergy {
-                lo,
-                hi: hi.min(n_finest),
-                levels: 0,
-                details: 0,
-                energy: 0.0,
-                rms: 0.0,
-                feature_size: feature_size_of_level(hi.min(n_finest), surface_area),
-            });
+            bands.push(empty_band(lo, hi.min(n_finest), surface_area));
             sums.push(0.0);
         }
         let band = bands.last_mut().expect("pushed above");
@@ -99,7 +90,51 @@ pub(crate) fn octave_spectrum<D: ExactSizeIterator<Item = glam::DVec3>>(
             *sum += d.length_squared();
         }
     }
-    for (b, s) in bands.iter_mut().zip(sums) {
+    with_energies(bands, &sums, diagonal)
+}
+
+/// [`octave_spectrum`] from the detail counts of each split (`counts`, in split order) and
+/// each band's `Σ |d|²` (`band_sums`, coarse to fine, one per band of [`octave_bands`]):
+/// when those sums are the exact ones, the same bits as [`octave_spectrum`] on the details.
+pub(crate) fn octave_spectrum_of_sums(
+    n_base: usize,
+    n_finest: usize,
+    surface_area: f64,
+    diagonal: f64,
+    counts: &[u32],
+    band_sums: &[f64],
+) -> Spectrum {
+    let bands = octave_bands(n_base, n_finest)
+        .into_iter()
+        .map(|(lo, hi)| {
+            let mut band = empty_band(lo, hi, surface_area);
+            band.levels = hi - lo;
+            band.details = counts[lo - n_base..hi - n_base]
+                .iter()
+                .map(|&c| c as usize)
+                .sum();
+            band
+        })
+        .collect();
+    with_energies(bands, band_sums, diagonal)
+}
+
+fn empty_band(lo: usize, hi: usize, surface_area: f64) -> BandEnergy {
+    BandEnergy {
+        lo,
+        hi,
+        levels: 0,
+        details: 0,
+        energy: 0.0,
+        rms: 0.0,
+        feature_size: feature_size_of_level(hi, surface_area),
+    }
+}
+
+/// The bands with their energies and RMS lengths from each band's `Σ |d|²` (`sums`).
+fn with_energies(mut bands: Vec<BandEnergy>, sums: &[f64], diagonal: f64) -> Spectrum {
+    let diag2 = (diagonal * diagonal).max(f64::MIN_POSITIVE);
+    for (b, &s) in bands.iter_mut().zip(sums) {
         b.energy = s / diag2;
         b.rms = if b.details > 0 {
             (s / b.details as f64).sqrt() / diag2.sqrt()

@@ -7,7 +7,9 @@
 //! 1. [`PyrData::into_pyramid_staged`] records the layout of the splits up to a level only
 //!    ([`DetailPyramid::with_stored_details_up_to`]: the first splits' records are those of
 //!    the whole layout, since a split's records depend only on the splits before it) and
-//!    takes the spectrum straight from the stored details;
+//!    takes the spectrum straight from the stored details (their squares per octave, taken
+//!    when the file was read, with the prefix's area and diagonal: nothing is decoded or
+//!    summed twice);
 //! 2. [`PendingLayout::record`] then makes the whole pyramid, as
 //!    [`PyrData::into_pyramid`] would have, bit for bit, for the caller to swap in.
 //!
@@ -78,7 +80,11 @@ impl PyrData {
             level,
             rest,
         )
-        .and_then(|prefix| Ok((prefix, stored.spectrum(&self.pm)?)));
+        .and_then(|prefix| {
+            // The prefix holds the whole hierarchy's area and diagonal already.
+            let (area, diagonal) = (prefix.surface_area, prefix.bbox_diagonal);
+            Ok((prefix, stored.spectrum_on(&self.pm, area, diagonal)?))
+        });
         let (prefix, spectrum) = match prefix {
             Ok(staged) => staged,
             // Details that do not fit the hierarchy: the whole path says why and analyses.

@@ -5,7 +5,7 @@
 
 use super::analysis::{Layout, surface_stats};
 use super::quantise::dequantised;
-use super::spectrum::octave_spectrum;
+use super::spectrum::{octave_bands, octave_spectrum, octave_spectrum_of_sums};
 use super::{DetailPyramid, PyramidError, Spectrum};
 use crate::format::StoredDetails;
 use crate::pm::ProgressiveMesh;
@@ -30,10 +30,44 @@ impl StoredDetails {
 
     /// The detail spectrum of these details on the hierarchy `pm`, without any analysis.
     pub fn spectrum(&self, pm: &ProgressiveMesh) -> Result<Spectrum, PyramidError> {
+        let (area, diagonal) = surface_stats(
+            &pm.original_positions()[..pm.n_vertices()],
+            pm.finest_faces(),
+        );
+        self.spectrum_on(pm, area, diagonal)
+    }
+
+    /// [`Self::spectrum`] on a finest mesh of area `area` and bounding-box diagonal
+    /// `diagonal` (`surface_stats` of `pm`'s, which a caller may hold already).
+    pub(crate) fn spectrum_on(
+        &self,
+        pm: &ProgressiveMesh,
+        area: f64,
+        diagonal: f64,
+    ) -> Result<Spectrum, PyramidError> {
         self.check_counts_sum(pm)?;
-        let n_finest = pm.n_vertices();
-        let (area, diagonal) =
-            surface_stats(&pm.original_positions()[..n_finest], pm.finest_faces());
+        let (n_base, n_finest) = (pm.n_base_vertices(), pm.n_vertices());
+        match self.exact_band_sums(n_base, n_finest) {
+            Some(sums) => Ok(octave_spectrum_of_sums(
+                n_base,
+                n_finest,
+                area,
+                diagonal,
+                &self.counts,
+                &sums,
+            )),
+            None => self.summed_spectrum(n_base, n_finest, area, diagonal),
+        }
+    }
+
+    /// The spectrum from the decoded details, summed one by one.
+    fn summed_spectrum(
+        &self,
+        n_base: usize,
+        n_finest: usize,
+        area: f64,
+        diagonal: f64,
+    ) -> Result<Spectrum, PyramidError> {
         let details = self.quantised().map_err(|e| mismatch(e.to_string()))?;
         let step = self.step;
         let mut at = 0;
@@ -44,13 +78,36 @@ impl StoredDetails {
             at += c as usize;
             d
         });
-        Ok(octave_spectrum(
-            pm.n_base_vertices(),
-            n_finest,
-            area,
-            diagonal,
-            per_split,
-        ))
+        Ok(octave_spectrum(n_base, n_finest, area, diagonal, per_split))
+    }
+
+    /// Each band's `Σ |d|²` from the details' squares per octave, when that is exactly what
+    /// summing the dequantised details one by one in `f64` gives: every component is `q · step`
+    /// with a power-of-two step, so each `|d|²` and each partial sum is a whole multiple of
+    /// `step²` and exact while the band's `Σ q·q` stays below 2^53 and `step²` is a normal
+    /// number. `None` otherwise (the caller then sums the decoded details).
+    fn exact_band_sums(&self, n_base: usize, n_finest: usize) -> Option<Vec<f64>> {
+        const EXACT: u128 = 1 << f64::MANTISSA_DIGITS;
+        let step2 = self.step * self.step;
+        if !step2.is_normal() || self.base.len() != n_base {
+            return None;
+        }
+        let squares = self.octave_squares();
+        let mut entries = squares.iter().peekable();
+        let mut sums = Vec::new();
+        for (_, hi) in octave_bands(n_base, n_finest) {
+            let mut total = 0u128;
+            while let Some(&&(key, s)) = entries.peek() {
+                if key.min(n_finest) != hi {
+                    break;
+                }
+                total = total.saturating_add(s);
+                entries.next();
+            }
+            let sum = (total < EXACT).then_some(total as f64 * step2)?;
+            sums.push(sum.is_finite().then_some(sum)?);
+        }
+        entries.next().is_none().then_some(sums)
     }
 
     /// The counts must cover the hierarchy's splits and the details exactly.
@@ -167,5 +224,91 @@ impl DetailPyramid {
             stored.step,
         );
         Ok(pyramid)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Details with components spread over the `i32` range's low and high ends, so that some
+    /// octaves' sums are exact and, with `big`, some are not.
+    fn details(n_base: usize, n_splits: usize, big: i32, step: f64) -> StoredDetails {
+        let counts: Vec<u32> = (0..n_splits as u32).map(|k| 5 + k % 4).collect();
+        let n: usize = counts.iter().map(|&c| c as usize).sum();
+        let mut x = 0x9e37_79b9_u32;
+        let quantised = (0..n)
+            .map(|i| {
+                [0, 1, 2].map(|_| {
+                    x ^= x << 13;
+                    x ^= x >> 17;
+                    x ^= x << 5;
+                    let small = (x % 2001) as i32 - 1000;
+                    if i % 97 == 0 {
+                        big.saturating_mul(small.signum())
+                    } else {
+                        small
+                    }
+                })
+            })
+            .collect();
+        let base = vec![glam::DVec3::ZERO; n_base];
+        StoredDetails::from_quantised(RelaxationSpec::default(), base, counts, quantised, step)
+            .unwrap()
+    }
+
+    fn split_of(all: &[[i32; 3]], start: usize, count: u32) -> &[[i32; 3]] {
+        &all[start..start + count as usize]
+    }
+
+    #[test]
+    fn the_spectrum_from_octave_squares_has_the_bits_of_the_summed_details() {
+        for (n_base, n_splits, big, step) in [
+            (4, 9000, 1 << 20, 0.25),
+            (100, 20_000, 1 << 18, 2f64.powi(-30)),
+            (7, 3, 1000, 1.0),
+            (10, 0, 1, 1.0),
+        ] {
+            let quantised = details(n_base, n_splits, big, step);
+            let all: &[[i32; 3]] = match quantised.quantised().unwrap() {
+                std::borrow::Cow::Borrowed(q) => q,
+                std::borrow::Cow::Owned(_) => unreachable!("held quantised"),
+            };
+            let starts: Vec<usize> = quantised
+                .counts
+                .iter()
+                .scan(0, |at, &c| {
+                    *at += c as usize;
+                    Some(*at - c as usize)
+                })
+                .collect();
+            let counts = &quantised.counts;
+            let split = |k: usize| split_of(all, starts[k], counts[k]);
+            let coded = StoredDetails::coded(
+                quantised.relaxation,
+                quantised.base.clone(),
+                n_splits,
+                split,
+                step,
+            )
+            .unwrap();
+            let n_finest = n_base + n_splits;
+            for held in [&quantised, &coded] {
+                let sums = held.exact_band_sums(n_base, n_finest).expect("exact sums");
+                let fast = octave_spectrum_of_sums(n_base, n_finest, 2.5, 3.0, &held.counts, &sums);
+                let summed = held.summed_spectrum(n_base, n_finest, 2.5, 3.0).unwrap();
+                assert_eq!(fast.to_csv(), summed.to_csv(), "{n_base} {n_splits}");
+                assert_eq!(fast, summed);
+            }
+        }
+    }
+
+    #[test]
+    fn octave_sums_beyond_the_exact_range_are_summed_from_the_details() {
+        let held = details(4, 5000, i32::MAX, 1.0);
+        assert!(held.exact_band_sums(4, 5004).is_none());
+        // A step whose square is subnormal is not exact either.
+        let tiny = details(4, 50, 1, 2f64.powi(-540));
+        assert!(tiny.exact_band_sums(4, 54).is_none());
     }
 }

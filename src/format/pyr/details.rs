@@ -69,6 +69,58 @@ struct CodedBlocks {
     /// Per block: its number of splits, its byte range in `bytes` and its offset in the file.
     blocks: Vec<(usize, std::ops::Range<usize>, u64)>,
     n_details: usize,
+    /// The details' squares per octave, taken while the blocks were first decoded.
+    squares: OctaveSquares,
+}
+
+/// `Σ q·q` over the components of the details of each octave of levels `(2^b, 2^(b+1)]`,
+/// keyed by `2^(b+1)` (split `k` makes level `n_base + k + 1`), in key order, saturating. With
+/// a power-of-two step these are the spectrum's energies in whole `step²`, so a reader that
+/// took them while checking the blocks gives the spectrum without decoding the details again.
+pub(crate) type OctaveSquares = Vec<(usize, u128)>;
+
+/// Adds `sum` to the octave of `level` (levels come in increasing order).
+fn add_square(squares: &mut OctaveSquares, level: usize, sum: u128) {
+    let key = level.checked_next_power_of_two().unwrap_or(usize::MAX);
+    match squares.last_mut() {
+        Some((k, s)) if *k == key => *s = s.saturating_add(sum),
+        _ => squares.push((key, sum)),
+    }
+}
+
+/// `Σ q·q` of one detail (below 2^108: every component is below 2^53).
+#[inline]
+fn square(q: [i64; 3]) -> u128 {
+    q.iter()
+        .map(|&x| x.unsigned_abs() as u128 * x.unsigned_abs() as u128)
+        .sum()
+}
+
+/// The octave squares of splits whose first makes level `first_level + 1`, with `counts` and
+/// `details` in split order.
+fn squares_of(first_level: usize, counts: &[u32], details: &[[i32; 3]]) -> OctaveSquares {
+    let mut squares = OctaveSquares::new();
+    let mut at = 0;
+    for (i, &c) in counts.iter().enumerate() {
+        let split = &details[at..at + c as usize];
+        let sum = split
+            .iter()
+            .map(|q| square(q.map(i64::from)))
+            .fold(0u128, u128::saturating_add);
+        add_square(&mut squares, first_level + i + 1, sum);
+        at += c as usize;
+    }
+    squares
+}
+
+/// Appends the squares of the next run of splits to `all`.
+fn merge_squares(all: &mut OctaveSquares, run: OctaveSquares) {
+    for (key, sum) in run {
+        match all.last_mut() {
+            Some((k, s)) if *k == key => *s = s.saturating_add(sum),
+            _ => all.push((key, sum)),
+        }
+    }
 }
 
 impl PartialEq for StoredDetails {
@@ -125,17 +177,20 @@ impl StoredDetails {
         step: f64,
     ) -> Result<StoredDetails, String> {
         use rayon::prelude::*;
+        let n_base = base.len();
         let checked = StoredDetails::from_quantised(relaxation, base, vec![], vec![], step)?;
         let n_blocks = n_splits.div_ceil(SPLITS_PER_BLOCK);
-        let coded: Vec<(Vec<u32>, usize, Vec<u8>)> = (0..n_blocks)
+        let coded: Vec<(Vec<u32>, usize, Vec<u8>, OctaveSquares)> = (0..n_blocks)
             .into_par_iter()
             .map(|b| {
                 let splits = b * SPLITS_PER_BLOCK..((b + 1) * SPLITS_PER_BLOCK).min(n_splits);
+                let first_level = n_base + splits.start;
                 let counts: Vec<u32> = splits.clone().map(|k| split(k).len() as u32).collect();
                 let details: Vec<[i32; 3]> =
                     splits.flat_map(|k| split(k).iter().copied()).collect();
                 let block = encode_block(&counts, &details);
-                (counts, details.len(), block)
+                let squares = squares_of(first_level, &counts, &details);
+                (counts, details.len(), block, squares)
             })
             .collect();
         let mut counts = Vec::with_capacity(n_splits);
@@ -143,13 +198,15 @@ impl StoredDetails {
             bytes: Vec::with_capacity(coded.iter().map(|c| c.2.len()).sum()),
             blocks: Vec::with_capacity(n_blocks),
             n_details: 0,
+            squares: OctaveSquares::new(),
         };
-        for (c, n, bytes) in coded {
+        for (c, n, bytes, squares) in coded {
             let start = blocks.bytes.len();
             blocks.bytes.extend_from_slice(&bytes);
             blocks.blocks.push((c.len(), start..blocks.bytes.len(), 0));
             blocks.n_details += n;
             counts.extend(c);
+            merge_squares(&mut blocks.squares, squares);
         }
         Ok(StoredDetails {
             counts,
@@ -211,6 +268,18 @@ impl StoredDetails {
         Ok(std::borrow::Cow::Owned(all))
     }
 
+    /// The details' squares per octave of levels ([`OctaveSquares`]), on a hierarchy of
+    /// `self.base.len()` base vertices: kept from the first decoding when the details are
+    /// coded, summed now when they are held quantised.
+    pub(crate) fn octave_squares(&self) -> std::borrow::Cow<'_, OctaveSquares> {
+        match &self.values {
+            Values::Coded(c) => std::borrow::Cow::Borrowed(&c.squares),
+            Values::Quantised(q) => {
+                std::borrow::Cow::Owned(squares_of(self.base.len(), &self.counts, q))
+            }
+        }
+    }
+
     /// All details in split order, in model units.
     pub fn details(&self) -> Result<Vec<DVec3>, FormatError> {
         let step = self.step;
@@ -242,7 +311,7 @@ impl CodedBlocks {
                 .map(|(n, range, at)| {
                     let mut out = Some(Vec::new());
                     let bytes = &self.bytes[range.clone()];
-                    let (counts, _) = decode_block(*n, bytes, *at, self.n_details, &mut out)?;
+                    let (counts, _) = decode_block(*n, bytes, *at, self.n_details, &mut out, None)?;
                     Ok((counts, out.unwrap_or_default()))
                 })
                 .collect::<Result<_, FormatError>>()?;
@@ -368,14 +437,14 @@ pub(crate) fn decode_details(
     let n_details = r.count(max_details, "detail count")?;
     let base = read_base(&mut r, n_base)?;
     let blocks = block_slices(&mut r, n_splits)?;
-    let (counts, fit) = check_blocks(&blocks, n_details)?;
+    let (counts, fit, squares) = check_blocks(&blocks, n_base, n_details)?;
     let stored = fit
         .then(|| StoredDetails {
             relaxation,
             base,
             counts,
             step,
-            values: Values::Coded(coded_copy(&blocks, n_details)),
+            values: Values::Coded(coded_copy(&blocks, n_details, squares)),
         })
         .ok_or_else(|| "a stored detail is beyond the 32 bits the pyramid keeps".to_string());
     Ok(DetailSection {
@@ -386,7 +455,7 @@ pub(crate) fn decode_details(
 }
 
 /// The blocks copied out of the file, to be decoded when the details are asked for.
-fn coded_copy(blocks: &[Block<'_>], n_details: usize) -> CodedBlocks {
+fn coded_copy(blocks: &[Block<'_>], n_details: usize, squares: OctaveSquares) -> CodedBlocks {
     let mut bytes = Vec::with_capacity(blocks.iter().map(|b| b.1.len()).sum());
     let blocks = blocks
         .iter()
@@ -400,6 +469,7 @@ fn coded_copy(blocks: &[Block<'_>], n_details: usize) -> CodedBlocks {
         bytes,
         blocks,
         n_details,
+        squares,
     }
 }
 
@@ -453,13 +523,25 @@ fn block_slices<'a>(
 }
 
 /// Decodes the blocks on all cores to check them, keeping only their counts, which must add
-/// up to `n_details`; says whether every detail fits 32 bits.
-fn check_blocks(blocks: &[Block<'_>], n_details: usize) -> Result<(Vec<u32>, bool), FormatError> {
+/// up to `n_details`, and the details' squares per octave of a hierarchy of `n_base` base
+/// vertices; says whether every detail fits 32 bits.
+fn check_blocks(
+    blocks: &[Block<'_>],
+    n_base: usize,
+    n_details: usize,
+) -> Result<(Vec<u32>, bool, OctaveSquares), FormatError> {
     use rayon::prelude::*;
-    let decoded: Vec<(Vec<u32>, bool)> = blocks
+    let decoded: Vec<(Vec<u32>, bool, OctaveSquares)> = blocks
         .par_iter()
-        .map(|&(n, bytes, at)| decode_block(n, bytes, at, n_details, &mut None))
-        .collect::<Result<_, _>>()?;
+        .enumerate()
+        .map(|(b, &(n, bytes, at))| {
+            let mut squares = OctaveSquares::new();
+            let first_level = n_base.saturating_add(b * SPLITS_PER_BLOCK);
+            let sums = Some((first_level, &mut squares));
+            let (counts, fit) = decode_block(n, bytes, at, n_details, &mut None, sums)?;
+            Ok((counts, fit, squares))
+        })
+        .collect::<Result<_, FormatError>>()?;
     let total: u64 = decoded
         .iter()
         .flat_map(|b| &b.0)
@@ -474,46 +556,56 @@ fn check_blocks(blocks: &[Block<'_>], n_details: usize) -> Result<(Vec<u32>, boo
     }
     let fit = decoded.iter().all(|b| b.1);
     let mut counts = Vec::with_capacity(blocks.iter().map(|b| b.0).sum());
-    for (c, _) in decoded {
+    let mut squares = OctaveSquares::new();
+    for (c, _, s) in decoded {
         counts.extend(c);
+        merge_squares(&mut squares, s);
     }
-    Ok((counts, fit))
+    Ok((counts, fit, squares))
 }
 
 /// One block of `n` splits (no block holds more than `max_details` details): its counts, and
 /// whether every detail fits 32 bits. With `out`, the details are appended to it, and then
-/// they must fit.
+/// they must fit. With `squares` (the level before the block's first split's, and where to
+/// add), the details' squares are added per octave.
 fn decode_block(
     n: usize,
     bytes: &[u8],
     at: u64,
     max_details: usize,
     out: &mut Option<Vec<[i32; 3]>>,
+    mut squares: Option<(usize, &mut OctaveSquares)>,
 ) -> Result<(Vec<u32>, bool), FormatError> {
     let mut r = BitReader::new(bytes, at);
     let mut ctx = [Context::default(); N_CONTEXTS];
     let mut counts = Vec::with_capacity(n);
     let mut seen = 0i64;
     let mut fit = true;
-    for _ in 0..n {
+    for split in 0..n {
         let c = r.decode(&mut ctx[0])?.saturating_add(7);
         if c < 1 || seen.saturating_add(c) > max_details as i64 {
             return Err(corrupt(at, format!("a split with {c} details")));
         }
         seen += c;
         counts.push(c as u32);
+        let mut sum = 0u128;
         for i in 0..c {
             let first = if i == 0 { 1 } else { 4 };
             let mut q = [0i32; 3];
+            let mut wide = [0i64; 3];
             for (j, x) in q.iter_mut().enumerate() {
                 let v = r.decode(&mut ctx[first + j])?;
                 if !(-MAX_QUANTISED < v && v < MAX_QUANTISED) {
                     return Err(corrupt(at, format!("quantised detail {v} out of range")));
                 }
+                wide[j] = v;
                 *x = i32::try_from(v).unwrap_or_else(|_| {
                     fit = false;
                     0
                 });
+            }
+            if squares.is_some() {
+                sum = sum.saturating_add(square(wide));
             }
             if let Some(out) = out.as_mut() {
                 if !fit {
@@ -521,6 +613,9 @@ fn decode_block(
                 }
                 out.push(q);
             }
+        }
+        if let Some((first_level, squares)) = squares.as_mut() {
+            add_square(squares, first_level.saturating_add(split + 1), sum);
         }
     }
     if !r.at_end() {

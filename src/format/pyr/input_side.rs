@@ -10,6 +10,7 @@ use crate::pm::{FaceBuckets, FlatReplay, ProgressiveMesh, canonical_sorted, tria
 use glam::DVec3;
 
 use super::attributes::decode_attributes;
+use super::copied_faces::copied_faces;
 use super::corners::decode_corners;
 use super::{ATTR, CRNR, Meta, ORDR, POLY, corrupt, required};
 
@@ -189,17 +190,30 @@ pub(super) fn restore_input_positions(
 }
 
 /// The finest faces in PM indices, checked to be exactly what the splits rebuild in `replay`:
-/// read off a clean triangle input, else from the builder's repaired triangles (with their
-/// map back onto the input, returned too).
+/// read off a clean triangle input, or off an input whose repair only copied vertices
+/// (`copied_faces`), else from the builder's repaired triangles (with their map back onto the
+/// input, returned too). `order` is the file's vertex order and `mesh_to_pm` its inverse
+/// (`permutation`: exactly).
 pub(super) fn finest_faces(
     input: &PolygonMesh,
     clean_faces: Option<CleanFaces>,
     replay: FlatReplay,
-    mesh_to_pm: &[u32],
+    (order, mesh_to_pm, permutation): (&[u32], &[u32], bool),
     positions: &[DVec3],
 ) -> Result<(Vec<[u32; 3]>, Option<SourceMap>), FormatError> {
+    // A clean input whose faces are not the replay's had triangles flipped by the builder:
+    // only the builder tells which.
+    let not_clean = clean_faces.is_none();
     if let Some(clean) = clean_faces.filter(|c| replay.has_faces(&c.buckets)) {
         return Ok((clean.faces, None));
+    }
+    let n_input = input.positions.len();
+    let copied = (not_clean && permutation)
+        .then(|| copied_faces(input, mesh_to_pm, positions))
+        .flatten()
+        .and_then(|c| c.resolve(n_input, &replay, order, positions));
+    if let Some((faces, source)) = copied {
+        return Ok((faces, Some(source)));
     }
     // The replay's rings (about 160 B per vertex) go before the builder's repair, whose
     // temporaries are as large: only the faces they rebuilt are compared.
