@@ -41,8 +41,8 @@ pub(crate) fn pass_in_step(
     let blocks: Vec<_> = tasks
         .into_par_iter()
         .map(|t| {
-            let (block, mesh, quadric) = working_mesh(t);
-            let mut stepper = Stepper::new(mesh, quadric);
+            let (block, mesh, quadric, seams) = working_mesh(t);
+            let mut stepper = Stepper::new(mesh, quadric, seams);
             stepper.collect(rim_scale, params.max_error_sq);
             (block, stepper)
         })
@@ -56,8 +56,8 @@ pub(crate) fn pass_in_step(
         .into_par_iter()
         .map(|(block, mut stepper)| {
             stepper.perform(cut, legality, &block_params);
-            let (collapses, mesh, quadric) = stepper.finish();
-            block.result(collapses, &mesh, &quadric)
+            let (collapses, mesh, quadric, seams) = stepper.finish();
+            block.result(collapses, &mesh, &quadric, seams.as_ref())
         })
         .collect();
     (results, cut)
