@@ -26,7 +26,7 @@
 
 use super::super::Stop;
 use super::super::attribute_quadric::AttributeQuadric;
-use super::super::decimate::{Collapse, DecimateParams, FlatMesh, Run, decimate_from};
+use super::super::decimate::{Collapse, DecimateParams, FlatMesh, Run, SeamFloor, decimate_from};
 use super::super::quadric::{Quadric, Quadrics};
 use super::super::seams::Seams;
 use crate::mesh::build::next_c;
@@ -62,6 +62,9 @@ pub(crate) struct BlockTask {
     pub last: bool,
     /// A textured scan's seams in the block; `None` decimates without them.
     pub seams: Option<BlockSeams>,
+    /// The dearest collapse the passes before made under a cost cut, which caps the last
+    /// block's passes without one when it keeps seams, as in one process.
+    pub seam_floor: SeamFloor,
 }
 
 /// A block's texture seams: the wedge of each corner of its faces and what the seam rule and
@@ -101,6 +104,7 @@ pub(crate) fn decimate_block(task: BlockTask) -> (BlockResult, Stop) {
     let run = Run {
         input_faces: task.input_faces,
         relax: task.last,
+        seam_floor: task.seam_floor,
     };
     let params = task.params;
     let (block, mesh, quadric, mut seams) = working_mesh(task);

@@ -24,6 +24,8 @@ pub(crate) struct Whole {
     pub faces: usize,
     /// Whether the pass takes the cost cut (off after a pass that collapsed nothing).
     pub use_goal: bool,
+    /// The highest cut a pass may take (the seam floor's cap, `docs/seams.md`; else infinite).
+    pub cap: f64,
 }
 
 /// One pass over the blocks `tasks`: their results in task order and the pass's cost cut.
@@ -49,7 +51,7 @@ pub(crate) fn pass_in_step(
         .collect();
     let mut costs: Vec<f64> = blocks.iter().flat_map(|b| b.1.costs()).collect();
     let goal = pass_goal(whole.faces, params.target_faces);
-    let cut = pass_cut(&mut costs, goal, whole.use_goal, params.max_error_sq);
+    let cut = pass_cut(&mut costs, goal, whole.use_goal, params.max_error_sq).min(whole.cap);
     drop(costs);
     let legality = params.legality.at_level(whole.faces, whole.input_faces);
     let results = blocks

@@ -51,7 +51,7 @@ mod through_files;
 use super::PmError;
 use super::attribute_quadric::AttributeQuadric;
 use super::decimate::passes::Turns;
-use super::decimate::{DecimateParams, FlatMesh, initial_quadrics};
+use super::decimate::{DecimateParams, FlatMesh, SeamFloor, initial_quadrics};
 use super::progressive::Decimated;
 use super::seams::Seams;
 use crate::progress::Progress;
@@ -95,6 +95,9 @@ pub(crate) fn decimate_in_blocks(
     let mut collapses = Vec::new();
     let mut turns = Turns::START;
     let mut pass = 0;
+    // Keeping seams, passes without the cut take no collapse far dearer than those made under
+    // one, as in one process (`SEAM_FLOOR_COST_FACTOR`, docs/seams.md), nor does the last block.
+    let mut floor = SeamFloor::default();
     while vertices.len() > stop_at && faces.len() > params.target_faces && turns.idle < FRAMES.len()
     {
         let frame = &FRAMES[pass % FRAMES.len()];
@@ -118,10 +121,12 @@ pub(crate) fn decimate_in_blocks(
             input_faces: input.input_faces,
             faces: faces.len(),
             use_goal: turns.use_goal,
+            cap: floor.cap(wedges.keeps_seams() && !turns.use_goal),
         };
         let (results, cut) = lockstep::pass_in_step(tasks, &whole, params);
         faces = split.across;
         wedges.faces = split.across_wedges;
+        let first_new = collapses.len();
         let made = gather(
             results,
             &mut quadrics,
@@ -129,6 +134,9 @@ pub(crate) fn decimate_in_blocks(
             &mut wedges,
             &mut collapses,
         );
+        if turns.use_goal {
+            floor.took(&collapses[first_new..]);
+        }
         vertices = vertices_of(&faces);
         // When no frame's cells find anything, the mesh goes to the last block as it is.
         turns.after(made > 0, cut, params.max_error_sq);
@@ -136,7 +144,8 @@ pub(crate) fn decimate_in_blocks(
     }
     let last_wedges = std::mem::take(&mut wedges.faces);
     let last_seams = wedges.block(Some(last_wedges));
-    let last = input.task(faces, &quadrics, |_| false, true, last_seams);
+    let mut last = input.task(faces, &quadrics, |_| false, true, last_seams);
+    last.seam_floor = floor;
     let (result, stop) = decimate_block(last);
     collapses.extend(result.collapses);
     progress.update(1.0);
@@ -276,6 +285,7 @@ impl Input<'_> {
             params: *self.params,
             last,
             seams,
+            seam_floor: SeamFloor::default(),
         }
     }
 }

@@ -171,6 +171,7 @@ fn task(info: &PassInfo, block: Bucket) -> BlockTask {
         params: info.params,
         last: info.last,
         seams: None,
+        seam_floor: Default::default(),
     }
 }
 
