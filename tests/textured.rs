@@ -7,6 +7,7 @@ mod common;
 
 use common::*;
 use glam::DVec3;
+use meshpyr::format::PyramidOptions;
 use meshpyr::io::{
     MeshFormat, PlyEncoding, read_mesh, read_mesh_bytes, read_mesh_reporting, write_mesh,
     write_mesh_bytes, write_mesh_with,
@@ -774,16 +775,72 @@ fn a_pyr_file_gives_the_same_level_bytes_as_the_pyramid_in_memory_and_records_th
     }
 }
 
-#[test]
-fn a_partitioned_build_does_not_claim_the_seams_and_its_levels_carry_no_corners() {
-    let input = read_mesh(data(OBJ)).unwrap();
-    let options = meshpyr::format::PyramidOptions {
+fn in_blocks(block_vertices: usize, block_scratch: Option<std::path::PathBuf>) -> PyramidOptions {
+    PyramidOptions {
         pm: meshpyr::pm::PmOptions {
-            block_vertices: Some(128),
+            block_vertices: Some(block_vertices),
+            block_scratch,
             ..Default::default()
         },
         ..Default::default()
-    };
+    }
+}
+
+/// A hierarchy built in blocks keeps the seams as one built in one process: its records replay
+/// exactly through the validating constructor, every level keeps each triangle inside one
+/// texture chart with its material, and its `.pyr` file gives the same levels.
+#[test]
+fn a_hierarchy_built_in_blocks_keeps_each_triangle_inside_one_texture_chart_at_every_level() {
+    for name in [OBJ, PLY] {
+        let input = read_mesh(data(name)).unwrap();
+        let whole = Pyramid::build(&input).unwrap();
+        for block in [48, 128] {
+            let options = in_blocks(block, None);
+            let pyramid =
+                Pyramid::build_with(input.clone(), &options, &meshpyr::NoProgress).unwrap();
+            let what = format!("{name} in blocks of {block}");
+            assert!(pyramid.pm.keeps_seams(), "{what}");
+            let again = meshpyr::pm::ProgressiveMesh::from_parts(pyramid.pm.to_parts())
+                .expect("the splits replay exactly to the input");
+            assert_eq!(again.n_base_faces(), pyramid.pm.n_base_faces(), "{what}");
+            let (base, finest) = (*pyramid.levels().start(), *pyramid.levels().end());
+            // The blocks stop where the one-process build does, at the seam floor, give or
+            // take the vertices pinned at a border when no frame's blocks find more.
+            let floor = *whole.levels().start();
+            assert!(
+                base * 2 < finest,
+                "{what}: the hierarchy went far ({base} of {finest})"
+            );
+            assert!(
+                base <= floor + floor / 4,
+                "{what}: base {base}, one process {floor}"
+            );
+            let (bytes, _) = pyramid.to_pyr_bytes().unwrap();
+            let file = meshpyr::format::decode(&bytes).unwrap();
+            assert!(file.pm.keeps_seams(), "{what}");
+            for n in [base, base + 1, (base + finest) / 2, finest - 1] {
+                let what = format!("{what}, level {n}");
+                let level = pyramid.level_mesh(n).unwrap();
+                assert_eq!(level.n_faces(), pyramid.pm.n_faces_at(n), "{what}");
+                let seam =
+                    assert_no_texture_across_seams(&input, &level, &level_rows(&pyramid, n), &what);
+                assert!(seam > 0, "{what}: no seam left to check");
+                assert!(
+                    file.level_mesh(n).unwrap() == level,
+                    "{what}: the file's level"
+                );
+            }
+        }
+    }
+}
+
+/// The task files of a partitioned build do not carry the seams: a hierarchy built through
+/// them does not claim them, and its coarser levels carry materials but no corners.
+#[test]
+fn a_build_through_task_files_does_not_claim_the_seams_and_its_levels_carry_no_corners() {
+    let input = read_mesh(data(OBJ)).unwrap();
+    let scratch = tempfile::tempdir().unwrap();
+    let options = in_blocks(128, Some(scratch.path().to_path_buf()));
     let pyramid = Pyramid::build_with(input.clone(), &options, &meshpyr::NoProgress).unwrap();
     assert!(!pyramid.pm.keeps_seams());
     let (bytes, _) = pyramid.to_pyr_bytes().unwrap();
@@ -864,15 +921,10 @@ fn damaged_build_options_and_records_that_break_a_seam_are_typed_errors() {
     );
     let err = meshpyr::format::decode(&with_options(&bytes, 3, Some(&[0u8; 3]))).unwrap_err();
     assert!(err.to_string().contains("OPTS"), "{err}");
-    // A partitioned build's records break seams; a file claiming otherwise is refused where
-    // the replay meets the first such record.
-    let options = meshpyr::format::PyramidOptions {
-        pm: meshpyr::pm::PmOptions {
-            block_vertices: Some(128),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
+    // A build through task files breaks seams; a file claiming otherwise is refused where the
+    // replay meets the first such record.
+    let scratch = tempfile::tempdir().unwrap();
+    let options = in_blocks(128, Some(scratch.path().to_path_buf()));
     let blocks = Pyramid::build_with(input.clone(), &options, &meshpyr::NoProgress).unwrap();
     let (bytes, _) = blocks.to_pyr_bytes().unwrap();
     let mut claims = 0.25f64.to_le_bytes().to_vec();

@@ -45,7 +45,7 @@ pub(crate) struct PathOptions {
 
 impl PathOptions {
     /// The path for `job` on the mesh `input` read from `path`, said unless `--quiet`. A
-    /// textured input is never built in blocks ([`keeping_seams`]).
+    /// textured input is not built in blocks through task files ([`keeping_seams`]).
     pub(crate) fn choose(
         &self,
         path: &Path,
@@ -57,7 +57,7 @@ impl PathOptions {
         let allowance = Allowance::of_this_process();
         let chosen =
             memory::choose_build_path(job, &size, self.block_vertices, self.memory, &allowance);
-        let chosen = keeping_seams(path, chosen, input)?;
+        keeping_seams(path, &chosen, input, self.block_files.is_some())?;
         global.say(format_args!(
             "{}: building the hierarchy {chosen}",
             path.display()
@@ -66,35 +66,26 @@ impl PathOptions {
     }
 }
 
-/// `chosen` for `input`, read from `path`, when its hierarchy keeps texture seams: the blocks
-/// of a partitioned build decide their collapses without the seams (`docs/seams.md`), so its
-/// coarser levels would lose the texture. Forced blocks are refused; blocks chosen for memory
-/// give way to one process, with a warning that it may not fit.
-fn keeping_seams(path: &Path, chosen: BuildPath, input: &PolygonMesh) -> anyhow::Result<BuildPath> {
-    let BuildPath::Partitioned { by_memory, .. } = chosen else {
-        return Ok(chosen);
+/// Refuses a partitioned build of `input`, read from `path`, through task files (`files`) when
+/// its hierarchy keeps texture seams: the blocks keep the seams in memory, but the task files
+/// (formats/blocks.md) do not carry the corners' wedges, so its coarser levels would lose the
+/// texture (`docs/seams.md`).
+fn keeping_seams(
+    path: &Path,
+    chosen: &BuildPath,
+    input: &PolygonMesh,
+    files: bool,
+) -> anyhow::Result<()> {
+    let BuildPath::Partitioned { .. } = chosen else {
+        return Ok(());
     };
-    if !meshpyr::pm::keeps_texture_seams(input) {
-        return Ok(chosen);
-    }
-    let Some((need, allowed)) = by_memory else {
+    if files && meshpyr::pm::keeps_texture_seams(input) {
         anyhow::bail!(
-            "{}: --block-vertices: the scan is textured and a partitioned build does not keep \
-             its texture seams (its coarser levels would lose the texture); leave \
-             --block-vertices out to build it in one process",
+            "{}: --block-files: the scan is textured and the task files of a partitioned build \
+             do not carry its texture seams (its coarser levels would lose the texture); leave \
+             --block-files out to build it in blocks in memory, which keeps them",
             path.display()
         );
-    };
-    eprintln!(
-        "warning: {}: the scan is textured and a partitioned build does not keep its texture \
-         seams, so its hierarchy is built in one process, estimated at {} with {} allowed; it \
-         may swap or be stopped by the system (a larger --memory says it may use more)",
-        path.display(),
-        memory::Bytes(need),
-        memory::Bytes(allowed)
-    );
-    Ok(BuildPath::OneProcess {
-        need,
-        allowed: Some(allowed),
-    })
+    }
+    Ok(())
 }

@@ -327,43 +327,56 @@ fn textured_obj_faces(text: &str, markers: &[&str]) -> usize {
     faces.len()
 }
 
-/// The blocks of a partitioned build decide their collapses without the seams: a textured
-/// scan is never built in blocks without saying so. Forced blocks are refused; blocks chosen
-/// for a tight memory give way to one process, with a warning, and the file keeps the seams.
+/// A textured scan is built in blocks as any scan, forced or for a tight memory, and its
+/// hierarchy keeps the seams: the coarse levels extract with their texture coordinates. Task
+/// files do not carry the seams, so `--block-files` is refused for it.
 #[test]
-fn a_textured_scan_is_built_in_one_process_or_refused_never_in_blocks_without_its_seams() {
+fn a_textured_scan_built_in_blocks_keeps_its_seams_and_block_files_are_refused() {
     let pyr = scratch_arg("cli_textured_blocks", "scan.pyr");
     let forced = meshpyr(&["build", &data(OBJ), "-o", &pyr, "--block-vertices", "128"]);
-    fails_with(&forced, "does not keep its texture seams");
-    assert!(stderr(&forced).contains("leave --block-vertices out"));
-    assert!(!std::path::Path::new(&pyr).exists());
-    let tight = meshpyr(&["build", &data(OBJ), "-o", &pyr, "--memory", "1K"]);
-    let err = ok(&tight);
+    let err = ok(&forced);
     assert!(
-        err.contains("warning:") && err.contains("built in one process"),
+        err.contains("building the hierarchy in blocks of at most 128 vertices"),
         "{err}"
     );
-    assert!(
-        err.contains("building the hierarchy in one process"),
-        "{err}"
-    );
+    assert!(!err.contains("warning"), "{err}");
     let file = meshpyr::format::decode(&std::fs::read(&pyr).unwrap()).unwrap();
     assert!(file.pm.keeps_seams(), "the hierarchy keeps the seams");
-    // filter and edit choose their path the same way.
-    let out = scratch_arg("cli_textured_blocks", "low.obj");
-    fails_with(
-        &meshpyr(&[
-            "filter",
-            &data(OBJ),
-            "-o",
-            &out,
-            "--lowpass",
-            "200",
-            "--block-vertices",
-            "128",
-        ]),
-        "does not keep its texture seams",
-    );
+    let level = scratch_arg("cli_textured_blocks", "level.obj");
+    let base = file.pm.n_base_vertices();
+    let at = (base + 40).to_string();
+    let err = ok(&meshpyr(&["extract", &pyr, "-o", &level, "--level", &at]));
+    assert!(!err.contains("warning"), "{err}");
+    let text = std::fs::read_to_string(&level).unwrap();
+    textured_obj_faces(&text, &["mtllib ", "usemtl ", "\nvt "]);
+    let tight = scratch_arg("cli_textured_blocks", "tight.pyr");
+    let err = ok(&meshpyr(&[
+        "build",
+        &data(OBJ),
+        "-o",
+        &tight,
+        "--memory",
+        "1K",
+    ]));
+    assert!(err.contains("building the hierarchy in blocks"), "{err}");
+    let file = meshpyr::format::decode(&std::fs::read(&tight).unwrap()).unwrap();
+    assert!(file.pm.keeps_seams(), "the hierarchy keeps the seams");
+    let folder = scratch("cli_textured_blocks", "files");
+    std::fs::create_dir_all(&folder).unwrap();
+    let files = scratch_arg("cli_textured_blocks", "files.pyr");
+    let refused = meshpyr(&[
+        "build",
+        &data(OBJ),
+        "-o",
+        &files,
+        "--block-vertices",
+        "128",
+        "--block-files",
+        folder.to_str().unwrap(),
+    ]);
+    fails_with(&refused, "do not carry its texture seams");
+    assert!(stderr(&refused).contains("leave --block-files out"));
+    assert!(!std::path::Path::new(&files).exists());
 }
 
 /// A low-pass below the seam floor acts on the levels above it: the warning says so, why the

@@ -496,6 +496,28 @@ fn over_the_budget_the_editor_shows_the_coarse_level_textured() {
     page_shows_the_texture_and_its_toggle_hides_it(&driver);
 }
 
+/// The scrubber's coarser levels of a textured scan draw with their texture, as the shown level
+/// does: the level's own corners, the scan's images.
+#[test]
+fn the_scrubber_draws_a_coarser_level_of_a_textured_scan_textured() {
+    let Some(driver) = driver_or_skip("the_scrubber_draws_a_coarser_level_of_a_textured_scan")
+    else {
+        return;
+    };
+    let server = serve("textured/anchor_tex.obj");
+    driver.navigate(&server.url);
+    driver.wait_for("window.meshpyr && window.meshpyr.ready && window.meshpyr.idle()");
+    let finest = driver.canvas_pixels();
+    driver.slide("#level", 300.0);
+    let shown = driver.script("return window.meshpyr.shownLevel;");
+    assert!(shown.as_u64().is_some_and(|n| n < 519), "{shown}");
+    let level_texture = driver.script("return window.meshpyr.levelTexture;");
+    assert_eq!(level_texture["groups"], 2, "{level_texture}");
+    let share = changed_share(&finest, &driver.canvas_pixels());
+    assert!(share > 0.005, "the coarse level looks the same: {share}");
+    page_shows_the_texture_and_its_toggle_hides_it(&driver);
+}
+
 /// The page draws the scan's images (two of them), and unchecking `texture` draws the clay.
 fn page_shows_the_texture_and_its_toggle_hides_it(driver: &Driver) {
     let texture = driver.script("return window.meshpyr.texture;");

@@ -194,12 +194,79 @@ fn over_the_budget_the_layout_textures_the_shown_level_with_the_inputs_corners()
     );
 }
 
+/// The scrubber's level `n`: the layout covers exactly `/api/level?n=N`'s triangles, and
+/// every drawn corner is a corner the input has at that vertex.
+#[test]
+fn the_layout_of_a_scrubbed_level_textures_its_triangles_with_the_inputs_corners() {
+    let server = serve(OBJ);
+    let info = server.api("GET", "/api/info", b"").json();
+    let min = info["levels"]["min"].as_u64().unwrap();
+    let n = min + 20;
+    let level = server.api("GET", &format!("/api/level?n={n}"), b"").body;
+    let head: Vec<u32> = u32s(&level[..8]).collect();
+    let (nv, nt) = (head[0] as usize, head[1] as usize);
+    assert_eq!(nv as u64, n);
+    let level_triangles: Vec<u32> = u32s(&level[8 + 12 * nv..]).collect();
+    assert_eq!(level_triangles.len(), 3 * nt);
+    let layout = layout_of(
+        &server
+            .api("GET", &format!("/api/texcoords?n={n}"), b"")
+            .body,
+    );
+    assert!(layout.vertex_of.iter().all(|&v| (v as usize) < nv));
+    let drawn: Vec<u32> = layout
+        .triangles
+        .iter()
+        .flatten()
+        .map(|&d| layout.vertex_of[d as usize])
+        .collect();
+    let sorted = |flat: &[u32]| {
+        let mut t: Vec<&[u32]> = flat.chunks_exact(3).collect();
+        t.sort_unstable();
+        t.into_iter().map(<[u32]>::to_vec).collect::<Vec<_>>()
+    };
+    assert_eq!(sorted(&drawn), sorted(&level_triangles));
+    // The level's vertex `i` is PM vertex `i`, at its input position.
+    let input = meshpyr::read_mesh(data(OBJ)).unwrap();
+    let pyramid = meshpyr::Pyramid::build(&input).unwrap();
+    let pm = pyramid.pm.original_positions();
+    let uv = input.corner_attribute(TEXCOORD).unwrap();
+    let input_corners: std::collections::HashSet<([u64; 3], [u32; 2])> =
+        (0..input.face_indices.len())
+            .map(|c| {
+                let p = input.positions[input.face_indices[c] as usize];
+                let value = uv.value(c).unwrap();
+                (
+                    p.to_array().map(f64::to_bits),
+                    [(value[0] as f32).to_bits(), (value[1] as f32).to_bits()],
+                )
+            })
+            .collect();
+    for (d, &v) in layout.vertex_of.iter().enumerate() {
+        let key = (
+            pm[v as usize].to_array().map(f64::to_bits),
+            layout.uvs[d].map(f32::to_bits),
+        );
+        assert!(input_corners.contains(&key), "drawn vertex {d} (PM {v})");
+    }
+    assert!(layout.vertex_of.len() > nv, "no seam split");
+    assert_eq!(layout.groups.len(), 2);
+    for bad in ["n=0", "n=abc", "n=100000"] {
+        let reply = server.api("GET", &format!("/api/texcoords?{bad}"), b"");
+        assert_eq!(reply.status, 400, "{bad}");
+    }
+}
+
 #[test]
 fn an_untextured_scan_has_no_texture_and_no_layout() {
     let server = serve("mc/mc_bunny_vox40.ply");
     let info = server.api("GET", "/api/info", b"").json();
     assert!(info["texture"].is_null());
-    for path in ["/api/texcoords", "/api/texture?image=0"] {
+    for path in [
+        "/api/texcoords",
+        "/api/texcoords?n=100",
+        "/api/texture?image=0",
+    ] {
         assert_eq!(server.api("GET", path, b"").status, 409, "{path}");
     }
 }

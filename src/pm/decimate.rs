@@ -900,6 +900,7 @@ pub(crate) fn decimate_with_seams(
     let run = Run {
         input_faces: mesh.n_faces,
         relax: true,
+        seam_floor: SeamFloor::default(),
     };
     let (collapses, mesh, outcome, _) = decimate_from(mesh, quadric, run, params, seams, progress);
     (collapses, mesh, outcome)
@@ -914,6 +915,9 @@ pub(crate) struct Run {
     pub input_faces: usize,
     /// Whether a pass that finds nothing relaxes the shape rules (else the decimation stops).
     pub relax: bool,
+    /// The dearest collapse made under a cost cut before this decimation (by a partitioned
+    /// build's passes), which the seam floor's cap starts from.
+    pub seam_floor: SeamFloor,
 }
 
 /// [`decimate`] from the given quadrics; also returns the quadrics at the end.
@@ -945,7 +949,7 @@ pub(crate) fn decimate_from(
     });
     let mut stop = Stop::Target;
     let mut live = live_triangles(&mesh);
-    let mut floor = SeamFloor::default();
+    let mut floor = run.seam_floor;
     while !is_done(&mesh, params) {
         drop_dead_triangles(&mesh, &mut live);
         state.quadric.rim_scale = rim_scale_at_level(mesh.n_faces, start_faces);
@@ -1025,21 +1029,21 @@ pub(crate) const SEAM_FLOOR_COST_FACTOR: f64 = 4.0;
 
 /// The dearest collapse a seam-keeping decimation made under a cost cut, which caps its passes
 /// without one ([`SEAM_FLOOR_COST_FACTOR`]).
-#[derive(Clone, Copy, Debug, Default)]
-struct SeamFloor {
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct SeamFloor {
     dearest: f64,
 }
 
 impl SeamFloor {
     /// Records the collapses of a pass made under a cost cut.
-    fn took(&mut self, collapses: &[Collapse]) {
+    pub(crate) fn took(&mut self, collapses: &[Collapse]) {
         for c in collapses {
             self.dearest = self.dearest.max(c.error_sq);
         }
     }
 
     /// The cost cap of a pass: none unless `capped` and some collapse cost anything yet.
-    fn cap(&self, capped: bool) -> f64 {
+    pub(crate) fn cap(&self, capped: bool) -> f64 {
         if capped && self.dearest > 0.0 {
             SEAM_FLOOR_COST_FACTOR * self.dearest
         } else {

@@ -250,9 +250,11 @@ impl ProgressiveMesh {
         // decimation's peak.
         let extent = BoundingBox::of(positions.iter().copied()).map_or(0.0, |b| b.max_side());
         let flat = FlatMesh::from_corners(positions, &corners);
-        // A partitioned build decides its collapses in blocks that do not see the seams.
-        let mut seams = match opts.block_vertices {
-            None => Seams::of(
+        // A partitioned build through task files decides its collapses in blocks whose files
+        // do not carry the seams (formats/blocks.md).
+        let seams = match (opts.block_vertices, &opts.block_scratch) {
+            (Some(_), Some(_)) => None,
+            _ => Seams::of(
                 input,
                 &corners.corner_vertex,
                 face_source,
@@ -261,14 +263,12 @@ impl ProgressiveMesh {
                 opts.uv_weight,
                 extent,
             ),
-            Some(_) => None,
         };
         let CornerTable {
             mut corner_vertex, ..
         } = corners;
         let keeps_seams = seams.is_some();
-        let decimated = decimate_flat(flat, &params, opts, seams.as_mut(), progress)?;
-        drop(seams);
+        let decimated = decimate_flat(flat, &params, opts, seams, progress)?;
         let faces = move |mesh_to_pm: &[u32]| {
             for v in &mut corner_vertex {
                 *v = mesh_to_pm[*v as usize];
@@ -632,7 +632,7 @@ fn decimate_flat(
     flat: FlatMesh,
     params: &DecimateParams,
     opts: &PmOptions,
-    seams: Option<&mut Seams>,
+    mut seams: Option<Seams>,
     progress: &dyn Progress,
 ) -> Result<Decimated, PmError> {
     if let Some(max) = opts.block_vertices {
@@ -645,9 +645,9 @@ fn decimate_flat(
                 flat, params, max, scratch, runner, progress,
             );
         }
-        return super::partition::decimate_in_blocks(flat, params, max, progress);
+        return super::partition::decimate_in_blocks(flat, params, max, seams, progress);
     }
-    let (collapses, coarse, outcome) = decimate_with_seams(flat, params, seams, progress);
+    let (collapses, coarse, outcome) = decimate_with_seams(flat, params, seams.as_mut(), progress);
     Ok(Decimated {
         collapses,
         survivors: coarse.survivors(),
@@ -656,9 +656,9 @@ fn decimate_flat(
     })
 }
 
-/// Whether a hierarchy of `input` built in one piece keeps texture seams: it has per-corner
-/// data or more than one material (`docs/seams.md`). A partitioned build
-/// ([`PmOptions::block_vertices`]) does not keep them.
+/// Whether a hierarchy of `input` keeps texture seams: it has per-corner data or more than one
+/// material (`docs/seams.md`). A partitioned build ([`PmOptions::block_vertices`]) keeps them
+/// in memory; run through task files ([`PmOptions::block_scratch`]) it does not.
 pub fn keeps_texture_seams(input: &PolygonMesh) -> bool {
     super::seams::is_textured(input)
 }

@@ -127,6 +127,45 @@ impl Seams {
         self.quadric = quadric;
     }
 
+    /// The seams of one block of a partitioned build (`partition/block.rs`): the wedge of
+    /// every corner of its triangles in the block's numbering, and per wedge its texture
+    /// coordinates and attribute quadric (both empty without texture coordinates or weight).
+    /// Decimating needs nothing else, so the wedges carry no input corner.
+    pub(crate) fn of_block(
+        wedge: Vec<u32>,
+        uv: Vec<DVec2>,
+        quadric: Vec<AttributeQuadric>,
+        scale: f64,
+    ) -> Seams {
+        Seams {
+            wedge,
+            source_corner: Vec::new(),
+            uv,
+            quadric,
+            scale,
+        }
+    }
+
+    /// The wedges of the corners of `mesh`'s live triangles, in the order of
+    /// [`FlatMesh::triangles`].
+    pub(crate) fn live_wedges(&self, mesh: &FlatMesh) -> Vec<[u32; 3]> {
+        super::decimate::live_triangles(mesh)
+            .into_iter()
+            .map(|t| [0, 1, 2].map(|k| self.wedge[3 * t as usize + k]))
+            .collect()
+    }
+
+    /// Per wedge: texture coordinates and attribute quadric (both empty without texture
+    /// coordinates or weight), and the weight's scale `(uv_weight · extent)²`.
+    pub(crate) fn wedge_tables(self) -> (Vec<DVec2>, Vec<AttributeQuadric>, f64) {
+        (self.uv, self.quadric, self.scale)
+    }
+
+    /// The attribute quadric of wedge `w`, `None` without texture coordinates or weight.
+    pub(crate) fn quadric(&self, w: u32) -> Option<&AttributeQuadric> {
+        self.quadric.get(w as usize)
+    }
+
     /// The wedge of corner `c` of the corner table.
     pub(crate) fn wedge(&self, c: u32) -> u32 {
         self.wedge[c as usize]

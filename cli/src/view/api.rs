@@ -82,11 +82,7 @@ pub(crate) fn dispatch(
     let result = match (method, path) {
         ("GET", "/api/info") => Ok(Reply::json(&session.info())),
         ("GET", "/api/faces") => Ok(Reply::binary(session.faces())),
-        ("GET", "/api/texcoords") => match session.texcoords() {
-            Some(Ok(layout)) => Ok(Reply::binary(layout)),
-            Some(Err(why)) => Err(Reply::error(409, why)),
-            None => Err(untextured()),
-        },
+        ("GET", "/api/texcoords") => texcoords(session, param("n")),
         ("GET", "/api/texture") => texture_image(session, param("image")),
         ("GET", "/api/level") => level(session, param("n")),
         ("GET", "/api/display") => session
@@ -327,9 +323,33 @@ fn exact(session: &mut Session, version: Option<&str>) -> Result<Reply, Reply> {
 }
 
 fn level(session: &Session, n: Option<&str>) -> Result<Reply, Reply> {
+    let n = level_number(session, n)?;
+    if n > session.synthesised_levels() {
+        whole(session)?;
+    }
+    Ok(Reply::binary(session.level(n)))
+}
+
+/// `/api/texcoords`, of what the page shows or, with `n`, of the scrubber's level `n`.
+fn texcoords(session: &mut Session, n: Option<&str>) -> Result<Reply, Reply> {
+    if session.texture.is_none() {
+        return Err(untextured());
+    }
+    let level = match n {
+        None => None,
+        Some(n) => Some(level_number(session, Some(n))?),
+    };
+    match session.texcoords(level) {
+        Some(Ok(layout)) => Ok(Reply::binary(layout)),
+        Some(Err(why)) => Err(Reply::error(409, why)),
+        None => Err(untextured()),
+    }
+}
+
+/// The level `n` a call names, within the hierarchy's levels.
+fn level_number(session: &Session, n: Option<&str>) -> Result<usize, Reply> {
     let levels = &session.levels;
-    let n: usize = n
-        .and_then(|n| n.parse().ok())
+    n.and_then(|n| n.parse().ok())
         .filter(|n| levels.contains(n))
         .ok_or_else(|| {
             bad(format!(
@@ -337,11 +357,7 @@ fn level(session: &Session, n: Option<&str>) -> Result<Reply, Reply> {
                 levels.start(),
                 levels.end()
             ))
-        })?;
-    if n > session.synthesised_levels() {
-        whole(session)?;
-    }
-    Ok(Reply::binary(session.level(n)))
+        })
 }
 
 fn export(session: &mut Session, state: EditorState, format: Option<&str>) -> Result<Reply, Reply> {

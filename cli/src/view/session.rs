@@ -424,20 +424,25 @@ impl Session {
     /// `/api/texcoords`: the drawing layout of a textured scan's texture coordinates
     /// ([`ViewTexture::layout`]) on the triangles the page shows: the input's, or over the
     /// budget the shown level's (its drawn vertices are then PM indices, as `/api/display`'s
-    /// triangles), whose corners follow from the finest ones ([`Pyramid::level_mesh`]).
+    /// triangles), whose corners follow from the finest ones ([`Pyramid::level_mesh`]). With
+    /// `level`, that of the scrubber's level `level` (`/api/level`'s triangles) instead.
     /// `None` for an untextured scan; an error when the hierarchy has no texture below the
-    /// finest level (a partitioned build) or a collapse breaks a seam.
-    pub fn texcoords(&mut self) -> Option<Result<Vec<u8>, String>> {
+    /// finest level (a partitioned build of a `.pyr` file written before it kept the seams) or
+    /// a collapse breaks a seam.
+    pub fn texcoords(&mut self, level: Option<usize>) -> Option<Result<Vec<u8>, String>> {
         self.texture.as_ref()?;
-        let shown = self.lod().map(|lod| lod.preview.shown);
+        let shown = match level {
+            Some(n) => Some(n),
+            None => self.lod().map(|lod| lod.preview.shown),
+        };
         let texture = self.texture.as_ref()?;
         let Some(shown) = shown else {
             return Some(Ok(texture.layout(&self.pyramid.input)));
         };
         if !self.pyramid.pm.keeps_seams() {
             return Some(Err(format!(
-                "the hierarchy was built without the texture seams (a partitioned build): \
-                 level {shown} on screen has no texture coordinates"
+                "the hierarchy was built without the texture seams: level {shown} has no \
+                 texture coordinates"
             )));
         }
         Some(

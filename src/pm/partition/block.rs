@@ -2,8 +2,10 @@
 //! (`lockstep.rs`) or, for the last block, to the base.
 //!
 //! A task reads only its [`BlockTask`] — its triangles, the positions, quadrics and pinned
-//! flags of their vertices, its rules — and returns a [`BlockResult`]: its collapses, its
-//! triangles afterwards and the quadrics its collapses changed. Everything is in the input's
+//! flags of their vertices, its rules and, for a textured scan, its corners' wedges with their
+//! texture coordinates and attribute quadrics ([`BlockSeams`]) — and returns a
+//! [`BlockResult`]: its collapses, its triangles (and their corners' wedges) afterwards and the
+//! quadrics its collapses changed. Everything is in the input's
 //! vertex numbering, so results of different tasks can be put together without knowing how
 //! each task numbered its working mesh; a task run twice gives the same result.
 //!
@@ -13,17 +15,23 @@
 //!    half-edge of the block, and both its ends are pinned);
 //! 2. pin the border, start the quadrics from the given ones (not from the block's faces: a
 //!    border edge is no hole rim, and a vertex's quadric sums the planes of its whole star);
+//!    number the block's wedges by their whole-mesh number, so that the one-process seam rule
+//!    and attribute cost (`super::super::seams`) decide its collapses. A free vertex has its
+//!    whole star, so all its corners and wedges, in the block, and the rule and the cost read
+//!    only the corners of the collapse's two ends, both free;
 //! 3. decimate: one pass under the whole mesh's cut (`lockstep.rs`), or, for the last block,
 //!    which holds the whole mesh and pins nothing, to the end (`decimate_from`), relaxing the
 //!    rules where nothing else moves, as the one-process build ends;
 //! 4. map the collapses and the triangles back to input indices.
 
 use super::super::Stop;
-use super::super::decimate::{Collapse, DecimateParams, FlatMesh, Run, decimate_from};
+use super::super::attribute_quadric::AttributeQuadric;
+use super::super::decimate::{Collapse, DecimateParams, FlatMesh, Run, SeamFloor, decimate_from};
 use super::super::quadric::{Quadric, Quadrics};
+use super::super::seams::Seams;
 use crate::mesh::build::next_c;
 use crate::progress::NoProgress;
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 
 const NONE: u32 = u32::MAX;
 
@@ -52,6 +60,27 @@ pub(crate) struct BlockTask {
     pub params: DecimateParams,
     /// Whether this is the last block (the whole mesh once it fits one): it may relax the rules.
     pub last: bool,
+    /// A textured scan's seams in the block; `None` decimates without them.
+    pub seams: Option<BlockSeams>,
+    /// The dearest collapse the passes before made under a cost cut, which caps the last
+    /// block's passes without one when it keeps seams, as in one process.
+    pub seam_floor: SeamFloor,
+}
+
+/// A block's texture seams: the wedge of each corner of its faces and what the seam rule and
+/// the attribute cost read of each wedge.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct BlockSeams {
+    /// Per face of the task, the wedges of its corners (the whole mesh's wedge numbers).
+    pub wedges: Vec<[u32; 3]>,
+    /// The wedges `wedges` names, ascending.
+    pub ids: Vec<u32>,
+    /// Per wedge of `ids`: its texture coordinates and attribute quadric (both empty without
+    /// texture coordinates or weight).
+    pub uv: Vec<DVec2>,
+    pub quadrics: Vec<AttributeQuadric>,
+    /// `(uv_weight · extent)²`, as the whole build's.
+    pub scale: f64,
 }
 
 /// What one block task returns.
@@ -63,6 +92,11 @@ pub(crate) struct BlockResult {
     pub faces: Vec<[u32; 3]>,
     /// The quadrics of the surviving free vertices (the only ones a collapse changes).
     pub quadrics: Vec<(u32, VertexQuadric)>,
+    /// With seams: per triangle of `faces`, its corners' wedges (else empty).
+    pub wedges: Vec<[u32; 3]>,
+    /// With seams: the attribute quadrics of the wedges at surviving free vertices (the only
+    /// ones a collapse changes), ascending by wedge.
+    pub wedge_quadrics: Vec<(u32, AttributeQuadric)>,
 }
 
 /// Runs one block task to its end; also says why it stopped.
@@ -70,29 +104,35 @@ pub(crate) fn decimate_block(task: BlockTask) -> (BlockResult, Stop) {
     let run = Run {
         input_faces: task.input_faces,
         relax: task.last,
+        seam_floor: task.seam_floor,
     };
     let params = task.params;
-    let (block, mesh, quadric) = working_mesh(task);
+    let (block, mesh, quadric, mut seams) = working_mesh(task);
     let (collapses, mesh, outcome, quadric) =
-        decimate_from(mesh, quadric, run, &params, None, &NoProgress);
-    (block.result(collapses, &mesh, &quadric), outcome.stop)
+        decimate_from(mesh, quadric, run, &params, seams.as_mut(), &NoProgress);
+    (
+        block.result(collapses, &mesh, &quadric, seams.as_ref()),
+        outcome.stop,
+    )
 }
 
 /// What a block keeps while its working mesh is decimated: its vertices (local index →
-/// input index) and which are pinned.
+/// input index), which are pinned, and its wedges (local number → whole-mesh number).
 pub(crate) struct Block {
     vertices: Vec<u32>,
     pinned: Vec<bool>,
+    wedges: Vec<u32>,
 }
 
-/// The working mesh and quadrics of a task (steps 1 and 2), its vertices pinned.
-pub(crate) fn working_mesh(task: BlockTask) -> (Block, FlatMesh, Quadrics) {
+/// The working mesh, quadrics and seams of a task (steps 1 and 2), its vertices pinned.
+pub(crate) fn working_mesh(task: BlockTask) -> (Block, FlatMesh, Quadrics, Option<Seams>) {
     let BlockTask {
         faces,
         vertices,
         positions,
         quadrics,
         pinned,
+        seams,
         ..
     } = task;
     let local = |v: u32| vertices.binary_search(&v).map_or(NONE, |i| i as u32);
@@ -107,10 +147,24 @@ pub(crate) fn working_mesh(task: BlockTask) -> (Block, FlatMesh, Quadrics) {
         .filter_map(|v| quadrics[v as usize].rim.map(|r| (v, r)))
         .collect();
     let planes = quadrics.iter().map(|q| q.planes).collect();
+    let (seams, wedges) = match seams {
+        Some(s) => {
+            let local = |w: u32| s.ids.binary_search(&w).map_or(NONE, |i| i as u32);
+            let wedge = s.wedges.iter().flatten().map(|&w| local(w)).collect();
+            let seams = Seams::of_block(wedge, s.uv, s.quadrics, s.scale);
+            (Some(seams), s.ids)
+        }
+        None => (None, Vec::new()),
+    };
     (
-        Block { vertices, pinned },
+        Block {
+            vertices,
+            pinned,
+            wedges,
+        },
         mesh,
         Quadrics::new(planes, &rims),
+        seams,
     )
 }
 
@@ -121,6 +175,7 @@ impl Block {
         collapses: Vec<Collapse>,
         mesh: &FlatMesh,
         quadric: &Quadrics,
+        seams: Option<&Seams>,
     ) -> BlockResult {
         let global = |v: u32| {
             if v == NONE {
@@ -151,15 +206,49 @@ impl Block {
                 (global(v), q)
             })
             .collect();
+        let triangles = mesh.triangles();
+        let (wedges, wedge_quadrics) = match seams {
+            Some(s) => self.wedges_after(s, mesh, &triangles),
+            None => (Vec::new(), Vec::new()),
+        };
         BlockResult {
             collapses,
-            faces: mesh
-                .triangles()
-                .into_iter()
-                .map(|t| t.map(global))
-                .collect(),
+            faces: triangles.into_iter().map(|t| t.map(global)).collect(),
             quadrics,
+            wedges,
+            wedge_quadrics,
         }
+    }
+
+    /// The wedges of the live `triangles` of `mesh` in whole-mesh numbers, and the attribute
+    /// quadrics of the wedges at their free vertices.
+    fn wedges_after(
+        &self,
+        seams: &Seams,
+        mesh: &FlatMesh,
+        triangles: &[[u32; 3]],
+    ) -> (Vec<[u32; 3]>, Vec<(u32, AttributeQuadric)>) {
+        let local = seams.live_wedges(mesh);
+        let mut free: Vec<u32> = triangles
+            .iter()
+            .zip(&local)
+            .flat_map(|(t, w)| {
+                (0..3)
+                    .filter(|&k| !self.pinned[t[k] as usize])
+                    .map(|k| w[k])
+            })
+            .collect();
+        free.sort_unstable();
+        free.dedup();
+        let quadrics = free
+            .into_iter()
+            .filter_map(|w| seams.quadric(w).map(|q| (self.wedges[w as usize], *q)))
+            .collect();
+        let wedges = local
+            .into_iter()
+            .map(|w| w.map(|w| self.wedges[w as usize]))
+            .collect();
+        (wedges, quadrics)
     }
 }
 

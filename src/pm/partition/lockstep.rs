@@ -24,6 +24,8 @@ pub(crate) struct Whole {
     pub faces: usize,
     /// Whether the pass takes the cost cut (off after a pass that collapsed nothing).
     pub use_goal: bool,
+    /// The highest cut a pass may take (the seam floor's cap, `docs/seams.md`; else infinite).
+    pub cap: f64,
 }
 
 /// One pass over the blocks `tasks`: their results in task order and the pass's cost cut.
@@ -41,23 +43,23 @@ pub(crate) fn pass_in_step(
     let blocks: Vec<_> = tasks
         .into_par_iter()
         .map(|t| {
-            let (block, mesh, quadric) = working_mesh(t);
-            let mut stepper = Stepper::new(mesh, quadric);
+            let (block, mesh, quadric, seams) = working_mesh(t);
+            let mut stepper = Stepper::new(mesh, quadric, seams);
             stepper.collect(rim_scale, params.max_error_sq);
             (block, stepper)
         })
         .collect();
     let mut costs: Vec<f64> = blocks.iter().flat_map(|b| b.1.costs()).collect();
     let goal = pass_goal(whole.faces, params.target_faces);
-    let cut = pass_cut(&mut costs, goal, whole.use_goal, params.max_error_sq);
+    let cut = pass_cut(&mut costs, goal, whole.use_goal, params.max_error_sq).min(whole.cap);
     drop(costs);
     let legality = params.legality.at_level(whole.faces, whole.input_faces);
     let results = blocks
         .into_par_iter()
         .map(|(block, mut stepper)| {
             stepper.perform(cut, legality, &block_params);
-            let (collapses, mesh, quadric) = stepper.finish();
-            block.result(collapses, &mesh, &quadric)
+            let (collapses, mesh, quadric, seams) = stepper.finish();
+            block.result(collapses, &mesh, &quadric, seams.as_ref())
         })
         .collect();
     (results, cut)

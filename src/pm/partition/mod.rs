@@ -27,6 +27,12 @@
 //! those borders, so it is free there unless it also lies at a border of those — near the few
 //! spots where a border of one frame crosses one of the other.
 //!
+//! A textured scan keeps its seams: every face carries its corners' wedges through the passes
+//! as it carries its vertices, each task gets the wedges of its faces with their texture
+//! coordinates and attribute quadrics and decides its collapses with the one-process seam rule
+//! and cost, and the attribute quadrics its collapses merge are written back as the geometric
+//! quadrics are (`docs/seams.md`, "Partitioned builds").
+//!
 //! Results depend on the input and the block size only: each task is a function of its
 //! inputs, the tasks of a pass are collected in cell order, and the merge breaks ties by cell.
 
@@ -43,28 +49,33 @@ pub mod tasks;
 mod through_files;
 
 use super::PmError;
+use super::attribute_quadric::AttributeQuadric;
 use super::decimate::passes::Turns;
-use super::decimate::{DecimateParams, FlatMesh, initial_quadrics};
+use super::decimate::{DecimateParams, FlatMesh, SeamFloor, initial_quadrics};
 use super::progressive::Decimated;
+use super::seams::Seams;
 use crate::progress::Progress;
-use block::{BlockResult, BlockTask, VertexQuadric, decimate_block};
+use block::{BlockResult, BlockSeams, BlockTask, VertexQuadric, decimate_block};
 use cells::FRAMES;
 pub(crate) use contents::read_any;
-use glam::DVec3;
+use glam::{DVec2, DVec3};
 use lockstep::Whole;
 use rayon::prelude::*;
 pub(crate) use through_files::decimate_through_files;
 
-/// Decimates `flat` in blocks of at most `max_block` vertices (see the module docs).
+/// Decimates `flat` in blocks of at most `max_block` vertices, keeping the texture seams of
+/// `seams` when there are any (see the module docs).
 pub(crate) fn decimate_in_blocks(
     flat: FlatMesh,
     params: &DecimateParams,
     max_block: usize,
+    seams: Option<Seams>,
     progress: &dyn Progress,
 ) -> Result<Decimated, PmError> {
     let quadric = initial_quadrics(&flat, params.boundary_weight);
     let positions = flat.positions();
     let mut faces = flat.triangles();
+    let mut wedges = WholeWedges::of(seams, &flat);
     let mut vertices = flat.survivors();
     drop(flat);
     let mut quadrics: Vec<VertexQuadric> = (0..positions.len())
@@ -84,31 +95,57 @@ pub(crate) fn decimate_in_blocks(
     let mut collapses = Vec::new();
     let mut turns = Turns::START;
     let mut pass = 0;
+    // Keeping seams, passes without the cut take no collapse far dearer than those made under
+    // one, as in one process (`SEAM_FLOOR_COST_FACTOR`, docs/seams.md), nor does the last block.
+    let mut floor = SeamFloor::default();
     while vertices.len() > stop_at && faces.len() > params.target_faces && turns.idle < FRAMES.len()
     {
         let frame = &FRAMES[pass % FRAMES.len()];
         pass += 1;
         let cells = cells::split_cells(&positions, vertices, max_block, frame);
-        let split = split::split_faces(&faces, &cells.cell_of, cells.n_cells);
+        let split = split::split_faces(&faces, &wedges.faces, &cells.cell_of, cells.n_cells);
         drop(cells);
-        let tasks: Vec<BlockTask> = (split.inside)
+        let mut block_wedges = split.inside_wedges.into_iter();
+        let blocks: Vec<_> = (split.inside)
+            .into_iter()
+            .map(|f| (f, block_wedges.next()))
+            .collect();
+        let tasks: Vec<BlockTask> = blocks
             .into_par_iter()
-            .map(|f| input.task(f, &quadrics, |v| split.pinned[v as usize], false))
+            .map(|(f, w)| {
+                let seams = wedges.block(w);
+                input.task(f, &quadrics, |v| split.pinned[v as usize], false, seams)
+            })
             .collect();
         let whole = Whole {
             input_faces: input.input_faces,
             faces: faces.len(),
             use_goal: turns.use_goal,
+            cap: floor.cap(wedges.keeps_seams() && !turns.use_goal),
         };
         let (results, cut) = lockstep::pass_in_step(tasks, &whole, params);
         faces = split.across;
-        let made = gather(results, &mut quadrics, &mut faces, &mut collapses);
+        wedges.faces = split.across_wedges;
+        let first_new = collapses.len();
+        let made = gather(
+            results,
+            &mut quadrics,
+            &mut faces,
+            &mut wedges,
+            &mut collapses,
+        );
+        if turns.use_goal {
+            floor.took(&collapses[first_new..]);
+        }
         vertices = vertices_of(&faces);
         // When no frame's cells find anything, the mesh goes to the last block as it is.
         turns.after(made > 0, cut, params.max_error_sq);
         progress.update((start - vertices.len()) as f64 / start.max(1) as f64);
     }
-    let last = input.task(faces, &quadrics, |_| false, true);
+    let last_wedges = std::mem::take(&mut wedges.faces);
+    let last_seams = wedges.block(Some(last_wedges));
+    let mut last = input.task(faces, &quadrics, |_| false, true, last_seams);
+    last.seam_floor = floor;
     let (result, stop) = decimate_block(last);
     collapses.extend(result.collapses);
     progress.update(1.0);
@@ -121,11 +158,13 @@ pub(crate) fn decimate_in_blocks(
 }
 
 /// Takes a pass's results into the whole mesh: their quadrics into `quadrics`, their faces
-/// after `faces`, their collapses interleaved by cost after `collapses`; returns how many.
+/// after `faces` (and their wedges into `wedges`), their collapses interleaved by cost after
+/// `collapses`; returns how many.
 fn gather(
     results: Vec<BlockResult>,
     quadrics: &mut [VertexQuadric],
     faces: &mut Vec<[u32; 3]>,
+    wedges: &mut WholeWedges,
     collapses: &mut Vec<super::decimate::Collapse>,
 ) -> usize {
     let mut made = Vec::with_capacity(results.len());
@@ -134,12 +173,85 @@ fn gather(
             quadrics[v as usize] = q;
         }
         faces.extend_from_slice(&r.faces);
+        if wedges.keeps_seams() {
+            wedges.faces.extend_from_slice(&r.wedges);
+            for &(w, q) in &r.wedge_quadrics {
+                wedges.quadrics[w as usize] = q;
+            }
+        }
         made.push(r.collapses);
     }
     let made = order::merge_by_cost(made);
     let n = made.len();
     collapses.extend(made);
     n
+}
+
+/// A textured scan's seams across the passes: the wedges of the current faces' corners, face
+/// for face, and per wedge (the whole mesh's numbering) its texture coordinates and attribute
+/// quadric, the latter written back after every pass as the vertices' quadrics are. Without
+/// seams everything is empty and the tasks get none.
+struct WholeWedges {
+    seams: bool,
+    faces: Vec<[u32; 3]>,
+    uv: Vec<DVec2>,
+    quadrics: Vec<AttributeQuadric>,
+    scale: f64,
+}
+
+impl WholeWedges {
+    /// The wedges of `seams` on the live triangles of `flat` (in [`FlatMesh::triangles`]'
+    /// order), or none.
+    fn of(seams: Option<Seams>, flat: &FlatMesh) -> WholeWedges {
+        match seams {
+            Some(s) => {
+                let faces = s.live_wedges(flat);
+                let (uv, quadrics, scale) = s.wedge_tables();
+                WholeWedges {
+                    seams: true,
+                    faces,
+                    uv,
+                    quadrics,
+                    scale,
+                }
+            }
+            None => WholeWedges {
+                seams: false,
+                faces: Vec::new(),
+                uv: Vec::new(),
+                quadrics: Vec::new(),
+                scale: 0.0,
+            },
+        }
+    }
+
+    fn keeps_seams(&self) -> bool {
+        self.seams
+    }
+
+    /// The seams of the block whose faces' corners have the wedges `faces` (`None` without).
+    fn block(&self, faces: Option<Vec<[u32; 3]>>) -> Option<BlockSeams> {
+        let faces = faces.filter(|_| self.seams)?;
+        let mut ids: Vec<u32> = faces.iter().flatten().copied().collect();
+        ids.sort_unstable();
+        ids.dedup();
+        Some(BlockSeams {
+            uv: pick(&self.uv, &ids),
+            quadrics: pick(&self.quadrics, &ids),
+            wedges: faces,
+            ids,
+            scale: self.scale,
+        })
+    }
+}
+
+/// The rows `ids` of `table`, or nothing from an empty table.
+fn pick<T: Copy>(table: &[T], ids: &[u32]) -> Vec<T> {
+    if table.is_empty() {
+        Vec::new()
+    } else {
+        ids.iter().map(|&w| table[w as usize]).collect()
+    }
 }
 
 /// What every task of a build reads from.
@@ -157,6 +269,7 @@ impl Input<'_> {
         quadrics: &[VertexQuadric],
         pinned: impl Fn(u32) -> bool,
         last: bool,
+        seams: Option<BlockSeams>,
     ) -> BlockTask {
         let vertices = vertices_of(&faces);
         BlockTask {
@@ -171,6 +284,8 @@ impl Input<'_> {
             input_faces: self.input_faces,
             params: *self.params,
             last,
+            seams,
+            seam_floor: SeamFloor::default(),
         }
     }
 }

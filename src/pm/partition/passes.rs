@@ -13,27 +13,28 @@ use super::{
     drop_dead_triangles, live_triangles, perform_collapses, rank_candidates, unlock_survivors,
 };
 use crate::pm::quadric::Quadrics;
+use crate::pm::seams::Seams;
 
 /// One block's pass: its candidates collected, then collapsed under the whole mesh's cut.
 pub(crate) struct Stepper {
     mesh: FlatMesh,
-    state: Decimation<'static>,
+    quadric: Quadrics,
+    /// The block's texture seams, whose wedges follow its collapses; `None` without.
+    seams: Option<Seams>,
+    collapses: Vec<Collapse>,
     cands: Vec<Candidate>,
     live: Vec<u32>,
 }
 
 impl Stepper {
-    /// A decimation of `mesh` from the quadrics `quadric`.
-    pub(crate) fn new(mesh: FlatMesh, quadric: Quadrics) -> Stepper {
+    /// A decimation of `mesh` from the quadrics `quadric`, keeping the seams `seams`.
+    pub(crate) fn new(mesh: FlatMesh, quadric: Quadrics, seams: Option<Seams>) -> Stepper {
         let live = live_triangles(&mesh);
         Stepper {
             mesh,
-            state: Decimation {
-                quadric,
-                locked: Vec::new(),
-                collapses: Vec::new(),
-                seams: None,
-            },
+            quadric,
+            seams,
+            collapses: Vec::new(),
             cands: Vec::new(),
             live,
         }
@@ -43,13 +44,12 @@ impl Stepper {
     /// `rim_scale`.
     pub(crate) fn collect(&mut self, rim_scale: f64, max_error_sq: f64) {
         drop_dead_triangles(&self.mesh, &mut self.live);
-        self.state.quadric.rim_scale = rim_scale;
-        let quadric = &self.state.quadric;
+        self.quadric.rim_scale = rim_scale;
         collect_candidates(
             &self.mesh,
             &self.live,
-            quadric,
-            None,
+            &self.quadric,
+            self.seams.as_ref(),
             max_error_sq,
             &mut self.cands,
         );
@@ -77,15 +77,23 @@ impl Stepper {
             legality,
             budget: usize::MAX,
         };
-        let made = perform_collapses(&mut self.mesh, &mut self.state, &self.cands, &pass, params);
-        unlock_survivors(&mut self.mesh, &mut self.state.locked);
+        let mut state = Decimation {
+            quadric: std::mem::replace(&mut self.quadric, Quadrics::new(Vec::new(), &[])),
+            locked: Vec::new(),
+            collapses: std::mem::take(&mut self.collapses),
+            seams: self.seams.as_mut(),
+        };
+        let made = perform_collapses(&mut self.mesh, &mut state, &self.cands, &pass, params);
+        unlock_survivors(&mut self.mesh, &mut state.locked);
+        self.quadric = state.quadric;
+        self.collapses = state.collapses;
         self.cands.clear();
         made
     }
 
-    /// The collapses made, the mesh and the quadrics at the end.
-    pub(crate) fn finish(self) -> (Vec<Collapse>, FlatMesh, Quadrics) {
-        (self.state.collapses, self.mesh, self.state.quadric)
+    /// The collapses made, the mesh, the quadrics and the seams at the end.
+    pub(crate) fn finish(self) -> (Vec<Collapse>, FlatMesh, Quadrics, Option<Seams>) {
+        (self.collapses, self.mesh, self.quadric, self.seams)
     }
 }
 

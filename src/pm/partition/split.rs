@@ -16,19 +16,39 @@ pub(crate) struct Split {
     pub across: Vec<[u32; 3]>,
     /// Per vertex (input index), whether a face across cells touches it.
     pub pinned: Vec<bool>,
+    /// With the faces' corners' wedges (a textured scan): those of `inside` and `across`, face
+    /// for face (else empty).
+    pub inside_wedges: Vec<Vec<[u32; 3]>>,
+    pub across_wedges: Vec<[u32; 3]>,
 }
 
-/// Splits `faces` by the cells `cell_of` (`n_cells` of them) of their vertices.
-pub(crate) fn split_faces(faces: &[[u32; 3]], cell_of: &[u32], n_cells: usize) -> Split {
+/// Splits `faces`, and `wedges` (per face its corners' wedges, or empty), by the cells
+/// `cell_of` (`n_cells` of them) of their vertices.
+pub(crate) fn split_faces(
+    faces: &[[u32; 3]],
+    wedges: &[[u32; 3]],
+    cell_of: &[u32],
+    n_cells: usize,
+) -> Split {
     let mut inside: Vec<Vec<[u32; 3]>> = vec![Vec::new(); n_cells];
     let mut across = Vec::new();
     let mut pinned = vec![false; cell_of.len()];
-    for &f in faces {
+    let with_wedges = !wedges.is_empty();
+    let mut inside_wedges: Vec<Vec<[u32; 3]>> =
+        vec![Vec::new(); if with_wedges { n_cells } else { 0 }];
+    let mut across_wedges = Vec::new();
+    for (i, &f) in faces.iter().enumerate() {
         let [a, b, c] = f.map(|v| cell_of[v as usize]);
         if a == b && b == c {
             inside[a as usize].push(f);
+            if with_wedges {
+                inside_wedges[a as usize].push(wedges[i]);
+            }
         } else {
             across.push(f);
+            if with_wedges {
+                across_wedges.push(wedges[i]);
+            }
             for v in f {
                 pinned[v as usize] = true;
             }
@@ -38,6 +58,8 @@ pub(crate) fn split_faces(faces: &[[u32; 3]], cell_of: &[u32], n_cells: usize) -
         inside,
         across,
         pinned,
+        inside_wedges,
+        across_wedges,
     }
 }
 
@@ -56,12 +78,12 @@ mod tests {
     fn faces_across_cells_pin_their_vertices_and_belong_to_no_block() {
         let cell_of = [0, 0, 1, 1, 2, 2];
         let faces = [[0, 1, 2], [2, 1, 3], [2, 3, 4], [4, 3, 5]];
-        let s = split_faces(&faces, &cell_of, 3);
+        let s = split_faces(&faces, &[], &cell_of, 3);
         assert!(s.inside.iter().all(Vec::is_empty));
         assert_eq!(s.across.len(), 4);
         assert!(s.pinned.iter().all(|&p| p));
         let cell_of = [0, 0, 0, 0, 1, 1];
-        let s = split_faces(&faces, &cell_of, 2);
+        let s = split_faces(&faces, &[], &cell_of, 2);
         assert_eq!(s.inside[0], vec![[0, 1, 2], [2, 1, 3]]);
         assert!(s.inside[1].is_empty());
         assert_eq!(s.across, vec![[2, 3, 4], [4, 3, 5]]);

@@ -170,6 +170,8 @@ fn task(info: &PassInfo, block: Bucket) -> BlockTask {
         input_faces: info.input_faces as usize,
         params: info.params,
         last: info.last,
+        seams: None,
+        seam_floor: Default::default(),
     }
 }
 
@@ -182,8 +184,8 @@ fn stepper(
     let info = contents::read_pass_info(pass)?;
     let block = contents::read_input(input)?;
     let records = block.records.clone();
-    let (b, mesh, quadric) = working_mesh(task(&info, block));
-    let mut stepper = Stepper::new(mesh, quadric);
+    let (b, mesh, quadric, seams) = working_mesh(task(&info, block));
+    let mut stepper = Stepper::new(mesh, quadric, seams);
     let rim_scale = rim_scale_at_level(info.whole_faces as usize, info.input_faces as usize);
     stepper.collect(rim_scale, info.params.max_error_sq);
     Ok((info, stepper, b, records))
@@ -277,8 +279,8 @@ pub fn collapse(
         ..info.params
     };
     stepper.perform(cut, legality, &block_params);
-    let (collapses, mesh, quadric) = stepper.finish();
-    let result = block.result(collapses, &mesh, &quadric);
+    let (collapses, mesh, quadric, seams) = stepper.finish();
+    let result = block.result(collapses, &mesh, &quadric, seams.as_ref());
     write_result(result_out, &result, &records, None)?;
     Ok(result.collapses.len() as u64)
 }

@@ -61,6 +61,7 @@ const M = window.meshpyr = {
   firstPictureMs: null, // performance.now() when the first picture (of the opening) was drawn
   pictures: [],       // the opening's pictures drawn: {what, triangles, ms}
   texture: null,      // a textured scan: {images: decoded count, groups} (null: untextured)
+  levelTexture: null, // the scrubber's level drawn textured: {groups} (null: plain or none)
 };
 
 // ---- camera ---------------------------------------------------------------------------------
@@ -663,10 +664,9 @@ function showLevel() {
   if (n >= resultLevel()) { showFinest(); requestDraw(); return; }
   if (scrub.busy) { scrub.again = true; return; }
   scrub.busy = true;
-  api('/api/level?n=' + n)
-    .then((r) => r.arrayBuffer())
-    .then((bytes) => {
-      const nv = setLevelMesh(bytes);
+  Promise.all([api('/api/level?n=' + n).then((r) => r.arrayBuffer()), levelSplit(n)])
+    .then(([bytes, split]) => {
+      const nv = setLevelMesh(bytes, split);
       M.shownLevel = nv;
       M.showingResult = false;
       setStatus(`level ${nv}`);
@@ -678,12 +678,40 @@ function showLevel() {
 }
 
 // Puts a mesh laid out as `/api/level` answers (u32 vertex and triangle counts, f32
-// positions, u32 triangles) into the level's GPU mesh; returns its vertex count.
-function setLevelMesh(bytes) {
+// positions, u32 triangles) into the level's GPU mesh, drawn with `split` (its texture) when
+// there is one; returns its vertex count.
+function setLevelMesh(bytes, split) {
   const [nv, nt] = new Uint32Array(bytes, 0, 2);
   level.setTriangles(new Uint32Array(bytes, 8 + 12 * nv, 3 * nt).slice());
+  if (split) level.setSplit(split);
+  M.levelTexture = split ? { groups: split.groups.length } : null;
   level.setPositions(new Float32Array(bytes, 8, 3 * nv).slice());
   return nv;
+}
+
+// A textured scan's level `n` for the scrubber: its corners' texture coordinates, which the
+// server derives from the finest ones as for the shown level, drawn with the images already
+// decoded; null for an untextured scan, and when the level has none (a hierarchy built without
+// the seams), which then draws plain.
+async function levelSplit(n) {
+  if (!finest.split) return null;
+  const r = await api('/api/texcoords?n=' + n);
+  if (!r.ok) return null;
+  return { ...readLayout(await r.arrayBuffer()), textures: finest.split.textures };
+}
+
+// `/api/texcoords` decoded: split vertices, their coordinates, triangles and image groups.
+function readLayout(bytes) {
+  const [nd, nt, ng] = new Uint32Array(bytes, 0, 3);
+  let at = 12;
+  const take = (Type, n) => { const a = new Type(bytes, at, n).slice(); at += 4 * n; return a; };
+  const vertexOf = take(Uint32Array, nd);
+  const uvs = take(Float32Array, 2 * nd);
+  const triangles = take(Uint32Array, 3 * nt);
+  const flat = take(Uint32Array, 3 * ng);
+  const groups = [];
+  for (let g = 0; g < ng; g++) groups.push([flat[3 * g], flat[3 * g + 1], flat[3 * g + 2]]);
+  return { vertexOf, uvs, triangles, groups };
 }
 
 function showFinest() {
@@ -961,16 +989,7 @@ async function openScan() {
 // its images as WebGL textures (repeating, mipmapped). An image the browser cannot decode
 // leaves its faces plain.
 async function loadTexture(info) {
-  const bytes = await (await api('/api/texcoords')).arrayBuffer();
-  const [nd, nt, ng] = new Uint32Array(bytes, 0, 3);
-  let at = 12;
-  const take = (Type, n) => { const a = new Type(bytes, at, n).slice(); at += 4 * n; return a; };
-  const vertexOf = take(Uint32Array, nd);
-  const uvs = take(Float32Array, 2 * nd);
-  const triangles = take(Uint32Array, 3 * nt);
-  const flat = take(Uint32Array, 3 * ng);
-  const groups = [];
-  for (let g = 0; g < ng; g++) groups.push([flat[3 * g], flat[3 * g + 1], flat[3 * g + 2]]);
+  const { vertexOf, uvs, triangles, groups } = readLayout(await (await api('/api/texcoords')).arrayBuffer());
   const textures = {};
   let decoded = 0;
   for (let k = 0; k < info.images.length; k++) {
