@@ -256,9 +256,8 @@ impl Driver<'_> {
 /// The whole mesh's faces, positions and initial quadrics as pieces: the faces in order, cut
 /// into runs of about a block's faces, the records of the vertices with faces in runs of a
 /// block's vertices. Each run's faces and records are made by the task that writes them, from
-/// the working mesh and the quadrics: the whole mesh's records at once (216 B per vertex) were
-/// the driver's largest array, and copies of its faces and positions would sit beside the
-/// working mesh.
+/// the working mesh and the quadrics, so that the driver never holds the whole mesh's records
+/// (216 B per vertex) nor copies of its faces and positions beside the working mesh.
 fn first_pieces(
     flat: FlatMesh,
     params: &DecimateParams,
