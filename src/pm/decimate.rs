@@ -262,6 +262,11 @@ impl FlatMesh {
         self.vertices.iter().map(|x| x.position).collect()
     }
 
+    /// Number of vertex slots, with faces or not.
+    pub(crate) fn n_vertex_slots(&self) -> usize {
+        self.vertices.len()
+    }
+
     /// Number of live triangles.
     pub(crate) fn n_faces(&self) -> usize {
         self.n_faces
@@ -276,7 +281,13 @@ impl FlatMesh {
 
     /// The live triangles in triangle order, each starting at its first corner.
     pub(crate) fn triangles(&self) -> Vec<[u32; 3]> {
-        self.corners
+        self.triangles_in(0..self.corners.len() / 3)
+    }
+
+    /// The live triangles among triangles `range`, in triangle order.
+    pub(crate) fn triangles_in(&self, range: std::ops::Range<usize>) -> Vec<[u32; 3]> {
+        let range = 3 * range.start..3 * range.end.min(self.corners.len() / 3);
+        self.corners[range]
             .chunks_exact(3)
             .filter(|t| t[0].vertex != NONE)
             .map(|t| [t[0].vertex, t[1].vertex, t[2].vertex])

@@ -284,12 +284,15 @@ pub(crate) fn write_piece(
     faces: &[[u32; 3]],
     records: &[Record],
 ) -> Result<(), BlockFileError> {
-    let b = Bucket {
-        faces: faces.to_vec(),
-        records: records.to_vec(),
-        pins: Vec::new(),
-    };
-    write(path, Kind::Piece, &bucket_sections(&b, 0))
+    // The sections of a bucket without pins, made from the slices rather than a copy of them.
+    let mut sections = vec![Section {
+        tag: FACE,
+        cell: 0,
+        bytes: faces_bytes(faces),
+    }];
+    sections.extend(records_sections(records, 0));
+    sections.retain(|s| !s.bytes.is_empty());
+    write(path, Kind::Piece, &sections)
 }
 
 /// Reads a piece (or a result, which is one): its faces and vertex records.

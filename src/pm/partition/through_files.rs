@@ -120,7 +120,7 @@ impl Driver<'_> {
         progress: &dyn Progress,
     ) -> Result<Decimated, BlockFileError> {
         let (dir, max_block) = (self.dir, self.max_block);
-        let n_vertices = flat.positions().len() as u64;
+        let n_vertices = flat.n_vertex_slots() as u64;
         let input_faces = flat.n_faces() as u64;
         let mut state = first_pieces(flat, params, max_block, dir)?;
         let start = state.vertices;
@@ -255,7 +255,9 @@ impl Driver<'_> {
 
 /// The whole mesh's faces, positions and initial quadrics as pieces: the faces in order, cut
 /// into runs of about a block's faces, the records of the vertices with faces in runs of a
-/// block's vertices.
+/// block's vertices. Each run's faces and records are made by the task that writes them, from
+/// the working mesh and the quadrics, so that the driver never holds the whole mesh's records
+/// (216 B per vertex) nor copies of its faces and positions beside the working mesh.
 fn first_pieces(
     flat: FlatMesh,
     params: &DecimateParams,
@@ -263,35 +265,33 @@ fn first_pieces(
     dir: &Scratch,
 ) -> Result<State, BlockFileError> {
     let quadric = initial_quadrics(&flat, params.boundary_weight);
-    let positions = flat.positions();
-    let faces = flat.triangles();
     let vertices = flat.survivors();
-    drop(flat);
-    let records: Vec<Record> = vertices
-        .iter()
-        .map(|&v| Record {
-            vertex: v,
-            position: positions[v as usize],
-            quadric: VertexQuadric {
-                planes: quadric.faces[v as usize],
-                rim: quadric.rim(v).copied(),
-            },
-        })
-        .collect();
-    drop(quadric);
-    let face_runs: Vec<_> = faces.chunks(2 * max_block.max(1)).collect();
-    let record_runs: Vec<_> = records.chunks(max_block.max(1)).collect();
-    let n = face_runs.len().max(record_runs.len());
+    // The working mesh is fresh, so its triangles are the live ones and runs of its triangle
+    // slots are runs of its face list.
+    let faces = flat.n_faces();
+    debug_assert_eq!(faces, flat.triangles().len());
+    let record = |v: u32| Record {
+        vertex: v,
+        position: flat.position(v),
+        quadric: VertexQuadric {
+            planes: quadric.faces[v as usize],
+            rim: quadric.rim(v).copied(),
+        },
+    };
+    let face_run = 2 * max_block.max(1);
+    let vertex_runs: Vec<_> = vertices.chunks(max_block.max(1)).collect();
+    let n = faces.div_ceil(face_run).max(vertex_runs.len());
     let pieces = round(n, |i| {
         let out = dir.file(format!("first.piece{i}"));
-        let f = face_runs.get(i).copied().unwrap_or_default();
-        let r = record_runs.get(i).copied().unwrap_or_default();
-        contents::write_piece(&out, f, r)?;
+        let f = flat.triangles_in((i * face_run).min(faces)..((i + 1) * face_run).min(faces));
+        let v = vertex_runs.get(i).copied().unwrap_or_default();
+        let records: Vec<Record> = v.iter().map(|&v| record(v)).collect();
+        contents::write_piece(&out, &f, &records)?;
         Ok(out)
     })?;
     Ok(State {
         pieces,
-        faces: faces.len(),
+        faces,
         vertices: vertices.len(),
     })
 }
