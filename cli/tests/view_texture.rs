@@ -137,19 +137,10 @@ fn the_layout_splits_vertices_by_texture_coordinates_for_drawing_only() {
     assert_eq!(groups[0][2] + groups[1][2], nt as u32);
 }
 
-/// Over the budget the page draws the shown level: the layout covers exactly its triangles
-/// (`/api/display`, PM indices), and every drawn corner is a corner the input has at that
-/// vertex, so each triangle keeps one chart of the texture.
-#[test]
-fn over_the_budget_the_layout_textures_the_shown_level_with_the_inputs_corners() {
-    let server = serve_with_budget(OBJ, COARSE_BUDGET);
-    let info = server.api("GET", "/api/info", b"").json();
-    assert_eq!(info["display"]["lod"], true);
-    let display = server.api("GET", "/api/display", b"").body;
-    let shown = u32s(&display[..4]).next().unwrap();
-    let shown_triangles: Vec<u32> = u32s(&display[8..]).collect();
-    let layout = layout_of(&server.api("GET", "/api/texcoords", b"").body);
-    assert!(layout.vertex_of.iter().all(|&v| v < shown));
+/// The layout draws exactly `triangles` (PM indices), and every drawn corner is a corner the
+/// input has at that vertex: a level's vertex `i` is PM vertex `i`, at its input position, so
+/// each drawn triangle keeps one chart of the texture.
+fn assert_layout_draws_with_the_inputs_corners(layout: &Layout, triangles: &[u32]) {
     let drawn: Vec<u32> = layout
         .triangles
         .iter()
@@ -161,8 +152,7 @@ fn over_the_budget_the_layout_textures_the_shown_level_with_the_inputs_corners()
         t.sort_unstable();
         t.into_iter().map(<[u32]>::to_vec).collect::<Vec<_>>()
     };
-    assert_eq!(sorted(&drawn), sorted(&shown_triangles));
-    // The shown level's vertex `i` is PM vertex `i`, at its input position.
+    assert_eq!(sorted(&drawn), sorted(triangles));
     let input = meshpyr::read_mesh(data(OBJ)).unwrap();
     let pyramid = meshpyr::Pyramid::build(&input).unwrap();
     let pm = pyramid.pm.original_positions();
@@ -185,6 +175,22 @@ fn over_the_budget_the_layout_textures_the_shown_level_with_the_inputs_corners()
         );
         assert!(input_corners.contains(&key), "drawn vertex {d} (PM {v})");
     }
+}
+
+/// Over the budget the page draws the shown level: the layout covers exactly its triangles
+/// (`/api/display`, PM indices), and every drawn corner is a corner the input has at that
+/// vertex, so each triangle keeps one chart of the texture.
+#[test]
+fn over_the_budget_the_layout_textures_the_shown_level_with_the_inputs_corners() {
+    let server = serve_with_budget(OBJ, COARSE_BUDGET);
+    let info = server.api("GET", "/api/info", b"").json();
+    assert_eq!(info["display"]["lod"], true);
+    let display = server.api("GET", "/api/display", b"").body;
+    let shown = u32s(&display[..4]).next().unwrap();
+    let shown_triangles: Vec<u32> = u32s(&display[8..]).collect();
+    let layout = layout_of(&server.api("GET", "/api/texcoords", b"").body);
+    assert!(layout.vertex_of.iter().all(|&v| v < shown));
+    assert_layout_draws_with_the_inputs_corners(&layout, &shown_triangles);
     // More drawn vertices than shown vertices: the level keeps seams.
     assert!(layout.vertex_of.len() > shown as usize, "no seam split");
     assert_eq!(layout.groups.len(), 2);
@@ -214,41 +220,7 @@ fn the_layout_of_a_scrubbed_level_textures_its_triangles_with_the_inputs_corners
             .body,
     );
     assert!(layout.vertex_of.iter().all(|&v| (v as usize) < nv));
-    let drawn: Vec<u32> = layout
-        .triangles
-        .iter()
-        .flatten()
-        .map(|&d| layout.vertex_of[d as usize])
-        .collect();
-    let sorted = |flat: &[u32]| {
-        let mut t: Vec<&[u32]> = flat.chunks_exact(3).collect();
-        t.sort_unstable();
-        t.into_iter().map(<[u32]>::to_vec).collect::<Vec<_>>()
-    };
-    assert_eq!(sorted(&drawn), sorted(&level_triangles));
-    // The level's vertex `i` is PM vertex `i`, at its input position.
-    let input = meshpyr::read_mesh(data(OBJ)).unwrap();
-    let pyramid = meshpyr::Pyramid::build(&input).unwrap();
-    let pm = pyramid.pm.original_positions();
-    let uv = input.corner_attribute(TEXCOORD).unwrap();
-    let input_corners: std::collections::HashSet<([u64; 3], [u32; 2])> =
-        (0..input.face_indices.len())
-            .map(|c| {
-                let p = input.positions[input.face_indices[c] as usize];
-                let value = uv.value(c).unwrap();
-                (
-                    p.to_array().map(f64::to_bits),
-                    [(value[0] as f32).to_bits(), (value[1] as f32).to_bits()],
-                )
-            })
-            .collect();
-    for (d, &v) in layout.vertex_of.iter().enumerate() {
-        let key = (
-            pm[v as usize].to_array().map(f64::to_bits),
-            layout.uvs[d].map(f32::to_bits),
-        );
-        assert!(input_corners.contains(&key), "drawn vertex {d} (PM {v})");
-    }
+    assert_layout_draws_with_the_inputs_corners(&layout, &level_triangles);
     assert!(layout.vertex_of.len() > nv, "no seam split");
     assert_eq!(layout.groups.len(), 2);
     for bad in ["n=0", "n=abc", "n=100000"] {
