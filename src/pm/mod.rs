@@ -41,7 +41,8 @@ pub mod blocks {
     };
     pub use super::partition::stream::{
         CellEntry, Copies, Cut, ExtraFan, GlobalRepair, Manifest, PieceCounts, SplitError,
-        SplitOptions, cell_fans, cell_piece, cell_pieces, number_copies, split_into_cells,
+        SplitOptions, cell_fans, cell_piece, cell_pieces, hierarchy_from_cells, number_copies,
+        split_into_cells,
     };
     pub use super::partition::task_memory::{block_vertices_for, memory_estimate};
     pub use super::partition::taskfile::BlockFileError;

@@ -35,6 +35,7 @@
 //! and **detaching multi-edges** (a loop over the whole mesh until none is left). A refusal of
 //! any cell voids every cell's piece: the caller builds such a scan in one process.
 
+mod build;
 mod cell;
 mod files;
 mod sample;
@@ -44,6 +45,7 @@ mod tree;
 #[cfg(test)]
 mod tests;
 
+pub use build::hierarchy_from_cells;
 pub use cell::{Copies, ExtraFan, PieceCounts, cell_fans, cell_piece, cell_pieces, number_copies};
 pub use files::{CellEntry, Cut, Manifest};
 pub use split::{SplitOptions, split_into_cells};
@@ -61,6 +63,9 @@ pub enum SplitError {
     /// A cell file or the manifest cannot be written or read back: the file, the byte, what.
     #[error(transparent)]
     File(#[from] BlockFileError),
+    /// The passes or the hierarchy's assembly failed ([`hierarchy_from_cells`]).
+    #[error(transparent)]
+    Build(#[from] crate::pm::PmError),
     /// The input needs a repair that a cell cannot make from its own files.
     #[error("{}: byte {offset}: {what}", path.display())]
     NotLocal {

@@ -404,3 +404,48 @@ fn the_cells_partition_the_vertices_and_follow_the_labels() {
     assert_eq!(manifest.sample, (300, 300));
     assert_eq!(manifest.dropped_triangles, 1);
 }
+
+#[test]
+fn a_hierarchy_built_from_the_cells_replays_every_split_and_leaves_no_file() {
+    let m = scan_with_fans_and_books(40, 30);
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("scan.ply");
+    write_ply(&input, &m, PlyEncoding::BinaryLittleEndian);
+    let scratch = dir.path().join("scratch");
+    let opts = crate::pm::PmOptions {
+        block_vertices: Some(100),
+        block_scratch: Some(scratch.clone()),
+        ..Default::default()
+    };
+    let (pm, source) = hierarchy_from_cells(&input, &opts, &crate::progress::NoProgress).unwrap();
+    let repaired = CornerTable::from_polygons(&m).unwrap();
+    assert!(repaired.report.split_vertices > 0);
+    assert_eq!(source, repaired.source);
+    assert_eq!(pm.n_vertices(), source.vertex_source.len());
+    // Its many small components (the books, the hanging triangles) stay in the base.
+    assert!(pm.n_base_vertices() < pm.n_vertices() / 8, "{}", pm.n_base_vertices());
+    crate::pm::ProgressiveMesh::from_parts(pm.to_parts()).unwrap();
+    assert_eq!(
+        std::fs::read_dir(&scratch).unwrap().count(),
+        0,
+        "scratch left"
+    );
+
+    let flipped = dir.path().join("flipped.ply");
+    let mut f = PolygonMesh::from_triangles(m.positions.clone(), &[]);
+    for (i, p) in m.faces().enumerate() {
+        let mut p = p.to_vec();
+        if i < 40 {
+            p.reverse();
+        }
+        f.push_face(&p);
+    }
+    write_ply(&flipped, &f, PlyEncoding::BinaryLittleEndian);
+    let e = hierarchy_from_cells(&flipped, &opts, &crate::progress::NoProgress).unwrap_err();
+    assert!(matches!(e, SplitError::NotLocal { .. }), "{e}");
+    assert_eq!(
+        std::fs::read_dir(&scratch).unwrap().count(),
+        0,
+        "scratch left"
+    );
+}
