@@ -87,18 +87,15 @@ impl PlyStream {
         face.map_or(0, |e| e.count)
     }
 
-    /// Walks the body, handing `each` the vertices or the faces (`Until`), `chunk` rows at a
-    /// time; stops at the first error (the reader's, or `each`'s). A walk to the faces after
-    /// one through the vertices skips a binary vertex block without decoding it.
+    /// Walks the body to the end of the faces, handing `each` the vertices, then the faces,
+    /// `chunk` rows at a time; stops at the first error (the reader's, or `each`'s).
     pub(crate) fn read<E: From<IoError>>(
         &self,
         chunk: usize,
-        until: Until,
         mut each: impl FnMut(Rows) -> Result<(), E>,
     ) -> Result<(), E> {
         let bytes: &[u8] = self.map.as_deref().unwrap_or(&[]);
         let mut walk = Walk::new(bytes, &self.header, self.nv);
-        walk.skip_vertices = until == Until::Faces;
         let mut seen_vertices = false;
         for el in &self.header.elements {
             let role = Role::of(el);
@@ -110,26 +107,12 @@ impl PlyStream {
             walk.element(el, &role, chunk.max(1), &mut each)
                 .map_err(|e| e.map_io(&self.path))?;
             seen_vertices |= role == Role::Vertex;
-            let done = match until {
-                Until::Vertices => seen_vertices,
-                Until::Faces => role == Role::Face,
-            };
-            if done {
+            if role == Role::Face {
                 break;
             }
         }
         Ok(())
     }
-}
-
-/// How far a streamed read goes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) enum Until {
-    /// To the end of the vertices.
-    Vertices,
-    /// To the end of the faces, the vertices not handed on (a second walk, after one that read
-    /// them): binary ones are skipped, ASCII ones decoded and dropped.
-    Faces,
 }
 
 /// An error of a streamed read: the reader's (without the path yet) or the caller's.
@@ -161,8 +144,6 @@ struct Walk<'a> {
     bin: Bin<'a>,
     asc: Ascii<'a>,
     ctx: Ctx,
-    /// Whether the vertices are not handed on (binary ones then skipped by their stride).
-    skip_vertices: bool,
 }
 
 impl<'a> Walk<'a> {
@@ -189,7 +170,6 @@ impl<'a> Walk<'a> {
                 face_starts: vec![0],
                 face_indices: Vec::new(),
             },
-            skip_vertices: false,
         }
     }
 
@@ -207,7 +187,7 @@ impl<'a> Walk<'a> {
         }
         let rows = self.check_room(el, &plans)?;
         let all_scalar = plans.iter().all(|p| matches!(p, Plan::Scalar { .. }));
-        if !self.ascii && all_scalar && (*role != Role::Vertex || self.skip_vertices) {
+        if !self.ascii && all_scalar && *role != Role::Vertex {
             // Nothing to check in such rows: the reader keeps them verbatim.
             self.bin.pos += rows * row_stride(&plans);
             return Ok(());
@@ -230,7 +210,6 @@ impl<'a> Walk<'a> {
                 }
             };
             let handed = match &rows {
-                Some(Chunk::Vertices(_)) if self.skip_vertices => Ok(()),
                 Some(Chunk::Vertices(p)) => each(Rows::Vertices {
                     first: first as u64,
                     positions: p,
@@ -380,8 +359,8 @@ mod tests {
     fn streamed(path: &Path, chunk: usize) -> Result<(Vec<DVec3>, Vec<Vec<u32>>), IoError> {
         let (mut p, mut f) = (Vec::new(), Vec::new());
         let stream = PlyStream::open(path)?;
-        for until in [Until::Vertices, Until::Faces] {
-            stream.read(chunk, until, |rows| {
+        {
+            stream.read(chunk, |rows| {
                 match rows {
                     Rows::Vertices { first, positions } => {
                         assert_eq!(first as usize, p.len());

@@ -8,7 +8,7 @@ use super::files::{
 };
 use super::sample::Reservoir;
 use super::tree::{CutTree, depth_for};
-use crate::io::ply::stream::{PlyStream, Rows, Until};
+use crate::io::ply::stream::{PlyStream, Rows};
 use crate::mesh::BoundingBox;
 use crate::pm::partition::cells::FRAMES;
 use crate::pm::partition::taskfile::BlockFileError;
@@ -74,22 +74,48 @@ fn split(
     let (nv, nf) = (stream.n_vertices(), stream.n_faces());
     let positions_path = dir.join("positions.f64");
     made.push(positions_path.clone());
-    let (bounds, mut sample) = vertices(stream, &positions_path, options, (nv, nf))?;
-    let sampled = sample.points.len() as u64;
-    let depth = depth_for(nv, sampled, options.block_vertices);
-    let tree = CutTree::from_sample(&mut sample.points, depth, FRAMES[0]);
-    drop(sample);
-    let n_cells = 1usize << depth;
-    let labels_path = dir.join("cell_of.u32");
-    made.push(labels_path.clone());
-    let paths: Vec<[PathBuf; 3]> = (0..n_cells).map(|k| cell_paths(dir, k)).collect();
-    made.extend(paths.iter().flatten().cloned());
-    let vert = labels(&positions_path, &labels_path, &tree, &paths, options)?;
-    let face_paths = paths.iter().map(|p| p[1].clone()).collect();
-    let mut faces = CellWriters::create(face_paths, options.buffer_bytes)?;
-    let counts = triangles(stream, input, &labels_path, &mut faces)?;
-    let face = faces.finish()?;
-    let mut cells: Vec<CellEntry> = (0..n_cells)
+    let part = part_name(&positions_path);
+    let file = std::fs::File::create(&part).map_err(|e| write_error(&part, e))?;
+    let mut s = Splitter {
+        dir,
+        options,
+        made,
+        positions_path,
+        positions: Some(std::io::BufWriter::with_capacity(
+            options.buffer_bytes.max(RECORD),
+            file,
+        )),
+        bounds: None,
+        sample: Some(Reservoir::new(options.sample_size, nv, nf)),
+        faces: None,
+    };
+    stream.read(CHUNK_ROWS, |rows| match rows {
+        Rows::Vertices { first, positions } => s.vertices(first, positions),
+        Rows::Faces {
+            first,
+            starts,
+            indices,
+        } => s.faces()?.triangles(input, first, starts, indices),
+    })?;
+    s.faces()?;
+    let Splitter {
+        positions_path,
+        bounds,
+        faces,
+        ..
+    } = s;
+    let Faces {
+        tree,
+        sampled,
+        paths,
+        vert,
+        labels,
+        writers,
+        counts,
+    } = faces.expect("made by faces()");
+    drop(labels);
+    let face = writers.finish()?;
+    let mut cells: Vec<CellEntry> = (0..paths.len())
         .map(|k| CellEntry {
             vertices: vert[k].0,
             faces: face[k].0,
@@ -107,7 +133,7 @@ fn split(
         bounds,
         used_bounds,
         frame: 0,
-        depth,
+        depth: tree.depth,
         cuts: tree.cuts,
         cells,
     };
@@ -125,35 +151,100 @@ fn part_name(path: &Path) -> PathBuf {
     path.with_file_name(name)
 }
 
-/// Step 1: the positions to `positions.f64` (24 bytes a vertex), their bounding box and the
-/// sample.
-fn vertices(
-    stream: &PlyStream,
-    out: &Path,
-    options: &SplitOptions,
-    (nv, nf): (u64, u64),
-) -> Result<(Option<BoundingBox>, Reservoir), SplitError> {
-    let part = part_name(out);
-    let file = std::fs::File::create(&part).map_err(|e| write_error(&part, e))?;
-    let mut w = std::io::BufWriter::with_capacity(options.buffer_bytes.max(RECORD), file);
-    let mut sample = Reservoir::new(options.sample_size, nv, nf);
-    let mut bounds: Option<BoundingBox> = None;
-    stream.read(CHUNK_ROWS, Until::Vertices, |rows| {
-        let Rows::Vertices { first, positions } = rows else {
-            return Ok::<(), SplitError>(());
+/// The split while the input streams by: steps 1 on the vertices, 2 and 3 when the first face
+/// comes (or the input ends), 4 on the faces.
+struct Splitter<'a> {
+    dir: &'a Path,
+    options: &'a SplitOptions,
+    made: &'a mut Vec<PathBuf>,
+    positions_path: PathBuf,
+    /// Step 1's writer of `positions.f64`, until the first face.
+    positions: Option<std::io::BufWriter<std::fs::File>>,
+    bounds: Option<BoundingBox>,
+    sample: Option<Reservoir>,
+    /// Step 4's state, from the first face on.
+    faces: Option<Faces>,
+}
+
+/// What step 4 works with: the tree, the cells' files and the labels, and what it counted.
+struct Faces {
+    tree: CutTree,
+    sampled: u64,
+    paths: Vec<[PathBuf; 3]>,
+    /// Each `vert` file's record count and checksum.
+    vert: Vec<(u64, u32)>,
+    labels: Option<memmap2::Mmap>,
+    writers: CellWriters,
+    counts: Counts,
+}
+
+impl Splitter<'_> {
+    /// Step 1: a chunk of positions to `positions.f64` (24 bytes a vertex), the bounding box
+    /// and the sample.
+    fn vertices(&mut self, first: u64, positions: &[DVec3]) -> Result<(), SplitError> {
+        let part = part_name(&self.positions_path);
+        let (Some(w), Some(sample)) = (&mut self.positions, &mut self.sample) else {
+            let what = "vertices after the faces";
+            return Err(BlockFileError::new(&part, 0, what).into());
         };
         for (i, &p) in positions.iter().enumerate() {
             let bytes: Vec<u8> = p.to_array().iter().flat_map(|x| x.to_le_bytes()).collect();
             w.write_all(&bytes).map_err(|e| write_error(&part, e))?;
-            bounds = Some(bounds.map_or(BoundingBox { min: p, max: p }, |b| b.including(p)));
+            let b = self
+                .bounds
+                .map_or(BoundingBox { min: p, max: p }, |b| b.including(p));
+            self.bounds = Some(b);
             sample.offer((first + i as u64) as u32, p);
         }
         Ok(())
-    })?;
-    w.flush().map_err(|e| write_error(&part, e))?;
-    drop(w);
-    std::fs::rename(&part, out).map_err(|e| write_error(out, e))?;
-    Ok((bounds, sample))
+    }
+
+    /// Steps 2 and 3 once, when the vertices end; then step 4's state.
+    fn faces(&mut self) -> Result<&mut Faces, SplitError> {
+        if self.faces.is_none() {
+            let part = part_name(&self.positions_path);
+            if let Some(mut w) = self.positions.take() {
+                w.flush().map_err(|e| write_error(&part, e))?;
+            }
+            std::fs::rename(&part, &self.positions_path)
+                .map_err(|e| write_error(&self.positions_path, e))?;
+            let mut sample = self.sample.take().expect("taken once");
+            let sampled = sample.points.len() as u64;
+            let nv = std::fs::metadata(&self.positions_path).map_or(0, |m| m.len() / 24);
+            let depth = depth_for(nv, sampled, self.options.block_vertices);
+            let tree = CutTree::from_sample(&mut sample.points, depth, FRAMES[0]);
+            drop(sample);
+            let dir = self.dir;
+            let labels_path = dir.join("cell_of.u32");
+            self.made.push(labels_path.clone());
+            let paths: Vec<[PathBuf; 3]> =
+                (0..1usize << depth).map(|k| cell_paths(dir, k)).collect();
+            self.made.extend(paths.iter().flatten().cloned());
+            let vert = labels(
+                &self.positions_path,
+                &labels_path,
+                &tree,
+                &paths,
+                self.options,
+            )?;
+            let face_paths = paths.iter().map(|p| p[1].clone()).collect();
+            let writers = CellWriters::create(face_paths, self.options.buffer_bytes)?;
+            self.faces = Some(Faces {
+                tree,
+                sampled,
+                paths,
+                vert,
+                labels: map(&labels_path)?,
+                writers,
+                counts: Counts {
+                    polygons: 0,
+                    triangles: 0,
+                    dropped: 0,
+                },
+            });
+        }
+        Ok(self.faces.as_mut().expect("made above"))
+    }
 }
 
 /// A read-only map of a file this split wrote (`None` when it is empty).
@@ -211,36 +302,24 @@ struct Counts {
     dropped: u64,
 }
 
-/// Step 4: the polygons fan-triangulated as the mesh builder does, each triangle to the `face`
-/// file of every cell holding one of its vertices.
-fn triangles(
-    stream: &PlyStream,
-    input: &Path,
-    labels_path: &Path,
-    faces: &mut CellWriters,
-) -> Result<Counts, SplitError> {
-    let labels = map(labels_path)?;
-    let labels: &[u8] = labels.as_deref().unwrap_or(&[]);
-    let cell_of = |v: u32| {
-        let at = 4 * v as usize;
-        u32::from_le_bytes(labels[at..at + 4].try_into().expect("4 bytes"))
-    };
-    // The builder numbers corners 3t..3t + 3 in 32 bits.
-    let max_triangles = (u32::MAX / 3) as u64;
-    let mut counts = Counts {
-        polygons: 0,
-        triangles: 0,
-        dropped: 0,
-    };
-    stream.read(CHUNK_ROWS, Until::Faces, |rows| {
-        let Rows::Faces {
-            first,
-            starts,
-            indices,
-        } = rows
-        else {
-            return Ok::<(), SplitError>(());
+impl Faces {
+    /// Step 4: a chunk of polygons fan-triangulated as the mesh builder does, each triangle to
+    /// the `face` file of every cell holding one of its vertices.
+    fn triangles(
+        &mut self,
+        input: &Path,
+        first: u64,
+        starts: &[u32],
+        indices: &[u32],
+    ) -> Result<(), SplitError> {
+        let labels: &[u8] = self.labels.as_deref().unwrap_or(&[]);
+        let cell_of = |v: u32| {
+            let at = 4 * v as usize;
+            u32::from_le_bytes(labels[at..at + 4].try_into().expect("4 bytes"))
         };
+        // The builder numbers corners 3t..3t + 3 in 32 bits.
+        let max_triangles = (u32::MAX / 3) as u64;
+        let counts = &mut self.counts;
         for (i, w) in starts.windows(2).enumerate() {
             let polygon = first + i as u64;
             let poly = &indices[w[0] as usize..w[1] as usize];
@@ -266,14 +345,13 @@ fn triangles(
                 counts.triangles += 1;
                 for (j, &k) in cells.iter().enumerate() {
                     if !cells[..j].contains(&k) {
-                        faces.push(k as usize, &record)?;
+                        self.writers.push(k as usize, &record)?;
                     }
                 }
             }
         }
         Ok(())
-    })?;
-    Ok(counts)
+    }
 }
 
 /// Step 5: each cell's `border` file (the positions of the other cells' vertices its triangles

@@ -423,7 +423,11 @@ fn a_hierarchy_built_from_the_cells_replays_every_split_and_leaves_no_file() {
     assert_eq!(source, repaired.source);
     assert_eq!(pm.n_vertices(), source.vertex_source.len());
     // Its many small components (the books, the hanging triangles) stay in the base.
-    assert!(pm.n_base_vertices() < pm.n_vertices() / 8, "{}", pm.n_base_vertices());
+    assert!(
+        pm.n_base_vertices() < pm.n_vertices() / 8,
+        "{}",
+        pm.n_base_vertices()
+    );
     crate::pm::ProgressiveMesh::from_parts(pm.to_parts()).unwrap();
     assert_eq!(
         std::fs::read_dir(&scratch).unwrap().count(),
