@@ -67,8 +67,13 @@ impl Copies {
 }
 
 /// Numbers the copies of every cell's extra fans as the builder does: after the input's
-/// `input_vertices` vertices, in the order of their first corners.
-pub fn number_copies(input_vertices: u64, mut fans: Vec<ExtraFan>) -> Copies {
+/// `input_vertices` vertices, in the order of their first corners. Fails as the builder does
+/// when the vertices would not fit 32-bit indices.
+pub fn number_copies(input_vertices: u64, mut fans: Vec<ExtraFan>) -> Result<Copies, SplitError> {
+    if input_vertices + fans.len() as u64 >= NONE as u64 {
+        let e = crate::pm::PmError::Mesh(crate::mesh::BuildError::TooLarge);
+        return Err(e.into());
+    }
     fans.sort_unstable_by_key(|f| f.first);
     let mut corners = Vec::new();
     for (i, f) in fans.iter().enumerate() {
@@ -76,10 +81,10 @@ pub fn number_copies(input_vertices: u64, mut fans: Vec<ExtraFan>) -> Copies {
         corners.extend(f.corners.iter().map(|&c| (c, v)));
     }
     corners.sort_unstable();
-    Copies {
+    Ok(Copies {
         corners,
         n_vertices: input_vertices + fans.len() as u64,
-    }
+    })
 }
 
 /// What a cell's piece holds.
@@ -466,7 +471,7 @@ pub fn cell_pieces(
     let copies = number_copies(
         manifest.input_vertices,
         fans.into_iter().flatten().collect(),
-    );
+    )?;
     let pieces: Vec<PathBuf> = (0..n)
         .map(|k| out_dir.join(format!("first.piece{k}")))
         .collect();

@@ -117,10 +117,14 @@ fn write_ply(path: &Path, m: &PolygonMesh, encoding: PlyEncoding) {
 }
 
 fn small(block: usize) -> SplitOptions {
+    sampled(block, 300)
+}
+
+fn sampled(block: usize, sample_size: usize) -> SplitOptions {
     SplitOptions {
         block_vertices: block,
         buffer_bytes: 64,
-        sample_size: 300,
+        sample_size,
     }
 }
 
@@ -138,12 +142,17 @@ fn pieces_of(pieces: &[std::path::PathBuf]) -> (Vec<[u32; 3]>, Vec<contents::Rec
 /// Splits `m` written as `encoding`, runs the cell tasks, and checks the pieces against the
 /// one-process corner table and quadrics, bit for bit; returns the number of cells.
 fn check_against_one_process(m: &PolygonMesh, block: usize, encoding: PlyEncoding) -> usize {
+    check_sampled(m, small(block), encoding)
+}
+
+/// [`check_against_one_process`] with the given split options.
+fn check_sampled(m: &PolygonMesh, options: SplitOptions, encoding: PlyEncoding) -> usize {
     let dir = tempfile::tempdir().unwrap();
     let input = dir.path().join("scan.ply");
     write_ply(&input, m, encoding);
     let cells = dir.path().join("cells");
     std::fs::create_dir(&cells).unwrap();
-    let manifest = split_into_cells(&input, &cells, &small(block)).unwrap();
+    let manifest = split_into_cells(&input, &cells, &options).unwrap();
     let (pieces, copies) = cell_pieces(&cells, BOUNDARY_WEIGHT, dir.path()).unwrap();
 
     let read = crate::io::ply::read(&std::fs::read(&input).unwrap()).unwrap();
@@ -200,6 +209,17 @@ fn check_against_one_process(m: &PolygonMesh, block: usize, encoding: PlyEncodin
 fn a_clean_scan_in_many_cells_gives_the_one_process_triangles_and_quadrics_bit_for_bit() {
     let cells = check_against_one_process(&scan(40, 30), 50, PlyEncoding::BinaryLittleEndian);
     assert!(cells >= 32, "{cells} cells");
+}
+
+#[test]
+fn real_scans_in_many_cells_give_the_one_process_triangles_and_quadrics_bit_for_bit() {
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    for name in ["bunny.ply", "fandisk.ply", "elephant_holes.ply"] {
+        let m = crate::io::ply::read(&std::fs::read(data.join(name)).unwrap()).unwrap();
+        let block = m.positions.len() / 40;
+        let cells = check_sampled(&m, sampled(block, 2000), PlyEncoding::BinaryLittleEndian);
+        assert!(cells >= 32, "{name}: {cells} cells");
+    }
 }
 
 #[test]
