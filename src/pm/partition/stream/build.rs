@@ -22,7 +22,7 @@ use crate::pm::{PmError, PmOptions, ProgressiveMesh};
 use crate::progress::Progress;
 use std::path::Path;
 
-/// The progressive mesh of the PLY file `input` built in blocks through files, the first pass
+/// The progressive mesh of the PLY file `input` (uncompressed) built in blocks through files, the first pass
 /// starting from the streaming split's cells: `opts.block_vertices` is the block size and
 /// `opts.block_scratch` the folder the files go to (a new folder in it, removed at the end),
 /// both required; `opts.block_runner` runs the passes' tasks (this process's threads without

@@ -329,45 +329,7 @@ pub fn cell_piece(
     let origin = manifest
         .used_bounds
         .map_or(DVec3::ZERO, |b: BoundingBox| b.centre());
-    let at = |c: u32| cell.position(cell.vertex(c)) - origin;
-    let own = |c: u32| cell.is_own(cell.vertex(c));
-    let mut planes: BTreeMap<u32, (DVec3, Quadric)> = BTreeMap::new();
-    for c in 0..n {
-        if own(c) {
-            planes
-                .entry(mesh[c as usize])
-                .or_insert((at(c), Quadric::default()));
-        }
-    }
-    for i in 0..cell.faces.len() as u32 {
-        let [a, b, c] = [3 * i, 3 * i + 1, 3 * i + 2];
-        let Some(fq) = Quadric::of_triangle(at(a), at(b), at(c)) else {
-            continue;
-        };
-        for x in [a, b, c].into_iter().filter(|&x| own(x)) {
-            planes
-                .get_mut(&mesh[x as usize])
-                .expect("an own vertex")
-                .1
-                .add(&fq);
-        }
-    }
-    for (p, q) in planes.values_mut() {
-        let scale = POINT_REGULARISATION * q.weight;
-        q.add(&Quadric::from_point(*p, scale));
-    }
-    let rims = rims(&cell, &mesh, &at, boundary_weight);
-    let records: Vec<Record> = planes
-        .into_iter()
-        .map(|(v, (position, planes))| Record {
-            vertex: v,
-            position,
-            quadric: VertexQuadric {
-                planes,
-                rim: rims.get(&v).copied(),
-            },
-        })
-        .collect();
+    let records = records(&cell, &mesh, origin, boundary_weight);
     let faces: Vec<[u32; 3]> = (0..cell.faces.len())
         .filter(|&i| cell.faces[i].owner == k)
         .map(|i| [0, 1, 2].map(|j| mesh[3 * i + j]))
@@ -377,6 +339,44 @@ pub fn cell_piece(
         faces: faces.len() as u64,
         vertices: records.len() as u64,
     })
+}
+
+/// Step 4: the records of the cell's vertices (and copies) with triangles, ascending: the
+/// position and the quadrics in the frame centred at `origin`, summed as `initial_quadrics`
+/// sums them (face planes in triangle order, then the point regulariser, the boundary planes
+/// apart).
+fn records(cell: &Cell, mesh: &[u32], origin: DVec3, boundary_weight: f64) -> Vec<Record> {
+    let at = |c: u32| cell.position(cell.vertex(c)) - origin;
+    let own = |c: u32| cell.is_own(cell.vertex(c));
+    let mut planes: BTreeMap<u32, (DVec3, Quadric)> = BTreeMap::new();
+    for c in (0..mesh.len() as u32).filter(|&c| own(c)) {
+        let fresh = (at(c), Quadric::default());
+        planes.entry(mesh[c as usize]).or_insert(fresh);
+    }
+    for i in 0..cell.faces.len() as u32 {
+        let [a, b, c] = [3 * i, 3 * i + 1, 3 * i + 2];
+        let Some(fq) = Quadric::of_triangle(at(a), at(b), at(c)) else {
+            continue;
+        };
+        for x in [a, b, c].into_iter().filter(|&x| own(x)) {
+            let q = planes.get_mut(&mesh[x as usize]).expect("an own vertex");
+            q.1.add(&fq);
+        }
+    }
+    for (p, q) in planes.values_mut() {
+        let scale = POINT_REGULARISATION * q.weight;
+        q.add(&Quadric::from_point(*p, scale));
+    }
+    let rims = rims(cell, mesh, &at, boundary_weight);
+    let record = |(v, (position, planes)): (u32, (DVec3, Quadric))| Record {
+        vertex: v,
+        position,
+        quadric: VertexQuadric {
+            planes,
+            rim: rims.get(&v).copied(),
+        },
+    };
+    planes.into_iter().map(record).collect()
 }
 
 /// Step 3: refuses two distinct edges between the same two vertices (of which one is the

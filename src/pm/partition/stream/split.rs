@@ -43,7 +43,7 @@ impl SplitOptions {
 /// Rows decoded at a time.
 const CHUNK_ROWS: usize = 1 << 16;
 
-/// Splits the PLY file `input` into cell files in `dir` (which must exist; the names are in
+/// Splits the PLY file `input` (uncompressed, vertices before faces) into cell files in `dir` (which must exist; the names are in
 /// `formats/blocks.md`, "Cell files") and writes `dir/manifest`, which it returns.
 ///
 /// The files depend on the input's vertices and faces only (not on its encoding, nor on the
