@@ -35,7 +35,6 @@ use crate::pm::partition::contents::{self, Record};
 use crate::pm::quadric::{POINT_REGULARISATION, Quadric};
 use glam::DVec3;
 use rayon::prelude::*;
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 const NONE: u32 = u32::MAX;
@@ -106,6 +105,8 @@ struct Cell {
     /// Mate of every local corner `3i + k` (triangle `i` of `faces`); `NONE` on a boundary
     /// and on edges without an end in the cell, which the cell does not see whole.
     mate: Vec<u32>,
+    /// Whether each local corner's vertex is one of the cell's.
+    own_at: Vec<bool>,
 }
 
 impl Cell {
@@ -125,8 +126,11 @@ impl Cell {
             border: border_v,
             faces,
             mate: Vec::new(),
+            own_at: Vec::new(),
         };
         cell.check(manifest)?;
+        let corners = 0..3 * cell.faces.len() as u32;
+        cell.own_at = corners.map(|c| cell.is_own(cell.vertex(c))).collect();
         cell.pair()?;
         Ok(cell)
     }
@@ -186,7 +190,7 @@ impl Cell {
         let mut edges: Vec<(u64, u32)> = Vec::new();
         for c in 0..n {
             let (a, b) = (self.vertex(c), self.vertex(next_c(c)));
-            if self.is_own(a) || self.is_own(b) {
+            if self.own_at[c as usize] || self.own_at[next_c(c) as usize] {
                 edges.push(((a.min(b) as u64) << 32 | a.max(b) as u64, c));
             }
         }
@@ -250,15 +254,15 @@ impl Cell {
         }
     }
 
-    /// The local corners at each of the cell's vertices, ascending, by vertex.
-    fn corners_by_vertex(&self) -> BTreeMap<u32, Vec<u32>> {
-        let mut at: BTreeMap<u32, Vec<u32>> = BTreeMap::new();
-        for c in 0..3 * self.faces.len() as u32 {
-            let v = self.vertex(c);
-            if self.is_own(v) {
-                at.entry(v).or_default().push(c);
-            }
-        }
+    /// `(vertex, local corner)` of every corner at one of the cell's vertices, sorted: each
+    /// vertex's corners in a run, ascending.
+    fn corners_by_vertex(&self) -> Vec<(u32, u32)> {
+        let corners = 0..3 * self.faces.len() as u32;
+        let mut at: Vec<(u32, u32)> = corners
+            .filter(|&c| self.own_at[c as usize])
+            .map(|c| (self.vertex(c), c))
+            .collect();
+        at.sort_unstable();
         at
     }
 
@@ -266,9 +270,9 @@ impl Cell {
     fn extra_fans(&self) -> Vec<Vec<u32>> {
         let mut out = Vec::new();
         let mut fan_of = vec![NONE; self.mate.len()];
-        for (_, corners) in self.corners_by_vertex() {
+        for run in self.corners_by_vertex().chunk_by(|a, b| a.0 == b.0) {
             let mut fans = 0u32;
-            for &c0 in &corners {
+            for &(_, c0) in run {
                 if fan_of[c0 as usize] != NONE {
                     continue;
                 }
@@ -347,36 +351,39 @@ pub fn cell_piece(
 /// apart).
 fn records(cell: &Cell, mesh: &[u32], origin: DVec3, boundary_weight: f64) -> Vec<Record> {
     let at = |c: u32| cell.position(cell.vertex(c)) - origin;
-    let own = |c: u32| cell.is_own(cell.vertex(c));
-    let mut planes: BTreeMap<u32, (DVec3, Quadric)> = BTreeMap::new();
-    for c in (0..mesh.len() as u32).filter(|&c| own(c)) {
-        let fresh = (at(c), Quadric::default());
-        planes.entry(mesh[c as usize]).or_insert(fresh);
-    }
+    let own = |c: u32| cell.own_at[c as usize];
+    let mut ids: Vec<(u32, u32)> = (0..mesh.len() as u32)
+        .filter(|&c| own(c))
+        .map(|c| (mesh[c as usize], c))
+        .collect();
+    ids.sort_unstable();
+    ids.dedup_by_key(|x| x.0);
+    let slot = |c: u32| {
+        let v = mesh[c as usize];
+        ids.binary_search_by_key(&v, |x| x.0)
+            .expect("an own vertex")
+    };
+    let mut planes = vec![Quadric::default(); ids.len()];
     for i in 0..cell.faces.len() as u32 {
         let [a, b, c] = [3 * i, 3 * i + 1, 3 * i + 2];
         let Some(fq) = Quadric::of_triangle(at(a), at(b), at(c)) else {
             continue;
         };
         for x in [a, b, c].into_iter().filter(|&x| own(x)) {
-            let q = planes.get_mut(&mesh[x as usize]).expect("an own vertex");
-            q.1.add(&fq);
+            planes[slot(x)].add(&fq);
         }
     }
-    for (p, q) in planes.values_mut() {
+    for (q, &(_, c)) in planes.iter_mut().zip(&ids) {
         let scale = POINT_REGULARISATION * q.weight;
-        q.add(&Quadric::from_point(*p, scale));
+        q.add(&Quadric::from_point(at(c), scale));
     }
-    let rims = rims(cell, mesh, &at, boundary_weight);
-    let record = |(v, (position, planes)): (u32, (DVec3, Quadric))| Record {
+    let rims = rims(cell, mesh, &at, boundary_weight, &slot, ids.len());
+    let record = |((&(v, c), planes), rim): ((&(u32, u32), Quadric), Option<Quadric>)| Record {
         vertex: v,
-        position,
-        quadric: VertexQuadric {
-            planes,
-            rim: rims.get(&v).copied(),
-        },
+        position: at(c),
+        quadric: VertexQuadric { planes, rim },
     };
-    planes.into_iter().map(record).collect()
+    ids.iter().zip(planes).zip(rims).map(record).collect()
 }
 
 /// Step 3: refuses two distinct edges between the same two vertices (of which one is the
@@ -384,7 +391,7 @@ fn records(cell: &Cell, mesh: &[u32], origin: DVec3, boundary_weight: f64) -> Ve
 fn check_multi_edges(cell: &Cell, mesh: &[u32]) -> Result<(), SplitError> {
     let mut edges: Vec<(u64, u32)> = Vec::new();
     for c in 0..mesh.len() as u32 {
-        if cell.is_own(cell.vertex(c)) || cell.is_own(cell.vertex(next_c(c))) {
+        if cell.own_at[c as usize] || cell.own_at[next_c(c) as usize] {
             let (a, b) = (mesh[c as usize], mesh[next_c(c) as usize]);
             edges.push(((a.min(b) as u64) << 32 | a.max(b) as u64, c));
         }
@@ -424,14 +431,16 @@ fn rims(
     mesh: &[u32],
     at: &impl Fn(u32) -> DVec3,
     weight: f64,
-) -> BTreeMap<u32, Quadric> {
-    let mut out: BTreeMap<u32, Quadric> = BTreeMap::new();
+    slot: &impl Fn(u32) -> usize,
+    n: usize,
+) -> Vec<Option<Quadric>> {
+    let mut out: Vec<Option<Quadric>> = vec![None; n];
     if weight <= 0.0 {
         return out;
     }
     for c in 0..mesh.len() as u32 {
         let ends = [next_c(c), c];
-        if cell.mate[c as usize] != NONE || !ends.iter().any(|&e| cell.is_own(cell.vertex(e))) {
+        if cell.mate[c as usize] != NONE || !ends.iter().any(|&e| cell.own_at[e as usize]) {
             continue;
         }
         // The boundary half-edge runs from c's head to its tail; its face is c's.
@@ -445,10 +454,8 @@ fn rims(
             continue;
         }
         let q = Quadric::from_plane(n, pa, weight * e.length_squared(), 0.0);
-        for x in ends {
-            if cell.is_own(cell.vertex(x)) {
-                out.entry(mesh[x as usize]).or_default().add(&q);
-            }
+        for x in ends.into_iter().filter(|&x| cell.own_at[x as usize]) {
+            out[slot(x)].get_or_insert_with(Quadric::default).add(&q);
         }
     }
     out
