@@ -6,7 +6,7 @@
 use meshpyr::io::read_mesh;
 use meshpyr::mesh::Mesh;
 use meshpyr::pm::blocks::{
-    Manifest, SplitError, SplitOptions, cell_fans, cell_pieces, hierarchy_from_cells,
+    Flips, Manifest, SplitError, SplitOptions, cell_fans, cell_pieces, hierarchy_from_cells,
     split_into_cells,
 };
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
@@ -82,7 +82,7 @@ fn a_damaged_cell_file_or_input_is_an_error_naming_the_file() {
     let mut bytes = std::fs::read(&vert).unwrap();
     bytes[9] ^= 0x40;
     std::fs::write(&vert, &bytes).unwrap();
-    let e = cell_fans(dir.path(), &manifest, 2).unwrap_err();
+    let e = cell_fans(dir.path(), &manifest, 2, &Flips::default()).unwrap_err();
     assert!(matches!(e, SplitError::File(_)), "{e}");
     assert!(
         e.to_string().starts_with(&vert.display().to_string()),

@@ -3,16 +3,16 @@
 //! local repairs and the initial quadrics of the cell's vertices, written as a first piece of
 //! the partitioned build through files.
 //!
-//! Steps ([`cell_fans`], then [`number_copies`] over all cells, then [`cell_piece`]):
+//! Steps (each round reads the cell again: a task keeps nothing between rounds):
 //! 1. **pairing**: the half-edges of every edge with an end in the cell, grouped by edge and
 //!    paired as the builder pairs them (two triangles: with each other; more: by angle about
 //!    the edge, `pair_around_edge`, the builder's code) — the cell holds every triangle
-//!    around its vertices, so it sees each such edge whole. A pair that runs the same way
-//!    would make the builder orient the whole component: refused ([`GlobalRepair`]);
-//! 2. **fans**: each of the cell's vertices walked fan by fan (`walk_fan`, the builder's
-//!    code); the fan with the vertex's first corner keeps it, every other fan is a copy. The
-//!    builder numbers copies after the input's vertices in the order of their fans' first
-//!    corners over the whole mesh, so the copies' numbers are given by the driver
+//!    around its vertices, so it sees each such edge whole. Then the triangles are flipped as
+//!    the orientation round decided (`orient.rs`, [`Flips`]; nothing before that round);
+//! 2. **fans** ([`cell_fans`]): each of the cell's vertices walked fan by fan (`walk_fan`, the
+//!    builder's code); the fan with the vertex's first corner keeps it, every other fan is a
+//!    copy. The builder numbers copies after the input's vertices in the order of their fans'
+//!    first corners over the whole mesh, so the copies' numbers are given by the driver
 //!    ([`number_copies`]) from every cell's fans;
 //! 3. **multi-edges**: two distinct edges between the same two vertices after the fans are
 //!    split would make the builder detach one end: refused;
@@ -20,13 +20,14 @@
 //!    in triangle order, then its point regulariser, then the planes of its boundary edges in
 //!    corner order, in the frame centred on the manifest's bounding box of used vertices —
 //!    the order and the operations of `initial_quadrics`, so the same bits;
-//! 5. **the piece**: the triangles the cell owns, in triangle order, and the records of its
+//! 5. **the piece** ([`cell_piece`]): the triangles the cell owns, in triangle order, and the records of its
 //!    vertices with triangles, ascending (copies after the input's vertices).
 //!
 //! The corners keep the builder's numbers (`3t + k` for corner `k` of triangle `t`), so ties
 //! (angles, first corners) are broken as the builder breaks them.
 
 use super::files::{FaceRecord, Manifest, cell_paths, read_faces, read_vertices};
+use super::orient::{CellPatches, Flips, cell_patches, local_patches, orient};
 use super::{GlobalRepair, SplitError};
 use crate::mesh::BoundingBox;
 use crate::mesh::build::{next_c, pair_around_edge, walk_fan};
@@ -96,22 +97,22 @@ pub struct PieceCounts {
 }
 
 /// One cell's files, read and checked, with its half-edges paired.
-struct Cell {
+pub(super) struct Cell {
     /// The `face` file (for messages).
-    face_path: PathBuf,
+    pub(super) face_path: PathBuf,
     own: Vec<(u32, DVec3)>,
     border: Vec<(u32, DVec3)>,
-    faces: Vec<FaceRecord>,
+    pub(super) faces: Vec<FaceRecord>,
     /// Mate of every local corner `3i + k` (triangle `i` of `faces`); `NONE` on a boundary
     /// and on edges without an end in the cell, which the cell does not see whole.
-    mate: Vec<u32>,
+    pub(super) mate: Vec<u32>,
     /// Whether each local corner's vertex is one of the cell's.
     own_at: Vec<bool>,
 }
 
 impl Cell {
     /// Reads cell `k` of the split described by `manifest` in `dir`, and pairs its edges.
-    fn read(dir: &Path, manifest: &Manifest, k: u32) -> Result<Cell, SplitError> {
+    pub(super) fn read(dir: &Path, manifest: &Manifest, k: u32) -> Result<Cell, SplitError> {
         let entry = manifest.cells.get(k as usize).ok_or_else(|| {
             let what = format!("cell {k} of {}", manifest.cells.len());
             SplitError::File(super::BlockFileError::new(&dir.join("manifest"), 0, what))
@@ -135,7 +136,7 @@ impl Cell {
         Ok(cell)
     }
 
-    fn is_own(&self, v: u32) -> bool {
+    pub(super) fn is_own(&self, v: u32) -> bool {
         self.own.binary_search_by_key(&v, |x| x.0).is_ok()
     }
 
@@ -149,7 +150,7 @@ impl Cell {
         }
     }
 
-    fn at(&self, i: usize) -> u64 {
+    pub(super) fn at(&self, i: usize) -> u64 {
         (i * super::files::RECORD) as u64
     }
 
@@ -180,7 +181,7 @@ impl Cell {
     }
 
     /// The input vertex of local corner `c`.
-    fn vertex(&self, c: u32) -> u32 {
+    pub(super) fn vertex(&self, c: u32) -> u32 {
         self.faces[(c / 3) as usize].vertices[(c % 3) as usize]
     }
 
@@ -224,9 +225,6 @@ impl Cell {
                 }
             };
             for (a, b) in pairs {
-                if self.vertex(a) == self.vertex(b) {
-                    return Err(self.same_direction(a, b));
-                }
                 mate[a as usize] = b;
                 mate[b as usize] = a;
             }
@@ -235,23 +233,32 @@ impl Cell {
         Ok(())
     }
 
-    fn same_direction(&self, a: u32, b: u32) -> SplitError {
-        let (ta, tb) = (self.faces[(a / 3) as usize], self.faces[(b / 3) as usize]);
-        SplitError::NotLocal {
-            path: self.face_path.clone(),
-            offset: self.at((b / 3) as usize),
-            repair: GlobalRepair::Orientation,
-            what: format!(
-                "triangles {} and {} run the same way along their edge {}-{}: the mesh builder \
-                 orients their whole component (the majority wins), which no cell can decide \
-                 alone; the streaming split does not make that decision yet (a union-find \
-                 round over the cells' patches), so build this scan in one process",
-                ta.triangle,
-                tb.triangle,
-                self.vertex(a),
-                self.vertex(next_c(a)),
-            ),
+    /// Flips the triangles the orientation round flips (`orient.rs`): `[a, b, c]` becomes
+    /// `[a, c, b]`, corner `k` of a triangle becomes corner `2 - k`, its mates following, as
+    /// the builder flips them.
+    fn orient(&mut self, k: u32, flips: &Flips) -> Result<(), SplitError> {
+        let (patch, parity) = local_patches(self)?;
+        let flipped: Vec<bool> = (0..self.faces.len())
+            .map(|i| flips.of(k, patch[i]) != (parity[i] == 1))
+            .collect();
+        if !flipped.contains(&true) {
+            return Ok(());
         }
+        let remap = |c: u32| match flipped[(c / 3) as usize] {
+            true => c - c % 3 + (2 - c % 3),
+            false => c,
+        };
+        let mut mate = vec![NONE; self.mate.len()];
+        for (c, &m) in self.mate.iter().enumerate() {
+            mate[remap(c as u32) as usize] = if m == NONE { NONE } else { remap(m) };
+        }
+        self.mate = mate;
+        for (f, _) in self.faces.iter_mut().zip(&flipped).filter(|x| *x.1) {
+            f.vertices.swap(1, 2);
+        }
+        let corners = 0..3 * self.faces.len() as u32;
+        self.own_at = corners.map(|c| self.is_own(self.vertex(c))).collect();
+        Ok(())
     }
 
     /// `(vertex, local corner)` of every corner at one of the cell's vertices, sorted: each
@@ -295,8 +302,14 @@ impl Cell {
 /// Round 1 of the cell tasks: the extra fans of cell `k`'s vertices (the copies the builder
 /// makes there), for [`number_copies`]. Fails with [`SplitError::NotLocal`] when the cell
 /// shows a repair it cannot make alone.
-pub fn cell_fans(dir: &Path, manifest: &Manifest, k: u32) -> Result<Vec<ExtraFan>, SplitError> {
-    let cell = Cell::read(dir, manifest, k)?;
+pub fn cell_fans(
+    dir: &Path,
+    manifest: &Manifest,
+    k: u32,
+    flips: &Flips,
+) -> Result<Vec<ExtraFan>, SplitError> {
+    let mut cell = Cell::read(dir, manifest, k)?;
+    cell.orient(k, flips)?;
     let fans = cell.extra_fans();
     Ok(fans
         .into_iter()
@@ -320,11 +333,12 @@ pub fn cell_piece(
     dir: &Path,
     manifest: &Manifest,
     k: u32,
-    copies: &Copies,
+    (flips, copies): (&Flips, &Copies),
     boundary_weight: f64,
     out: &Path,
 ) -> Result<PieceCounts, SplitError> {
-    let cell = Cell::read(dir, manifest, k)?;
+    let mut cell = Cell::read(dir, manifest, k)?;
+    cell.orient(k, flips)?;
     let n = 3 * cell.faces.len() as u32;
     let mesh: Vec<u32> = (0..n)
         .map(|c| copies.of(cell.corner(c)).unwrap_or(cell.vertex(c)))
@@ -471,9 +485,15 @@ pub fn cell_pieces(
 ) -> Result<(Vec<PathBuf>, Copies), SplitError> {
     let manifest = Manifest::read(&dir.join("manifest"))?;
     let n = manifest.cells.len() as u32;
+    let patches: Vec<CellPatches> = (0..n)
+        .into_par_iter()
+        .map(|k| cell_patches(dir, &manifest, k))
+        .collect::<Result<_, _>>()?;
+    let flips = orient(dir, &patches)?;
+    drop(patches);
     let fans: Vec<Vec<ExtraFan>> = (0..n)
         .into_par_iter()
-        .map(|k| cell_fans(dir, &manifest, k))
+        .map(|k| cell_fans(dir, &manifest, k, &flips))
         .collect::<Result<_, _>>()?;
     let copies = number_copies(
         manifest.input_vertices,
@@ -487,7 +507,7 @@ pub fn cell_pieces(
             dir,
             &manifest,
             k,
-            &copies,
+            (&flips, &copies),
             boundary_weight,
             &pieces[k as usize],
         )

@@ -26,18 +26,21 @@
 //! local — pairing the half-edges of every edge at the cell's vertices (non-manifold edges by
 //! angle, with the builder's own code) and splitting a vertex into one copy per fan — and the
 //! quadrics of the cell's vertices, summed in triangle order in the whole mesh's frame, so that
-//! they equal the one-process `initial_quadrics` bit for bit. A copy's number depends on every
-//! other copy (copies are numbered after the input's vertices in the order of their fans' first
-//! corners), so the fans are a round of their own ([`cell_fans`], then [`number_copies`] by the
-//! driver, then [`cell_piece`]). Two repairs are not local and are refused with
-//! [`SplitError::NotLocal`] rather than made differently: **orientation** (the builder orients
-//! a whole component, the majority winning, so one flipped patch can flip faces of every cell)
-//! and **detaching multi-edges** (a loop over the whole mesh until none is left). A refusal of
-//! any cell voids every cell's piece: the caller builds such a scan in one process.
+//! they equal the one-process `initial_quadrics` bit for bit. Two decisions are not local and
+//! take a round through the driver each: the **orientation** of each component (the builder
+//! orients a whole component, the majority winning, so one flipped patch can flip faces of
+//! every cell: [`cell_patches`], then [`orient`], `orient.rs`) and the **copies' numbers**
+//! (numbered after the input's vertices in the order of their fans' first corners over the
+//! whole mesh: [`cell_fans`], then [`number_copies`]); then [`cell_piece`]. Two repairs are
+//! refused with [`SplitError::NotLocal`] rather than made differently: a component that cannot
+//! be oriented (the builder cuts the edge its walk meets first) and **detaching multi-edges**
+//! (a loop over the whole mesh until none is left). A refusal of any cell voids every cell's
+//! piece: the caller builds such a scan in one process.
 
 mod build;
 mod cell;
 mod files;
+mod orient;
 mod sample;
 mod split;
 mod tree;
@@ -48,6 +51,7 @@ mod tests;
 pub use build::hierarchy_from_cells;
 pub use cell::{Copies, ExtraFan, PieceCounts, cell_fans, cell_piece, cell_pieces, number_copies};
 pub use files::{CellEntry, Cut, Manifest};
+pub use orient::{CellPatches, Flips, cell_patches, orient};
 pub use split::{SplitOptions, split_into_cells};
 
 use super::taskfile::BlockFileError;
@@ -83,8 +87,8 @@ pub enum SplitError {
 /// A repair of the mesh builder that depends on more than one cell's triangles.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GlobalRepair {
-    /// Two triangles run the same way along an edge they share: the builder orients the
-    /// whole component, the majority winning.
+    /// A component cannot be oriented (a Möbius band): the builder cuts the edge its walk
+    /// meets first.
     Orientation,
     /// Two distinct edges join the same two vertices after fan splitting: the builder detaches
     /// one end in a loop over the whole mesh.

@@ -291,22 +291,73 @@ fn ascii_and_binary_files_and_any_buffer_give_the_same_bytes_every_time() {
     assert_eq!(first, split("d", PlyEncoding::BinaryBigEndian, 100));
 }
 
-#[test]
-fn a_flipped_patch_is_refused_as_an_orientation_the_cells_cannot_decide() {
-    let grid = scan(30, 20);
+/// `grid` with the faces `flip` picks reversed.
+fn flipped(grid: &PolygonMesh, flip: impl Fn(usize) -> bool) -> PolygonMesh {
     let mut m = PolygonMesh::from_triangles(grid.positions.clone(), &[]);
     for (i, f) in grid.faces().enumerate() {
         let mut f = f.to_vec();
-        if (200..230).contains(&i) {
+        if flip(i) {
             f.reverse();
         }
         m.push_face(&f);
     }
-    assert!(CornerTable::from_polygons(&m).unwrap().report.flipped_faces > 0);
+    m
+}
+
+#[test]
+fn flipped_patches_across_cells_are_oriented_as_the_builder_orients_them() {
+    // Most of the grid (so the builder flips the rest: the majority wins) and a scattering
+    // of single faces, across cells, with fans and books about.
+    let grid = scan_with_fans_and_books(36, 30);
+    let n = grid.n_faces();
+    let m = flipped(&grid, |i| (200..n - 200).contains(&i) || i % 37 == 5);
+    let report = CornerTable::from_polygons(&m).unwrap().report;
+    // The first 200 faces, less the scattered ones among them, are the minority.
+    assert!((300..n / 2).contains(&report.flipped_faces), "{report:?}");
+    assert_eq!(
+        report.orientation_cuts + report.detached_vertices,
+        0,
+        "{report:?}"
+    );
+    for encoding in [PlyEncoding::BinaryLittleEndian, PlyEncoding::Ascii] {
+        let cells = check_against_one_process(&m, 40, encoding);
+        assert!(cells >= 32, "{cells} cells");
+    }
+}
+
+#[test]
+fn a_mobius_band_is_refused_as_an_orientation_the_cells_cannot_decide() {
+    // A strip of quads whose ends are glued with a half twist.
+    let n = 60u32;
+    let positions = (0..2 * n)
+        .map(|i| {
+            let (k, side) = ((i % n) as f64, (i / n) as f64 - 0.5);
+            let a = k / n as f64 * std::f64::consts::TAU;
+            let r = 3.0 + side * (a / 2.0).cos();
+            DVec3::new(r * a.cos(), r * a.sin(), side * (a / 2.0).sin())
+        })
+        .collect();
+    let mut m = PolygonMesh::from_triangles(positions, &[]);
+    for k in 0..n {
+        let (a, b) = (k, n + k);
+        let (c, d) = match k + 1 == n {
+            true => (n, 0),
+            false => (k + 1, n + k + 1),
+        };
+        m.push_face(&[a, c, d]);
+        m.push_face(&[a, d, b]);
+    }
+    assert!(
+        CornerTable::from_polygons(&m)
+            .unwrap()
+            .report
+            .orientation_cuts
+            > 0
+    );
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("flipped.ply");
+    let input = dir.path().join("mobius.ply");
     write_ply(&input, &m, PlyEncoding::BinaryLittleEndian);
-    split_into_cells(&input, dir.path(), &small(40)).unwrap();
+    split_into_cells(&input, dir.path(), &small(15)).unwrap();
     let e = cell_pieces(dir.path(), BOUNDARY_WEIGHT, dir.path()).unwrap_err();
     let SplitError::NotLocal { repair, path, .. } = &e else {
         panic!("{e}")
@@ -372,7 +423,7 @@ fn damaged_inputs_and_cell_files_are_typed_errors_naming_the_file() {
     let mut bytes = std::fs::read(&face).unwrap();
     bytes[40] ^= 1;
     std::fs::write(&face, &bytes).unwrap();
-    let e = cell_fans(&out, &manifest, 1).unwrap_err();
+    let e = cell_fans(&out, &manifest, 1, &Flips::default()).unwrap_err();
     assert!(
         e.to_string().starts_with(&face.display().to_string()),
         "{e}"
@@ -380,10 +431,10 @@ fn damaged_inputs_and_cell_files_are_typed_errors_naming_the_file() {
     bytes[40] ^= 1;
     std::fs::write(&face, &bytes[..bytes.len() - 1]).unwrap();
     assert!(matches!(
-        cell_fans(&out, &manifest, 1),
+        cell_fans(&out, &manifest, 1, &Flips::default()),
         Err(SplitError::File(_))
     ));
-    let e = cell_fans(&out, &manifest, 99).unwrap_err();
+    let e = cell_fans(&out, &manifest, 99, &Flips::default()).unwrap_err();
     assert!(matches!(e, SplitError::File(_)), "{e}");
 
     let path = out.join("manifest");
@@ -455,17 +506,12 @@ fn a_hierarchy_built_from_the_cells_replays_every_split_and_leaves_no_file() {
         "scratch left"
     );
 
-    let flipped = dir.path().join("flipped.ply");
-    let mut f = PolygonMesh::from_triangles(m.positions.clone(), &[]);
-    for (i, p) in m.faces().enumerate() {
-        let mut p = p.to_vec();
-        if i < 40 {
-            p.reverse();
-        }
-        f.push_face(&p);
-    }
-    write_ply(&flipped, &f, PlyEncoding::BinaryLittleEndian);
-    let e = hierarchy_from_cells(&flipped, &opts, &crate::progress::NoProgress).unwrap_err();
+    let doubled = dir.path().join("doubled.ply");
+    let mut f = m.clone();
+    let t: Vec<u32> = f.faces().nth(300).unwrap().to_vec();
+    f.push_face(&[t[0], t[2], t[1]]);
+    write_ply(&doubled, &f, PlyEncoding::BinaryLittleEndian);
+    let e = hierarchy_from_cells(&doubled, &opts, &crate::progress::NoProgress).unwrap_err();
     assert!(matches!(e, SplitError::NotLocal { .. }), "{e}");
     assert_eq!(
         std::fs::read_dir(&scratch).unwrap().count(),
