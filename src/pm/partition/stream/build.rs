@@ -32,8 +32,8 @@ use std::path::Path;
 /// The hierarchy is a valid one of the builder's repair of the input, but not the bytes of
 /// the file path from the whole mesh (`PmOptions::block_scratch`): the first pass's cells are
 /// cut at a sample's medians, not the exact ones, and its faces come in cell order. Texture
-/// seams are not kept (as on the file path). A scan whose repair is not local (a flipped
-/// patch, a multi-edge) is refused with [`SplitError::NotLocal`].
+/// seams are not kept (as on the file path). A scan whose repair is not local (a component
+/// that cannot be oriented, a multi-edge) is refused with [`SplitError::NotLocal`].
 pub fn hierarchy_from_cells(
     input: &Path,
     opts: &PmOptions,
