@@ -132,7 +132,7 @@ impl Cell {
         cell.check(manifest)?;
         let corners = 0..3 * cell.faces.len() as u32;
         cell.own_at = corners.map(|c| cell.is_own(cell.vertex(c))).collect();
-        cell.pair()?;
+        cell.pair();
         Ok(cell)
     }
 
@@ -186,7 +186,7 @@ impl Cell {
     }
 
     /// Step 1: pairs the half-edges of every edge with an end in the cell.
-    fn pair(&mut self) -> Result<(), SplitError> {
+    fn pair(&mut self) {
         let n = 3 * self.faces.len() as u32;
         let mut edges: Vec<(u64, u32)> = Vec::new();
         for c in 0..n {
@@ -230,7 +230,6 @@ impl Cell {
             }
         }
         self.mate = mate;
-        Ok(())
     }
 
     /// Flips the triangles the orientation round flips (`orient.rs`): `[a, b, c]` becomes
