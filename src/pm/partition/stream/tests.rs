@@ -519,3 +519,29 @@ fn a_hierarchy_built_from_the_cells_replays_every_split_and_leaves_no_file() {
         "scratch left"
     );
 }
+
+#[test]
+fn the_pieces_are_the_same_bytes_on_any_number_of_threads() {
+    let m = flipped(&scan_with_fans_and_books(30, 24), |i| {
+        (100..500).contains(&i)
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("scan.ply");
+    write_ply(&input, &m, PlyEncoding::BinaryLittleEndian);
+    let cells = dir.path().join("cells");
+    std::fs::create_dir(&cells).unwrap();
+    split_into_cells(&input, &cells, &small(30)).unwrap();
+    let pieces_on = |threads: usize| {
+        let out = dir.path().join(format!("on{threads}"));
+        std::fs::create_dir(&out).unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        pool.install(|| cell_pieces(&cells, BOUNDARY_WEIGHT, &out).unwrap());
+        folder(&out)
+    };
+    let one = pieces_on(1);
+    assert!(one.len() >= 16);
+    assert_eq!(one, pieces_on(3));
+}
