@@ -458,6 +458,44 @@ mod tests {
     }
 
     #[test]
+    fn other_elements_around_the_faces_are_passed_over() {
+        let dir = tempfile::tempdir().unwrap();
+        let head = "ply\nformat FORMAT 1.0\nelement edge 1\nproperty int a\nproperty int b\n\
+                    element vertex 4\nproperty float x\nproperty float y\nproperty float z\n\
+                    element note 2\nproperty list uchar int ids\nproperty double w\n\
+                    element face 2\nproperty list uchar int vertex_indices\n\
+                    element tail 1\nproperty uchar k\nend_header\n";
+        let ascii = "0 1\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 5 6 0.5\n0 1.5\n3 0 1 2\n4 0 2 3 1\n7\n";
+        let mut binary = head.replace("FORMAT", "binary_little_endian").into_bytes();
+        for x in [0i32, 1] {
+            binary.extend(x.to_le_bytes());
+        }
+        for p in [[0f32, 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]] {
+            p.iter().for_each(|c| binary.extend(c.to_le_bytes()));
+        }
+        for (ids, w) in [(vec![5i32, 6], 0.5f64), (vec![], 1.5)] {
+            binary.push(ids.len() as u8);
+            ids.iter().for_each(|i| binary.extend(i.to_le_bytes()));
+            binary.extend(w.to_le_bytes());
+        }
+        for f in [vec![0i32, 1, 2], vec![0, 2, 3, 1]] {
+            binary.push(f.len() as u8);
+            f.iter().for_each(|i| binary.extend(i.to_le_bytes()));
+        }
+        binary.push(7);
+        let a = dir.path().join("a.ply");
+        std::fs::write(&a, head.replace("FORMAT", "ascii") + ascii).unwrap();
+        let b = dir.path().join("b.ply");
+        std::fs::write(&b, binary).unwrap();
+        for path in [a, b] {
+            let (p, f) = streamed(&path, 1).unwrap();
+            assert_eq!(p.len(), 4);
+            assert_eq!(p[2], DVec3::new(1.0, 1.0, 0.0));
+            assert_eq!(f, vec![vec![0, 1, 2], vec![0, 2, 3, 1]]);
+        }
+    }
+
+    #[test]
     fn faces_before_vertices_are_refused() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("f.ply");
