@@ -39,6 +39,11 @@ pub mod blocks {
     pub use super::partition::runner::{
         RayonRunner, SharedRunner, Task, TaskOutput, TaskRunner, run_task,
     };
+    pub use super::partition::stream::{
+        CellEntry, CellPatches, Copies, Cut, ExtraFan, Flips, GlobalRepair, Manifest, PieceCounts,
+        SplitError, SplitOptions, cell_fans, cell_patches, cell_piece, cell_pieces,
+        hierarchy_from_cells, number_copies, orient, split_into_cells,
+    };
     pub use super::partition::task_memory::{block_vertices_for, memory_estimate};
     pub use super::partition::taskfile::BlockFileError;
     pub use super::partition::tasks::{

@@ -292,7 +292,7 @@ impl ProgressiveMesh {
     /// order, then the `isolated` vertices (slot order). `position` gives each slot's original
     /// position (the working mesh holds them recentred), `faces` the finest faces in face slot
     /// order, their vertices mapped by the slot → PM index map it is given.
-    fn from_decimation(
+    pub(crate) fn from_decimation(
         decimated: Decimated,
         (n_slots, n_vertices): (usize, usize),
         isolated: &[u32],

@@ -44,11 +44,12 @@ fn column(block: &[u8], stride: usize, off: usize, t: ScalarType, big: bool) -> 
 }
 
 /// Fast path: binary little-endian face element whose only property is
-/// `list <uchar|ushort|uint|…> <int|uint> vertex_indices`.
+/// `list <uchar|ushort|uint|…> <int|uint> vertex_indices`; `rows` rows from the element's row
+/// `first` (messages name the element's row).
 pub(super) fn read_faces_fast(
     data: &[u8],
     mut pos: usize,
-    rows: usize,
+    (first, rows): (usize, usize),
     count: ScalarType,
     item: ScalarType,
     ctx: &mut Ctx,
@@ -62,7 +63,7 @@ pub(super) fn read_faces_fast(
         .reserve((rows.saturating_mul(3)).min(left / 4));
     // Indices below `limit` are valid (for `int` items this also rules out negatives).
     let limit = if signed { nv.min(1 << 31) } else { nv };
-    for f in 0..rows {
+    for f in first..first + rows {
         // Shortcut: `uchar 3` followed by three valid indices.
         if count == ScalarType::U8
             && let Some(r) = data.get(pos..pos + 13)
@@ -134,12 +135,13 @@ pub(super) fn read_faces_fast(
 }
 
 /// Positions straight from a fixed-stride binary vertex block when `x`, `y`, `z` are all
-/// `float`; `Ok(None)` for other layouts. Checks finiteness.
+/// `float`; `Ok(None)` for other layouts. Checks finiteness. The block's first row is the
+/// element's row `first` (for messages).
 pub(super) fn float_positions(
     el: &ElementDef,
     block: &[u8],
     stride: usize,
-    start: usize,
+    (start, first): (usize, usize),
     big: bool,
 ) -> Result<Option<Vec<DVec3>>, IoError> {
     let mut offs = [usize::MAX; 3];
@@ -177,7 +179,7 @@ pub(super) fn float_positions(
         let k = (0..3).find(|&k| !out[i][k].is_finite()).unwrap_or(0);
         return Err(err_byte(
             (start + i * stride + offs[k]) as u64,
-            format!("vertex {i} has a non-finite coordinate"),
+            format!("vertex {} has a non-finite coordinate", first + i),
         ));
     }
     Ok(Some(out))
@@ -194,14 +196,14 @@ pub(super) fn row_stride(plans: &[Plan]) -> usize {
         .sum()
 }
 
-/// The columns of a fixed-stride block starting at byte `start`, position columns checked
-/// for non-finite values. With `positions_decoded` (x, y, z already read by
-/// [`float_positions`]) the position columns are left empty.
+/// The columns of a fixed-stride block starting at byte `start` (the element's row `first`),
+/// position columns checked for non-finite values. With `positions_decoded` (x, y, z already
+/// read by [`float_positions`]) the position columns are left empty.
 pub(super) fn scalar_columns(
     plans: &[Plan],
     block: &[u8],
     stride: usize,
-    start: usize,
+    (start, first): (usize, usize),
     big: bool,
     positions_decoded: bool,
 ) -> Result<Vec<Out>, IoError> {
@@ -220,7 +222,7 @@ pub(super) fn scalar_columns(
         if let Some(i) = first_non_finite(&col, finite) {
             return Err(err_byte(
                 (start + i * stride + off) as u64,
-                format!("vertex {i} has a non-finite coordinate"),
+                format!("vertex {} has a non-finite coordinate", first + i),
             ));
         }
         outs.push(Out::Col(col));

@@ -46,6 +46,7 @@ mod plan;
 mod reader;
 mod rows;
 mod source;
+pub(crate) mod stream;
 mod types;
 mod validate;
 mod write_body;

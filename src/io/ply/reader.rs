@@ -145,13 +145,19 @@ impl<'a> BodyReader<'a> {
             return self.decode_scalar_block(el, role, plans, rows);
         }
         let outs = if let Some((count, item)) = self.fast_face_layout(plans) {
-            self.bin.pos =
-                read_faces_fast(self.bytes, self.bin.pos, rows, count, item, &mut self.ctx)?;
+            self.bin.pos = read_faces_fast(
+                self.bytes,
+                self.bin.pos,
+                (0, rows),
+                count,
+                item,
+                &mut self.ctx,
+            )?;
             vec![Out::Indices]
         } else if self.ascii {
-            read_rows(&mut self.asc, el, plans, rows, &mut self.ctx)?
+            read_rows(&mut self.asc, el, plans, (0, rows), &mut self.ctx)?
         } else {
-            read_rows(&mut self.bin, el, plans, rows, &mut self.ctx)?
+            read_rows(&mut self.bin, el, plans, (0, rows), &mut self.ctx)?
         };
         Ok(Decoded {
             outs,
@@ -172,11 +178,18 @@ impl<'a> BodyReader<'a> {
         let block = &self.bytes[start..start + rows * stride];
         // Common case: float x, y, z anywhere in the row, decoded in one pass.
         let positions = if *role == Role::Vertex {
-            float_positions(el, block, stride, start, self.big)?
+            float_positions(el, block, stride, (start, 0), self.big)?
         } else {
             None
         };
-        let outs = scalar_columns(plans, block, stride, start, self.big, positions.is_some())?;
+        let outs = scalar_columns(
+            plans,
+            block,
+            stride,
+            (start, 0),
+            self.big,
+            positions.is_some(),
+        )?;
         self.bin.pos += rows * stride;
         Ok(Decoded { outs, positions })
     }

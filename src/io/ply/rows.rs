@@ -14,12 +14,13 @@ pub(super) struct Ctx {
     pub(super) face_indices: Vec<u32>,
 }
 
-/// Reads the rows of one element, value by value (all encodings, all layouts).
+/// Reads `rows` rows of one element, value by value (all encodings, all layouts); `first` is
+/// the element's row the first of them is, for messages (a streamed read decodes in chunks).
 pub(super) fn read_rows(
     src: &mut dyn Source,
     el: &ElementDef,
     plans: &[Plan],
-    rows: usize,
+    (first, rows): (usize, usize),
     ctx: &mut Ctx,
 ) -> Result<Vec<Out>, IoError> {
     let mut outs = empty_outputs(el, plans, rows);
@@ -27,7 +28,8 @@ pub(super) fn read_rows(
     if is_face {
         ctx.face_starts.reserve(rows + 1);
     }
-    for row in 0..rows {
+    for local in 0..rows {
+        let row = first + local;
         src.begin_row(&|| format!("{} {row} of {}", el.name, el.count))?;
         for (plan, out) in plans.iter().zip(outs.iter_mut()) {
             match (*plan, out) {
@@ -42,7 +44,7 @@ pub(super) fn read_rows(
             }
         }
         if is_face {
-            check_corner_lists(src, row, &outs, ctx)?;
+            check_corner_lists(src, (row, local), &outs, ctx)?;
         }
         src.end_row()?;
     }
@@ -53,7 +55,7 @@ pub(super) fn read_rows(
 /// (`texcoord`: two), or nothing for a face without them.
 fn check_corner_lists(
     src: &dyn Source,
-    row: usize,
+    (row, local): (usize, usize),
     outs: &[Out],
     ctx: &Ctx,
 ) -> Result<(), IoError> {
@@ -64,7 +66,7 @@ fn check_corner_lists(
         let Some(per) = corner_list_width(&l.name) else {
             continue;
         };
-        let len = (l.starts[row + 1] - l.starts[row]) as usize;
+        let len = (l.starts[local + 1] - l.starts[local]) as usize;
         let fits = match per {
             Some(k) => len == k * corners,
             None => corners > 0 && len.is_multiple_of(corners),

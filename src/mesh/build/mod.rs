@@ -36,6 +36,7 @@ mod repair;
 
 use assemble::assemble;
 pub(crate) use corners::{CornerTable, next_c, prev_c};
+pub(crate) use repair::{pair_around_edge, walk_fan};
 
 /// What the builder changed, in counts. All zero for a clean manifold triangle mesh.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Serialize)]

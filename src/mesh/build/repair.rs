@@ -18,18 +18,22 @@ use std::sync::atomic::{AtomicU8, AtomicU32, AtomicU64, Ordering};
 /// so two solids touching along an edge become two closed surfaces. The rest stay unpaired and
 /// become boundary. If no opposite pair exists, the first two are paired and the orientation
 /// pass sorts them out.
-fn pair_around_edge(
-    positions: &[DVec3],
-    tris: &[[u32; 3]],
+///
+/// `position(v)` is input vertex `v`'s position and `tri(t)` triangle `t`'s vertices (lookups
+/// rather than slices, so that a cell of the streaming split, which holds only the triangles
+/// around its vertices, pairs its edges by the same code).
+pub(crate) fn pair_around_edge(
+    position: &impl Fn(u32) -> DVec3,
+    tri: &impl Fn(u32) -> [u32; 3],
     lo: u32,
     group: &[(u32, u32)],
 ) -> Vec<(u32, u32)> {
     let hi = group[0].0;
-    let p0 = positions[lo as usize];
-    let axis = (positions[hi as usize] - p0).normalize_or_zero();
+    let p0 = position(lo);
+    let axis = (position(hi) - p0).normalize_or_zero();
     let wing = |c: u32| {
-        let t = tris[(c / 3) as usize];
-        let w = positions[t[((c % 3 + 2) % 3) as usize] as usize] - p0;
+        let t = tri(c / 3);
+        let w = position(t[((c % 3 + 2) % 3) as usize]) - p0;
         w - axis * w.dot(axis)
     };
     let reference = group
@@ -43,7 +47,7 @@ fn pair_around_edge(
         .iter()
         .map(|&(_, c)| {
             let w = wing(c);
-            let forward = tris[(c / 3) as usize][(c % 3) as usize] == lo;
+            let forward = tri(c / 3)[(c % 3) as usize] == lo;
             (w.dot(side).atan2(w.dot(reference)), c, forward)
         })
         .collect();
@@ -94,7 +98,7 @@ const NON_MANIFOLD: u8 = 2;
 /// across the incoming one, prev(c), it is mate(prev(c)). A closed fan is walked once round;
 /// an open one forward to its end, then backward from `c0`.
 #[inline]
-fn walk_fan(c0: u32, mate: &[u32], mut f: impl FnMut(u32)) {
+pub(crate) fn walk_fan(c0: u32, mate: &[u32], mut f: impl FnMut(u32)) {
     f(c0);
     let mut c = c0;
     while mate[c as usize] != NONE {
@@ -416,7 +420,9 @@ fn pair_halfedges(
             for g in &group {
                 flags[g.1 as usize] = SHARED | NON_MANIFOLD;
             }
-            for (a, b) in pair_around_edge(positions, tris, lo, &group) {
+            let position = |v: u32| positions[v as usize];
+            let tri = |t: u32| tris[t as usize];
+            for (a, b) in pair_around_edge(&position, &tri, lo, &group) {
                 any_same_direction |= from(a) == from(b);
                 mate[a as usize] = b;
                 mate[b as usize] = a;

@@ -43,6 +43,7 @@ mod lockstep;
 mod order;
 pub mod runner;
 mod split;
+pub mod stream;
 pub mod task_memory;
 pub mod taskfile;
 pub mod tasks;

@@ -48,11 +48,14 @@ pub(crate) enum Kind {
     Pass = 6,
     /// A pass's collapses, interleaved by cost.
     Sequence = 7,
+    /// What the streaming split of a scan wrote: counts, bounding boxes, the cut tree and the
+    /// cells' files' sizes and checksums.
+    Manifest = 8,
 }
 
 impl Kind {
     /// Every kind of task file.
-    pub(crate) const ALL: [Kind; 7] = [
+    pub(crate) const ALL: [Kind; 8] = [
         Kind::Piece,
         Kind::Routed,
         Kind::Input,
@@ -60,6 +63,7 @@ impl Kind {
         Kind::Result,
         Kind::Pass,
         Kind::Sequence,
+        Kind::Manifest,
     ];
 
     fn from_code(code: u16) -> Option<Kind> {

@@ -30,7 +30,7 @@ use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// A scratch directory, removed when dropped.
-struct Scratch(PathBuf);
+pub(super) struct Scratch(pub(super) PathBuf);
 
 impl Drop for Scratch {
     fn drop(&mut self) {
@@ -69,7 +69,39 @@ pub(crate) fn decimate_through_files(
         dir: &dir,
         max_block,
     };
-    Ok(driver.run(flat, params, progress)?)
+    let counts = (flat.n_vertex_slots() as u64, flat.n_faces() as u64);
+    let state = first_pieces(flat, params, max_block, &dir)?;
+    Ok(driver.run(state, counts, params, progress)?)
+}
+
+/// [`decimate_through_files`] from first pieces made elsewhere: the cell pieces of the
+/// streaming split (`stream::cell_pieces`), whose vertices are numbered below `n_vertices`
+/// (the repaired mesh's vertex count) and whose faces together are the whole mesh's. The
+/// pieces are consumed: the first pass removes them once it has split them.
+pub(crate) fn decimate_from_pieces(
+    pieces: Vec<PathBuf>,
+    n_vertices: u64,
+    params: &DecimateParams,
+    max_block: usize,
+    scratch: &Path,
+    runner: &dyn TaskRunner,
+    progress: &dyn Progress,
+) -> Result<Decimated, PmError> {
+    let dir = unique_dir(scratch)?;
+    let dir = Scratch(dir);
+    let driver = Driver {
+        runner,
+        dir: &dir,
+        max_block,
+    };
+    let mut state = State {
+        pieces,
+        faces: 0,
+        vertices: 0,
+    };
+    count(&mut state)?;
+    let counts = (n_vertices, state.faces as u64);
+    Ok(driver.run(state, counts, params, progress)?)
 }
 
 /// What every step of the driver uses.
@@ -89,7 +121,7 @@ fn counts(outputs: Vec<TaskOutput>) -> Vec<u64> {
 }
 
 /// A new directory under `scratch`, named by the process and a counter.
-fn unique_dir(scratch: &Path) -> Result<PathBuf, PmError> {
+pub(super) fn unique_dir(scratch: &Path) -> Result<PathBuf, PmError> {
     let failed = |e: std::io::Error| {
         BlockFileError::new(scratch, 0, format!("cannot make a scratch directory: {e}"))
     };
@@ -113,16 +145,16 @@ struct State {
 }
 
 impl Driver<'_> {
+    /// The passes from the first state `state` of a mesh of `n_vertices` vertex slots and
+    /// `input_faces` faces.
     fn run(
         &self,
-        flat: FlatMesh,
+        mut state: State,
+        (n_vertices, input_faces): (u64, u64),
         params: &DecimateParams,
         progress: &dyn Progress,
     ) -> Result<Decimated, BlockFileError> {
         let (dir, max_block) = (self.dir, self.max_block);
-        let n_vertices = flat.n_vertex_slots() as u64;
-        let input_faces = flat.n_faces() as u64;
-        let mut state = first_pieces(flat, params, max_block, dir)?;
         let start = state.vertices;
         let stop_at = max_block.max(params.target_vertices);
         let mut sequences = Vec::new();
