@@ -42,11 +42,14 @@ class TimedRounds:
     def __init__(self):
         self.rounds = []  # per round: [(kind, seconds, declared memory)]
         self.driver = 0.0
+        self.before = None  # the driver's time before the first round
         self.last = time.perf_counter()
 
     def __call__(self, tasks):
         start = time.perf_counter()
         self.driver += start - self.last
+        if self.before is None:
+            self.before = self.driver
         done, outputs = [], []
         for task in tasks:
             t = time.perf_counter()
@@ -57,7 +60,8 @@ class TimedRounds:
         return outputs
 
     def finish(self):
-        self.driver += time.perf_counter() - self.last
+        self.after = time.perf_counter() - self.last
+        self.driver += self.after
 
 
 def on_workers(tasks, workers):
@@ -97,7 +101,9 @@ def main():
         per_kind[k] += t
     print(f"{a.input}: blocks of {a.block_vertices}, wall {wall:.1f} s, {len(rounds.rounds)} rounds, "
           f"{len(tasks)} tasks, {kinds['collapse'] + kinds['finish']} decimation tasks")
-    print(f"driver {rounds.driver:.1f} s; tasks {work - rounds.driver:.1f} s; total work {work:.1f} s; "
+    between = rounds.driver - rounds.before - rounds.after
+    print(f"driver {rounds.driver:.1f} s (before the first round {rounds.before:.1f}, between rounds "
+          f"{between:.1f}, after the last {rounds.after:.1f}); tasks {work - rounds.driver:.1f} s; total work {work:.1f} s; "
           f"critical path {critical:.1f} s")
     for k in sorted(per_kind, key=per_kind.get, reverse=True):
         times = [t for kk, t, _ in tasks if kk == k]
