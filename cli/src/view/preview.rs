@@ -20,7 +20,6 @@
 //! The exact full-resolution result is computed in the background and replaces the preview
 //! when it arrives; exports use it.
 
-use super::session::hierarchy_levels;
 use super::state::{EditorState, ms_between};
 use glam::{DMat3, DVec3};
 use meshpyr::pyramid::{LevelGains, LevelMove, MoveHandle, Pyramid, SynthesisCache};
@@ -347,6 +346,12 @@ fn f32s(v: DVec3) -> [f32; 3] {
 
 fn dvec(v: [f32; 3]) -> DVec3 {
     DVec3::new(v[0].into(), v[1].into(), v[2].into())
+}
+
+/// The hierarchy's levels, from the base to the finest: those of the whole pyramid, also
+/// while a staged pyramid's first stage is in hand.
+pub(crate) fn hierarchy_levels(pyramid: &Pyramid) -> RangeInclusive<usize> {
+    pyramid.pm.n_base_vertices()..=pyramid.pm.n_vertices()
 }
 
 #[cfg(test)]

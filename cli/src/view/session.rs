@@ -97,7 +97,7 @@ impl Session {
             ..Default::default()
         };
         Session {
-            levels: hierarchy_levels(&pyramid),
+            levels: preview::hierarchy_levels(&pyramid),
             pyramid,
             spectrum,
             layout,
@@ -524,12 +524,6 @@ impl Session {
             meshpyr::io::write_mesh_bytes(&bare, format, &opts).map_err(|e| e.to_string())
         })
     }
-}
-
-/// The hierarchy's levels, from the base to the finest: those of the whole pyramid, also
-/// while a staged pyramid's first stage is in hand.
-pub(crate) fn hierarchy_levels(pyramid: &Pyramid) -> RangeInclusive<usize> {
-    pyramid.pm.n_base_vertices()..=pyramid.pm.n_vertices()
 }
 
 /// Appends `positions` to `out` as little-endian f32 triples.

@@ -19,12 +19,12 @@
 
 use super::fast::{float_positions, read_faces_fast, row_stride, scalar_columns};
 use super::header::{ElementDef, Header, parse_header};
-use super::plan::{Out, Plan, Role, min_row_bytes, plan_element};
-use super::reader::{positions, vertex_count};
+use super::plan::{Out, Plan, Role, plan_element};
+use super::reader::{check_room, positions, vertex_count};
 use super::rows::{Ctx, read_rows};
 use super::source::{Ascii, Bin};
 use crate::io::text::Lines;
-use crate::io::{IoError, PlyEncoding, err_byte, err_line};
+use crate::io::{IoError, PlyEncoding, err_line};
 use crate::mesh::{AttributeData, ScalarType};
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -229,23 +229,14 @@ impl<'a> Walk<'a> {
 
     /// Rejects counts the rest of the file cannot hold, as the whole-file reader does.
     fn check_room(&self, el: &ElementDef, plans: &[Plan]) -> Result<usize, IoError> {
-        let left = if self.ascii {
-            self.asc.lines.rest_len() as u64 + 1
-        } else {
-            (self.bytes.len() - self.bin.pos) as u64
-        };
-        let need = el.count.saturating_mul(min_row_bytes(plans, self.ascii));
-        if need > left {
-            let what = format!(
-                "element {:?} claims {} rows (at least {need} bytes) but only {left} bytes remain",
-                el.name, el.count
-            );
-            return Err(match self.ascii {
-                true => err_line(el.line, what),
-                false => err_byte(self.bin.pos as u64, what),
-            });
-        }
-        Ok(el.count as usize)
+        check_room(
+            el,
+            plans,
+            self.ascii,
+            &self.asc,
+            &self.bin,
+            self.bytes.len(),
+        )
     }
 
     /// The positions of `n` vertex rows from row `first`.

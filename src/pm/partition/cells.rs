@@ -104,7 +104,13 @@ fn cut(
 /// The axis (0, 1, 2) along which `part`'s bounding box is longest (the first on ties).
 fn longest_axis(along: &impl Fn(u32, usize) -> f64, part: &[u32]) -> usize {
     let point = |v: u32| DVec3::new(along(v, 0), along(v, 1), along(v, 2));
-    let Some(b) = BoundingBox::of(part.iter().map(|&v| point(v))) else {
+    longest_axis_of(part.iter().map(|&v| point(v)))
+}
+
+/// The axis (0, 1, 2) along which the bounding box of `points` is longest (the first on ties;
+/// 0 for no points): the cut rule of the passes' cells and of the streaming split's tree.
+pub(super) fn longest_axis_of(points: impl Iterator<Item = DVec3>) -> usize {
+    let Some(b) = BoundingBox::of(points) else {
         return 0;
     };
     let size = b.max - b.min;

@@ -9,8 +9,8 @@
 //! has one cell and a sample point the cell the sample's cut gave it. Cells are numbered as
 //! the leaves of the tree in heap order (lower side first), as `cells.rs` numbers them.
 
+use super::super::cells::longest_axis_of;
 use super::files::Cut;
-use crate::mesh::BoundingBox;
 use glam::DVec3;
 
 /// The tree: its depth, its frame and its `2^depth - 1` cuts in heap order (node `n` at
@@ -91,17 +91,7 @@ impl CutTree {
     /// The axis along which `part`'s bounding box is longest (the first on ties).
     fn longest_axis(&self, part: &[(u32, DVec3)]) -> usize {
         let point = |p: DVec3| DVec3::new(self.along(p, 0), self.along(p, 1), self.along(p, 2));
-        let Some(b) = BoundingBox::of(part.iter().map(|x| point(x.1))) else {
-            return 0;
-        };
-        let size = b.max - b.min;
-        let mut axis = 0;
-        for k in 1..3 {
-            if size[k] > size[axis] {
-                axis = k;
-            }
-        }
-        axis
+        longest_axis_of(part.iter().map(|x| point(x.1)))
     }
 
     /// The cell of vertex `index` at `p`.
