@@ -8,7 +8,7 @@
 //! repeated half-edge, an unsorted list) with the file and the byte offset of the record.
 
 use super::block::VertexQuadric;
-use super::taskfile::{BlockFileError, Kind, Section, TaskFile, write};
+use super::taskfile::{BlockFileError, Kind, Section, SectionBytes, TaskFile, write};
 use crate::pm::Stop;
 use crate::pm::decimate::{Collapse, DecimateParams};
 use crate::pm::legality::{Legality, Refusal};
@@ -683,10 +683,50 @@ pub(crate) fn read_pass_info(path: &Path) -> Result<PassInfo, BlockFileError> {
     })
 }
 
-/// Reads a pass's cell labels: one per input vertex, each a cell or `u32::MAX`.
-pub(crate) fn read_labels(path: &Path, info: &PassInfo) -> Result<Vec<u32>, BlockFileError> {
+/// A pass's cell labels, one per input vertex (a cell, or `u32::MAX` for a vertex not in the
+/// pass's mesh), mapped and checked against the section's checksum when read, and decoded when
+/// looked up:
+/// a split task sorts a piece of a few blocks' vertices, and decoding the whole scan's labels
+/// for it made the split tasks the largest share of a partitioned build's work.
+pub(crate) struct Labels {
+    bytes: SectionBytes,
+    at: u64,
+    n_cells: u32,
+    path: std::path::PathBuf,
+}
+
+impl Labels {
+    /// How many input vertices have a label.
+    pub(crate) fn len(&self) -> usize {
+        self.bytes.len() / 4
+    }
+
+    /// The cell of input vertex `v`: `None` when `v` is not in the pass's mesh (no label, or
+    /// `u32::MAX`), an error naming the label's byte when it names no cell of the pass.
+    pub(crate) fn cell(&self, v: u32) -> Result<Option<u32>, BlockFileError> {
+        let i = 4 * v as usize;
+        let Some(b) = self.bytes.get(i..i + 4) else {
+            return Ok(None);
+        };
+        let c = u32::from_le_bytes(b.try_into().expect("4 bytes"));
+        if c == NONE {
+            Ok(None)
+        } else if c >= self.n_cells {
+            let at = self.at + i as u64;
+            let what = format!("cell {c} of {}", self.n_cells);
+            Err(BlockFileError::new(&self.path, at, what))
+        } else {
+            Ok(Some(c))
+        }
+    }
+}
+
+/// Reads a pass's cell labels ([`Labels`]).
+pub(crate) fn read_labels(path: &Path, info: &PassInfo) -> Result<Labels, BlockFileError> {
     let mut f = TaskFile::open(path, &[Kind::Pass])?;
-    let (bytes, at) = section(&mut f, LABL, 0)?;
+    let (bytes, at) = f
+        .mapped_section(LABL, 0)?
+        .unwrap_or((SectionBytes::Read(Vec::new()), 0));
     if bytes.len() as u64 != 4 * info.n_vertices {
         return Err(f.error(
             at,
@@ -697,15 +737,12 @@ pub(crate) fn read_labels(path: &Path, info: &PassInfo) -> Result<Vec<u32>, Bloc
             ),
         ));
     }
-    let mut out = Vec::with_capacity(bytes.len() / 4);
-    for (mut r, off) in records(&f, LABL, &bytes, at, 4)? {
-        let c = r.u32();
-        if c != NONE && c >= info.n_cells {
-            return Err(f.error(off, format!("cell {c} of {}", info.n_cells)));
-        }
-        out.push(c);
-    }
-    Ok(out)
+    Ok(Labels {
+        bytes,
+        at,
+        n_cells: info.n_cells,
+        path: path.to_path_buf(),
+    })
 }
 
 /// Reads `bytes`, as given and with their checksums fixed, as every kind of task file with
@@ -733,7 +770,11 @@ pub(crate) fn read_any(bytes: &[u8]) {
         let _ = read_stop(&path);
         let _ = super::stream::Manifest::read(&path);
         if let Ok(info) = read_pass_info(&path) {
-            let _ = read_labels(&path, &info);
+            if let Ok(labels) = read_labels(&path, &info) {
+                for v in 0..labels.len() {
+                    let _ = labels.cell(v as u32);
+                }
+            }
         }
         if let Ok(f) = TaskFile::open(&path, &[Kind::Routed]) {
             for e in f.entries.iter().take(64) {

@@ -318,6 +318,68 @@ impl TaskFile {
     }
 }
 
+impl TaskFile {
+    /// [`Self::section`] without reading it into memory: the file is mapped and the section's
+    /// bytes checked in place, for a section a task looks into here and there (a pass's labels:
+    /// 4 B per input vertex, read by every split task). The file must not change while mapped;
+    /// task files are written once under a temporary name and renamed.
+    pub(crate) fn mapped_section(
+        &mut self,
+        tag: [u8; 4],
+        cell: u32,
+    ) -> Result<Option<(SectionBytes, u64)>, BlockFileError> {
+        let Source::File(f) = &self.source else {
+            return Ok(self
+                .section(tag, cell)?
+                .map(|(b, at)| (SectionBytes::Read(b), at)));
+        };
+        let Some(e) = self
+            .entries
+            .iter()
+            .find(|e| e.tag == tag && e.cell == cell)
+            .copied()
+        else {
+            return Ok(None);
+        };
+        if e.offset.saturating_add(e.length) > self.len {
+            return Err(self.error(self.len, "file is truncated"));
+        }
+        // SAFETY: the map is only read; task files are not written after their rename.
+        let map = unsafe { memmap2::Mmap::map(f) }
+            .map_err(|err| BlockFileError::new(&self.path, 0, format!("cannot map: {err}")))?;
+        let range = e.offset as usize..(e.offset + e.length) as usize;
+        if map.len() < range.end {
+            return Err(self.error(map.len() as u64, "file is truncated"));
+        }
+        if crc32fast::hash(&map[range.clone()]) != e.crc {
+            return Err(self.error(
+                e.offset,
+                format!("section {} checksum mismatch", tag_name(tag)),
+            ));
+        }
+        Ok(Some((SectionBytes::Mapped(map, range), e.offset)))
+    }
+}
+
+/// A section's bytes, mapped from its file or read into memory.
+pub(crate) enum SectionBytes {
+    /// The section as a range of the mapped file.
+    Mapped(memmap2::Mmap, std::ops::Range<usize>),
+    /// The section read into memory.
+    Read(Vec<u8>),
+}
+
+impl std::ops::Deref for SectionBytes {
+    type Target = [u8];
+
+    fn deref(&self) -> &[u8] {
+        match self {
+            SectionBytes::Mapped(map, range) => &map[range.clone()],
+            SectionBytes::Read(bytes) => bytes,
+        }
+    }
+}
+
 /// `bytes` with every checksum recomputed where the header and table can be followed, so that
 /// mutated inputs of the fuzz target reach the readers behind the checksums.
 pub(crate) fn fix_checksums(bytes: &[u8]) -> Vec<u8> {

@@ -27,8 +27,6 @@ use crate::pm::decimate::passes::Stepper;
 use crate::pm::decimate::{DecimateParams, rim_scale_at_level};
 use std::path::{Path, PathBuf};
 
-const NONE: u32 = u32::MAX;
-
 /// Round 1: sorts the piece `piece` into the cells of the pass `pass`: the faces whose three
 /// vertices lie in one cell, and the vertex records, go to that cell's share of `routed_out`;
 /// the faces across cells go, in order, to the piece `across_out`, and pin their vertices
@@ -42,13 +40,11 @@ pub fn split(
     let info = contents::read_pass_info(pass)?;
     let labels = contents::read_labels(pass, &info)?;
     let (faces, records) = contents::read_piece(piece)?;
-    let cell_of = |v: u32| {
-        let c = labels.get(v as usize).copied().unwrap_or(NONE);
-        if c == NONE {
+    let cell_of = |v: u32| match labels.cell(v)? {
+        Some(c) => Ok(c as usize),
+        None => {
             let what = format!("vertex {v} is not in the mesh of this pass");
             Err(BlockFileError::new(piece, 0, what))
-        } else {
-            Ok(c as usize)
         }
     };
     let mut buckets = vec![Bucket::default(); info.n_cells as usize];
@@ -346,6 +342,48 @@ pub fn finish(pass: &Path, input: &Path, result_out: &Path) -> Result<(), BlockF
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::pm::legality::Legality;
+
+    fn pass_info(n_cells: u32, n_vertices: u64) -> PassInfo {
+        PassInfo {
+            pass: 0,
+            n_cells,
+            last: false,
+            n_vertices,
+            input_faces: 1,
+            whole_faces: 1,
+            params: DecimateParams {
+                target_vertices: 0,
+                target_faces: 0,
+                max_error_sq: f64::INFINITY,
+                legality: Legality::default(),
+                boundary_weight: 1.0,
+            },
+        }
+    }
+
+    #[test]
+    fn a_split_task_sorts_by_the_labels_it_looks_up_and_names_the_byte_of_a_label_of_no_cell() {
+        let dir = std::env::temp_dir().join(format!("meshpyr-labels-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (pass, piece) = (dir.join("pass"), dir.join("piece"));
+        let (across, routed) = (dir.join("across"), dir.join("routed"));
+        // Vertices 0..3 in cell 1, vertex 3 outside the mesh, vertex 4 labelled with cell 7 of 2.
+        contents::write_pass(&pass, &pass_info(2, 5), &[1, 1, 1, NO_CELL, 7]).unwrap();
+        contents::write_piece(&piece, &[[0, 1, 2]], &[]).unwrap();
+        split(&pass, &piece, &across, &routed).unwrap();
+        let cells = contents::read_routed(&routed, 1).unwrap();
+        assert_eq!(cells.faces, vec![[0, 1, 2]]);
+        contents::write_piece(&piece, &[[0, 1, 4]], &[]).unwrap();
+        let e = split(&pass, &piece, &across, &routed).unwrap_err().to_string();
+        assert!(e.contains("cell 7 of 2") && e.contains("pass"), "{e}");
+        contents::write_piece(&piece, &[[0, 1, 3]], &[]).unwrap();
+        let e = split(&pass, &piece, &across, &routed).unwrap_err().to_string();
+        assert!(e.contains("vertex 3 is not in the mesh"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    const NO_CELL: u32 = u32::MAX;
 
     #[test]
     fn the_histogram_selection_is_the_kth_cost_in_total_order() {
