@@ -769,11 +769,11 @@ pub(crate) fn read_any(bytes: &[u8]) {
         let _ = read_collapses(&path, u32::MAX as u64);
         let _ = read_stop(&path);
         let _ = super::stream::Manifest::read(&path);
-        if let Ok(info) = read_pass_info(&path) {
-            if let Ok(labels) = read_labels(&path, &info) {
-                for v in 0..labels.len() {
-                    let _ = labels.cell(v as u32);
-                }
+        if let Ok(info) = read_pass_info(&path)
+            && let Ok(labels) = read_labels(&path, &info)
+        {
+            for v in 0..labels.len() {
+                let _ = labels.cell(v as u32);
             }
         }
         if let Ok(f) = TaskFile::open(&path, &[Kind::Routed]) {

@@ -375,10 +375,14 @@ mod tests {
         let cells = contents::read_routed(&routed, 1).unwrap();
         assert_eq!(cells.faces, vec![[0, 1, 2]]);
         contents::write_piece(&piece, &[[0, 1, 4]], &[]).unwrap();
-        let e = split(&pass, &piece, &across, &routed).unwrap_err().to_string();
+        let e = split(&pass, &piece, &across, &routed)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("cell 7 of 2") && e.contains("pass"), "{e}");
         contents::write_piece(&piece, &[[0, 1, 3]], &[]).unwrap();
-        let e = split(&pass, &piece, &across, &routed).unwrap_err().to_string();
+        let e = split(&pass, &piece, &across, &routed)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("vertex 3 is not in the mesh"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
