@@ -293,18 +293,21 @@ impl TaskFile {
         }
     }
 
+    /// The table entry of the section `tag` of `cell`.
+    fn entry(&self, tag: [u8; 4], cell: u32) -> Option<Entry> {
+        self.entries
+            .iter()
+            .find(|e| e.tag == tag && e.cell == cell)
+            .copied()
+    }
+
     /// The section `tag` of `cell`, checked against its checksum; `None` when the file has none.
     pub(crate) fn section(
         &mut self,
         tag: [u8; 4],
         cell: u32,
     ) -> Result<Option<(Vec<u8>, u64)>, BlockFileError> {
-        let Some(e) = self
-            .entries
-            .iter()
-            .find(|e| e.tag == tag && e.cell == cell)
-            .copied()
-        else {
+        let Some(e) = self.entry(tag, cell) else {
             return Ok(None);
         };
         let bytes = self.read_at(e.offset, e.length)?;
@@ -316,9 +319,7 @@ impl TaskFile {
         }
         Ok(Some((bytes, e.offset)))
     }
-}
 
-impl TaskFile {
     /// [`Self::section`] without reading it into memory: the file is mapped and the section's
     /// bytes checked in place, for a section a task looks into here and there (a pass's labels:
     /// 4 B per input vertex, read by every split task). The file must not change while mapped;
@@ -333,12 +334,7 @@ impl TaskFile {
                 .section(tag, cell)?
                 .map(|(b, at)| (SectionBytes::Read(b), at)));
         };
-        let Some(e) = self
-            .entries
-            .iter()
-            .find(|e| e.tag == tag && e.cell == cell)
-            .copied()
-        else {
+        let Some(e) = self.entry(tag, cell) else {
             return Ok(None);
         };
         if e.offset.saturating_add(e.length) > self.len {

@@ -62,15 +62,13 @@ pub(crate) fn decimate_through_files(
     runner: &dyn TaskRunner,
     progress: &dyn Progress,
 ) -> Result<Decimated, PmError> {
-    let dir = unique_dir(scratch)?;
-    let dir = Scratch(dir);
     let driver = Driver {
         runner,
-        dir: &dir,
+        dir: &Scratch(unique_dir(scratch)?),
         max_block,
     };
     let counts = (flat.n_vertex_slots() as u64, flat.n_faces() as u64);
-    let state = first_pieces(flat, params, max_block, &dir)?;
+    let state = first_pieces(flat, params, max_block, driver.dir)?;
     Ok(driver.run(state, counts, params, progress)?)
 }
 
@@ -87,11 +85,9 @@ pub(crate) fn decimate_from_pieces(
     runner: &dyn TaskRunner,
     progress: &dyn Progress,
 ) -> Result<Decimated, PmError> {
-    let dir = unique_dir(scratch)?;
-    let dir = Scratch(dir);
     let driver = Driver {
         runner,
-        dir: &dir,
+        dir: &Scratch(unique_dir(scratch)?),
         max_block,
     };
     let mut state = State {
