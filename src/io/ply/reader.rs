@@ -37,12 +37,12 @@ pub(super) fn vertex_count(header: &Header) -> Result<u64, IoError> {
 /// Where the reader stands in the body (both sources; the encoding says which one reads) and
 /// the faces read so far.
 pub(super) struct BodyReader<'a> {
-    bytes: &'a [u8],
-    ascii: bool,
-    big: bool,
-    bin: Bin<'a>,
-    asc: Ascii<'a>,
-    ctx: Ctx,
+    pub(super) bytes: &'a [u8],
+    pub(super) ascii: bool,
+    pub(super) big: bool,
+    pub(super) bin: Bin<'a>,
+    pub(super) asc: Ascii<'a>,
+    pub(super) ctx: Ctx,
 }
 
 /// One element's decoded properties in header order, and its positions when a fast path
@@ -66,7 +66,7 @@ impl<'a> BodyReader<'a> {
                 big: header.encoding == PlyEncoding::BinaryBigEndian,
             },
             asc: Ascii {
-                lines: Lines::new(&bytes[header.body..], header.body_line),
+                lines: Lines::new(&bytes[header.body.min(bytes.len())..], header.body_line),
                 line_no: header.body_line - 1,
                 toks: Vec::new(),
                 next: 0,
@@ -109,16 +109,27 @@ impl<'a> BodyReader<'a> {
     }
 
     /// Rejects counts the rest of the file cannot hold, before allocating anything; returns
-    /// the row count (which then fits in `usize`).
-    fn check_room(&self, el: &ElementDef, plans: &[Plan]) -> Result<usize, IoError> {
-        check_room(
-            el,
-            plans,
-            self.ascii,
-            &self.asc,
-            &self.bin,
-            self.bytes.len(),
-        )
+    /// the row count (which then fits in `usize`). Both readers, whole and streamed, refuse alike.
+    pub(super) fn check_room(&self, el: &ElementDef, plans: &[Plan]) -> Result<usize, IoError> {
+        let left = if self.ascii {
+            // Rows are separated by line breaks; the last one may lack its own.
+            self.asc.lines.rest_len() as u64 + 1
+        } else {
+            (self.bytes.len() - self.bin.pos) as u64
+        };
+        let need = el.count.saturating_mul(min_row_bytes(plans, self.ascii));
+        if need > left {
+            let what = format!(
+                "element {:?} claims {} rows (at least {need} bytes) but only {left} bytes remain",
+                el.name, el.count
+            );
+            return Err(if self.ascii {
+                err_line(el.line, what)
+            } else {
+                err_byte(self.bin.pos as u64, what)
+            });
+        }
+        Ok(el.count as usize) // fits: bounded by the file size above
     }
 
     /// Decodes the `rows` rows of `el`, by the fastest way its layout allows.
@@ -299,37 +310,4 @@ pub(super) fn positions(x: &AttributeData, y: &AttributeData, z: &AttributeData)
             .map(|i| DVec3::new(x.get_f64(i), y.get_f64(i), z.get_f64(i)))
             .collect(),
     }
-}
-
-/// Rejects `el`'s row count when the rest of the file (after `asc`'s line or `bin`'s byte of a
-/// file of `len` bytes) cannot hold that many rows of `plans`, before anything is allocated for
-/// them; returns the row count (which then fits in `usize`). Both readers, whole and streamed,
-/// refuse alike.
-pub(super) fn check_room(
-    el: &ElementDef,
-    plans: &[Plan],
-    ascii: bool,
-    asc: &Ascii,
-    bin: &Bin,
-    len: usize,
-) -> Result<usize, IoError> {
-    let left = if ascii {
-        // Rows are separated by line breaks; the last one may lack its own.
-        asc.lines.rest_len() as u64 + 1
-    } else {
-        (len - bin.pos) as u64
-    };
-    let need = el.count.saturating_mul(min_row_bytes(plans, ascii));
-    if need > left {
-        let what = format!(
-            "element {:?} claims {} rows (at least {need} bytes) but only {left} bytes remain",
-            el.name, el.count
-        );
-        return Err(if ascii {
-            err_line(el.line, what)
-        } else {
-            err_byte(bin.pos as u64, what)
-        });
-    }
-    Ok(el.count as usize) // fits: bounded by the file size above
 }

@@ -20,11 +20,9 @@
 use super::fast::{float_positions, read_faces_fast, row_stride, scalar_columns};
 use super::header::{ElementDef, Header, parse_header};
 use super::plan::{Out, Plan, Role, plan_element};
-use super::reader::{check_room, positions, vertex_count};
-use super::rows::{Ctx, read_rows};
-use super::source::{Ascii, Bin};
-use crate::io::text::Lines;
-use crate::io::{IoError, PlyEncoding, err_line};
+use super::reader::{BodyReader, positions, vertex_count};
+use super::rows::read_rows;
+use crate::io::{IoError, err_line};
 use crate::mesh::{AttributeData, ScalarType};
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -95,7 +93,7 @@ impl PlyStream {
         mut each: impl FnMut(Rows) -> Result<(), E>,
     ) -> Result<(), E> {
         let bytes: &[u8] = self.map.as_deref().unwrap_or(&[]);
-        let mut walk = Walk::new(bytes, &self.header, self.nv);
+        let mut walk = BodyReader::new(bytes, &self.header, self.nv);
         let mut seen_vertices = false;
         for el in &self.header.elements {
             let role = Role::of(el);
@@ -136,43 +134,9 @@ impl<E> From<IoError> for Failed<E> {
     }
 }
 
-/// Where the walk stands in the body (both sources; the encoding says which one reads).
-struct Walk<'a> {
-    bytes: &'a [u8],
-    ascii: bool,
-    big: bool,
-    bin: Bin<'a>,
-    asc: Ascii<'a>,
-    ctx: Ctx,
-}
-
-impl<'a> Walk<'a> {
-    fn new(bytes: &'a [u8], header: &Header, nv: u64) -> Self {
-        let big = header.encoding == PlyEncoding::BinaryBigEndian;
-        Walk {
-            bytes,
-            ascii: header.encoding == PlyEncoding::Ascii,
-            big,
-            bin: Bin {
-                data: bytes,
-                pos: header.body,
-                last: header.body,
-                big,
-            },
-            asc: Ascii {
-                lines: Lines::new(&bytes[header.body.min(bytes.len())..], header.body_line),
-                line_no: header.body_line - 1,
-                toks: Vec::new(),
-                next: 0,
-            },
-            ctx: Ctx {
-                nv,
-                face_starts: vec![0],
-                face_indices: Vec::new(),
-            },
-        }
-    }
-
+/// The streamed walk uses the whole-file reader's state (`BodyReader`): its sources, its room
+/// check and its face context, with chunked decoding of its own below.
+impl BodyReader<'_> {
     /// Decodes the rows of `el` chunk by chunk, handing vertices and faces to `each`.
     fn element<E>(
         &mut self,
@@ -225,18 +189,6 @@ impl<'a> Walk<'a> {
             first += n;
         }
         Ok(())
-    }
-
-    /// Rejects counts the rest of the file cannot hold, as the whole-file reader does.
-    fn check_room(&self, el: &ElementDef, plans: &[Plan]) -> Result<usize, IoError> {
-        check_room(
-            el,
-            plans,
-            self.ascii,
-            &self.asc,
-            &self.bin,
-            self.bytes.len(),
-        )
     }
 
     /// The positions of `n` vertex rows from row `first`.
@@ -330,7 +282,7 @@ fn xyz(el: &ElementDef, outs: Vec<Out>) -> Vec<DVec3> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::io::{IoError, Location};
+    use crate::io::{IoError, Location, PlyEncoding};
     use crate::mesh::{Materials, PolygonMesh};
 
     fn mesh() -> PolygonMesh {
