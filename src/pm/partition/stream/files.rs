@@ -289,13 +289,15 @@ pub(super) struct CellWriters {
     limit: usize,
 }
 
-fn part(path: &Path) -> PathBuf {
+/// The temporary name a split file is written under before its rename.
+pub(super) fn part(path: &Path) -> PathBuf {
     let mut name = path.file_name().unwrap_or_default().to_os_string();
     name.push(".part");
     path.with_file_name(name)
 }
 
-fn write_error(path: &Path, e: std::io::Error) -> BlockFileError {
+/// A failed write of a split file `path`.
+pub(super) fn write_error(path: &Path, e: std::io::Error) -> BlockFileError {
     BlockFileError::new(path, 0, format!("cannot write: {e}"))
 }
 

@@ -3,8 +3,8 @@
 
 use super::SplitError;
 use super::files::{
-    CellEntry, CellWriters, FaceRecord, Manifest, RECORD, cell_paths, read_faces, remove_made,
-    vertex_record,
+    CellEntry, CellWriters, FaceRecord, Manifest, RECORD, cell_paths, part, read_faces,
+    remove_made, vertex_record, write_error,
 };
 use super::sample::Reservoir;
 use super::tree::{CutTree, depth_for};
@@ -74,7 +74,7 @@ fn split(
     let (nv, nf) = (stream.n_vertices(), stream.n_faces());
     let positions_path = dir.join("positions.f64");
     made.push(positions_path.clone());
-    let part = part_name(&positions_path);
+    let part = part(&positions_path);
     let file = std::fs::File::create(&part).map_err(|e| write_error(&part, e))?;
     let mut s = Splitter {
         dir,
@@ -141,16 +141,6 @@ fn split(
     Ok(manifest)
 }
 
-fn write_error(path: &Path, e: std::io::Error) -> BlockFileError {
-    BlockFileError::new(path, 0, format!("cannot write: {e}"))
-}
-
-fn part_name(path: &Path) -> PathBuf {
-    let mut name = path.file_name().unwrap_or_default().to_os_string();
-    name.push(".part");
-    path.with_file_name(name)
-}
-
 /// The split while the input streams by: steps 1 on the vertices, 2 and 3 when the first face
 /// comes (or the input ends), 4 on the faces.
 struct Splitter<'a> {
@@ -182,7 +172,7 @@ impl Splitter<'_> {
     /// Step 1: a chunk of positions to `positions.f64` (24 bytes a vertex), the bounding box
     /// and the sample.
     fn vertices(&mut self, first: u64, positions: &[DVec3]) -> Result<(), SplitError> {
-        let part = part_name(&self.positions_path);
+        let part = part(&self.positions_path);
         let (Some(w), Some(sample)) = (&mut self.positions, &mut self.sample) else {
             let what = "vertices after the faces";
             return Err(BlockFileError::new(&part, 0, what).into());
@@ -202,7 +192,7 @@ impl Splitter<'_> {
     /// Steps 2 and 3 once, when the vertices end; then step 4's state.
     fn faces(&mut self) -> Result<&mut Faces, SplitError> {
         if self.faces.is_none() {
-            let part = part_name(&self.positions_path);
+            let part = part(&self.positions_path);
             if let Some(mut w) = self.positions.take() {
                 w.flush().map_err(|e| write_error(&part, e))?;
             }
@@ -277,7 +267,7 @@ fn labels(
 ) -> Result<Vec<(u64, u32)>, BlockFileError> {
     let positions = map(positions_path)?;
     let positions: &[u8] = positions.as_deref().unwrap_or(&[]);
-    let part = part_name(out);
+    let part = part(out);
     let file = std::fs::File::create(&part).map_err(|e| write_error(&part, e))?;
     let mut w = std::io::BufWriter::with_capacity(options.buffer_bytes.max(RECORD), file);
     let vert_paths = paths.iter().map(|p| p[0].clone()).collect();
