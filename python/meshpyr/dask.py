@@ -1,6 +1,6 @@
 """The hierarchy of a scan built in spatial blocks on a Dask cluster (``dask.distributed``).
 
-:func:`build` and :func:`filter` are ``meshpyr build`` and ``meshpyr filter`` with
+:func:`build`, :func:`filter` and :func:`edit` are ``meshpyr build``, ``filter`` and ``edit`` with
 ``--block-vertices N --block-files DIR``: the same options and the same output bytes, but every
 round of block tasks runs on the cluster's workers. This process (the driver) reads the input,
 cuts each pass into cells, takes the cost cut from the blocks' histograms and assembles the
@@ -20,8 +20,9 @@ From the shell::
     python -m meshpyr.dask filter IN -o OUT --enhance 2000:30000=2 \\
         [--scheduler tcp://HOST:8786 | --workers 2 --memory-limit 3GB] [--block-vertices N]
     python -m meshpyr.dask build IN -o OUT.pyr [...]
+    python -m meshpyr.dask edit IN -o OUT --level K --move X,Y,Z:DX,DY,DZ --radius R [...]
 
-with every other option of ``meshpyr build`` and ``meshpyr filter``. Needs the ``dask`` extra
+with every other option of ``meshpyr build``, ``filter`` and ``edit``. Needs the ``dask`` extra
 (``pip install "meshpyr[dask]"``).
 """
 
@@ -201,6 +202,12 @@ def filter(
     given to the command as ``--lowpass``, ``--stopband``, ``--enhance``, ``--gain`` and
     ``--normal-only``; ``relax`` is ``--relax``. The other keywords are :func:`build`'s.
     """
+    flags = _filter_flags(lowpass, stopband, enhance, gains, normal_only, relax)
+    _run("filter", input, output, flags, client, block_vertices, scratch, quiet, run)
+
+
+def _filter_flags(lowpass, stopband, enhance, gains, normal_only, relax):
+    """The command's flags for the filter keywords shared by :func:`filter` and :func:`edit`."""
     flags = []
     if lowpass is not None:
         flags += ["--lowpass", _level(lowpass, "lowpass")]
@@ -215,7 +222,66 @@ def filter(
         flags.append("--normal-only")
     if relax is not None:
         flags += ["--relax", str(relax)]
-    _run("filter", input, output, flags, client, block_vertices, scratch, quiet, run)
+    return flags
+
+
+def _vector(value, what):
+    values = tuple(value)
+    if len(values) != 3 or any(isinstance(x, bool) for x in values):
+        raise ValueError(f"{what} must be three numbers (x, y, z), got {value!r}")
+    return ",".join(repr(float(x)) for x in values)
+
+
+def _moves(moves):
+    out = []
+    for i, move in enumerate(moves):
+        move = tuple(move)
+        if len(move) != 2:
+            raise ValueError(f"moves[{i}] must be a pair (point, offset), got {len(move)} values")
+        point, offset = _vector(move[0], f"moves[{i}][0]"), _vector(move[1], f"moves[{i}][1]")
+        out += ["--move", f"{point}:{offset}"]
+    if not out:
+        raise ValueError("moves is empty: an edit needs at least one (point, offset) pair")
+    return out
+
+
+def edit(
+    input,
+    output,
+    level,
+    moves,
+    radius,
+    *,
+    client,
+    lowpass=None,
+    stopband=None,
+    enhance=None,
+    gains=None,
+    normal_only=False,
+    relax=None,
+    no_details=False,
+    block_vertices=None,
+    scratch=None,
+    quiet=True,
+    run=run_task,
+):
+    """``meshpyr edit INPUT -o OUTPUT --level LEVEL --move ... --radius RADIUS --block-vertices N
+    --block-files SCRATCH`` with every block task run on the Dask cluster of ``client``: the same
+    output bytes.
+
+    ``level``, ``moves`` (pairs of a point and an offset, each three numbers) and ``radius`` are
+    those of :meth:`meshpyr.Pyramid.edit`, given to the command as ``--level``, one ``--move
+    X,Y,Z:DX,DY,DZ`` per pair and ``--radius``; the filter keywords are :func:`filter`'s, applied
+    with the edit; ``no_details`` is ``--no-details`` (a ``.pyr`` output without details). The
+    other keywords are :func:`build`'s.
+    """
+    if isinstance(level, bool) or not isinstance(level, int):
+        raise ValueError(f"level must be an int vertex count, got {level!r}")
+    flags = ["--level", str(level), *_moves(moves), "--radius", repr(float(radius))]
+    flags += _filter_flags(lowpass, stopband, enhance, gains, normal_only, relax)
+    if no_details:
+        flags.append("--no-details")
+    _run("edit", input, output, flags, client, block_vertices, scratch, quiet, run)
 
 
 class _OneLineParser(argparse.ArgumentParser):
@@ -227,11 +293,12 @@ def _parser():
     p = _OneLineParser(
         prog="python -m meshpyr.dask",
         description=(
-            "meshpyr build and filter with the hierarchy built in blocks on a Dask cluster: "
-            "every option of `meshpyr build` and `meshpyr filter` is accepted and passed on."
+            "meshpyr build, filter and edit with the hierarchy built in blocks on a Dask "
+            "cluster: every option of `meshpyr build`, `filter` and `edit` is accepted and "
+            "passed on."
         ),
     )
-    p.add_argument("command", choices=["build", "filter"])
+    p.add_argument("command", choices=["build", "filter", "edit"])
     p.add_argument("input", help="input mesh (or .pyr file for filter)")
     p.add_argument("-o", "--output", required=True, help="output file")
     p.add_argument(

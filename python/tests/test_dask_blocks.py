@@ -1,5 +1,5 @@
-"""meshpyr.dask: the block tasks of a partitioned build on LocalClusters give the command line's
-bytes (``--block-vertices N --block-files DIR``), on one worker and on two, and when a worker
+"""meshpyr.dask: the block tasks of a partitioned build, filter and edit on LocalClusters give
+the command line's bytes (``--block-vertices N --block-files DIR``), on one worker and on two, and when a worker
 dies in the middle of a run."""
 
 import os
@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 from conftest import data
 
@@ -21,6 +22,8 @@ SCAN = data("elephant_holes.ply")  # 2798 vertices, holes: 8 cells of 400 and se
 BLOCK = 400
 ENHANCE = (40, 1500, 2.0)
 ENHANCE_FLAG = "40:1500=2.0"
+# An edit of level 500: the elephant's first vertex (read below) pulled up.
+EDIT_LEVEL, EDIT_OFFSET = 500, (0.0, 0.05, 0.0)
 MEMORY = 1_000_000_000
 
 # The test's own task function runs on the workers: sent by value, not by module name.
@@ -46,13 +49,26 @@ def client(request):
 
 @pytest.fixture(scope="module")
 def expected(tmp_path_factory, cli):
-    """The command line's .pyr and filtered mesh, built in blocks through files."""
+    """The command line's .pyr, filtered and edited meshes, built in blocks through files."""
     folder = tmp_path_factory.mktemp("cli")
-    pyr, filtered = folder / "scan.pyr", folder / "filtered.ply"
+    pyr, filtered, edited = folder / "scan.pyr", folder / "filtered.ply", folder / "edited.ply"
     blocks = ["--block-vertices", BLOCK, "--block-files", folder]
     cli("build", SCAN, "-o", pyr, *blocks)
     cli("filter", SCAN, "-o", filtered, "--enhance", ENHANCE_FLAG, "--normal-only", *blocks)
-    return {"build": pyr.read_bytes(), "filter": filtered.read_bytes()}
+    point, radius = edit_point()
+    move = ",".join(map(repr, point)) + ":" + ",".join(map(repr, EDIT_OFFSET))
+    cli(
+        "edit", SCAN, "-o", edited, "--level", EDIT_LEVEL, "--move", move,
+        "--radius", repr(radius), "--enhance", ENHANCE_FLAG, *blocks,
+    )  # fmt: skip
+    return {"build": pyr.read_bytes(), "filter": filtered.read_bytes(), "edit": edited.read_bytes()}
+
+
+def edit_point():
+    """The point an edit grabs (the scan's first vertex) and its radius (a tenth of the
+    bounding box's diagonal)."""
+    v, _ = meshpyr.read(SCAN)
+    return tuple(float(x) for x in v[0]), 0.1 * float(np.linalg.norm(np.ptp(v, axis=0)))
 
 
 def test_a_build_on_the_cluster_is_the_command_lines_build(client, expected, tmp_path):
@@ -77,6 +93,33 @@ def test_a_filter_on_the_cluster_is_the_command_lines_filter(client, expected, t
     )
     assert out.read_bytes() == expected["filter"]
     assert list(scratch.iterdir()) == []
+
+
+def test_an_edit_on_the_cluster_is_the_command_lines_edit(client, expected, tmp_path):
+    out = tmp_path / "edited.ply"
+    point, radius = edit_point()
+    meshpyr.dask.edit(
+        SCAN,
+        out,
+        EDIT_LEVEL,
+        [(point, EDIT_OFFSET)],
+        radius,
+        client=client,
+        enhance=[ENHANCE],
+        block_vertices=BLOCK,
+    )
+    assert out.read_bytes() == expected["edit"]
+    assert out.read_bytes() != expected["filter"]
+
+
+@pytest.mark.parametrize(
+    "moves, message",
+    [([], "moves is empty"), ([((0, 0), (0, 0, 1))], r"moves\[0\]\[0\] must be three numbers")],
+)
+def test_an_edit_without_well_formed_moves_is_refused_before_any_work(tmp_path, moves, message):
+    with pytest.raises(ValueError, match=message):
+        meshpyr.dask.edit(SCAN, tmp_path / "out.ply", EDIT_LEVEL, moves, 1.0, client=None)
+    assert list(tmp_path.iterdir()) == []
 
 
 def kill_own_worker_once(task, marker):
@@ -118,6 +161,18 @@ def test_the_command_filters_on_a_local_cluster(expected, tmp_path):
     )  # fmt: skip
     assert done.returncode == 0, done.stderr
     assert out.read_bytes() == expected["filter"]
+
+
+def test_the_command_edits_on_a_local_cluster(expected, tmp_path):
+    out = tmp_path / "edited.ply"
+    point, radius = edit_point()
+    move = ",".join(map(repr, point)) + ":" + ",".join(map(repr, EDIT_OFFSET))
+    done = command(
+        "edit", SCAN, "-o", out, "--level", EDIT_LEVEL, "--move", move, "--radius", repr(radius),
+        "--enhance", ENHANCE_FLAG, "--workers", 1, "--block-vertices", BLOCK, "--quiet",
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert out.read_bytes() == expected["edit"]
 
 
 def test_the_commands_errors_are_one_line(tmp_path):
