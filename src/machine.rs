@@ -4,19 +4,34 @@
 //! layout (module `pyramid`'s `spill`) start from.
 
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// The allowance [`set_memory_allowance`] gave, in bytes; 0 when none was given.
+static MEMORY_ALLOWANCE: AtomicU64 = AtomicU64::new(0);
+
+/// Caps what [`available_memory`] reports, for the rest of this process, at `bytes`: the
+/// memory a job has been allowed (the command line's `--memory`), so that the choices made
+/// from the available memory (a large pyramid's layout kept in a temporary file rather than
+/// on the heap) keep the job inside its allowance rather than inside the machine's free
+/// memory. `None` lifts the cap.
+pub fn set_memory_allowance(bytes: Option<u64>) {
+    MEMORY_ALLOWANCE.store(bytes.map_or(0, |b| b.max(1)), Ordering::Relaxed);
+}
 
 /// The memory this process can take now without pushing anything out, in bytes: the
 /// machine's `MemAvailable` (swap not counted: paging a layout out to swap is slower than
-/// reading it from a file), capped by the cgroup's memory limit. `None` when neither is known.
+/// reading it from a file), capped by the cgroup's memory limit and by the allowance of
+/// [`set_memory_allowance`]. `None` when none of them is known.
 pub fn available_memory() -> Option<u64> {
     let read = |p: &str| std::fs::read_to_string(p).ok();
     let available = read("/proc/meminfo").and_then(|t| meminfo_field(&t, "MemAvailable"));
     let cgroup =
         read("/proc/self/cgroup").and_then(|t| cgroup_limit(&t, Path::new("/sys/fs/cgroup")));
-    match (available, cgroup) {
-        (Some(a), Some(c)) => Some(a.min(c)),
-        (a, c) => a.or(c),
-    }
+    let allowance = match MEMORY_ALLOWANCE.load(Ordering::Relaxed) {
+        0 => None,
+        bytes => Some(bytes),
+    };
+    [available, cgroup, allowance].into_iter().flatten().min()
 }
 
 /// One `/proc/meminfo` field (given in kB) in bytes.

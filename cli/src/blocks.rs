@@ -5,8 +5,8 @@
 use super::Global;
 use meshpyr::memory::{self, Allowance, BuildPath, InputSize, Job};
 use meshpyr::mesh::PolygonMesh;
-use meshpyr::pm::MIN_BLOCK_VERTICES;
 use meshpyr::pm::blocks::SharedRunner;
+use meshpyr::pm::{MIN_BLOCK_VERTICES, PmOptions};
 use std::path::Path;
 
 fn parse_block_vertices(s: &str) -> Result<usize, String> {
@@ -30,7 +30,9 @@ pub(crate) struct PathOptions {
     #[arg(long, value_name = "N", value_parser = parse_block_vertices)]
     pub(crate) block_vertices: Option<usize>,
     /// The memory the build may use (8G, 3GB, 1.5GiB; default: what the machine and the
-    /// cgroup allow); a scan whose estimate exceeds it is built in blocks.
+    /// cgroup allow); a scan whose estimate exceeds it is built in blocks, through task files
+    /// in a folder next to the output (removed afterwards), and a pyramid's layout goes to a
+    /// temporary file once it would take an eighth of it.
     #[arg(long, value_name = "SIZE", value_parser = memory::parse_memory_size)]
     pub(crate) memory: Option<u64>,
     /// When the hierarchy is built in blocks: run every pass through task files in a new
@@ -44,25 +46,75 @@ pub(crate) struct PathOptions {
 }
 
 impl PathOptions {
-    /// The path for `job` on the mesh `input` read from `path`, said unless `--quiet`. A
-    /// textured input is not built in blocks through task files ([`keeping_seams`]).
-    pub(crate) fn choose(
+    /// Caps the memory this process's own choices take as available at `--memory` (the
+    /// pyramid's layout goes to a temporary file rather than the heap once it would take more
+    /// than an eighth of it: `meshpyr::machine::set_memory_allowance`).
+    pub(crate) fn apply_allowance(&self) {
+        if self.memory.is_some() {
+            meshpyr::machine::set_memory_allowance(self.memory);
+        }
+    }
+
+    /// The options of the build path chosen for `job` on the mesh `input` read from `path`,
+    /// said unless `--quiet`: the block size, and where the passes' task files go. A path
+    /// chosen because the scan would not fit runs through task files in a folder next to
+    /// `output` (when known and the scan has no texture seams): the passes then hold only
+    /// the tasks' blocks, where in memory they hold every block's result beside the whole
+    /// mesh. A textured input is not built in blocks through task files ([`keeping_seams`]).
+    pub(crate) fn pm_options(
         &self,
         path: &Path,
+        output: Option<&Path>,
         job: Job,
         input: &PolygonMesh,
         global: &Global,
-    ) -> anyhow::Result<BuildPath> {
+    ) -> anyhow::Result<PmOptions> {
+        self.apply_allowance();
         let size = InputSize::mesh(input.n_vertices() as u64, input.n_faces() as u64);
         let allowance = Allowance::of_this_process();
         let chosen =
             memory::choose_build_path(job, &size, self.block_vertices, self.memory, &allowance);
         keeping_seams(path, &chosen, input, self.block_files.is_some())?;
+        let scratch = match (&chosen, &self.block_files) {
+            (_, Some(dir)) => Some(dir.clone()),
+            (
+                BuildPath::Partitioned {
+                    by_memory: Some(_), ..
+                },
+                None,
+            ) if !meshpyr::pm::keeps_texture_seams(input) => output.map(folder_of),
+            _ => None,
+        };
+        let files = match (&chosen, &scratch, &self.block_files) {
+            (BuildPath::Partitioned { by_memory, .. }, Some(dir), None) => {
+                let need = by_memory.map_or(0, |(need, _)| need);
+                format!(
+                    ", through task files in {}; this process still holds the whole mesh \
+                     (about {}: docs/partitioned.md)",
+                    dir.display(),
+                    memory::Bytes(need)
+                )
+            }
+            _ => String::new(),
+        };
         global.say(format_args!(
-            "{}: building the hierarchy {chosen}",
+            "{}: building the hierarchy {chosen}{files}",
             path.display()
         ));
-        Ok(chosen)
+        Ok(PmOptions {
+            block_vertices: chosen.block_vertices(),
+            block_scratch: scratch,
+            block_runner: self.runner.clone(),
+            ..PmOptions::default()
+        })
+    }
+}
+
+/// The folder `output` is written to (`.` for a bare file name).
+fn folder_of(output: &Path) -> std::path::PathBuf {
+    match output.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => std::path::PathBuf::from("."),
     }
 }
 

@@ -52,14 +52,8 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
     let options = PyramidOptions {
         relaxation: args.relax.spec(),
         pm: PmOptions {
-            block_vertices: args
-                .path
-                .choose(&args.input, job, &input, global)?
-                .block_vertices(),
-            block_scratch: args.path.block_files.clone(),
-            block_runner: args.path.runner.clone(),
             uv_weight: args.uv_weight,
-            ..PmOptions::default()
+            ..(args.path).pm_options(&args.input, Some(&args.output), job, &input, global)?
         },
     };
     let n_input = input.n_vertices();

@@ -96,7 +96,13 @@ pub(crate) fn run(args: EditArgs, global: &Global) -> anyhow::Result<()> {
     if !(args.radius > 0.0 && args.radius.is_finite()) {
         anyhow::bail!("--radius must be a positive number, got {}", args.radius);
     }
-    let scan = load_pyramid_by(&args.input, args.relax, &args.path, global)?;
+    let scan = load_pyramid_by(
+        &args.input,
+        Some(&args.output),
+        args.relax,
+        &args.path,
+        global,
+    )?;
     let levels = scan.levels();
     if !levels.contains(&args.level) {
         anyhow::bail!(

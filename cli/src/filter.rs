@@ -102,7 +102,13 @@ pub(crate) fn run(args: FilterArgs, global: &Global) -> anyhow::Result<()> {
             "no filter given: use --lowpass N, --stopband A:B, --enhance A:B=G or --gain A:B=G"
         );
     }
-    let scan = load_pyramid_by(&args.input, args.relax, &args.path, global)?;
+    let scan = load_pyramid_by(
+        &args.input,
+        Some(&args.output),
+        args.relax,
+        &args.path,
+        global,
+    )?;
     let start = Instant::now();
     let levels = scan.levels();
     let filtered = scan.into_filtered(&filter);

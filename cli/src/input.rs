@@ -8,7 +8,7 @@ use meshpyr::format;
 use meshpyr::io;
 use meshpyr::memory::{self, InputSize, Job};
 use meshpyr::mesh::{MissingSurface, PolygonMesh};
-use meshpyr::pm::{PmOptions, ProgressiveMesh};
+use meshpyr::pm::ProgressiveMesh;
 use meshpyr::progress::{NoProgress, Progress};
 use meshpyr::pyramid::{self, DetailSource, Pyramid, PyramidOptions, Staged};
 use meshpyr::relax::{RelaxKind, RelaxationSpec};
@@ -151,33 +151,29 @@ pub(crate) fn load_pyramid(
     relax: Option<RelaxKind>,
     global: &Global,
 ) -> anyhow::Result<Pyramid> {
-    load_pyramid_by(path, relax, &PathOptions::default(), global)
+    load_pyramid_by(path, None, relax, &PathOptions::default(), global)
 }
 
 /// [`load_pyramid`], a mesh input's hierarchy built on the path `options` choose (said
-/// unless `--quiet`; a `.pyr` file's hierarchy is read, not built).
+/// unless `--quiet`; a `.pyr` file's hierarchy is read, not built) for a command writing
+/// `output` (where a path chosen by memory puts its task files).
 pub(crate) fn load_pyramid_by(
     path: &Path,
+    output: Option<&Path>,
     relax: Option<RelaxKind>,
     options: &PathOptions,
     global: &Global,
 ) -> anyhow::Result<Pyramid> {
     let wanted = relax.map(RelaxKind::spec);
     if is_pyr_file(path) {
+        options.apply_allowance();
         check_memory(path, Job::Pyramid)?;
         return load_pyr_scan(path, wanted, global);
     }
     let input = read_input_mesh_for(path, Job::Pyramid)?;
     let options = PyramidOptions {
         relaxation: wanted.unwrap_or_default(),
-        pm: PmOptions {
-            block_vertices: options
-                .choose(path, Job::Pyramid, &input, global)?
-                .block_vertices(),
-            block_scratch: options.block_files.clone(),
-            block_runner: options.runner.clone(),
-            ..PmOptions::default()
-        },
+        pm: options.pm_options(path, output, Job::Pyramid, &input, global)?,
     };
     let name = path.display().to_string();
     build_pyramid_with(input, &options, &name, global, &NoProgress, &mut |_| {})

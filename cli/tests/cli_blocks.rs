@@ -68,12 +68,28 @@ fn forced_blocks_are_said_and_their_pyr_file_filters_like_any_other() {
 }
 
 #[test]
-fn a_tight_memory_allowance_takes_the_partitioned_path_by_itself() {
+fn a_tight_memory_allowance_takes_the_partitioned_path_through_files_by_itself() {
     let out = scratch("blocks-memory", "out.ply");
-    let err = ok(&lowpass_bunny(&out, &["--memory", "1M"]));
-    assert!(err.contains("in blocks of at most"), "{err}");
-    assert!(err.contains("1 MB allowed"), "{err}");
-    let quiet = ok(&lowpass_bunny(&out, &["--memory", "1M", "--quiet"]));
+    let err = ok(&lowpass_bunny(&out, &["--memory", "30M"]));
+    assert!(err.contains("30 MB allowed"), "{err}");
+    let folder = out.parent().unwrap();
+    assert!(
+        err.contains(&format!("through task files in {}", folder.display())),
+        "{err}"
+    );
+    assert!(err.contains("still holds the whole mesh"), "{err}");
+    // The task files are gone, and the hierarchy is the one of blocks of the size it said.
+    let names: Vec<_> = std::fs::read_dir(folder)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(names, ["out.ply"]);
+    let block = err.split("blocks of at most ").nth(1).unwrap();
+    let block = block.split(' ').next().unwrap();
+    let forced = scratch("blocks-memory-forced", "out.ply");
+    ok(&lowpass_bunny(&forced, &["--block-vertices", block]));
+    assert!(std::fs::read(&out).unwrap() == std::fs::read(&forced).unwrap());
+    let quiet = ok(&lowpass_bunny(&out, &["--memory", "30M", "--quiet"]));
     assert!(quiet.is_empty(), "{quiet}");
 }
 

@@ -1,6 +1,7 @@
 //! Memory and interruption: a small `.obj.gz` that inflates to hundreds of megabytes of
 //! comment reads in bounded memory, and a command stopped by Ctrl-C or SIGTERM while writing
-//! leaves no file behind (neither the output nor a hidden temporary one).
+//! leaves no file behind (neither the output nor a hidden temporary one, nor the task files of
+//! a build in blocks).
 #![cfg(target_os = "linux")]
 
 mod common;
@@ -104,4 +105,37 @@ fn ctrl_c_during_a_write_leaves_no_file() {
     let dir = folder("int");
     assert_eq!(interrupt_a_write(&dir, "-INT"), Some(130));
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 0);
+}
+
+#[test]
+fn sigterm_during_a_build_in_blocks_leaves_no_task_files() {
+    let dir = folder("blocks");
+    let tasks = dir.join("tasks");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_meshpyr"))
+        .args(["filter", &data("bunny.ply"), "--lowpass", "1000"])
+        .args(["--block-vertices", "400", "--block-files"])
+        .arg(&tasks)
+        .arg("-o")
+        .arg(dir.join("out.ply"))
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let started = std::time::Instant::now();
+    let in_flight = loop {
+        let found = std::fs::read_dir(&tasks).ok().and_then(|mut d| d.next());
+        if let Some(entry) = found {
+            break entry.unwrap().path();
+        }
+        assert!(started.elapsed().as_secs() < 120, "no task folder appeared");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    };
+    let killed = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    assert_eq!(child.wait().unwrap().code(), Some(143));
+    assert!(!in_flight.exists(), "{} is left", in_flight.display());
+    assert_eq!(std::fs::read_dir(&tasks).unwrap().count(), 0);
+    assert!(!dir.join("out.ply").exists());
 }

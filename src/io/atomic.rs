@@ -36,14 +36,47 @@ fn in_flight() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
         .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-/// Removes the temporary files of the atomic writes under way and ends the process with
-/// `code`, without letting another write start or finish in between: for a handler of Ctrl-C
-/// or SIGTERM (run on an ordinary thread, as the `cli` feature's handler does). Outputs that
-/// were complete stay; the ones being written are not created.
+/// The folders of temporary files of the jobs under way (a partitioned build's task files),
+/// which their jobs remove when they end, and a signal's exit removes with them.
+static SCRATCH_FOLDERS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn scratch_folders() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    SCRATCH_FOLDERS
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Registers `folder`, a new folder of a job's temporary files, to be removed by
+/// [`exit_removing_temporary_files`] should the process be stopped before the job removes it
+/// ([`forget_scratch_folder`]).
+pub(crate) fn register_scratch_folder(folder: &Path) {
+    scratch_folders().push(folder.to_path_buf());
+}
+
+/// Unregisters `folder`, which its job has removed or is about to remove.
+pub(crate) fn forget_scratch_folder(folder: &Path) {
+    scratch_folders().retain(|f| f != folder);
+}
+
+/// Removes the temporary files of the atomic writes under way (and the registered folders of
+/// temporary files) and ends the process with `code`, without letting another write start or
+/// finish in between: for a handler of Ctrl-C or SIGTERM (run on an ordinary thread, as the
+/// `cli` feature's handler does). Outputs that were complete stay; the ones being written are
+/// not created.
 pub fn exit_removing_temporary_files(code: i32) -> ! {
     let files = in_flight();
     for tmp in files.iter() {
         let _ = fs::remove_file(tmp);
+    }
+    for folder in scratch_folders().iter() {
+        // The job's other threads may still be writing into the folder: a file made between
+        // the listing and the folder's own removal fails it, and once the folder is gone they
+        // can make none.
+        for _ in 0..16 {
+            if fs::remove_dir_all(folder).is_ok() || !folder.exists() {
+                break;
+            }
+        }
     }
     std::process::exit(code)
 }

@@ -39,7 +39,7 @@ use std::path::{Path, PathBuf};
 
 use crate::mesh::{Materials, PolygonMesh};
 
-mod atomic;
+pub(crate) mod atomic;
 mod fuzz;
 mod gz;
 pub(crate) mod obj;

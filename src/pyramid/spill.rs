@@ -11,8 +11,9 @@
 //! directory (`TMPDIR`).
 //!
 //! Where streams go is decided once per pyramid ([`Placement::for_layout`]), from the memory
-//! available when the pyramid is made (`MemAvailable`, capped by the cgroup's limit: see
-//! [`crate::machine::available_memory`]): a layout expected to take at most an eighth of it
+//! available when the pyramid is made (`MemAvailable`, capped by the cgroup's limit and by the
+//! job's allowance, the command line's `--memory`: see [`crate::machine::available_memory`]):
+//! a layout expected to take at most an eighth of it
 //! ([`MEMORY_SHARE`]) stays in memory, a larger one goes to a file. In memory the layout is
 //! about 60 % of the pyramid's peak, so a job whose layout passes the rule peaks near a
 //! quarter of what was available, leaving the rest to other programs and to the page cache;
@@ -336,6 +337,29 @@ mod tests {
         assert_eq!(
             Placement::by_rule(64 * MIB, None, || None),
             Placement::TempFile
+        );
+    }
+
+    #[test]
+    fn a_jobs_memory_allowance_sends_a_layout_to_a_file_sooner() {
+        const MIB: usize = 1 << 20;
+        let machine = crate::machine::available_memory();
+        let by_available =
+            |bytes| Placement::by_rule(bytes, None, crate::machine::available_memory);
+        // An eighth of a 1 GiB allowance: a 100 MiB layout stays in memory where the machine
+        // has that much free; with 512 MiB allowed, whatever the machine has, it goes to a file.
+        crate::machine::set_memory_allowance(Some(1 << 30));
+        let roomy = by_available(100 * MIB);
+        crate::machine::set_memory_allowance(Some(512 << 20));
+        let tight = by_available(100 * MIB);
+        crate::machine::set_memory_allowance(None);
+        if machine.is_some_and(|m| m >= 1 << 30) {
+            assert_eq!(roomy, Placement::Memory);
+        }
+        assert_eq!(tight, Placement::TempFile);
+        assert_eq!(
+            crate::machine::available_memory().is_some(),
+            machine.is_some()
         );
     }
 

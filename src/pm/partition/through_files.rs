@@ -35,6 +35,7 @@ pub(super) struct Scratch(pub(super) PathBuf);
 impl Drop for Scratch {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.0);
+        crate::io::atomic::forget_scratch_folder(&self.0);
     }
 }
 
@@ -116,7 +117,8 @@ fn counts(outputs: Vec<TaskOutput>) -> Vec<u64> {
     outputs.into_iter().map(count).collect()
 }
 
-/// A new directory under `scratch`, named by the process and a counter.
+/// A new directory under `scratch`, named by the process and a counter, registered to be removed
+/// if a signal ends the process before its [`Scratch`] does.
 pub(super) fn unique_dir(scratch: &Path) -> Result<PathBuf, PmError> {
     let failed = |e: std::io::Error| {
         BlockFileError::new(scratch, 0, format!("cannot make a scratch directory: {e}"))
@@ -125,7 +127,10 @@ pub(super) fn unique_dir(scratch: &Path) -> Result<PathBuf, PmError> {
     for n in 0.. {
         let dir = scratch.join(format!("meshpyr-blocks-{}-{n}", std::process::id()));
         match std::fs::create_dir(&dir) {
-            Ok(()) => return Ok(dir),
+            Ok(()) => {
+                crate::io::atomic::register_scratch_folder(&dir);
+                return Ok(dir);
+            }
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
             Err(e) => return Err(failed(e).into()),
         }
