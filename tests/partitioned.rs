@@ -226,6 +226,39 @@ fn a_scratch_directory_that_cannot_be_made_is_an_error_naming_it() {
 }
 
 #[test]
+fn a_partitioned_hierarchy_carries_the_pins_of_its_passes_in_memory_and_through_files() {
+    let poly = load("elephant_holes.ply");
+    let (whole, _) =
+        ProgressiveMesh::from_polygons(&poly, &PmOptions::default(), &NoProgress).unwrap();
+    assert!(whole.pins().is_none(), "one process pins nothing");
+    let (pm, _) = ProgressiveMesh::from_polygons(&poly, &blocks(400), &NoProgress).unwrap();
+    let pins = pm.pins().expect("blocks pin their borders");
+    let survivor = |k: usize| pm.splits()[k].survivor;
+    pins.check(pm.n_base_vertices(), pm.splits().len(), survivor)
+        .unwrap();
+    let passes: Vec<_> = pins.passes().collect();
+    assert!(passes.len() >= 3, "{} passes", passes.len());
+    // Split order: the last block (nothing pinned) comes first, then the passes, each with
+    // a border.
+    assert!(passes[0].1.is_empty());
+    assert!(passes[1..].iter().all(|(_, pinned)| !pinned.is_empty()));
+    let dir = scratch("pins");
+    let through_files = PmOptions {
+        block_scratch: Some(dir.clone()),
+        ..blocks(400)
+    };
+    let (files, _) = ProgressiveMesh::from_polygons(&poly, &through_files, &NoProgress).unwrap();
+    assert_eq!(files.pins(), pm.pins());
+    let _ = std::fs::remove_dir(&dir);
+    let n = poly.n_vertices();
+    let (one_block, _) = ProgressiveMesh::from_polygons(&poly, &blocks(n), &NoProgress).unwrap();
+    assert!(
+        one_block.pins().is_none(),
+        "a mesh in one block pins nothing"
+    );
+}
+
+#[test]
 fn a_mesh_that_fits_one_block_is_one_decimation_of_the_whole() {
     let poly = load("bunny.ply");
     let n = poly.n_vertices();

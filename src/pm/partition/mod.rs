@@ -94,6 +94,7 @@ pub(crate) fn decimate_in_blocks(
     let start = vertices.len();
     let stop_at = max_block.max(params.target_vertices);
     let mut collapses = Vec::new();
+    let mut passes = Vec::new();
     let mut turns = Turns::START;
     let mut pass = 0;
     // Keeping seams, passes without the cut take no collapse far dearer than those made under
@@ -138,6 +139,7 @@ pub(crate) fn decimate_in_blocks(
         if turns.use_goal {
             floor.took(&collapses[first_new..]);
         }
+        passes.push((made, pinned_of(&split.pinned)));
         vertices = vertices_of(&faces);
         // When no frame's cells find anything, the mesh goes to the last block as it is.
         turns.after(made > 0, cut, params.max_error_sq);
@@ -148,6 +150,7 @@ pub(crate) fn decimate_in_blocks(
     let mut last = input.task(faces, &quadrics, |_| false, true, last_seams);
     last.seam_floor = floor;
     let (result, stop) = decimate_block(last);
+    passes.push((result.collapses.len(), Vec::new()));
     collapses.extend(result.collapses);
     progress.update(1.0);
     Ok(Decimated {
@@ -155,7 +158,15 @@ pub(crate) fn decimate_in_blocks(
         survivors: vertices_of(&result.faces),
         n_base_faces: result.faces.len(),
         stop,
+        passes,
     })
+}
+
+/// The vertices `pinned` marks, ascending.
+fn pinned_of(pinned: &[bool]) -> Vec<u32> {
+    (0..pinned.len() as u32)
+        .filter(|&v| pinned[v as usize])
+        .collect()
 }
 
 /// Takes a pass's results into the whole mesh: their quadrics into `quadrics`, their faces
