@@ -8,7 +8,9 @@ use meshpyr::mesh::{Mesh, PolygonMesh};
 use meshpyr::pm::blocks::{BlockFileError, SharedRunner, Task, TaskOutput, TaskRunner, run_task};
 use meshpyr::pm::{MeshRecords, PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Filter, Pyramid, PyramidOptions};
+use meshpyr::mesh::SlotIndex;
+use meshpyr::pyramid::{DetailPyramid, Filter, LevelGains, Pyramid, PyramidOptions};
+use meshpyr::relax::{MeanCurvatureStep, Relaxation, SecondDifference};
 use proptest::prelude::*;
 use std::sync::Arc;
 
@@ -256,6 +258,67 @@ fn a_partitioned_hierarchy_carries_the_pins_of_its_passes_in_memory_and_through_
         one_block.pins().is_none(),
         "a mesh in one block pins nothing"
     );
+}
+
+/// Per split of `pm`, the ring of its new vertex at its level (PM indices, in circulation
+/// order, as the analysis lists them).
+fn split_rings(pm: &ProgressiveMesh) -> Vec<Vec<u32>> {
+    let mut cursor = pm.cursor();
+    let mut rings = vec![Vec::new(); pm.splits().len()];
+    for k in (0..rings.len()).rev() {
+        let mesh = cursor.mesh();
+        let ring = mesh.neighbors(cursor.vertex(pm.n_base_vertices() + k));
+        rings[k] = ring.iter().map(|v| v.slot() as u32).collect();
+        assert!(cursor.collapse());
+    }
+    rings
+}
+
+fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter().zip(b).map(|(x, y)| x.distance(*y)).fold(0.0, f64::max)
+}
+
+#[test]
+fn a_split_of_a_partitioned_hierarchy_leaves_the_ring_vertices_pinned_in_its_pass_untouched() {
+    let poly = load("elephant_holes.ply");
+    let (pm, _) = ProgressiveMesh::from_polygons(&poly, &blocks(400), &NoProgress).unwrap();
+    let pins = pm.pins().unwrap();
+    let rings = split_rings(&pm);
+    // Guskov's operator records on the replay, the MCM step on the half-edge cursor.
+    let operators: [&dyn Relaxation; 2] =
+        [&SecondDifference::default(), &MeanCurvatureStep::default()];
+    for op in operators {
+        let pyr = DetailPyramid::analyze(&pm, op, &NoProgress).unwrap();
+        let mut left_out = 0;
+        for (k, ring) in rings.iter().enumerate() {
+            let pinned = pins.pinned_at(k);
+            let v = (pm.n_base_vertices() + k) as u32;
+            let mut free: Vec<u32> = ring
+                .iter()
+                .copied()
+                .filter(|x| pinned.binary_search(x).is_err())
+                .collect();
+            left_out += ring.len() - free.len();
+            // The circulation may start elsewhere on the replay: compare the ring as a set.
+            let (first, rest) = pyr.split_details(k).0.split_first().unwrap();
+            let mut rest = rest.to_vec();
+            (rest.sort_unstable(), free.sort_unstable());
+            assert_eq!((*first, rest), (v, free), "split {k}");
+        }
+        assert!(left_out > 0, "the borders' ring vertices are left out");
+        // Each vertex is still set last by the finest split that touches it, to its input
+        // value: unit gains reconstruct.
+        let err = max_distance(&pyr.synthesize(&LevelGains::unit()), pm.original_positions());
+        assert!(err <= common::closed_loop_bound(&pyr), "{}: {err:e}", op.name());
+    }
+    // The same hierarchy without its pins gets the one-process rule: the whole ring.
+    let mut bare = pm.clone();
+    bare.set_pins(None).unwrap();
+    let pyr = DetailPyramid::analyze(&bare, &SecondDifference::default(), &NoProgress).unwrap();
+    for (k, ring) in rings.iter().enumerate() {
+        assert_eq!(pyr.split_details(k).0.len(), 1 + ring.len(), "split {k}");
+    }
 }
 
 #[test]
