@@ -11,6 +11,12 @@
 //! Presmoothing only changes vertices the synthesis overwrites with `q + d`, so the pyramid
 //! reconstructs exactly whatever the presmoothing does (the Burt–Adelson property).
 //!
+//! On a hierarchy built in blocks ([`ProgressiveMesh::pins`]), a split's touched vertices are
+//! its new vertex and the ring vertices that are free in its pass: the ones pinned there are
+//! only read, so that each block's splits write only the block's free vertices and the
+//! blocks' analyses commute (`docs/partitioned.md`, "The detail pyramid on a partitioned
+//! hierarchy"). Everything downstream reads the touched set from the records.
+//!
 //! Steps 4 and 5 run in a second pass, coarsest split first (module `quantise`): the walk down
 //! keeps each split's targets `f^(n)_j`, and the details are quantised against the
 //! predictions synthesis itself makes, so that rounding does not add up across levels.
