@@ -35,14 +35,16 @@ pub(super) fn encode_pins(pins: &Pins) -> Vec<u8> {
 }
 
 /// Reads `PINS` for a hierarchy of `n_splits` splits and `n_vertices` vertices (every count
-/// is checked before anything is allocated from it; the record's fit to the splits is checked
-/// by [`crate::pm::ProgressiveMesh::set_pins`]).
+/// is checked before anything is allocated from it, also against the bytes left: a pass takes
+/// at least two, a vertex one; the record's fit to the splits is checked by
+/// [`crate::pm::ProgressiveMesh::set_pins`]).
 pub(super) fn decode_pins(
     mut r: ByteReader<'_>,
     n_splits: usize,
     n_vertices: usize,
 ) -> Result<Pins, FormatError> {
-    let n_passes = r.count(n_splits as u64, "PINS pass count")?;
+    let most_passes = n_splits.min(r.remaining() / 2) as u64;
+    let n_passes = r.count(most_passes, "PINS pass count")?;
     let mut passes = Vec::with_capacity(n_passes);
     for p in 0..n_passes {
         let at = r.offset();
@@ -50,7 +52,7 @@ pub(super) fn decode_pins(
         if run == 0 {
             return Err(corrupt(at, format!("PINS: pass {p} has no split")));
         }
-        let k = r.count(n_vertices as u64, "PINS pinned count")?;
+        let k = r.count(n_vertices.min(r.remaining()) as u64, "PINS pinned count")?;
         let mut pinned = Vec::with_capacity(k);
         let mut next = 0u64;
         for _ in 0..k {
