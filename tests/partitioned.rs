@@ -386,6 +386,14 @@ fn a_partitioned_pyr_keeps_its_pins_and_filters_to_the_bytes_of_the_mesh() {
             assert_eq!(q.filter(f).positions, p.filter(f).positions, "{content:?}");
         }
     }
+    // An edit's file: the same hierarchy with new positions, the same pins, and details
+    // analysed under the rule (they fit: the file's pyramid is the stored one).
+    let edited = p.filter(&filters[0]).positions;
+    let bytes = p.to_pyr_bytes_with_positions(edited).unwrap().0;
+    let data = format::decode(&bytes).unwrap();
+    assert_eq!(data.pm.pins(), p.pm.pins(), "edit");
+    let (_, from) = data.into_pyramid_with(None, &NoProgress).unwrap();
+    assert_eq!(from, DetailSource::Stored, "edit");
     // One process: no pins, the 2.1 layout as before.
     let whole = Pyramid::build_with(poly, &PyramidOptions::default(), &NoProgress).unwrap();
     let bytes = whole.to_pyr_bytes().unwrap().0;
