@@ -3,12 +3,18 @@
 //! depend on the thread count, and filter like the one-process hierarchy.
 
 use glam::DVec3;
+use meshpyr::PyrContent;
+use meshpyr::format::container::{Container, REQUIRED, Section, write_container};
+use meshpyr::format::varint::put_uvarint;
+use meshpyr::format::{self};
 use meshpyr::io::read_mesh;
+use meshpyr::mesh::SlotIndex;
 use meshpyr::mesh::{Mesh, PolygonMesh};
 use meshpyr::pm::blocks::{BlockFileError, SharedRunner, Task, TaskOutput, TaskRunner, run_task};
 use meshpyr::pm::{MeshRecords, PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
-use meshpyr::pyramid::{Filter, Pyramid, PyramidOptions};
+use meshpyr::pyramid::{DetailPyramid, DetailSource, Filter, LevelGains, Pyramid, PyramidOptions};
+use meshpyr::relax::{MeanCurvatureStep, Relaxation, SecondDifference};
 use proptest::prelude::*;
 use std::sync::Arc;
 
@@ -223,6 +229,285 @@ fn a_scratch_directory_that_cannot_be_made_is_an_error_naming_it() {
     let err = ProgressiveMesh::from_polygons(&poly, &options, &NoProgress).unwrap_err();
     std::fs::remove_file(&file).unwrap();
     assert!(err.to_string().contains("not-a-directory"), "{err}");
+}
+
+#[test]
+fn a_partitioned_hierarchy_carries_the_pins_of_its_passes_in_memory_and_through_files() {
+    let poly = load("elephant_holes.ply");
+    let (whole, _) =
+        ProgressiveMesh::from_polygons(&poly, &PmOptions::default(), &NoProgress).unwrap();
+    assert!(whole.pins().is_none(), "one process pins nothing");
+    let (pm, _) = ProgressiveMesh::from_polygons(&poly, &blocks(400), &NoProgress).unwrap();
+    let pins = pm.pins().expect("blocks pin their borders");
+    let survivor = |k: usize| pm.splits()[k].survivor;
+    pins.check(pm.n_base_vertices(), pm.splits().len(), survivor)
+        .unwrap();
+    let passes: Vec<_> = pins.passes().collect();
+    assert!(passes.len() >= 3, "{} passes", passes.len());
+    // Split order: the last block (nothing pinned) comes first, then the passes, each with
+    // a border.
+    assert!(passes[0].1.is_empty());
+    assert!(passes[1..].iter().all(|(_, pinned)| !pinned.is_empty()));
+    let dir = scratch("pins");
+    let through_files = PmOptions {
+        block_scratch: Some(dir.clone()),
+        ..blocks(400)
+    };
+    let (files, _) = ProgressiveMesh::from_polygons(&poly, &through_files, &NoProgress).unwrap();
+    assert_eq!(files.pins(), pm.pins());
+    let _ = std::fs::remove_dir(&dir);
+    let n = poly.n_vertices();
+    let (one_block, _) = ProgressiveMesh::from_polygons(&poly, &blocks(n), &NoProgress).unwrap();
+    assert!(
+        one_block.pins().is_none(),
+        "a mesh in one block pins nothing"
+    );
+}
+
+/// Per split of `pm`, the ring of its new vertex at its level (PM indices, in circulation
+/// order, as the analysis lists them).
+fn split_rings(pm: &ProgressiveMesh) -> Vec<Vec<u32>> {
+    let mut cursor = pm.cursor();
+    let mut rings = vec![Vec::new(); pm.splits().len()];
+    for k in (0..rings.len()).rev() {
+        let mesh = cursor.mesh();
+        let ring = mesh.neighbors(cursor.vertex(pm.n_base_vertices() + k));
+        rings[k] = ring.iter().map(|v| v.slot() as u32).collect();
+        assert!(cursor.collapse());
+    }
+    rings
+}
+
+fn max_distance(a: &[DVec3], b: &[DVec3]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| x.distance(*y))
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn a_split_of_a_partitioned_hierarchy_leaves_the_ring_vertices_pinned_in_its_pass_untouched() {
+    let poly = load("elephant_holes.ply");
+    let (pm, _) = ProgressiveMesh::from_polygons(&poly, &blocks(400), &NoProgress).unwrap();
+    let pins = pm.pins().unwrap();
+    let rings = split_rings(&pm);
+    // Guskov's operator records on the replay, the MCM step on the half-edge cursor.
+    let operators: [&dyn Relaxation; 2] =
+        [&SecondDifference::default(), &MeanCurvatureStep::default()];
+    for op in operators {
+        let pyr = DetailPyramid::analyze(&pm, op, &NoProgress).unwrap();
+        let mut left_out = 0;
+        for (k, ring) in rings.iter().enumerate() {
+            let pinned = pins.pinned_at(k);
+            let v = (pm.n_base_vertices() + k) as u32;
+            let mut free: Vec<u32> = ring
+                .iter()
+                .copied()
+                .filter(|x| pinned.binary_search(x).is_err())
+                .collect();
+            left_out += ring.len() - free.len();
+            // The circulation may start elsewhere on the replay: compare the ring as a set.
+            let (first, rest) = pyr.split_details(k).0.split_first().unwrap();
+            let mut rest = rest.to_vec();
+            rest.sort_unstable();
+            free.sort_unstable();
+            assert_eq!((*first, rest), (v, free), "split {k}");
+        }
+        assert!(left_out > 0, "the borders' ring vertices are left out");
+        // Each vertex is still set last by the finest split that touches it, to its input
+        // value: unit gains reconstruct.
+        let err = max_distance(
+            &pyr.synthesize(&LevelGains::unit()),
+            pm.original_positions(),
+        );
+        assert!(
+            err <= common::closed_loop_bound(&pyr),
+            "{}: {err:e}",
+            op.name()
+        );
+    }
+    // The same hierarchy without its pins gets the one-process rule: the whole ring.
+    let mut bare = pm.clone();
+    bare.set_pins(None).unwrap();
+    let pyr = DetailPyramid::analyze(&bare, &SecondDifference::default(), &NoProgress).unwrap();
+    for (k, ring) in rings.iter().enumerate() {
+        assert_eq!(pyr.split_details(k).0.len(), 1 + ring.len(), "split {k}");
+    }
+}
+
+/// `bytes`' sections, with `tag`'s payload replaced by `payload`.
+fn with_section(bytes: &[u8], tag: [u8; 4], payload: Vec<u8>) -> Vec<u8> {
+    let c = Container::parse(bytes).unwrap();
+    let sections: Vec<Section> = (c.sections.iter())
+        .map(|e| Section {
+            tag: e.tag,
+            flags: e.flags,
+            bytes: if e.tag == tag {
+                payload.clone()
+            } else {
+                bytes[e.offset as usize..(e.offset + e.length) as usize].to_vec()
+            },
+        })
+        .collect();
+    write_container(c.major, c.minor, &sections)
+}
+
+#[test]
+fn a_partitioned_pyr_keeps_its_pins_and_filters_to_the_bytes_of_the_mesh() {
+    let poly = load("elephant_holes.ply");
+    let options = PyramidOptions {
+        pm: blocks(400),
+        ..PyramidOptions::default()
+    };
+    let p = Pyramid::build_with(poly.clone(), &options, &NoProgress).unwrap();
+    let n = p.pyramid.n_vertices();
+    let filters = [
+        Filter::new().gain(n / 32, n / 2, 2.0),
+        Filter::new().lowpass(n / 8),
+        Filter::new().gain(n / 16, n, 0.5).normal_only(),
+    ];
+    for content in [PyrContent::WithDetails, PyrContent::HierarchyOnly] {
+        let bytes = p.to_pyr_bytes_as(content).unwrap().0;
+        let c = Container::parse(&bytes).unwrap();
+        assert_eq!((c.major, c.minor), (format::MAJOR, 4), "{content:?}");
+        let pins = c.sections.iter().find(|e| &e.tag == b"PINS").unwrap();
+        assert_eq!(pins.flags, REQUIRED, "an older reader refuses it");
+        let data = format::decode(&bytes).unwrap();
+        assert_eq!(data.pm.pins(), p.pm.pins(), "{content:?}");
+        let (q, from) = data.into_pyramid_with(None, &NoProgress).unwrap();
+        let stored = matches!(content, PyrContent::WithDetails);
+        assert_eq!(
+            from == DetailSource::Stored,
+            stored,
+            "{content:?}: {from:?}"
+        );
+        for f in &filters {
+            assert_eq!(q.filter(f).positions, p.filter(f).positions, "{content:?}");
+        }
+    }
+    // An edit's file: the same hierarchy with new positions, the same pins, and details
+    // analysed under the rule (they fit: the file's pyramid is the stored one).
+    let edited = p.filter(&filters[0]).positions;
+    let bytes = p.to_pyr_bytes_with_positions(edited).unwrap().0;
+    let data = format::decode(&bytes).unwrap();
+    assert_eq!(data.pm.pins(), p.pm.pins(), "edit");
+    let (_, from) = data.into_pyramid_with(None, &NoProgress).unwrap();
+    assert_eq!(from, DetailSource::Stored, "edit");
+    // One process: no pins, the 2.1 layout as before.
+    let whole = Pyramid::build_with(poly, &PyramidOptions::default(), &NoProgress).unwrap();
+    let bytes = whole.to_pyr_bytes().unwrap().0;
+    let c = Container::parse(&bytes).unwrap();
+    assert_eq!(c.minor, format::MINOR_WITHOUT_CORNERS);
+    assert!(c.sections.iter().all(|e| &e.tag != b"PINS"));
+}
+
+#[test]
+fn a_pyr_whose_pins_pin_a_collapsed_vertex_is_an_error_naming_the_section() {
+    let options = PyramidOptions {
+        pm: blocks(400),
+        ..PyramidOptions::default()
+    };
+    let p = Pyramid::build_with(load("elephant_holes.ply"), &options, &NoProgress).unwrap();
+    let bytes = p.to_pyr_bytes().unwrap().0;
+    // One pass over all splits pinning the survivor of the first.
+    let mut pins = Vec::new();
+    for x in [
+        1,
+        p.pm.splits().len() as u64,
+        1,
+        u64::from(p.pm.splits()[0].survivor),
+    ] {
+        put_uvarint(&mut pins, x);
+    }
+    let err = format::decode(&with_section(&bytes, *b"PINS", pins)).unwrap_err();
+    assert!(err.to_string().contains("pinned"), "{err}");
+    let err = format::decode(&with_section(&bytes, *b"PINS", vec![1, 0])).unwrap_err();
+    assert!(err.to_string().contains("PINS"), "{err}");
+}
+
+/// Per input edge of `pm` (PM indices, each once), the length of the difference between the
+/// displacements `filtered − input` at its two ends.
+fn displacement_jumps(
+    pm: &ProgressiveMesh,
+    input: &PolygonMesh,
+    filtered: &PolygonMesh,
+) -> Vec<([u32; 2], f64)> {
+    let moved = |v: u32| {
+        let s = pm.pm_to_mesh()[v as usize] as usize;
+        filtered.positions[s] - input.positions[s]
+    };
+    let mut edges: Vec<[u32; 2]> = (pm.finest_faces().iter())
+        .flat_map(|t| [[t[0], t[1]], [t[1], t[2]], [t[2], t[0]]])
+        .map(|[a, b]| [a.min(b), a.max(b)])
+        .collect();
+    edges.sort_unstable();
+    edges.dedup();
+    edges
+        .into_iter()
+        .map(|e| (e, moved(e[0]).distance(moved(e[1]))))
+        .collect()
+}
+
+#[test]
+fn a_filter_of_a_partitioned_hierarchy_shows_no_jump_across_the_borders() {
+    // A seam would be a border whose vertices move unlike their free neighbours. On the edges
+    // between a vertex pinned in the first pass and a free one, the difference of the two
+    // displacements under the README's enhancement must stay what it is on the same edges
+    // in one process, and on the partitioned filter's other edges.
+    let scan = bumpy_scan(160);
+    let n = scan.n_vertices();
+    let filter = Filter::new().gain(n / 32, n / 2, 2.0);
+    let build = |pm: PmOptions| {
+        let options = PyramidOptions {
+            pm,
+            ..PyramidOptions::default()
+        };
+        Pyramid::build_with(scan.clone(), &options, &NoProgress).unwrap()
+    };
+    let whole = build(PmOptions::default());
+    let whole_filtered = whole.filter(&filter);
+    for block in [400, 1600] {
+        let parts = build(blocks(block));
+        let pins = parts.pm.pins().unwrap();
+        // Split order: the first pass is the last.
+        let (_, first_pass) = pins.passes().last().unwrap();
+        let pinned = |v: u32| first_pass.binary_search(&v).is_ok();
+        let jumps = displacement_jumps(&parts.pm, &scan, &parts.filter(&filter));
+        let (mut across, mut inside) = (Vec::new(), Vec::new());
+        for &([a, b], jump) in &jumps {
+            match (pinned(a), pinned(b)) {
+                (true, false) | (false, true) => across.push(jump),
+                (false, false) => inside.push(jump),
+                (true, true) => {}
+            }
+        }
+        // The same edges in one process (its own PM numbering: the input's vertices).
+        let to_input = |v: u32| parts.pm.pm_to_mesh()[v as usize];
+        let moved_whole =
+            |s: u32| whole_filtered.positions[s as usize] - scan.positions[s as usize];
+        let mut across_whole: Vec<f64> = (jumps.iter())
+            .filter(|([a, b], _)| pinned(*a) != pinned(*b))
+            .map(|([a, b], _)| moved_whole(to_input(*a)).distance(moved_whole(to_input(*b))))
+            .collect();
+        for v in [&mut across, &mut inside, &mut across_whole] {
+            v.sort_by(f64::total_cmp);
+        }
+        let (a, i, w) = (p99(&across), p99(&inside), p99(&across_whole));
+        let (am, wm) = (
+            across[across.len() - 1],
+            across_whole[across_whole.len() - 1],
+        );
+        // A seam would make jumps of the order of the displacement itself (its p99 is about
+        // four times these jumps here).
+        let what = format!(
+            "blocks of {block}, {} border edges: p99 jump {a:.3e}, on other edges {i:.3e}, \
+             one process {w:.3e}; largest {am:.3e}, one process {wm:.3e}",
+            across.len()
+        );
+        assert!(across.len() > 1000, "{what}");
+        assert!(a <= 1.2 * i && a <= 1.2 * w && am <= 1.5 * wm, "{what}");
+    }
 }
 
 #[test]

@@ -11,7 +11,13 @@ filters a scan once on each path and prints the issue's measures.
 
 - with --near-borders: the same p99 ratio for the vertices at each ring distance from the
   borders of the build's first pass (its k-d cells along the model's axes, as
-  src/pm/partition/cells.rs cuts them), to see whether the differences sit at the borders.
+  src/pm/partition/cells.rs cuts them), to see whether the differences sit at the borders,
+  and the p99 and largest displacement |partitioned - input| at each distance against the
+  one-process filter's at the same vertices (a seam or spike at the borders shows there).
+
+- with --baseline OTHER_MESHPYR: the partitioned run also with that binary (say main's, before
+  a change to the partitioned analysis), once, and the same two ratios for it, with p99 and max
+  of |partitioned - baseline partitioned| over p99 |one process - input|.
 
 The default filter is the README's scan enhancement, `--enhance V/32:V/2=2` with V the input's
 vertex count. Distances are in model units and also given relative to the bounding-box diagonal.
@@ -51,6 +57,7 @@ def main():
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--keep", default=None, help="folder for the filtered meshes")
     ap.add_argument("--near-borders", action="store_true")
+    ap.add_argument("--baseline", default=None, help="another meshpyr binary's partitioned run")
     a = ap.parse_args()
 
     pos, tris = read_ply(a.scan)
@@ -67,6 +74,9 @@ def main():
     for _ in range(a.runs):
         times["one"].append(run(whole_cmd))
         times["parts"].append(run(parts_cmd))
+    base_out = os.path.join(folder, "baseline_partitioned.ply")
+    if a.baseline:
+        run([a.baseline] + base[1:] + ["-o", base_out, "--block-vertices", str(a.block_vertices)])
 
     whole, _ = read_ply(whole_out)
     parts, _ = read_ply(parts_out)
@@ -100,8 +110,19 @@ def main():
         f"partitioned {m_parts / 1024:.0f} MB ({m_parts * 1024 / n:.0f} B/vertex)"
     )
     np.save(os.path.join(folder, "apart.npy"), apart)
+    if a.baseline:
+        other, _ = read_ply(base_out)
+        o_apart = np.linalg.norm(other - whole, axis=1)
+        o_moved = np.linalg.norm(other - pos, axis=1)
+        change = np.linalg.norm(parts - other, axis=1)
+        print(
+            f"baseline {a.baseline}: p99 ratio {np.percentile(o_apart, 99) / p99_moved:.3f}, "
+            f"max ratio {o_moved.max() / max_whole:.3f}; |partitioned - baseline partitioned|: "
+            f"p99 {np.percentile(change, 99) / p99_moved:.3f}, max {change.max() / p99_moved:.3f} "
+            f"(of p99 |one process - input|)"
+        )
     if a.near_borders:
-        by_rings(pos, tris, a.block_vertices, apart, p99_moved)
+        by_rings(pos, tris, a.block_vertices, apart, p99_moved, parts_moved, moved)
 
 
 def first_pass_cells(pos, tris, block):
@@ -127,8 +148,9 @@ def first_pass_cells(pos, tris, block):
     return cell
 
 
-def by_rings(pos, tris, block, apart, p99_moved):
-    """Prints the p99 ratio by ring distance to the first pass's borders."""
+def by_rings(pos, tris, block, apart, p99_moved, parts_moved, moved):
+    """Prints the p99 ratio, and the displacements of both filters, by ring distance to the
+    first pass's borders."""
     import scipy.sparse as sparse
     from scipy.sparse.csgraph import dijkstra
 
@@ -141,12 +163,18 @@ def by_rings(pos, tris, block, apart, p99_moved):
     graph = graph.tocsr()
     rings = dijkstra(graph + graph.T, unweighted=True, indices=border, min_only=True, limit=64)
     print(f"first pass: {len(border)} border vertices; p99 |partitioned - one process| over")
-    print("p99 |one process - input| by ring distance to them:")
+    print("p99 |one process - input| by ring distance to them, and the displacement")
+    print("|filtered - input| there, partitioned / one process (p99 and max, in p99 |one process - input|):")
     for lo, hi in [(0, 1), (1, 3), (3, 8), (8, 16), (16, 32), (32, 64), (64, np.inf)]:
         near = (rings >= lo) & (rings < hi)
         if near.sum() >= 100:
             ratio = np.percentile(apart[near], 99) / p99_moved
-            print(f"  rings {lo}..{hi}: {near.sum()} vertices, ratio {ratio:.3f}")
+            p, w = parts_moved[near] / p99_moved, moved[near] / p99_moved
+            print(
+                f"  rings {lo}..{hi}: {near.sum()} vertices, ratio {ratio:.3f}; displacement "
+                f"p99 {np.percentile(p, 99):.3f} / {np.percentile(w, 99):.3f}, "
+                f"max {p.max():.3f} / {w.max():.3f}"
+            )
 
 
 if __name__ == "__main__":

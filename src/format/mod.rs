@@ -16,8 +16,8 @@ pub use pyr::{
     EncodedPyr, FileDetails, LevelMesh, PyrData, PyramidOptions, SizeReport, StoredDetails,
 };
 pub use pyr::{
-    MAJOR, MINOR, MINOR_WITHOUT_CORNERS, OLDEST_MAJOR, decode, encode, encode_sections,
-    encode_with_details, read_level, read_level_within,
+    MAJOR, MINOR, MINOR_WITH_CORNERS, MINOR_WITHOUT_CORNERS, OLDEST_MAJOR, decode, encode,
+    encode_sections, encode_with_details, read_level, read_level_within,
 };
 pub(crate) use pyr::{fix_checksums, fuzz_read_pyr, with_positions};
 pub use pyr::{is_pyr, is_textured};

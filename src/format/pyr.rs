@@ -39,6 +39,7 @@ mod input_side;
 mod loaded;
 mod meta;
 mod options;
+mod pins;
 mod positions;
 mod rice;
 mod split_block;
@@ -63,6 +64,7 @@ use input_side::{
 pub(crate) use meta::head_counts;
 use meta::{build_info, describe, encode_meta};
 use options::{decode_options, encode_options};
+use pins::{decode_pins, encode_pins};
 use positions::exactly_f32;
 
 /// Major version written. 2.0 codes the split errors as varint deltas of their bit patterns
@@ -73,11 +75,15 @@ pub const OLDEST_MAJOR: u16 = 1;
 /// Minor version written; readers accept any minor of their major (unknown optional sections
 /// are skipped). 2.1 adds the optional `DETL` section; 2.2 the required `CRNR` section of a
 /// textured input; 2.3 the optional `OPTS` section (the uv weight, and whether the hierarchy
-/// kept the seams), written with `CRNR`. A file without either is written as 2.1
-/// ([`MINOR_WITHOUT_CORNERS`]), byte for byte what a 2.1 writer wrote, so untextured files
-/// still open in 2.1 readers.
-pub const MINOR: u16 = 3;
-/// The minor version of a file without a `CRNR` section.
+/// kept the seams), written with `CRNR`; 2.4 the required `PINS` section of a partitioned
+/// hierarchy. A file is written with the lowest minor that has its sections: 2.4 with `PINS`,
+/// else 2.3 with `CRNR` ([`MINOR_WITH_CORNERS`]), else 2.1 ([`MINOR_WITHOUT_CORNERS`]), byte
+/// for byte what a 2.1 writer wrote, so untextured one-process files still open in 2.1
+/// readers.
+pub const MINOR: u16 = 4;
+/// The minor version of a file with a `CRNR` section and without `PINS`.
+pub const MINOR_WITH_CORNERS: u16 = 3;
+/// The minor version of a file without a `CRNR` or `PINS` section.
 pub const MINOR_WITHOUT_CORNERS: u16 = 1;
 /// Vertex splits per block of the `SPLT` section.
 pub(crate) const SPLITS_PER_BLOCK: u32 = 4096;
@@ -92,7 +98,10 @@ const ATTR: [u8; 4] = *b"ATTR";
 const DETL: [u8; 4] = *b"DETL";
 const CRNR: [u8; 4] = *b"CRNR";
 const OPTS: [u8; 4] = *b"OPTS";
-const KNOWN: [[u8; 4]; 10] = [META, BASE, SPLT, ISOL, ORDR, POLY, ATTR, DETL, CRNR, OPTS];
+const PINS: [u8; 4] = *b"PINS";
+const KNOWN: [[u8; 4]; 11] = [
+    META, BASE, SPLT, ISOL, ORDR, POLY, ATTR, DETL, CRNR, OPTS, PINS,
+];
 
 /// The `META` section (bincode 2 standard configuration). Fixed-size fields only: nothing in
 /// it allocates while decoding, so a damaged length cannot make bincode allocate.
@@ -299,17 +308,29 @@ pub fn encode_sections(
             bytes,
         });
     }
-    let minor = if textured || pm.keeps_seams() {
+    let mut minor = if textured || pm.keeps_seams() {
         // Optional: a 2.2 reader reads the hierarchy without knowing how it was built.
         sections.push(Section {
             tag: OPTS,
             flags: 0,
             bytes: encode_options(&info.pm, pm.keeps_seams()),
         });
-        MINOR
+        MINOR_WITH_CORNERS
     } else {
         MINOR_WITHOUT_CORNERS
     };
+    if let Some(pins) = pm.pins() {
+        let bytes = encode_pins(pins);
+        sizes.trailing += bytes.len();
+        // Required: the pins change the detail pyramid, which an older reader would analyse
+        // without them.
+        sections.push(Section {
+            tag: PINS,
+            flags: REQUIRED,
+            bytes,
+        });
+        minor = MINOR;
+    }
     if let Some(bytes) = detl {
         sizes.details = bytes.len();
         // Optional: a 2.0 reader skips it and analyses the hierarchy as before.
@@ -429,6 +450,12 @@ pub(super) fn decode_releasing(bytes: &[u8], release: Release<'_>) -> Result<Pyr
         permutation.then_some(mesh_to_pm),
     )
     .map_err(|e| corrupt(0, e.to_string()))?;
+    if let Some(r) = c.section(PINS)? {
+        let at = r.offset();
+        let pins = decode_pins(r, pm.splits().len(), pm.n_vertices())?;
+        pm.set_pins(Some(pins))
+            .map_err(|e| corrupt(at, e.to_string()))?;
+    }
     let details = file_details(&c, detl?);
     let mut info = build_info(&meta);
     if let Some(o) = options {

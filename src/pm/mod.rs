@@ -29,6 +29,7 @@ mod goal;
 mod legality;
 mod level_corners;
 mod partition;
+mod pins;
 pub mod blocks {
     //! The tasks of a partitioned build run through files (`docs/partitioned.md`, "Running
     //! the passes through files"; the files: `formats/blocks.md`), one function per task, and
@@ -70,6 +71,7 @@ pub use legality::{Legality, Relaxation};
 pub use level_corners::{LevelFaces, SeamBreak, level_corners, level_mesh};
 pub(crate) use partition::read_any as fuzz_read_block_file;
 pub use partition::taskfile::BlockFileError;
+pub use pins::{Pins, PinsError};
 pub use progressive::SplitReplay;
 pub use progressive::keeps_texture_seams;
 pub(crate) use progressive::triangles_of;

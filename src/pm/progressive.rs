@@ -3,6 +3,7 @@
 
 use super::collapse::{half_edge_collapse, vertex_split};
 use super::decimate::{Collapse, DecimateParams, FlatMesh, Stop, decimate_with_seams};
+use super::pins::{Pins, PinsError};
 use super::seams::Seams;
 use crate::mesh::{BoundingBox, CornerTable, Mesh, PolygonMesh, SlotIndex, SourceMap, VertexId};
 use crate::progress::Progress;
@@ -155,6 +156,9 @@ pub struct ProgressiveMesh {
     /// Whether every collapse kept the input's texture seams (`super::seams`), so that each
     /// level's corners follow from the finest ones (`super::level_corners`).
     keeps_seams: bool,
+    /// Per pass of a partitioned build, the vertices it pinned (`super::pins`); `None` for a
+    /// hierarchy built in one piece or one whose passes pinned nothing.
+    pins: Option<Pins>,
 }
 
 /// A corner table's vertex list as triangles, reusing its allocation when its capacity is a
@@ -304,6 +308,7 @@ impl ProgressiveMesh {
             survivors,
             n_base_faces,
             stop,
+            passes,
         } = decimated;
         let mut mesh_to_pm = vec![NONE; n_slots];
         let mut pm_to_mesh: Vec<u32> = Vec::with_capacity(n_vertices);
@@ -346,6 +351,7 @@ impl ProgressiveMesh {
             .map(|c| c.error_sq.sqrt() as f32)
             .collect();
         drop(collapses);
+        let pins = pins_in_split_order(passes, &mesh_to_pm);
         let positions = pm_to_mesh.iter().map(|&v| position(v)).collect();
         let faces = faces(&mesh_to_pm);
         Ok(ProgressiveMesh {
@@ -359,6 +365,7 @@ impl ProgressiveMesh {
             errors,
             stop: Some(stop),
             keeps_seams: false,
+            pins,
         })
     }
 
@@ -408,6 +415,23 @@ impl ProgressiveMesh {
             s += &format!("; {stop}");
         }
         s
+    }
+
+    /// The vertices a partitioned build pinned, per pass (PM indices): the detail pyramid
+    /// leaves a split's ring vertices pinned in its pass untouched. `None` for a hierarchy
+    /// built in one piece (or whose passes pinned nothing).
+    pub fn pins(&self) -> Option<&Pins> {
+        self.pins.as_ref()
+    }
+
+    /// Gives the hierarchy the pin record `pins` (read from a file), after checking it
+    /// against the splits; an empty record is none.
+    pub fn set_pins(&mut self, pins: Option<Pins>) -> Result<(), PinsError> {
+        if let Some(p) = &pins {
+            p.check(self.n_base, self.splits.len(), |k| self.splits[k].survivor)?;
+        }
+        self.pins = pins.filter(|p| !p.is_empty());
+        Ok(())
     }
 
     /// Number of faces at the coarsest level.
@@ -619,12 +643,26 @@ impl PmCursor<'_> {
 }
 
 /// What a decimation of the whole mesh leaves: its collapses in order (vertex slots), the
-/// surviving vertices in slot order, the base level's face count and why it stopped.
+/// surviving vertices in slot order, the base level's face count, why it stopped, and for a
+/// partitioned build its passes in order: how many of the collapses each made and the vertex
+/// slots it pinned (empty for a build in one piece).
 pub(crate) struct Decimated {
     pub collapses: Vec<Collapse>,
     pub survivors: Vec<u32>,
     pub n_base_faces: usize,
     pub stop: Stop,
+    pub passes: Vec<(usize, Vec<u32>)>,
+}
+
+/// The pin record of a partitioned build's `passes` (collapse order, vertex slots) in split
+/// order and PM indices; `None` when nothing was pinned. Splits run in reverse collapse
+/// order, so the passes do too.
+fn pins_in_split_order(passes: Vec<(usize, Vec<u32>)>, mesh_to_pm: &[u32]) -> Option<Pins> {
+    let pins = Pins::from_passes(passes.into_iter().rev().map(|(n, slots)| {
+        let pm: Vec<u32> = slots.iter().map(|&v| mesh_to_pm[v as usize]).collect();
+        (n, pm)
+    }));
+    (!pins.is_empty()).then_some(pins)
 }
 
 /// Decimates the working mesh in one piece, or in blocks when `opts` asks for them.
@@ -653,6 +691,7 @@ fn decimate_flat(
         survivors: coarse.survivors(),
         n_base_faces: coarse.n_faces(),
         stop: outcome.stop,
+        passes: Vec::new(),
     })
 }
 

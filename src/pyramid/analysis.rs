@@ -11,6 +11,12 @@
 //! Presmoothing only changes vertices the synthesis overwrites with `q + d`, so the pyramid
 //! reconstructs exactly whatever the presmoothing does (the Burt–Adelson property).
 //!
+//! On a hierarchy built in blocks ([`ProgressiveMesh::pins`]), a split's touched vertices are
+//! its new vertex and the ring vertices that are free in its pass: the ones pinned there are
+//! only read, so that each block's splits write only the block's free vertices and the
+//! blocks' analyses commute (`docs/partitioned.md`, "The detail pyramid on a partitioned
+//! hierarchy"). Everything downstream reads the touched set from the records.
+//!
 //! Steps 4 and 5 run in a second pass, coarsest split first (module `quantise`): the walk down
 //! keeps each split's targets `f^(n)_j`, and the details are quantised against the
 //! predictions synthesis itself makes, so that rounding does not add up across levels.
@@ -380,7 +386,9 @@ fn record_range_on_rings(
         let v = (n_base + k) as u32;
         touched.clear();
         touched.push(v);
-        touched.extend(replay.ring_entries(v).0.iter().map(|e| e.nbr));
+        let pinned = pinned_at(pm, k);
+        let ring = replay.ring_entries(v).0.iter().map(|e| e.nbr);
+        touched.extend(ring.filter(|x| !is_pinned(pinned, *x)));
         recorder.stencils.clear();
         recorder.stencil_lens.clear();
         let (stencils, lens) = (&mut recorder.stencils, &mut recorder.stencil_lens);
@@ -433,7 +441,9 @@ fn record_range(
         }
         touched_handles.clear();
         touched_handles.push(vh);
-        touched_handles.extend(mesh.outgoing(vh).map(|h| mesh.to_vertex(h)));
+        let pinned = pinned_at(pm, k);
+        let ring = mesh.outgoing(vh).map(|h| mesh.to_vertex(h));
+        touched_handles.extend(ring.filter(|x| !is_pinned(pinned, x.slot() as u32)));
         touched.clear();
         touched.extend(touched_handles.iter().map(|j| j.slot() as u32));
         stencils.clear();
@@ -465,6 +475,19 @@ fn record_range(
         }
     }
     recorder.finish()
+}
+
+/// The vertices pinned in the pass of split `k` of a partitioned hierarchy (ascending; none
+/// in one piece). A split leaves its ring vertices pinned in its pass untouched: they are
+/// neither presmoothed nor predicted and get no detail there, only read, so that the splits
+/// of one block of a pass write only the block's free vertices and read nothing another
+/// block writes (`docs/partitioned.md`, "The detail pyramid on a partitioned hierarchy").
+fn pinned_at(pm: &ProgressiveMesh, k: usize) -> &[u32] {
+    pm.pins().map_or(&[], |p| p.pinned_at(k))
+}
+
+fn is_pinned(pinned: &[u32], v: u32) -> bool {
+    !pinned.is_empty() && pinned.binary_search(&v).is_ok()
 }
 
 /// Writes the records of one range of splits, split by split.

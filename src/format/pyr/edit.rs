@@ -38,7 +38,7 @@ pub(crate) fn with_positions(
             .ok_or_else(|| internal("vertex source out of range"))?;
         pm_positions.push(p);
     }
-    let new_pm = ProgressiveMesh::from_parts(PmParts {
+    let mut new_pm = ProgressiveMesh::from_parts(PmParts {
         n_base: pm.n_base_vertices(),
         positions: pm_positions,
         pm_to_mesh: pm.pm_to_mesh().to_vec(),
@@ -47,5 +47,9 @@ pub(crate) fn with_positions(
         errors: pm.split_errors().to_vec(),
     })
     .map_err(|e| internal(&e.to_string()))?;
+    // The same splits, so the same passes: the edited hierarchy's pyramid keeps the rule.
+    new_pm
+        .set_pins(pm.pins().cloned())
+        .map_err(|e| internal(&e.to_string()))?;
     Ok((new_input, new_pm))
 }

@@ -41,6 +41,8 @@ mod cells;
 mod contents;
 mod lockstep;
 mod order;
+#[cfg(test)]
+mod pyramid_commutes;
 pub mod runner;
 mod split;
 pub mod stream;
@@ -52,7 +54,7 @@ mod through_files;
 use super::PmError;
 use super::attribute_quadric::AttributeQuadric;
 use super::decimate::passes::Turns;
-use super::decimate::{DecimateParams, FlatMesh, SeamFloor, initial_quadrics};
+use super::decimate::{Collapse, DecimateParams, FlatMesh, SeamFloor, initial_quadrics};
 use super::progressive::Decimated;
 use super::seams::Seams;
 use crate::progress::Progress;
@@ -72,6 +74,21 @@ pub(crate) fn decimate_in_blocks(
     max_block: usize,
     seams: Option<Seams>,
     progress: &dyn Progress,
+) -> Result<Decimated, PmError> {
+    let merge = order::merge_by_cost;
+    decimate_in_blocks_merged(flat, params, max_block, seams, progress, merge)
+}
+
+/// [`decimate_in_blocks`] with each pass's collapses interleaved by `merge` (given the blocks'
+/// sequences in cell order; any interleaving keeping each block's order is a valid sequence,
+/// "Why the concatenated records are a valid progressive mesh").
+fn decimate_in_blocks_merged(
+    flat: FlatMesh,
+    params: &DecimateParams,
+    max_block: usize,
+    seams: Option<Seams>,
+    progress: &dyn Progress,
+    merge: fn(Vec<Vec<Collapse>>) -> Vec<Collapse>,
 ) -> Result<Decimated, PmError> {
     let quadric = initial_quadrics(&flat, params.boundary_weight);
     let positions = flat.positions();
@@ -94,6 +111,7 @@ pub(crate) fn decimate_in_blocks(
     let start = vertices.len();
     let stop_at = max_block.max(params.target_vertices);
     let mut collapses = Vec::new();
+    let mut passes = Vec::new();
     let mut turns = Turns::START;
     let mut pass = 0;
     // Keeping seams, passes without the cut take no collapse far dearer than those made under
@@ -130,14 +148,14 @@ pub(crate) fn decimate_in_blocks(
         let first_new = collapses.len();
         let made = gather(
             results,
-            &mut quadrics,
-            &mut faces,
-            &mut wedges,
+            (&mut quadrics, &mut faces, &mut wedges),
             &mut collapses,
+            merge,
         );
         if turns.use_goal {
             floor.took(&collapses[first_new..]);
         }
+        passes.push((made, pinned_of(&split.pinned)));
         vertices = vertices_of(&faces);
         // When no frame's cells find anything, the mesh goes to the last block as it is.
         turns.after(made > 0, cut, params.max_error_sq);
@@ -148,6 +166,7 @@ pub(crate) fn decimate_in_blocks(
     let mut last = input.task(faces, &quadrics, |_| false, true, last_seams);
     last.seam_floor = floor;
     let (result, stop) = decimate_block(last);
+    passes.push((result.collapses.len(), Vec::new()));
     collapses.extend(result.collapses);
     progress.update(1.0);
     Ok(Decimated {
@@ -155,18 +174,25 @@ pub(crate) fn decimate_in_blocks(
         survivors: vertices_of(&result.faces),
         n_base_faces: result.faces.len(),
         stop,
+        passes,
     })
 }
 
+/// The vertices `pinned` marks, ascending.
+fn pinned_of(pinned: &[bool]) -> Vec<u32> {
+    (0..pinned.len() as u32)
+        .filter(|&v| pinned[v as usize])
+        .collect()
+}
+
 /// Takes a pass's results into the whole mesh: their quadrics into `quadrics`, their faces
-/// after `faces` (and their wedges into `wedges`), their collapses interleaved by cost after
-/// `collapses`; returns how many.
+/// after `faces` (and their wedges into `wedges`), their collapses interleaved by `merge`
+/// after `collapses`; returns how many.
 fn gather(
     results: Vec<BlockResult>,
-    quadrics: &mut [VertexQuadric],
-    faces: &mut Vec<[u32; 3]>,
-    wedges: &mut WholeWedges,
-    collapses: &mut Vec<super::decimate::Collapse>,
+    (quadrics, faces, wedges): (&mut [VertexQuadric], &mut Vec<[u32; 3]>, &mut WholeWedges),
+    collapses: &mut Vec<Collapse>,
+    merge: fn(Vec<Vec<Collapse>>) -> Vec<Collapse>,
 ) -> usize {
     let mut made = Vec::with_capacity(results.len());
     for r in results {
@@ -182,7 +208,7 @@ fn gather(
         }
         made.push(r.collapses);
     }
-    let made = order::merge_by_cost(made);
+    let made = merge(made);
     let n = made.len();
     collapses.extend(made);
     n

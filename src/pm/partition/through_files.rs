@@ -176,6 +176,7 @@ impl Driver<'_> {
             };
             let pass_file = cut_cells(&state, info, |p| split_cells_of(p, max_block, frame), dir)?;
             let blocks = self.split_and_gather(&pass_file, &mut state)?;
+            let pinned = pinned_vertices(&blocks.held)?;
             let costs: Vec<PathBuf> = (0..blocks.inputs.len())
                 .map(|k| dir.file(format!("p{pass}.costs{k}")))
                 .collect();
@@ -213,7 +214,7 @@ impl Driver<'_> {
                 sequence_out: sequence.clone(),
             };
             let made = counts(self.runner.run_round(vec![assemble])?)[0];
-            sequences.push(sequence);
+            sequences.push((sequence, pinned));
             state.pieces = [vec![blocks.across], results, blocks.held].concat();
             count(&mut state)?;
             pass += 1;
@@ -247,8 +248,11 @@ impl Driver<'_> {
         };
         self.runner.run_round(vec![finish])?;
         let mut collapses: Vec<Collapse> = Vec::new();
-        for s in sequences.iter().chain([&last]) {
-            collapses.extend(contents::read_collapses(s, n_vertices)?);
+        let mut passes = Vec::new();
+        for (s, pinned) in sequences.into_iter().chain([(last.clone(), Vec::new())]) {
+            let made = contents::read_collapses(&s, n_vertices)?;
+            passes.push((made.len(), pinned));
+            collapses.extend(made);
         }
         let (faces, _) = contents::read_piece(&last)?;
         let stop = contents::read_stop(&last)?;
@@ -258,6 +262,7 @@ impl Driver<'_> {
             survivors: vertices_of(&faces),
             n_base_faces: faces.len(),
             stop,
+            passes,
         })
     }
 
@@ -429,6 +434,15 @@ impl Driver<'_> {
             held,
         })
     }
+}
+
+/// The vertices pinned in a pass, ascending: those of its cells' held pieces (`tasks::gather`
+/// writes there the records of each cell's pinned vertices).
+fn pinned_vertices(held: &[PathBuf]) -> Result<Vec<u32>, BlockFileError> {
+    let parts = round(held.len(), |k| contents::read_positions(&held[k]))?;
+    let mut pinned: Vec<u32> = parts.into_iter().flatten().map(|(v, _)| v).collect();
+    pinned.sort_unstable();
+    Ok(pinned)
 }
 
 fn remove(files: &[PathBuf]) {
