@@ -3,6 +3,7 @@
 
 use super::collapse::{half_edge_collapse, vertex_split};
 use super::decimate::{Collapse, DecimateParams, FlatMesh, Stop, decimate_with_seams};
+use super::partition::{InputPoints, first_cells};
 use super::seams::Seams;
 use crate::mesh::{BoundingBox, CornerTable, Mesh, PolygonMesh, SlotIndex, SourceMap, VertexId};
 use crate::progress::Progress;
@@ -180,17 +181,24 @@ impl ProgressiveMesh {
         progress: &dyn Progress,
     ) -> Result<ProgressiveMesh, PmError> {
         let params = decimate_params(opts, mesh.bbox_diagonal())?;
-        let decimated = decimate_flat(FlatMesh::from_mesh(mesh), &params, opts, None, progress)?;
         let n_slots = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
+        let mut positions = vec![DVec3::ZERO; n_slots];
+        for v in mesh.vertices() {
+            positions[v.slot()] = mesh.position(v);
+        }
+        // The mesh is its own input: its slots are the input's vertices.
+        let points = InputPoints {
+            positions: &positions,
+            polygons: mesh.n_faces() as u64,
+            source: None,
+        };
+        let flat = FlatMesh::from_mesh(mesh);
+        let decimated = decimate_flat(flat, &params, opts, (None, &points), progress)?;
         let isolated: Vec<u32> = mesh
             .vertices()
             .filter(|&v| mesh.is_isolated(v))
             .map(|v| v.slot() as u32)
             .collect();
-        let mut positions = vec![DVec3::ZERO; n_slots];
-        for v in mesh.vertices() {
-            positions[v.slot()] = mesh.position(v);
-        }
         let faces = |mesh_to_pm: &[u32]| {
             mesh.faces()
                 .map(|f| mesh.face_vertices(f).map(|v| mesh_to_pm[v.slot()]))
@@ -268,7 +276,12 @@ impl ProgressiveMesh {
             mut corner_vertex, ..
         } = corners;
         let keeps_seams = seams.is_some();
-        let decimated = decimate_flat(flat, &params, opts, seams, progress)?;
+        let points = InputPoints {
+            positions: &input.positions,
+            polygons: input.n_faces() as u64,
+            source: Some(source),
+        };
+        let decimated = decimate_flat(flat, &params, opts, (seams, &points), progress)?;
         let faces = move |mesh_to_pm: &[u32]| {
             for v in &mut corner_vertex {
                 *v = mesh_to_pm[*v as usize];
@@ -627,25 +640,32 @@ pub(crate) struct Decimated {
     pub stop: Stop,
 }
 
-/// Decimates the working mesh in one piece, or in blocks when `opts` asks for them.
+/// Decimates the working mesh in one piece, or in blocks when `opts` asks for them, the first
+/// pass's cells cut from `input` as the streaming split cuts them.
 fn decimate_flat(
     flat: FlatMesh,
     params: &DecimateParams,
     opts: &PmOptions,
-    mut seams: Option<Seams>,
+    (mut seams, input): (Option<Seams>, &InputPoints),
     progress: &dyn Progress,
 ) -> Result<Decimated, PmError> {
     if let Some(max) = opts.block_vertices {
+        let first = first_cells(input, flat.n_vertex_slots(), max);
         if let Some(scratch) = &opts.block_scratch {
             let runner = opts.block_runner.as_ref().map_or(
                 &super::blocks::RayonRunner as &dyn super::blocks::TaskRunner,
                 |r| &*r.0,
             );
             return super::partition::decimate_through_files(
-                flat, params, max, scratch, runner, progress,
+                flat,
+                params,
+                (max, first),
+                scratch,
+                runner,
+                progress,
             );
         }
-        return super::partition::decimate_in_blocks(flat, params, max, seams, progress);
+        return super::partition::decimate_in_blocks(flat, params, max, (seams, first), progress);
     }
     let (collapses, coarse, outcome) = decimate_with_seams(flat, params, seams.as_mut(), progress);
     Ok(Decimated {

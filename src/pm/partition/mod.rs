@@ -57,26 +57,30 @@ use super::progressive::Decimated;
 use super::seams::Seams;
 use crate::progress::Progress;
 use block::{BlockResult, BlockSeams, BlockTask, VertexQuadric, decimate_block};
-use cells::FRAMES;
+use cells::{Cells, FRAMES};
 pub(crate) use contents::read_any;
 use glam::{DVec2, DVec3};
 use lockstep::Whole;
 use rayon::prelude::*;
+pub(crate) use stream::{InputPoints, first_cells};
 pub(crate) use through_files::decimate_through_files;
 
 /// Decimates `flat` in blocks of at most `max_block` vertices, keeping the texture seams of
-/// `seams` when there are any (see the module docs).
+/// `seams` when there are any (see the module docs). The first pass takes the cells `first`
+/// (the streaming split's, [`stream::first_cells`]).
 pub(crate) fn decimate_in_blocks(
     flat: FlatMesh,
     params: &DecimateParams,
     max_block: usize,
-    seams: Option<Seams>,
+    (seams, first): (Option<Seams>, Cells),
     progress: &dyn Progress,
 ) -> Result<Decimated, PmError> {
     let quadric = initial_quadrics(&flat, params.boundary_weight);
     let positions = flat.positions();
     let mut faces = flat.triangles();
     let mut wedges = WholeWedges::of(seams, &flat);
+    in_cell_order(&mut faces, &mut wedges.faces, &first.cell_of);
+    let mut first = Some(first);
     let mut vertices = flat.survivors();
     drop(flat);
     let mut quadrics: Vec<VertexQuadric> = (0..positions.len())
@@ -103,7 +107,10 @@ pub(crate) fn decimate_in_blocks(
     {
         let frame = &FRAMES[pass % FRAMES.len()];
         pass += 1;
-        let cells = cells::split_cells(&positions, vertices, max_block, frame);
+        let cells = match first.take() {
+            Some(cells) => cells,
+            None => cells::split_cells(&positions, vertices, max_block, frame),
+        };
         let split = split::split_faces(&faces, &wedges.faces, &cells.cell_of, cells.n_cells);
         drop(cells);
         let mut block_wedges = split.inside_wedges.into_iter();
@@ -156,6 +163,24 @@ pub(crate) fn decimate_in_blocks(
         n_base_faces: result.faces.len(),
         stop,
     })
+}
+
+/// Puts `faces` (and their corners' `wedges`, face for face, when there are any) in the order
+/// of the first pass's pieces: by the cell `cell_of` gives their first vertex, keeping their
+/// order within a cell. The cell tasks write each cell's piece so (a face goes to the cell of
+/// its first vertex, in triangle order), and the order of the faces is what breaks the ties
+/// between a block's candidates, so every path's first pass sees the same blocks.
+pub(crate) fn in_cell_order(
+    faces: &mut Vec<[u32; 3]>,
+    wedges: &mut Vec<[u32; 3]>,
+    cell_of: &[u32],
+) {
+    let mut order: Vec<u32> = (0..faces.len() as u32).collect();
+    order.sort_by_key(|&i| cell_of[faces[i as usize][0] as usize]);
+    *faces = order.iter().map(|&i| faces[i as usize]).collect();
+    if !wedges.is_empty() {
+        *wedges = order.iter().map(|&i| wedges[i as usize]).collect();
+    }
 }
 
 /// Takes a pass's results into the whole mesh: their quadrics into `quadrics`, their faces

@@ -40,6 +40,7 @@
 mod build;
 mod cell;
 mod files;
+mod first;
 mod orient;
 mod sample;
 mod split;
@@ -51,6 +52,7 @@ mod tests;
 pub use build::hierarchy_from_cells;
 pub use cell::{Copies, ExtraFan, PieceCounts, cell_fans, cell_piece, cell_pieces, number_copies};
 pub use files::{CellEntry, Cut, Manifest};
+pub(crate) use first::{InputPoints, first_cells};
 pub use orient::{CellPatches, Flips, cell_patches, orient};
 pub use split::{SplitOptions, split_into_cells};
 
