@@ -58,6 +58,7 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
                 .block_vertices(),
             block_scratch: args.path.block_files.clone(),
             block_runner: args.path.runner.clone(),
+            block_input: Some(args.input.clone()),
             uv_weight: args.uv_weight,
             ..PmOptions::default()
         },
@@ -87,6 +88,7 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
             .with_context(|| format!("cannot encode {}", args.input.display()))?
     };
     let took = start.elapsed().as_secs_f64();
+    super::input::say_first_pieces(&args.input.display().to_string(), &pm, global);
     io::write_atomic_with(&args.output, |w| encoded.write_to(w))?;
     let sizes = encoded.sizes;
     let n = n_input.max(1) as f64;

@@ -73,7 +73,9 @@ pub use partition::taskfile::BlockFileError;
 pub use progressive::SplitReplay;
 pub use progressive::keeps_texture_seams;
 pub(crate) use progressive::triangles_of;
-pub use progressive::{MIN_BLOCK_VERTICES, PmCursor, PmOptions, PmParts, ProgressiveMesh};
+pub use progressive::{
+    FirstPieces, MIN_BLOCK_VERTICES, PmCursor, PmOptions, PmParts, ProgressiveMesh,
+};
 pub use progressive::{PmError, VertexSplit};
 pub use replay::FlatReplay;
 pub(crate) use replay::{FaceBuckets, canonical_sorted};

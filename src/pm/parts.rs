@@ -266,6 +266,7 @@ impl ProgressiveMesh {
             errors,
             stop: None,
             keeps_seams: false,
+            first_pieces: None,
         })
     }
 }

@@ -3,6 +3,7 @@
 
 use super::collapse::{half_edge_collapse, vertex_split};
 use super::decimate::{Collapse, DecimateParams, FlatMesh, Stop, decimate_with_seams};
+use super::partition::stream::{SplitError, assemble_from_cells, decimate_from_cells};
 use super::partition::{InputPoints, first_cells};
 use super::seams::Seams;
 use crate::mesh::{BoundingBox, CornerTable, Mesh, PolygonMesh, SlotIndex, SourceMap, VertexId};
@@ -55,6 +56,12 @@ pub struct PmOptions {
     /// With `block_scratch`: what runs each round's tasks (`None`: this process's threads,
     /// [`crate::pm::blocks::RayonRunner`]). Any runner gives the same hierarchy.
     pub block_runner: Option<super::blocks::SharedRunner>,
+    /// With `block_scratch`: the file the input was read from. An uncompressed PLY file is
+    /// then split into cells in one pass and the cell tasks make the first pieces, instead of
+    /// the whole working mesh (`docs/partitioned.md`, "Splitting a scan into cell files in one
+    /// pass"); the hierarchy is the same bit for bit, and [`ProgressiveMesh::first_pieces`]
+    /// says which way it went. Default `None`: from the whole mesh.
+    pub block_input: Option<std::path::PathBuf>,
     /// Weight λ of the boundary constraint planes (each boundary edge adds a plane through it,
     /// perpendicular to its face, scaled by λ·|e|²) while at least 5 % of the input's faces are
     /// left; at the coarse end (1 %) they count 0.3 λ, so that hole rims give up the vertices the
@@ -80,6 +87,7 @@ impl Default for PmOptions {
             block_vertices: None,
             block_scratch: None,
             block_runner: None,
+            block_input: None,
             boundary_weight: 10.0,
             uv_weight: 0.25,
         }
@@ -156,6 +164,30 @@ pub struct ProgressiveMesh {
     /// Whether every collapse kept the input's texture seams (`super::seams`), so that each
     /// level's corners follow from the finest ones (`super::level_corners`).
     keeps_seams: bool,
+    /// How a partitioned build through files made its first pieces; `None` otherwise.
+    first_pieces: Option<FirstPieces>,
+}
+
+/// How a partitioned build through files ([`PmOptions::block_scratch`]) made the pieces its
+/// first pass starts from; either way gives the same hierarchy.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FirstPieces {
+    /// The input file split into cells in one pass, one cell task per cell
+    /// ([`PmOptions::block_input`]).
+    Cells,
+    /// The whole working mesh in memory, and why not the cells.
+    WholeMesh(String),
+}
+
+impl std::fmt::Display for FirstPieces {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FirstPieces::Cells => write!(f, "first pieces split from the file into cells"),
+            FirstPieces::WholeMesh(why) => {
+                write!(f, "first pieces made from the whole mesh ({why})")
+            }
+        }
+    }
 }
 
 /// A corner table's vertex list as triangles, reusing its allocation when its capacity is a
@@ -223,9 +255,31 @@ impl ProgressiveMesh {
         opts: &PmOptions,
         progress: &dyn Progress,
     ) -> Result<(ProgressiveMesh, SourceMap), PmError> {
+        let why = match cells_input(opts) {
+            Err(why) => why,
+            Ok(path) => match decimate_from_cells(path, opts, progress) {
+                Ok(passed) => {
+                    let (mut pm, source) = assemble_from_cells(input, passed)?;
+                    pm.first_pieces = Some(FirstPieces::Cells);
+                    return Ok((pm, source));
+                }
+                Err(SplitError::Build(e)) => return Err(e),
+                Err(SplitError::File(e)) => return Err(e.into()),
+                Err(e @ (SplitError::NotLocal { .. } | SplitError::Read(_))) => e.to_string(),
+            },
+        };
         let repaired = CornerTable::from_polygons(input)?;
-        let pm = Self::from_corners(input, repaired.corners, &repaired.source, opts, progress)?;
+        let mut pm = Self::from_corners(input, repaired.corners, &repaired.source, opts, progress)?;
+        if opts.block_vertices.is_some() && opts.block_scratch.is_some() {
+            pm.first_pieces = Some(FirstPieces::WholeMesh(why));
+        }
         Ok((pm, repaired.source))
+    }
+
+    /// How a partitioned build through files made its first pieces (`None` for any other
+    /// build, and for a hierarchy read from a file).
+    pub fn first_pieces(&self) -> Option<&FirstPieces> {
+        self.first_pieces.as_ref()
     }
 
     /// [`Self::from_polygons`] on the builder's corner table of `input`.
@@ -372,6 +426,7 @@ impl ProgressiveMesh {
             errors,
             stop: Some(stop),
             keeps_seams: false,
+            first_pieces: None,
         })
     }
 
@@ -628,6 +683,23 @@ impl PmCursor<'_> {
     pub(crate) fn seek_faces(&mut self, faces: usize) {
         let level = self.pm.level_for_faces(faces);
         self.seek(level);
+    }
+}
+
+/// The input file a build from cells splits (`opts` asks for blocks through files and names
+/// an uncompressed PLY file), or why there is none.
+fn cells_input(opts: &PmOptions) -> Result<&std::path::Path, String> {
+    let (Some(_), Some(_)) = (opts.block_vertices, &opts.block_scratch) else {
+        return Err("not built in blocks through files".into());
+    };
+    let Some(path) = &opts.block_input else {
+        return Err("no input file given".into());
+    };
+    let ply = crate::io::MeshFormat::from_path(path).is_ok_and(|f| f == crate::io::MeshFormat::Ply);
+    match (ply, crate::io::is_gzip(path)) {
+        (true, false) => Ok(path),
+        (true, true) => Err("the file is compressed; the split reads an uncompressed PLY".into()),
+        (false, _) => Err("the split reads PLY files only".into()),
     }
 }
 

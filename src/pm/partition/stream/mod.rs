@@ -50,6 +50,7 @@ mod tree;
 mod tests;
 
 pub use build::hierarchy_from_cells;
+pub(crate) use build::{assemble_from_cells, decimate_from_cells};
 pub use cell::{Copies, ExtraFan, PieceCounts, cell_fans, cell_piece, cell_pieces, number_copies};
 pub use files::{CellEntry, Cut, Manifest};
 pub(crate) use first::{InputPoints, first_cells};
