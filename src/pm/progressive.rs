@@ -3,7 +3,9 @@
 
 use super::collapse::{half_edge_collapse, vertex_split};
 use super::decimate::{Collapse, DecimateParams, FlatMesh, Stop, decimate_with_seams};
-use super::partition::stream::{SplitError, assemble_from_cells, decimate_from_cells};
+use super::partition::stream::{
+    GlobalRepair, SplitError, assemble_from_cells, decimate_from_cells,
+};
 use super::partition::{InputPoints, first_cells};
 use super::seams::Seams;
 use crate::mesh::{BoundingBox, CornerTable, Mesh, PolygonMesh, SlotIndex, SourceMap, VertexId};
@@ -265,7 +267,8 @@ impl ProgressiveMesh {
                 }
                 Err(SplitError::Build(e)) => return Err(e),
                 Err(SplitError::File(e)) => return Err(e.into()),
-                Err(e @ (SplitError::NotLocal { .. } | SplitError::Read(_))) => e.to_string(),
+                Err(SplitError::NotLocal { repair, .. }) => not_local(repair),
+                Err(e @ SplitError::Read(_)) => e.to_string(),
             },
         };
         let repaired = CornerTable::from_polygons(input)?;
@@ -701,6 +704,15 @@ fn cells_input(opts: &PmOptions) -> Result<&std::path::Path, String> {
         (true, true) => Err("the file is compressed; the split reads an uncompressed PLY".into()),
         (false, _) => Err("the split reads PLY files only".into()),
     }
+}
+
+/// Why a build from cells gave way to the whole mesh when a cell refused `repair`.
+fn not_local(repair: GlobalRepair) -> String {
+    let what = match repair {
+        GlobalRepair::Orientation => "a component that cannot be oriented",
+        GlobalRepair::MultiEdge => "a multi-edge to detach",
+    };
+    format!("the scan has {what}, a repair the cells cannot make alone")
 }
 
 /// What a decimation of the whole mesh leaves: its collapses in order (vertex slots), the
