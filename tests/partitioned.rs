@@ -6,7 +6,7 @@ use glam::DVec3;
 use meshpyr::io::read_mesh;
 use meshpyr::mesh::{Mesh, PolygonMesh};
 use meshpyr::pm::blocks::{BlockFileError, SharedRunner, Task, TaskOutput, TaskRunner, run_task};
-use meshpyr::pm::{MeshRecords, PmOptions, ProgressiveMesh};
+use meshpyr::pm::{FirstPieces, MeshRecords, PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
 use meshpyr::pyramid::{Filter, Pyramid, PyramidOptions};
 use proptest::prelude::*;
@@ -270,6 +270,9 @@ fn written_files(task: &Task) -> Vec<std::path::PathBuf> {
             vec![result_out.clone()]
         }
         Task::Assemble { sequence_out, .. } => vec![sequence_out.clone()],
+        Task::CellPatches { patches_out, .. } => vec![patches_out.clone()],
+        Task::CellFans { fans_out, .. } => vec![fans_out.clone()],
+        Task::CellPiece { piece_out, .. } => vec![piece_out.clone()],
     }
 }
 
@@ -282,8 +285,20 @@ fn any_order_of_a_rounds_tasks_and_retried_tasks_give_the_same_pyr_bytes() {
         block_runner: Some(SharedRunner(Arc::new(ReversedTwice))),
         ..blocks(300)
     };
-    assert!(pyr_bytes(&poly, options) == in_memory);
+    assert!(pyr_bytes(&poly, options.clone()) == in_memory);
     std::fs::remove_dir(scratch("reversed")).unwrap();
+    // The cell tasks' rounds too, from the file split into cells.
+    let dir = tempfile::tempdir().unwrap();
+    let ply = dir.path().join("scan.ply");
+    meshpyr::io::write_mesh(&ply, &poly).unwrap();
+    let from_cells = PmOptions {
+        block_scratch: Some(dir.path().join("blocks")),
+        block_input: Some(ply),
+        ..options
+    };
+    let (pm, _) = ProgressiveMesh::from_polygons(&poly, &from_cells, &NoProgress).unwrap();
+    assert_eq!(pm.first_pieces(), Some(&FirstPieces::Cells));
+    assert!(pyr_bytes(&poly, from_cells) == in_memory);
 }
 
 #[test]

@@ -12,7 +12,7 @@
 //! over the sequence files in reverse would remove that (`docs/partitioned.md`).
 
 use super::SplitError;
-use super::cell::cell_pieces;
+use super::rounds::cell_pieces_by;
 use super::split::{SplitOptions, split_into_cells};
 use crate::mesh::{BoundingBox, CornerTable, PolygonMesh, SourceMap};
 use crate::pm::partition::runner::RayonRunner;
@@ -73,16 +73,16 @@ pub(crate) fn decimate_from_cells(
     };
     std::fs::create_dir(&cells).map_err(made)?;
     let manifest = split_into_cells(input, &cells, &SplitOptions::new(max_block))?;
-    let (pieces, copies) = cell_pieces(&cells, opts.boundary_weight, &dir.0)?;
-    let _ = std::fs::remove_dir_all(&cells);
-    let diagonal = manifest.bounds.map_or(0.0, |b| b.diagonal());
-    let params = decimate_params(opts, diagonal)?;
     let runner = opts
         .block_runner
         .as_ref()
         .map_or(&RayonRunner as &dyn super::super::runner::TaskRunner, |r| {
             &*r.0
         });
+    let (pieces, copies) = cell_pieces_by(&cells, opts.boundary_weight, &dir.0, runner)?;
+    let _ = std::fs::remove_dir_all(&cells);
+    let diagonal = manifest.bounds.map_or(0.0, |b| b.diagonal());
+    let params = decimate_params(opts, diagonal)?;
     let decimated = decimate_from_pieces(
         pieces,
         copies.n_vertices,
