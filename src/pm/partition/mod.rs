@@ -11,7 +11,11 @@
 //! 1. the whole mesh's quadrics, once (a vertex's quadric sums its whole star's planes);
 //! 2. while the mesh has more vertices than a block holds, one pass:
 //!    - its vertices cut into cells of at most the block size along the axes of the pass's
-//!      frame, the frames taking turns (`cells.rs`);
+//!      frame, the frames taking turns (`cells.rs`); the first pass's cells are the streaming
+//!      split's, cut at a sample's medians and drawn alike from the input in memory
+//!      (`stream/first.rs`), its faces in the order of the split's pieces, so that every path
+//!      (in memory, through files from the whole mesh or from the file's cells) makes the same
+//!      first pass;
 //!    - the faces sorted into the cells' blocks; a face across cells pins its vertices
 //!      (`split.rs`);
 //!    - every block collects its candidates, one cost cut is taken over all of them, every

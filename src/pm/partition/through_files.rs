@@ -5,9 +5,12 @@
 //! would.
 //!
 //! Steps:
-//! 1. the whole mesh's quadrics, written with the faces and positions as the first pieces;
+//! 1. the whole mesh's quadrics, written with the faces (in the first pass's cell order) and
+//!    positions as the first pieces, or the cell pieces of the streaming split taken as they
+//!    are ([`decimate_from_pieces`]);
 //! 2. per pass: the cells cut from the current vertices' positions (read from the pieces) and
-//!    written with the pass's parameters; then the rounds of `tasks.rs` — split, gather,
+//!    written with the pass's parameters (the first pass's given, or read off the cell
+//!    pieces); then the rounds of `tasks.rs` — split, gather,
 //!    candidates, the exact cut, collapse, assemble — the next state being the faces across
 //!    cells, the blocks' results and the cells' pinned records;
 //! 3. the last block from the last state, as one cell;

@@ -35,7 +35,12 @@
 //! refused with [`SplitError::NotLocal`] rather than made differently: a component that cannot
 //! be oriented (the builder cuts the edge its walk meets first) and **detaching multi-edges**
 //! (a loop over the whole mesh until none is left). A refusal of any cell voids every cell's
-//! piece: the caller builds such a scan in one process.
+//! piece: the caller builds such a scan from the whole mesh's first pieces.
+//!
+//! The rounds run as tasks of a runner (`rounds.rs`), each writing a small file the driver
+//! reads back, so that a scheduler runs them where it runs the passes; the first pass then
+//! takes the split's cells as they are ([`first_cells`] draws the same cells from a mesh in
+//! memory, for the paths that make their first pieces from the whole mesh).
 
 mod build;
 mod cell;
