@@ -61,8 +61,8 @@ pub use cell::{Copies, ExtraFan, PieceCounts, cell_fans, cell_piece, cell_pieces
 pub use files::{CellEntry, Cut, Manifest};
 pub(crate) use first::{InputPoints, first_cells};
 pub use orient::{CellPatches, Flips, cell_patches, orient};
-pub(crate) use rounds::run as run_cell_task;
 pub use rounds::{fans_task, patches_task, piece_task};
+pub(crate) use rounds::{read_any_round, run as run_cell_task};
 pub use split::{SplitOptions, split_into_cells};
 
 use super::taskfile::BlockFileError;

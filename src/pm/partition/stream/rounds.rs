@@ -361,3 +361,97 @@ pub(crate) fn run(task: &Task) -> Option<Result<TaskOutput, BlockFileError>> {
     };
     Some(done.map_err(|e| task_error(cells, e)))
 }
+
+/// Reads the round file `path` with every reader of round files, for the fuzz target.
+pub(crate) fn read_any_round(path: &Path) {
+    if let Ok(mut f) = open_round(path) {
+        let _ = refusal_in(&mut f);
+        let _ = CellPatches::read(&mut f);
+        for k in 0..4 {
+            let _ = Flips::read_cell(&mut f, k);
+        }
+        let _ = read_fans(&mut f);
+        let _ = Copies::read(&mut f);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn damaged_round_files_are_errors_naming_the_file_and_the_byte() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("round");
+        let check = |sections: &[Section], needle: &str| {
+            write_round(&path, sections).unwrap();
+            let mut f = open_round(&path).unwrap();
+            let errors = [
+                CellPatches::read(&mut f).err(),
+                Flips::read_cell(&mut f, 0).err(),
+                read_fans(&mut f).err(),
+                Copies::read(&mut f).err(),
+            ];
+            let e = errors
+                .into_iter()
+                .flatten()
+                .find(|e| e.what.contains(needle));
+            let e = e.unwrap_or_else(|| panic!("no error with {needle:?}"));
+            assert_eq!(e.path, path);
+            // Past the header and the table: the byte of the section or of its record.
+            assert!(e.offset >= 24 + 32 * sections.len() as u64, "{e}");
+        };
+        check(
+            &[
+                words_section(PATCHES, 0, &[1, 2, 3, 2]),
+                words_section(SHARED, 0, &[]),
+            ],
+            "parity",
+        );
+        check(
+            &[
+                words_section(PATCHES, 0, &[]),
+                words_section(SHARED, 0, &[9, 0, 0]),
+            ],
+            "no patch",
+        );
+        check(&[words_section(FLIPS, 0, &[0, 1, 7])], "flip other than");
+        check(&[words_section(FANS, 0, &[3, 5, 4, 6])], "out of order");
+        check(&[words_section(FANS, 0, &[4, 5, 6])], "past the section");
+        check(&[words_section(COPIES, 0, &[10, 3, 11])], "copy past");
+        check(&[words_section(COPIES, 0, &[])], "no vertex count");
+        let mut partial = words_section(FANS, 0, &[1, 2]);
+        partial.bytes.pop();
+        check(&[partial], "partial word");
+    }
+
+    #[test]
+    fn a_refusal_reads_back_as_it_was_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("round");
+        let cell = Path::new("cells/c3.face");
+        let what = "a component cannot be oriented";
+        write_round(&path, &[refusal(cell, 96, GlobalRepair::Orientation, what)]).unwrap();
+        let e = refusal_in(&mut open_round(&path).unwrap())
+            .unwrap()
+            .unwrap();
+        let SplitError::NotLocal {
+            path: p,
+            offset,
+            repair,
+            what: w,
+        } = e
+        else {
+            panic!("{e}")
+        };
+        assert_eq!(
+            (p.as_path(), offset, repair, w.as_str()),
+            (cell, 96, GlobalRepair::Orientation, what)
+        );
+        let mut damaged = refusal(cell, 96, GlobalRepair::MultiEdge, what);
+        damaged.bytes.truncate(20);
+        write_round(&path, &[damaged]).unwrap();
+        let e = refusal_in(&mut open_round(&path).unwrap()).unwrap_err();
+        assert!(e.what.contains("damaged refusal"), "{e}");
+    }
+}
