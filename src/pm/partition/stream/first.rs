@@ -29,7 +29,17 @@ pub(crate) struct InputPoints<'a> {
 /// The first pass's cells of the `n_vertices` vertices of the repaired mesh of `input`, in
 /// blocks of `max_block`: the cells [`super::split_into_cells`] gives the same input.
 pub(crate) fn first_cells(input: &InputPoints, n_vertices: usize, max_block: usize) -> Cells {
-    let tree = input_tree(input.positions, input.polygons, max_block);
+    first_cells_sampled(input, n_vertices, max_block, SAMPLE_SIZE)
+}
+
+/// [`first_cells`] from a sample of `sample_size` points, as a split told so cuts them.
+pub(super) fn first_cells_sampled(
+    input: &InputPoints,
+    n_vertices: usize,
+    max_block: usize,
+    sample_size: usize,
+) -> Cells {
+    let tree = input_tree(input.positions, input.polygons, max_block, sample_size);
     let source = |v: usize| input.source.map_or(v as u32, |s| s[v]);
     let cell_of = (0..n_vertices)
         .map(|v| {
@@ -43,10 +53,11 @@ pub(crate) fn first_cells(input: &InputPoints, n_vertices: usize, max_block: usi
     }
 }
 
-/// The split's cut tree of the input `positions` of a mesh with `polygons` polygons.
-fn input_tree(positions: &[DVec3], polygons: u64, max_block: usize) -> CutTree {
+/// The split's cut tree of the input `positions` of a mesh with `polygons` polygons, from a
+/// sample of `sample_size` points.
+fn input_tree(positions: &[DVec3], polygons: u64, max_block: usize, sample_size: usize) -> CutTree {
     let n = positions.len() as u64;
-    let mut sample = Reservoir::new(SAMPLE_SIZE, n, polygons);
+    let mut sample = Reservoir::new(sample_size, n, polygons);
     for (i, &p) in positions.iter().enumerate() {
         sample.offer(i as u32, p);
     }

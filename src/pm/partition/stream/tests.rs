@@ -595,3 +595,30 @@ fn a_refusal_comes_back_from_the_rounds_as_the_cell_found_it() {
     assert_eq!(refused(), refused());
     assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0, "pieces left");
 }
+
+#[test]
+fn the_first_cells_drawn_in_memory_are_the_cells_the_split_writes_from_a_partial_sample() {
+    // A sample of a quarter of the vertices: the reservoir replaces points, so its draws, seeded
+    // from the counts, must be the same in memory as in the split.
+    let m = scan_with_fans_and_books(40, 30);
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("scan.ply");
+    write_ply(&input, &m, PlyEncoding::Ascii);
+    let options = sampled(100, m.n_vertices() / 4);
+    let manifest = split_into_cells(&input, dir.path(), &options).unwrap();
+    assert!(manifest.sample.1 < manifest.input_vertices);
+    let labels = std::fs::read(dir.path().join("cell_of.u32")).unwrap();
+    let points = super::first::InputPoints {
+        positions: &m.positions,
+        polygons: m.n_faces() as u64,
+        source: None,
+    };
+    let cells =
+        super::first::first_cells_sampled(&points, m.n_vertices(), 100, options.sample_size);
+    assert_eq!(cells.n_cells, manifest.cells.len());
+    let written: Vec<u32> = labels
+        .chunks_exact(4)
+        .map(|b| u32::from_le_bytes(b.try_into().unwrap()))
+        .collect();
+    assert_eq!(cells.cell_of, written);
+}
