@@ -11,7 +11,7 @@ use meshpyr::io::read_mesh;
 use meshpyr::mesh::SlotIndex;
 use meshpyr::mesh::{Mesh, PolygonMesh};
 use meshpyr::pm::blocks::{BlockFileError, SharedRunner, Task, TaskOutput, TaskRunner, run_task};
-use meshpyr::pm::{MeshRecords, PmOptions, ProgressiveMesh};
+use meshpyr::pm::{FirstPieces, MeshRecords, PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
 use meshpyr::pyramid::{DetailPyramid, DetailSource, Filter, LevelGains, Pyramid, PyramidOptions};
 use meshpyr::relax::{MeanCurvatureStep, Relaxation, SecondDifference};
@@ -156,6 +156,81 @@ fn passes_run_through_task_files_write_the_same_pyr_bytes_as_passes_in_memory() 
     }
 }
 
+/// The hierarchy of `poly`, read from `path`, built in blocks of `block` through files, and
+/// how its first pieces were made.
+fn built_from_file(poly: &PolygonMesh, path: &std::path::Path, block: usize) -> (Vec<u8>, String) {
+    let options = PmOptions {
+        block_scratch: Some(path.with_extension("blocks")),
+        block_input: Some(path.to_path_buf()),
+        ..blocks(block)
+    };
+    let (pm, _) = ProgressiveMesh::from_polygons(poly, &options, &NoProgress).unwrap();
+    let first = pm
+        .first_pieces()
+        .expect("said on the file path")
+        .to_string();
+    let bytes = pyr_bytes(poly, options);
+    (bytes, first)
+}
+
+#[test]
+fn a_ply_split_into_cells_and_an_obj_of_the_same_mesh_write_the_pyr_bytes_of_the_blocks_in_memory()
+{
+    let dir = tempfile::tempdir().unwrap();
+    for (name, block) in [("elephant_holes.ply", 400), ("spider_assimp.ply", 64)] {
+        let poly = load(name);
+        let in_memory = pyr_bytes(&poly, blocks(block));
+        let ply = dir.path().join("scan.ply");
+        let obj = dir.path().join("scan.obj");
+        meshpyr::io::write_mesh(&ply, &poly).unwrap();
+        meshpyr::io::write_mesh(&obj, &poly).unwrap();
+        let (from_cells, first) = built_from_file(&poly, &ply, block);
+        assert!(
+            first.contains("split from the file into cells"),
+            "{name}: {first}"
+        );
+        assert!(from_cells == in_memory, "{name}: the cells' first pieces");
+        let (from_whole, first) = built_from_file(&poly, &obj, block);
+        assert!(first.contains("PLY files only"), "{name}: {first}");
+        assert!(from_whole == in_memory, "{name}: the OBJ's whole mesh");
+    }
+}
+
+#[test]
+fn a_scan_whose_repair_the_cells_refuse_is_built_from_the_whole_mesh_with_the_same_bytes() {
+    // A Möbius band: the builder cuts the edge its walk over the whole component meets first,
+    // which no cell can decide alone.
+    let n = 400u32;
+    let positions = (0..2 * n)
+        .map(|i| {
+            let (k, side) = ((i % n) as f64, (i / n) as f64 - 0.5);
+            let a = k / n as f64 * std::f64::consts::TAU;
+            let r = 3.0 + side * (a / 2.0).cos();
+            DVec3::new(r * a.cos(), r * a.sin(), side * (a / 2.0).sin())
+        })
+        .collect();
+    let mut poly = PolygonMesh::from_triangles(positions, &[]);
+    for k in 0..n {
+        let (a, b) = (k, n + k);
+        let (c, d) = if k + 1 == n {
+            (n, 0)
+        } else {
+            (k + 1, n + k + 1)
+        };
+        poly.push_face(&[a, c, d]);
+        poly.push_face(&[a, d, b]);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let ply = dir.path().join("mobius.ply");
+    meshpyr::io::write_mesh(&ply, &poly).unwrap();
+    let (bytes, first) = built_from_file(&poly, &ply, 64);
+    assert!(
+        first.contains("whole mesh") && first.contains("cannot be oriented"),
+        "{first}"
+    );
+    assert!(bytes == pyr_bytes(&poly, blocks(64)));
+}
+
 /// Runs each round's tasks last first, one at a time, each twice (a retried task), and checks
 /// that the second run wrote the same bytes as the first.
 struct ReversedTwice;
@@ -201,6 +276,9 @@ fn written_files(task: &Task) -> Vec<std::path::PathBuf> {
             vec![result_out.clone()]
         }
         Task::Assemble { sequence_out, .. } => vec![sequence_out.clone()],
+        Task::CellPatches { patches_out, .. } => vec![patches_out.clone()],
+        Task::CellFans { fans_out, .. } => vec![fans_out.clone()],
+        Task::CellPiece { piece_out, .. } => vec![piece_out.clone()],
     }
 }
 
@@ -213,8 +291,20 @@ fn any_order_of_a_rounds_tasks_and_retried_tasks_give_the_same_pyr_bytes() {
         block_runner: Some(SharedRunner(Arc::new(ReversedTwice))),
         ..blocks(300)
     };
-    assert!(pyr_bytes(&poly, options) == in_memory);
+    assert!(pyr_bytes(&poly, options.clone()) == in_memory);
     std::fs::remove_dir(scratch("reversed")).unwrap();
+    // The cell tasks' rounds too, from the file split into cells.
+    let dir = tempfile::tempdir().unwrap();
+    let ply = dir.path().join("scan.ply");
+    meshpyr::io::write_mesh(&ply, &poly).unwrap();
+    let from_cells = PmOptions {
+        block_scratch: Some(dir.path().join("blocks")),
+        block_input: Some(ply),
+        ..options
+    };
+    let (pm, _) = ProgressiveMesh::from_polygons(&poly, &from_cells, &NoProgress).unwrap();
+    assert_eq!(pm.first_pieces(), Some(&FirstPieces::Cells));
+    assert!(pyr_bytes(&poly, from_cells) == in_memory);
 }
 
 #[test]

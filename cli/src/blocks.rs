@@ -105,6 +105,7 @@ impl PathOptions {
             block_vertices: chosen.block_vertices(),
             block_scratch: scratch,
             block_runner: self.runner.clone(),
+            block_input: Some(path.to_path_buf()),
             ..PmOptions::default()
         })
     }

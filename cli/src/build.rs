@@ -81,6 +81,7 @@ pub(crate) fn run(args: BuildArgs, global: &Global) -> anyhow::Result<()> {
             .with_context(|| format!("cannot encode {}", args.input.display()))?
     };
     let took = start.elapsed().as_secs_f64();
+    super::input::say_first_pieces(&args.input.display().to_string(), &pm, global);
     io::write_atomic_with(&args.output, |w| encoded.write_to(w))?;
     let sizes = encoded.sizes;
     let n = n_input.max(1) as f64;

@@ -353,6 +353,7 @@ fn build_pyramid_with(
     let scan = Pyramid::build_staged(input, options, &progress, hierarchy_built)
         .with_context(|| format!("cannot build the detail pyramid of {name}"))?;
     bar.finish_and_clear();
+    say_first_pieces(name, &scan.pm, global);
     let p = &scan.pyramid;
     global.say(format_args!(
         "{name}: {} vertices, levels {}..={}, {} details ({} relaxation) in {:.2} s{}",
@@ -365,6 +366,14 @@ fn build_pyramid_with(
         extra_vertices_note(scan.input.n_vertices(), p.n_vertices()),
     ));
     Ok(scan)
+}
+
+/// Says how a partitioned build through files made its first pieces (nothing for another
+/// build).
+pub(crate) fn say_first_pieces(name: &str, pm: &ProgressiveMesh, global: &Global) {
+    if let Some(first) = pm.first_pieces() {
+        global.say(format_args!("{name}: {first}"));
+    }
 }
 
 /// Progress shown in two places.

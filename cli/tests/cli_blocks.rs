@@ -114,9 +114,16 @@ fn blocks_run_through_task_files_write_the_same_pyr_file_and_leave_no_files() {
     let folder = scratch("blocks-files", "tasks");
     ok(&on_bunny("build", &memory, &["--block-vertices", "2000"]));
     let args = ["--block-vertices", "2000", "--block-files", path(&folder)];
-    ok(&on_bunny("build", &files, &args));
+    let said = ok(&on_bunny("build", &files, &args));
+    assert!(
+        said.contains("bunny.ply: first pieces split from the file into cells"),
+        "{said}"
+    );
     assert!(std::fs::read(&memory).unwrap() == std::fs::read(&files).unwrap());
     assert_eq!(std::fs::read_dir(&folder).unwrap().count(), 0);
+    let quiet = [&args[..], &["-q"]].concat();
+    let said = ok(&on_bunny("build", &files, &quiet));
+    assert!(!said.contains("first pieces"), "{said}");
 }
 
 /// Runs each round's tasks in reverse order, as another scheduler might, and counts them.

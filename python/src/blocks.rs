@@ -103,6 +103,44 @@ fn describe<'py>(py: Python<'py>, task: &Task) -> PyResult<Bound<'py, PyDict>> {
             d.set_item("input", path(input))?;
             d.set_item("result_out", path(result_out))?;
         }
+        Task::CellPatches {
+            cells,
+            cell,
+            patches_out,
+        } => {
+            d.set_item("kind", "cell_patches")?;
+            d.set_item("cells", path(cells))?;
+            d.set_item("cell", cell)?;
+            d.set_item("patches_out", path(patches_out))?;
+        }
+        Task::CellFans {
+            cells,
+            cell,
+            flips,
+            fans_out,
+        } => {
+            d.set_item("kind", "cell_fans")?;
+            d.set_item("cells", path(cells))?;
+            d.set_item("cell", cell)?;
+            d.set_item("flips", path(flips))?;
+            d.set_item("fans_out", path(fans_out))?;
+        }
+        Task::CellPiece {
+            cells,
+            cell,
+            flips,
+            copies,
+            boundary_weight,
+            piece_out,
+        } => {
+            d.set_item("kind", "cell_piece")?;
+            d.set_item("cells", path(cells))?;
+            d.set_item("cell", cell)?;
+            d.set_item("flips", path(flips))?;
+            d.set_item("copies", path(copies))?;
+            d.set_item("boundary_weight", boundary_weight)?;
+            d.set_item("piece_out", path(piece_out))?;
+        }
     }
     d.set_item("memory", memory_estimate(task))?;
     Ok(d)
@@ -158,6 +196,25 @@ fn task_of(d: &Bound<'_, PyDict>) -> PyResult<Task> {
             pass: path("pass")?,
             input: path("input")?,
             result_out: path("result_out")?,
+        },
+        "cell_patches" => Task::CellPatches {
+            cells: path("cells")?,
+            cell: get("cell")?.extract()?,
+            patches_out: path("patches_out")?,
+        },
+        "cell_fans" => Task::CellFans {
+            cells: path("cells")?,
+            cell: get("cell")?.extract()?,
+            flips: path("flips")?,
+            fans_out: path("fans_out")?,
+        },
+        "cell_piece" => Task::CellPiece {
+            cells: path("cells")?,
+            cell: get("cell")?.extract()?,
+            flips: path("flips")?,
+            copies: path("copies")?,
+            boundary_weight: get("boundary_weight")?.extract()?,
+            piece_out: path("piece_out")?,
         },
         other => return Err(value_error(format!("unknown task kind {other:?}"))),
     })

@@ -284,6 +284,12 @@ impl FlatMesh {
         self.triangles_in(0..self.corners.len() / 3)
     }
 
+    /// Triangle `t`'s vertices, from its first corner (dead or live).
+    pub(crate) fn triangle(&self, t: usize) -> [u32; 3] {
+        let c = &self.corners[3 * t..3 * t + 3];
+        [c[0].vertex, c[1].vertex, c[2].vertex]
+    }
+
     /// The live triangles among triangles `range`, in triangle order.
     pub(crate) fn triangles_in(&self, range: std::ops::Range<usize>) -> Vec<[u32; 3]> {
         let range = 3 * range.start..3 * range.end.min(self.corners.len() / 3);

@@ -42,8 +42,8 @@ pub mod blocks {
     };
     pub use super::partition::stream::{
         CellEntry, CellPatches, Copies, Cut, ExtraFan, Flips, GlobalRepair, Manifest, PieceCounts,
-        SplitError, SplitOptions, cell_fans, cell_patches, cell_piece, cell_pieces,
-        hierarchy_from_cells, number_copies, orient, split_into_cells,
+        SplitError, SplitOptions, cell_fans, cell_patches, cell_piece, cell_pieces, fans_task,
+        hierarchy_from_cells, number_copies, orient, patches_task, piece_task, split_into_cells,
     };
     pub use super::partition::task_memory::{block_vertices_for, memory_estimate};
     pub use super::partition::taskfile::BlockFileError;
@@ -75,7 +75,9 @@ pub use pins::{Pins, PinsError};
 pub use progressive::SplitReplay;
 pub use progressive::keeps_texture_seams;
 pub(crate) use progressive::triangles_of;
-pub use progressive::{MIN_BLOCK_VERTICES, PmCursor, PmOptions, PmParts, ProgressiveMesh};
+pub use progressive::{
+    FirstPieces, MIN_BLOCK_VERTICES, PmCursor, PmOptions, PmParts, ProgressiveMesh,
+};
 pub use progressive::{PmError, VertexSplit};
 pub use replay::FlatReplay;
 pub(crate) use replay::{FaceBuckets, canonical_sorted};

@@ -267,6 +267,7 @@ impl ProgressiveMesh {
             stop: None,
             keeps_seams: false,
             pins: None,
+            first_pieces: None,
         })
     }
 }

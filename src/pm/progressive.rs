@@ -3,6 +3,10 @@
 
 use super::collapse::{half_edge_collapse, vertex_split};
 use super::decimate::{Collapse, DecimateParams, FlatMesh, Stop, decimate_with_seams};
+use super::partition::stream::{
+    GlobalRepair, SplitError, assemble_from_cells, decimate_from_cells,
+};
+use super::partition::{InputPoints, first_cells};
 use super::pins::{Pins, PinsError};
 use super::seams::Seams;
 use crate::mesh::{BoundingBox, CornerTable, Mesh, PolygonMesh, SlotIndex, SourceMap, VertexId};
@@ -55,6 +59,12 @@ pub struct PmOptions {
     /// With `block_scratch`: what runs each round's tasks (`None`: this process's threads,
     /// [`crate::pm::blocks::RayonRunner`]). Any runner gives the same hierarchy.
     pub block_runner: Option<super::blocks::SharedRunner>,
+    /// With `block_scratch`: the file the input was read from. An uncompressed PLY file is
+    /// then split into cells in one pass and the cell tasks make the first pieces, instead of
+    /// the whole working mesh (`docs/partitioned.md`, "Splitting a scan into cell files in one
+    /// pass"); the hierarchy is the same bit for bit, and [`ProgressiveMesh::first_pieces`]
+    /// says which way it went. Default `None`: from the whole mesh.
+    pub block_input: Option<std::path::PathBuf>,
     /// Weight λ of the boundary constraint planes (each boundary edge adds a plane through it,
     /// perpendicular to its face, scaled by λ·|e|²) while at least 5 % of the input's faces are
     /// left; at the coarse end (1 %) they count 0.3 λ, so that hole rims give up the vertices the
@@ -80,6 +90,7 @@ impl Default for PmOptions {
             block_vertices: None,
             block_scratch: None,
             block_runner: None,
+            block_input: None,
             boundary_weight: 10.0,
             uv_weight: 0.25,
         }
@@ -159,6 +170,30 @@ pub struct ProgressiveMesh {
     /// Per pass of a partitioned build, the vertices it pinned (`super::pins`); `None` for a
     /// hierarchy built in one piece or one whose passes pinned nothing.
     pins: Option<Pins>,
+    /// How a partitioned build through files made its first pieces; `None` otherwise.
+    first_pieces: Option<FirstPieces>,
+}
+
+/// How a partitioned build through files ([`PmOptions::block_scratch`]) made the pieces its
+/// first pass starts from; either way gives the same hierarchy.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum FirstPieces {
+    /// The input file split into cells in one pass, one cell task per cell
+    /// ([`PmOptions::block_input`]).
+    Cells,
+    /// The whole working mesh in memory, and why not the cells.
+    WholeMesh(String),
+}
+
+impl std::fmt::Display for FirstPieces {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            FirstPieces::Cells => write!(f, "first pieces split from the file into cells"),
+            FirstPieces::WholeMesh(why) => {
+                write!(f, "first pieces made from the whole mesh ({why})")
+            }
+        }
+    }
 }
 
 /// A corner table's vertex list as triangles, reusing its allocation when its capacity is a
@@ -184,17 +219,24 @@ impl ProgressiveMesh {
         progress: &dyn Progress,
     ) -> Result<ProgressiveMesh, PmError> {
         let params = decimate_params(opts, mesh.bbox_diagonal())?;
-        let decimated = decimate_flat(FlatMesh::from_mesh(mesh), &params, opts, None, progress)?;
         let n_slots = mesh.vertices().map(|v| v.slot() + 1).max().unwrap_or(0);
+        let mut positions = vec![DVec3::ZERO; n_slots];
+        for v in mesh.vertices() {
+            positions[v.slot()] = mesh.position(v);
+        }
+        // The mesh is its own input: its slots are the input's vertices.
+        let points = InputPoints {
+            positions: &positions,
+            polygons: mesh.n_faces() as u64,
+            source: None,
+        };
+        let flat = FlatMesh::from_mesh(mesh);
+        let decimated = decimate_flat(flat, &params, opts, (None, &points), progress)?;
         let isolated: Vec<u32> = mesh
             .vertices()
             .filter(|&v| mesh.is_isolated(v))
             .map(|v| v.slot() as u32)
             .collect();
-        let mut positions = vec![DVec3::ZERO; n_slots];
-        for v in mesh.vertices() {
-            positions[v.slot()] = mesh.position(v);
-        }
         let faces = |mesh_to_pm: &[u32]| {
             mesh.faces()
                 .map(|f| mesh.face_vertices(f).map(|v| mesh_to_pm[v.slot()]))
@@ -219,9 +261,32 @@ impl ProgressiveMesh {
         opts: &PmOptions,
         progress: &dyn Progress,
     ) -> Result<(ProgressiveMesh, SourceMap), PmError> {
+        let why = match cells_input(opts) {
+            Err(why) => why,
+            Ok(path) => match decimate_from_cells(path, opts, progress) {
+                Ok(passed) => {
+                    let (mut pm, source) = assemble_from_cells(input, passed)?;
+                    pm.first_pieces = Some(FirstPieces::Cells);
+                    return Ok((pm, source));
+                }
+                Err(SplitError::Build(e)) => return Err(e),
+                Err(SplitError::File(e)) => return Err(e.into()),
+                Err(SplitError::NotLocal { repair, .. }) => not_local(repair),
+                Err(e @ SplitError::Read(_)) => e.to_string(),
+            },
+        };
         let repaired = CornerTable::from_polygons(input)?;
-        let pm = Self::from_corners(input, repaired.corners, &repaired.source, opts, progress)?;
+        let mut pm = Self::from_corners(input, repaired.corners, &repaired.source, opts, progress)?;
+        if opts.block_vertices.is_some() && opts.block_scratch.is_some() {
+            pm.first_pieces = Some(FirstPieces::WholeMesh(why));
+        }
         Ok((pm, repaired.source))
+    }
+
+    /// How a partitioned build through files made its first pieces (`None` for any other
+    /// build, and for a hierarchy read from a file).
+    pub fn first_pieces(&self) -> Option<&FirstPieces> {
+        self.first_pieces.as_ref()
     }
 
     /// [`Self::from_polygons`] on the builder's corner table of `input`.
@@ -272,7 +337,12 @@ impl ProgressiveMesh {
             mut corner_vertex, ..
         } = corners;
         let keeps_seams = seams.is_some();
-        let decimated = decimate_flat(flat, &params, opts, seams, progress)?;
+        let points = InputPoints {
+            positions: &input.positions,
+            polygons: input.n_faces() as u64,
+            source: Some(source),
+        };
+        let decimated = decimate_flat(flat, &params, opts, (seams, &points), progress)?;
         let faces = move |mesh_to_pm: &[u32]| {
             for v in &mut corner_vertex {
                 *v = mesh_to_pm[*v as usize];
@@ -366,6 +436,7 @@ impl ProgressiveMesh {
             stop: Some(stop),
             keeps_seams: false,
             pins,
+            first_pieces: None,
         })
     }
 
@@ -642,6 +713,32 @@ impl PmCursor<'_> {
     }
 }
 
+/// The input file a build from cells splits (`opts` asks for blocks through files and names
+/// an uncompressed PLY file), or why there is none.
+fn cells_input(opts: &PmOptions) -> Result<&std::path::Path, String> {
+    let (Some(_), Some(_)) = (opts.block_vertices, &opts.block_scratch) else {
+        return Err("not built in blocks through files".into());
+    };
+    let Some(path) = &opts.block_input else {
+        return Err("no input file given".into());
+    };
+    let ply = crate::io::MeshFormat::from_path(path).is_ok_and(|f| f == crate::io::MeshFormat::Ply);
+    match (ply, crate::io::is_gzip(path)) {
+        (true, false) => Ok(path),
+        (true, true) => Err("the file is compressed; the split reads an uncompressed PLY".into()),
+        (false, _) => Err("the split reads PLY files only".into()),
+    }
+}
+
+/// Why a build from cells gave way to the whole mesh when a cell refused `repair`.
+fn not_local(repair: GlobalRepair) -> String {
+    let what = match repair {
+        GlobalRepair::Orientation => "a component that cannot be oriented",
+        GlobalRepair::MultiEdge => "a multi-edge to detach",
+    };
+    format!("the scan has {what}, a repair the cells cannot make alone")
+}
+
 /// What a decimation of the whole mesh leaves: its collapses in order (vertex slots), the
 /// surviving vertices in slot order, the base level's face count, why it stopped, and for a
 /// partitioned build its passes in order: how many of the collapses each made and the vertex
@@ -665,25 +762,32 @@ fn pins_in_split_order(passes: Vec<(usize, Vec<u32>)>, mesh_to_pm: &[u32]) -> Op
     (!pins.is_empty()).then_some(pins)
 }
 
-/// Decimates the working mesh in one piece, or in blocks when `opts` asks for them.
+/// Decimates the working mesh in one piece, or in blocks when `opts` asks for them, the first
+/// pass's cells cut from `input` as the streaming split cuts them.
 fn decimate_flat(
     flat: FlatMesh,
     params: &DecimateParams,
     opts: &PmOptions,
-    mut seams: Option<Seams>,
+    (mut seams, input): (Option<Seams>, &InputPoints),
     progress: &dyn Progress,
 ) -> Result<Decimated, PmError> {
     if let Some(max) = opts.block_vertices {
+        let first = first_cells(input, flat.n_vertex_slots(), max);
         if let Some(scratch) = &opts.block_scratch {
             let runner = opts.block_runner.as_ref().map_or(
                 &super::blocks::RayonRunner as &dyn super::blocks::TaskRunner,
                 |r| &*r.0,
             );
             return super::partition::decimate_through_files(
-                flat, params, max, scratch, runner, progress,
+                flat,
+                params,
+                (max, first),
+                scratch,
+                runner,
+                progress,
             );
         }
-        return super::partition::decimate_in_blocks(flat, params, max, seams, progress);
+        return super::partition::decimate_in_blocks(flat, params, max, (seams, first), progress);
     }
     let (collapses, coarse, outcome) = decimate_with_seams(flat, params, seams.as_mut(), progress);
     Ok(Decimated {

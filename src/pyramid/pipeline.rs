@@ -7,7 +7,7 @@ use super::{DetailPyramid, MoveHandle, PyramidError, Spectrum, StoredDetails};
 use crate::fairing::{DenoiseOptions, denoise};
 use crate::format::{self, FormatError, PyramidOptions, SizeReport};
 use crate::io::IoError;
-use crate::mesh::{CornerTable, Mesh, PolygonMesh, SourceMap};
+use crate::mesh::{Mesh, PolygonMesh, SourceMap};
 use crate::pm::ProgressiveMesh;
 use crate::progress::{NoProgress, Progress};
 use crate::pyramid::Filter;
@@ -138,15 +138,9 @@ impl Pyramid {
         hierarchy_built: &mut dyn FnMut(&ProgressiveMesh),
     ) -> Result<Pyramid, PyramidError> {
         input.check_surface()?;
-        let repaired = CornerTable::from_polygons(&input)?;
-        let source = repaired.source;
-        let pm = ProgressiveMesh::from_corners(
-            &input,
-            repaired.corners,
-            &source,
-            &options.pm,
-            &|x: f64| progress.update(0.5 * x),
-        )?;
+        let (pm, source) = ProgressiveMesh::from_polygons(&input, &options.pm, &|x: f64| {
+            progress.update(0.5 * x)
+        })?;
         hierarchy_built(&pm);
         let (_, pyramid) = analyze_with(&options.relaxation, &pm, &|x: f64| {
             progress.update(0.5 + 0.5 * x)

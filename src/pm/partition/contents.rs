@@ -769,6 +769,7 @@ pub(crate) fn read_any(bytes: &[u8]) {
         let _ = read_collapses(&path, u32::MAX as u64);
         let _ = read_stop(&path);
         let _ = super::stream::Manifest::read(&path);
+        super::stream::read_any_round(&path);
         if let Ok(info) = read_pass_info(&path)
             && let Ok(labels) = read_labels(&path, &info)
         {

@@ -11,7 +11,11 @@
 //! 1. the whole mesh's quadrics, once (a vertex's quadric sums its whole star's planes);
 //! 2. while the mesh has more vertices than a block holds, one pass:
 //!    - its vertices cut into cells of at most the block size along the axes of the pass's
-//!      frame, the frames taking turns (`cells.rs`);
+//!      frame, the frames taking turns (`cells.rs`); the first pass's cells are the streaming
+//!      split's, cut at a sample's medians and drawn alike from the input in memory
+//!      (`stream/first.rs`), its faces in the order of the split's pieces, so that every path
+//!      (in memory, through files from the whole mesh or from the file's cells) makes the same
+//!      first pass;
 //!    - the faces sorted into the cells' blocks; a face across cells pins its vertices
 //!      (`split.rs`);
 //!    - every block collects its candidates, one cost cut is taken over all of them, every
@@ -59,24 +63,26 @@ use super::progressive::Decimated;
 use super::seams::Seams;
 use crate::progress::Progress;
 use block::{BlockResult, BlockSeams, BlockTask, VertexQuadric, decimate_block};
-use cells::FRAMES;
+use cells::{Cells, FRAMES};
 pub(crate) use contents::read_any;
 use glam::{DVec2, DVec3};
 use lockstep::Whole;
 use rayon::prelude::*;
+pub(crate) use stream::{InputPoints, first_cells};
 pub(crate) use through_files::decimate_through_files;
 
 /// Decimates `flat` in blocks of at most `max_block` vertices, keeping the texture seams of
-/// `seams` when there are any (see the module docs).
+/// `seams` when there are any (see the module docs). The first pass takes the cells `first`
+/// (the streaming split's, [`stream::first_cells`]).
 pub(crate) fn decimate_in_blocks(
     flat: FlatMesh,
     params: &DecimateParams,
     max_block: usize,
-    seams: Option<Seams>,
+    (seams, first): (Option<Seams>, Cells),
     progress: &dyn Progress,
 ) -> Result<Decimated, PmError> {
     let merge = order::merge_by_cost;
-    decimate_in_blocks_merged(flat, params, max_block, seams, progress, merge)
+    decimate_in_blocks_merged(flat, params, max_block, (seams, first), progress, merge)
 }
 
 /// [`decimate_in_blocks`] with each pass's collapses interleaved by `merge` (given the blocks'
@@ -86,7 +92,7 @@ fn decimate_in_blocks_merged(
     flat: FlatMesh,
     params: &DecimateParams,
     max_block: usize,
-    seams: Option<Seams>,
+    (seams, first): (Option<Seams>, Cells),
     progress: &dyn Progress,
     merge: fn(Vec<Vec<Collapse>>) -> Vec<Collapse>,
 ) -> Result<Decimated, PmError> {
@@ -94,6 +100,8 @@ fn decimate_in_blocks_merged(
     let positions = flat.positions();
     let mut faces = flat.triangles();
     let mut wedges = WholeWedges::of(seams, &flat);
+    in_cell_order(&mut faces, &mut wedges.faces, &first.cell_of);
+    let mut first = Some(first);
     let mut vertices = flat.survivors();
     drop(flat);
     let mut quadrics: Vec<VertexQuadric> = (0..positions.len())
@@ -121,7 +129,10 @@ fn decimate_in_blocks_merged(
     {
         let frame = &FRAMES[pass % FRAMES.len()];
         pass += 1;
-        let cells = cells::split_cells(&positions, vertices, max_block, frame);
+        let cells = match first.take() {
+            Some(cells) => cells,
+            None => cells::split_cells(&positions, vertices, max_block, frame),
+        };
         let split = split::split_faces(&faces, &wedges.faces, &cells.cell_of, cells.n_cells);
         drop(cells);
         let mut block_wedges = split.inside_wedges.into_iter();
@@ -183,6 +194,24 @@ fn pinned_of(pinned: &[bool]) -> Vec<u32> {
     (0..pinned.len() as u32)
         .filter(|&v| pinned[v as usize])
         .collect()
+}
+
+/// Puts `faces` (and their corners' `wedges`, face for face, when there are any) in the order
+/// of the first pass's pieces: by the cell `cell_of` gives their first vertex, keeping their
+/// order within a cell. The cell tasks write each cell's piece so (a face goes to the cell of
+/// its first vertex, in triangle order), and the order of the faces is what breaks the ties
+/// between a block's candidates, so every path's first pass sees the same blocks.
+pub(crate) fn in_cell_order(
+    faces: &mut Vec<[u32; 3]>,
+    wedges: &mut Vec<[u32; 3]>,
+    cell_of: &[u32],
+) {
+    let mut order: Vec<u32> = (0..faces.len() as u32).collect();
+    order.sort_by_key(|&i| cell_of[faces[i as usize][0] as usize]);
+    *faces = order.iter().map(|&i| faces[i as usize]).collect();
+    if !wedges.is_empty() {
+        *wedges = order.iter().map(|&i| wedges[i as usize]).collect();
+    }
 }
 
 /// Takes a pass's results into the whole mesh: their quadrics into `quadrics`, their faces

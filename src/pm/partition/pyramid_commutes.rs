@@ -5,7 +5,7 @@
 //! interleaved by cost and once block by block (the last cell's first), and comparing every
 //! split's touched vertices and details, matched by the input vertex it makes.
 
-use super::{decimate_in_blocks_merged, order};
+use super::{InputPoints, decimate_in_blocks_merged, first_cells, order};
 use crate::mesh::{Mesh, SlotIndex};
 use crate::pm::decimate::{Collapse, FlatMesh};
 use crate::pm::progressive::decimate_params;
@@ -50,10 +50,16 @@ fn hierarchy(
 ) -> ProgressiveMesh {
     let params = decimate_params(&PmOptions::default(), mesh.bbox_diagonal()).unwrap();
     let flat = FlatMesh::from_mesh(mesh);
-    let decimated =
-        decimate_in_blocks_merged(flat, &params, block, None, &NoProgress, merge).unwrap();
     let positions = mesh.positions();
     let n = mesh.n_vertices();
+    let points = InputPoints {
+        positions: &positions,
+        polygons: mesh.n_faces() as u64,
+        source: None,
+    };
+    let first = first_cells(&points, n, block);
+    let decimated =
+        decimate_in_blocks_merged(flat, &params, block, (None, first), &NoProgress, merge).unwrap();
     let faces = |mesh_to_pm: &[u32]| {
         (mesh.faces())
             .map(|f| mesh.face_vertices(f).map(|v| mesh_to_pm[v.slot()]))

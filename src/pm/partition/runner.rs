@@ -82,6 +82,41 @@ pub enum Task {
         /// Where the sequence goes.
         sequence_out: PathBuf,
     },
+    /// [`crate::pm::blocks::patches_task`]: round 1 of the cell tasks.
+    CellPatches {
+        /// The streaming split's folder.
+        cells: PathBuf,
+        /// The cell.
+        cell: u32,
+        /// Where its patches (or its refusal) go.
+        patches_out: PathBuf,
+    },
+    /// [`crate::pm::blocks::fans_task`]: round 2 of the cell tasks.
+    CellFans {
+        /// The streaming split's folder.
+        cells: PathBuf,
+        /// The cell.
+        cell: u32,
+        /// The driver's flips file.
+        flips: PathBuf,
+        /// Where its extra fans (or its refusal) go.
+        fans_out: PathBuf,
+    },
+    /// [`crate::pm::blocks::piece_task`]: round 3 of the cell tasks.
+    CellPiece {
+        /// The streaming split's folder.
+        cells: PathBuf,
+        /// The cell.
+        cell: u32,
+        /// The driver's flips file.
+        flips: PathBuf,
+        /// The driver's copies file.
+        copies: PathBuf,
+        /// The weight of the boundary planes.
+        boundary_weight: f64,
+        /// Where its first piece (or its refusal) goes.
+        piece_out: PathBuf,
+    },
     /// [`tasks::finish`].
     Finish {
         /// The last pass's file.
@@ -148,6 +183,9 @@ pub fn run_task(task: &Task) -> Result<TaskOutput, BlockFileError> {
             input,
             result_out,
         } => tasks::finish(pass, input, result_out).map(|()| Written)?,
+        Task::CellPatches { .. } | Task::CellFans { .. } | Task::CellPiece { .. } => {
+            super::stream::run_cell_task(task).expect("a cell task")?
+        }
     })
 }
 

@@ -22,6 +22,10 @@ const DECIMATION_PER_BYTE: u64 = 5;
 /// assemble), per byte read: what was read, what it is sorted into, the bytes being written.
 const COPY_PER_BYTE: u64 = 3;
 
+/// A cell task per byte of its cell's files (32 B a record): the records, the half-edges and
+/// their mates, the quadrics and the encoded piece.
+const CELL_PER_BYTE: u64 = 6;
+
 /// A block input's bytes per vertex: a record (120 B), two faces (24 B) and a share of the
 /// pinned and boundary records.
 const INPUT_BYTES_PER_VERTEX: u64 = 150;
@@ -42,6 +46,15 @@ pub fn memory_estimate(task: &Task) -> u64 {
         // The costs read and the bins.
         Task::CostHistogram { costs, .. } => size(costs) + (8 << super::tasks::HISTOGRAM_BITS),
         Task::Assemble { results, .. } => COPY_PER_BYTE * sizes(results),
+        Task::CellPatches { cells, cell, .. } | Task::CellFans { cells, cell, .. } => {
+            CELL_PER_BYTE * cell_size(cells, *cell)
+        }
+        Task::CellPiece {
+            cells,
+            cell,
+            copies,
+            ..
+        } => CELL_PER_BYTE * cell_size(cells, *cell) + COPY_PER_BYTE * size(copies),
     };
     FIXED.saturating_add(data)
 }
@@ -57,6 +70,12 @@ pub fn block_vertices_for(memory: u64) -> usize {
 
 fn size(path: &Path) -> u64 {
     std::fs::metadata(path).map_or(0, |m| m.len())
+}
+
+/// The bytes of cell `cell`'s files in the split's folder `cells`.
+fn cell_size(cells: &Path, cell: u32) -> u64 {
+    let name = |ext: &str| cells.join(format!("c{cell}.{ext}"));
+    size(&name("vert")) + size(&name("face")) + size(&name("border"))
 }
 
 fn sizes(paths: &[PathBuf]) -> u64 {

@@ -51,11 +51,14 @@ pub(crate) enum Kind {
     /// What the streaming split of a scan wrote: counts, bounding boxes, the cut tree and the
     /// cells' files' sizes and checksums.
     Manifest = 8,
+    /// What a round of the cell tasks hands on: a cell's patches or extra fans, the driver's
+    /// flips or copies, a cell's refusal.
+    CellRound = 9,
 }
 
 impl Kind {
     /// Every kind of task file.
-    pub(crate) const ALL: [Kind; 8] = [
+    pub(crate) const ALL: [Kind; 9] = [
         Kind::Piece,
         Kind::Routed,
         Kind::Input,
@@ -64,6 +67,7 @@ impl Kind {
         Kind::Pass,
         Kind::Sequence,
         Kind::Manifest,
+        Kind::CellRound,
     ];
 
     fn from_code(code: u16) -> Option<Kind> {

@@ -5,9 +5,12 @@
 //! would.
 //!
 //! Steps:
-//! 1. the whole mesh's quadrics, written with the faces and positions as the first pieces;
+//! 1. the whole mesh's quadrics, written with the faces (in the first pass's cell order) and
+//!    positions as the first pieces, or the cell pieces of the streaming split taken as they
+//!    are ([`decimate_from_pieces`]);
 //! 2. per pass: the cells cut from the current vertices' positions (read from the pieces) and
-//!    written with the pass's parameters; then the rounds of `tasks.rs` — split, gather,
+//!    written with the pass's parameters (the first pass's given, or read off the cell
+//!    pieces); then the rounds of `tasks.rs` — split, gather,
 //!    candidates, the exact cut, collapse, assemble — the next state being the faces across
 //!    cells, the blocks' results and the cells' pinned records;
 //! 3. the last block from the last state, as one cell;
@@ -54,11 +57,12 @@ fn round<T: Send>(
 }
 
 /// Decimates `flat` in blocks of at most `max_block` vertices, every pass through task files in
-/// a new directory under `scratch`, each round's tasks run by `runner`.
+/// a new directory under `scratch`, each round's tasks run by `runner`; the first pass takes
+/// the cells `first` (the streaming split's, `stream::first_cells`).
 pub(crate) fn decimate_through_files(
     flat: FlatMesh,
     params: &DecimateParams,
-    max_block: usize,
+    (max_block, first): (usize, Cells),
     scratch: &Path,
     runner: &dyn TaskRunner,
     progress: &dyn Progress,
@@ -69,14 +73,17 @@ pub(crate) fn decimate_through_files(
         max_block,
     };
     let counts = (flat.n_vertex_slots() as u64, flat.n_faces() as u64);
-    let state = first_pieces(flat, params, max_block, driver.dir)?;
-    Ok(driver.run(state, counts, params, progress)?)
+    let state = first_pieces(flat, params, (max_block, &first.cell_of), driver.dir)?;
+    let first = FirstCut::Labels(first);
+    Ok(driver.run(state, (counts, first), params, progress)?)
 }
 
 /// [`decimate_through_files`] from first pieces made elsewhere: the cell pieces of the
-/// streaming split (`stream::cell_pieces`), whose vertices are numbered below `n_vertices`
-/// (the repaired mesh's vertex count) and whose faces together are the whole mesh's. The
-/// pieces are consumed: the first pass removes them once it has split them.
+/// streaming split (`stream::cell_pieces`), one per cell in cell order, whose vertices are
+/// numbered below `n_vertices` (the repaired mesh's vertex count) and whose faces together are
+/// the whole mesh's. The first pass's cells are the pieces: a vertex is in the cell of the
+/// piece holding its record. The pieces are consumed: the first pass removes them once it has
+/// split them.
 pub(crate) fn decimate_from_pieces(
     pieces: Vec<PathBuf>,
     n_vertices: u64,
@@ -98,7 +105,15 @@ pub(crate) fn decimate_from_pieces(
     };
     count(&mut state)?;
     let counts = (n_vertices, state.faces as u64);
-    Ok(driver.run(state, counts, params, progress)?)
+    Ok(driver.run(state, (counts, FirstCut::ByPiece), params, progress)?)
+}
+
+/// Where the first pass's cells come from.
+enum FirstCut {
+    /// Given, per vertex.
+    Labels(Cells),
+    /// The cell of each vertex is the index of the first piece holding its record.
+    ByPiece,
 }
 
 /// What every step of the driver uses.
@@ -147,11 +162,11 @@ struct State {
 
 impl Driver<'_> {
     /// The passes from the first state `state` of a mesh of `n_vertices` vertex slots and
-    /// `input_faces` faces.
+    /// `input_faces` faces, the first pass's cells from `first`.
     fn run(
         &self,
         mut state: State,
-        (n_vertices, input_faces): (u64, u64),
+        ((n_vertices, input_faces), first): ((u64, u64), FirstCut),
         params: &DecimateParams,
         progress: &dyn Progress,
     ) -> Result<Decimated, BlockFileError> {
@@ -160,6 +175,7 @@ impl Driver<'_> {
         let stop_at = max_block.max(params.target_vertices);
         let mut sequences = Vec::new();
         let (mut turns, mut pass) = (Turns::START, 0u32);
+        let mut first = Some(first);
         while state.vertices > stop_at
             && state.faces > params.target_faces
             && turns.idle < FRAMES.len()
@@ -174,7 +190,11 @@ impl Driver<'_> {
                 whole_faces: state.faces as u64,
                 params: *params,
             };
-            let pass_file = cut_cells(&state, info, |p| split_cells_of(p, max_block, frame), dir)?;
+            let pass_file = match first.take() {
+                Some(FirstCut::Labels(cells)) => write_cells(info, cells, dir)?,
+                Some(FirstCut::ByPiece) => piece_cells(&state, info, dir)?,
+                None => cut_cells(&state, info, |p| split_cells_of(p, max_block, frame), dir)?,
+            };
             let blocks = self.split_and_gather(&pass_file, &mut state)?;
             let pinned = pinned_vertices(&blocks.held)?;
             let costs: Vec<PathBuf> = (0..blocks.inputs.len())
@@ -291,15 +311,17 @@ impl Driver<'_> {
     }
 }
 
-/// The whole mesh's faces, positions and initial quadrics as pieces: the faces in order, cut
-/// into runs of about a block's faces, the records of the vertices with faces in runs of a
-/// block's vertices. Each run's faces and records are made by the task that writes them, from
-/// the working mesh and the quadrics, so that the driver never holds the whole mesh's records
-/// (216 B per vertex) nor copies of its faces and positions beside the working mesh.
+/// The whole mesh's faces, positions and initial quadrics as pieces: the faces in the order of
+/// the first pass's cells (`cell_of`, as `super::in_cell_order` puts them), cut into runs of
+/// about a block's faces, the records of the vertices with faces in runs of a block's
+/// vertices. Each run's faces and records are made by the task that writes them, from the
+/// working mesh and the quadrics, so that the driver never holds the whole mesh's records
+/// (216 B per vertex) nor copies of its faces and positions beside the working mesh (only the
+/// faces' order, 4 B a face).
 fn first_pieces(
     flat: FlatMesh,
     params: &DecimateParams,
-    max_block: usize,
+    (max_block, cell_of): (usize, &[u32]),
     dir: &Scratch,
 ) -> Result<State, BlockFileError> {
     let quadric = initial_quadrics(&flat, params.boundary_weight);
@@ -316,12 +338,15 @@ fn first_pieces(
             rim: quadric.rim(v).copied(),
         },
     };
+    let mut order: Vec<u32> = (0..faces as u32).collect();
+    order.sort_by_key(|&t| cell_of[flat.triangle(t as usize)[0] as usize]);
     let face_run = 2 * max_block.max(1);
     let vertex_runs: Vec<_> = vertices.chunks(max_block.max(1)).collect();
     let n = faces.div_ceil(face_run).max(vertex_runs.len());
     let pieces = round(n, |i| {
         let out = dir.file(format!("first.piece{i}"));
-        let f = flat.triangles_in((i * face_run).min(faces)..((i + 1) * face_run).min(faces));
+        let run = &order[(i * face_run).min(faces)..((i + 1) * face_run).min(faces)];
+        let f: Vec<[u32; 3]> = run.iter().map(|&t| flat.triangle(t as usize)).collect();
         let v = vertex_runs.get(i).copied().unwrap_or_default();
         let records: Vec<Record> = v.iter().map(|&v| record(v)).collect();
         contents::write_piece(&out, &f, &records)?;
@@ -344,6 +369,46 @@ fn count(state: &mut State) -> Result<(), BlockFileError> {
     Ok(())
 }
 
+/// The pass's cells `cells` (per vertex) written with `info` to the pass's file.
+fn write_cells(mut info: PassInfo, cells: Cells, dir: &Scratch) -> Result<PathBuf, BlockFileError> {
+    info.n_cells = cells.n_cells as u32;
+    let out = dir.file(format!("p{}.pass", info.pass));
+    contents::write_pass(&out, &info, &cells.cell_of)?;
+    Ok(out)
+}
+
+/// The pass's cells read off the state's pieces, one cell per piece (each vertex in the cell
+/// of the piece holding its record), written with `info` to the pass's file.
+fn piece_cells(
+    state: &State,
+    mut info: PassInfo,
+    dir: &Scratch,
+) -> Result<PathBuf, BlockFileError> {
+    let parts = round(state.pieces.len(), |i| {
+        contents::read_positions(&state.pieces[i])
+    })?;
+    info.n_cells = parts.len() as u32;
+    let mut labels = vec![u32::MAX; info.n_vertices as usize];
+    for (k, part) in parts.iter().enumerate() {
+        for &(v, _) in part {
+            *label_slot(&mut labels, v, dir)? = k as u32;
+        }
+    }
+    let out = dir.file(format!("p{}.pass", info.pass));
+    contents::write_pass(&out, &info, &labels)?;
+    Ok(out)
+}
+
+/// Vertex `v`'s label in `labels`, or an error naming the scratch folder.
+fn label_slot<'a>(
+    labels: &'a mut [u32],
+    v: u32,
+    dir: &Scratch,
+) -> Result<&'a mut u32, BlockFileError> {
+    let what = || BlockFileError::new(&dir.0, 0, format!("vertex {v} out of range"));
+    labels.get_mut(v as usize).ok_or_else(what)
+}
+
 /// The pass's cells from the current vertices' positions (`cells_of` labels positions given
 /// in ascending vertex order), written with `info` to the pass's file.
 fn cut_cells(
@@ -363,10 +428,7 @@ fn cut_cells(
     info.n_cells = cells.n_cells as u32;
     let mut labels = vec![u32::MAX; info.n_vertices as usize];
     for ((v, _), c) in points.iter().zip(cells.cell_of) {
-        let slot = labels.get_mut(*v as usize);
-        let slot =
-            slot.ok_or_else(|| BlockFileError::new(&dir.0, 0, format!("vertex {v} out of range")))?;
-        *slot = c;
+        *label_slot(&mut labels, *v, dir)? = c;
     }
     let out = dir.file(format!("p{}.pass", info.pass));
     contents::write_pass(&out, &info, &labels)?;

@@ -12,9 +12,9 @@
 //! over the sequence files in reverse would remove that (`docs/partitioned.md`).
 
 use super::SplitError;
-use super::cell::cell_pieces;
+use super::rounds::cell_pieces_by;
 use super::split::{SplitOptions, split_into_cells};
-use crate::mesh::{BoundingBox, CornerTable, SourceMap};
+use crate::mesh::{BoundingBox, CornerTable, PolygonMesh, SourceMap};
 use crate::pm::partition::runner::RayonRunner;
 use crate::pm::partition::through_files::{Scratch, decimate_from_pieces, unique_dir};
 use crate::pm::progressive::{decimate_params, triangles_of};
@@ -29,16 +29,36 @@ use std::path::Path;
 /// one). Returns the hierarchy and the map back onto the input, as
 /// [`ProgressiveMesh::from_polygons`].
 ///
-/// The hierarchy is a valid one of the builder's repair of the input, but not the bytes of
-/// the file path from the whole mesh (`PmOptions::block_scratch`): the first pass's cells are
-/// cut at a sample's medians, not the exact ones, and its faces come in cell order. Texture
-/// seams are not kept (as on the file path). A scan whose repair is not local (a component
-/// that cannot be oriented, a multi-edge) is refused with [`SplitError::NotLocal`].
+/// The hierarchy is the bytes of the partitioned build of the same input in memory or through
+/// files from the whole mesh (`PmOptions::block_scratch`): those take the first pass's cells
+/// from the same sample and its faces in the same order. Texture seams are not kept (as on the
+/// file path). A scan whose repair is not local (a component that cannot be oriented, a
+/// multi-edge) is refused with [`SplitError::NotLocal`].
 pub fn hierarchy_from_cells(
     input: &Path,
     opts: &PmOptions,
     progress: &dyn Progress,
 ) -> Result<(ProgressiveMesh, SourceMap), SplitError> {
+    let passed = decimate_from_cells(input, opts, progress)?;
+    let mesh = crate::io::read_mesh(input)?;
+    Ok(assemble_from_cells(&mesh, passed)?)
+}
+
+/// The passes of a build from cells: the collapses, the repaired mesh's vertex count and the
+/// bounding-box diagonal the options were made relative to.
+pub(crate) struct FromCells {
+    decimated: crate::pm::progressive::Decimated,
+    n_vertices: u64,
+    diagonal: f64,
+}
+
+/// The streaming split of `input`, the cell tasks and the passes from their pieces, as
+/// [`hierarchy_from_cells`] runs them; nothing of the whole mesh is held.
+pub(crate) fn decimate_from_cells(
+    input: &Path,
+    opts: &PmOptions,
+    progress: &dyn Progress,
+) -> Result<FromCells, SplitError> {
     let (Some(max_block), Some(scratch)) = (opts.block_vertices, &opts.block_scratch) else {
         let what = "a build from cells needs block_vertices and block_scratch";
         return Err(PmError::InvalidOption(what.into()).into());
@@ -53,16 +73,16 @@ pub fn hierarchy_from_cells(
     };
     std::fs::create_dir(&cells).map_err(made)?;
     let manifest = split_into_cells(input, &cells, &SplitOptions::new(max_block))?;
-    let (pieces, copies) = cell_pieces(&cells, opts.boundary_weight, &dir.0)?;
-    let _ = std::fs::remove_dir_all(&cells);
-    let diagonal = manifest.bounds.map_or(0.0, |b| b.diagonal());
-    let params = decimate_params(opts, diagonal)?;
     let runner = opts
         .block_runner
         .as_ref()
         .map_or(&RayonRunner as &dyn super::super::runner::TaskRunner, |r| {
             &*r.0
         });
+    let (pieces, copies) = cell_pieces_by(&cells, opts.boundary_weight, &dir.0, runner)?;
+    let _ = std::fs::remove_dir_all(&cells);
+    let diagonal = manifest.bounds.map_or(0.0, |b| b.diagonal());
+    let params = decimate_params(opts, diagonal)?;
     let decimated = decimate_from_pieces(
         pieces,
         copies.n_vertices,
@@ -72,21 +92,33 @@ pub fn hierarchy_from_cells(
         runner,
         progress,
     )?;
-    let mesh = crate::io::read_mesh(input)?;
-    let repaired = CornerTable::from_polygons(&mesh).map_err(PmError::from)?;
+    Ok(FromCells {
+        decimated,
+        n_vertices: copies.n_vertices,
+        diagonal,
+    })
+}
+
+/// The hierarchy of the passes `passed` put into PM order from `mesh`, the input they were
+/// run on, repaired by the builder (whose vertices the pieces number alike).
+pub(crate) fn assemble_from_cells(
+    mesh: &PolygonMesh,
+    passed: FromCells,
+) -> Result<(ProgressiveMesh, SourceMap), PmError> {
+    let repaired = CornerTable::from_polygons(mesh)?;
     let source = repaired.source.vertex_source.as_slice();
-    if source.len() as u64 != copies.n_vertices {
+    if source.len() as u64 != passed.n_vertices {
         let what = format!(
             "the cells number {} vertices, the builder {}",
-            copies.n_vertices,
+            passed.n_vertices,
             source.len()
         );
-        return Err(PmError::Internal(what).into());
+        return Err(PmError::Internal(what));
     }
     let positions = source.iter().map(|&s| mesh.positions[s as usize]);
-    if BoundingBox::of(positions).map_or(0.0, |b| b.diagonal()) != diagonal {
+    if BoundingBox::of(positions).map_or(0.0, |b| b.diagonal()) != passed.diagonal {
         let what = "the input changed while it was built";
-        return Err(PmError::Internal(what.into()).into());
+        return Err(PmError::Internal(what.into()));
     }
     let mut corner_vertex = repaired.corners.corner_vertex;
     let mut referenced = vec![false; source.len()];
@@ -104,6 +136,7 @@ pub fn hierarchy_from_cells(
     };
     let position = |v: u32| mesh.positions[source[v as usize] as usize];
     let n = source.len();
-    let pm = ProgressiveMesh::from_decimation(decimated, (n, n), &isolated, position, faces)?;
+    let pm =
+        ProgressiveMesh::from_decimation(passed.decimated, (n, n), &isolated, position, faces)?;
     Ok((pm, repaired.source))
 }

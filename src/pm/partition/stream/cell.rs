@@ -27,15 +27,16 @@
 //! (angles, first corners) are broken as the builder breaks them.
 
 use super::files::{FaceRecord, Manifest, cell_paths, read_faces, read_vertices};
-use super::orient::{CellPatches, Flips, cell_patches, local_patches, orient};
+use super::orient::{Flips, local_patches};
+use super::rounds::{COPIES, read_words, words_section};
 use super::{GlobalRepair, SplitError};
 use crate::mesh::BoundingBox;
 use crate::mesh::build::{next_c, pair_around_edge, walk_fan};
 use crate::pm::partition::block::VertexQuadric;
 use crate::pm::partition::contents::{self, Record};
+use crate::pm::partition::taskfile::{BlockFileError, Section, TaskFile};
 use crate::pm::quadric::{POINT_REGULARISATION, Quadric};
 use glam::DVec3;
-use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 const NONE: u32 = u32::MAX;
@@ -60,6 +61,39 @@ pub struct Copies {
 }
 
 impl Copies {
+    /// The copies file's section (`rounds.rs`).
+    pub(super) fn section(&self) -> Section {
+        let mut words = Vec::with_capacity(1 + 2 * self.corners.len());
+        words.push(self.n_vertices);
+        words.extend(self.corners.iter().flat_map(|&(c, v)| [c as u64, v as u64]));
+        words_section(COPIES, 0, &words)
+    }
+
+    /// The copies of a copies file, checked: pairs ascending by corner, copies numbered
+    /// below the vertex count.
+    pub(super) fn read(f: &mut TaskFile) -> Result<Copies, BlockFileError> {
+        let (words, at) = read_words(f, COPIES, 0)?;
+        let Some((&n_vertices, pairs)) = words.split_first() else {
+            return Err(f.error(at, "no vertex count"));
+        };
+        if pairs.len() % 2 != 0 || n_vertices >= NONE as u64 {
+            return Err(f.error(at, "a partial pair or a vertex count past 32 bits"));
+        }
+        let mut corners = Vec::with_capacity(pairs.len() / 2);
+        for (i, p) in pairs.chunks_exact(2).enumerate() {
+            let ascending = corners.last().is_none_or(|&(c, _)| (c as u64) < p[0]);
+            if p[0] >= NONE as u64 || p[1] >= n_vertices || !ascending {
+                let what = "a corner out of order or a copy past the vertex count";
+                return Err(f.error(at + 8 + 16 * i as u64, what));
+            }
+            corners.push((p[0] as u32, p[1] as u32));
+        }
+        Ok(Copies {
+            corners,
+            n_vertices,
+        })
+    }
+
     fn of(&self, corner: u32) -> Option<u32> {
         let i = self.corners.binary_search_by_key(&corner, |x| x.0).ok()?;
         Some(self.corners[i].1)
@@ -482,6 +516,20 @@ pub fn cell_pieces(
     boundary_weight: f64,
     out_dir: &Path,
 ) -> Result<(Vec<PathBuf>, Copies), SplitError> {
+    let runner = crate::pm::partition::runner::RayonRunner;
+    super::rounds::cell_pieces_by(dir, boundary_weight, out_dir, &runner)
+}
+
+/// [`cell_pieces`] on this process's threads without the round files: the rounds' answers
+/// held in memory (what the runner's rounds are checked against).
+#[cfg(test)]
+pub(super) fn cell_pieces_in_memory(
+    dir: &Path,
+    boundary_weight: f64,
+    out_dir: &Path,
+) -> Result<(Vec<PathBuf>, Copies), SplitError> {
+    use super::orient::{CellPatches, cell_patches, orient};
+    use rayon::prelude::*;
     let manifest = Manifest::read(&dir.join("manifest"))?;
     let n = manifest.cells.len() as u32;
     let patches: Vec<CellPatches> = (0..n)

@@ -35,12 +35,19 @@
 //! refused with [`SplitError::NotLocal`] rather than made differently: a component that cannot
 //! be oriented (the builder cuts the edge its walk meets first) and **detaching multi-edges**
 //! (a loop over the whole mesh until none is left). A refusal of any cell voids every cell's
-//! piece: the caller builds such a scan in one process.
+//! piece: the caller builds such a scan from the whole mesh's first pieces.
+//!
+//! The rounds run as tasks of a runner (`rounds.rs`), each writing a small file the driver
+//! reads back, so that a scheduler runs them where it runs the passes; the first pass then
+//! takes the split's cells as they are ([`first_cells`] draws the same cells from a mesh in
+//! memory, for the paths that make their first pieces from the whole mesh).
 
 mod build;
 mod cell;
 mod files;
+mod first;
 mod orient;
+mod rounds;
 mod sample;
 mod split;
 mod tree;
@@ -49,9 +56,13 @@ mod tree;
 mod tests;
 
 pub use build::hierarchy_from_cells;
+pub(crate) use build::{assemble_from_cells, decimate_from_cells};
 pub use cell::{Copies, ExtraFan, PieceCounts, cell_fans, cell_piece, cell_pieces, number_copies};
 pub use files::{CellEntry, Cut, Manifest};
+pub(crate) use first::{InputPoints, first_cells};
 pub use orient::{CellPatches, Flips, cell_patches, orient};
+pub use rounds::{fans_task, patches_task, piece_task};
+pub(crate) use rounds::{read_any_round, run as run_cell_task};
 pub use split::{SplitOptions, split_into_cells};
 
 use super::taskfile::BlockFileError;

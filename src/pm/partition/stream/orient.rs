@@ -20,7 +20,9 @@
 
 use super::cell::Cell;
 use super::files::{Manifest, cell_paths};
+use super::rounds::{FLIPS, PATCHES, SHARED, read_words, words_section};
 use super::{GlobalRepair, SplitError};
+use crate::pm::partition::taskfile::{BlockFileError, Section, TaskFile};
 use std::path::Path;
 
 const NONE: u32 = u32::MAX;
@@ -53,6 +55,70 @@ impl Flips {
         cell.and_then(|c| c.get(patch as usize))
             .copied()
             .unwrap_or(false)
+    }
+}
+
+impl CellPatches {
+    /// The round file's sections of these patches (`rounds.rs`).
+    pub(super) fn sections(&self) -> Vec<Section> {
+        let mut p = Vec::with_capacity(4 * self.patches.len());
+        for (counts, first) in &self.patches {
+            let (t, parity) = first.map_or((u64::MAX, 0), |(t, q)| (t, q as u64));
+            p.extend([counts[0], counts[1], t, parity]);
+        }
+        let mut s = Vec::with_capacity(3 * self.shared.len());
+        for &(t, q, parity) in &self.shared {
+            s.extend([t, q as u64, parity as u64]);
+        }
+        vec![words_section(PATCHES, 0, &p), words_section(SHARED, 0, &s)]
+    }
+
+    /// The patches of a patches round file, checked: parities 0 or 1, patches in range.
+    pub(super) fn read(f: &mut TaskFile) -> Result<CellPatches, BlockFileError> {
+        let (p, at) = read_words(f, PATCHES, 0)?;
+        let (s, at_shared) = read_words(f, SHARED, 0)?;
+        if p.len() % 4 != 0 || s.len() % 3 != 0 {
+            return Err(f.error(at, "patches or shared triangles of a partial record"));
+        }
+        let mut out = CellPatches::default();
+        for (i, r) in p.chunks_exact(4).enumerate() {
+            if r[3] > 1 {
+                return Err(f.error(at + 32 * i as u64, "a parity other than 0 or 1"));
+            }
+            let first = (r[2] != u64::MAX).then_some((r[2], r[3] as u8));
+            out.patches.push(([r[0], r[1]], first));
+        }
+        for (i, r) in s.chunks_exact(3).enumerate() {
+            if r[1] >= out.patches.len() as u64 || r[2] > 1 {
+                let what = "a shared triangle of no patch or with a parity other than 0 or 1";
+                return Err(f.error(at_shared + 24 * i as u64, what));
+            }
+            out.shared.push((r[0], r[1] as u32, r[2] as u8));
+        }
+        Ok(out)
+    }
+}
+
+impl Flips {
+    /// The flips file's sections: one per cell (`rounds.rs`).
+    pub(super) fn sections(&self) -> Vec<Section> {
+        let cell = |(k, bits): (usize, &Vec<bool>)| {
+            let words: Vec<u64> = bits.iter().map(|&b| b as u64).collect();
+            words_section(FLIPS, k as u32, &words)
+        };
+        self.cells.iter().enumerate().map(cell).collect()
+    }
+
+    /// Cell `k`'s flips from a flips file (the other cells' left out: a cell task reads only
+    /// its own).
+    pub(super) fn read_cell(f: &mut TaskFile, k: u32) -> Result<Flips, BlockFileError> {
+        let (words, at) = read_words(f, FLIPS, k)?;
+        if let Some(i) = words.iter().position(|&w| w > 1) {
+            return Err(f.error(at + 8 * i as u64, "a flip other than 0 or 1"));
+        }
+        let mut cells = vec![Vec::new(); k as usize];
+        cells.push(words.iter().map(|&w| w == 1).collect());
+        Ok(Flips { cells })
     }
 }
 

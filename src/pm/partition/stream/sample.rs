@@ -12,6 +12,11 @@
 
 use glam::DVec3;
 
+/// The reservoir's capacity unless a split is told otherwise: 4M points (128 MB), enough for
+/// cells within a few per cent of the block size on meshes of billions of vertices. The
+/// in-memory paths draw the same sample, so it is one number for both.
+pub(crate) const SAMPLE_SIZE: usize = 4 << 20;
+
 /// The reservoir: `(input index, position)` per slot.
 pub(super) struct Reservoir {
     size: usize,

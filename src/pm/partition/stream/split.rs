@@ -35,7 +35,7 @@ impl SplitOptions {
         SplitOptions {
             block_vertices,
             buffer_bytes: 64 << 10,
-            sample_size: 4 << 20,
+            sample_size: super::sample::SAMPLE_SIZE,
         }
     }
 }

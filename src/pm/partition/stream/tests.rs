@@ -545,3 +545,80 @@ fn the_pieces_are_the_same_bytes_on_any_number_of_threads() {
     assert!(one.len() >= 16);
     assert_eq!(one, pieces_on(3));
 }
+
+#[test]
+fn the_cell_rounds_through_files_write_the_pieces_of_the_rounds_in_memory() {
+    let m = flipped(&scan_with_fans_and_books(30, 24), |i| {
+        (100..500).contains(&i)
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("scan.ply");
+    write_ply(&input, &m, PlyEncoding::BinaryLittleEndian);
+    let cells = dir.path().join("cells");
+    std::fs::create_dir(&cells).unwrap();
+    split_into_cells(&input, &cells, &small(30)).unwrap();
+    let pieces_by = |name: &str, in_memory: bool| {
+        let out = dir.path().join(name);
+        std::fs::create_dir(&out).unwrap();
+        let (_, copies) = match in_memory {
+            true => super::cell::cell_pieces_in_memory(&cells, BOUNDARY_WEIGHT, &out).unwrap(),
+            false => cell_pieces(&cells, BOUNDARY_WEIGHT, &out).unwrap(),
+        };
+        (folder(&out), copies)
+    };
+    let (files, copies) = pieces_by("files", false);
+    assert!(files.len() >= 16 && copies.n_vertices > m.n_vertices() as u64);
+    assert_eq!((files, copies), pieces_by("memory", true));
+}
+
+#[test]
+fn a_refusal_comes_back_from_the_rounds_as_the_cell_found_it() {
+    let mut m = scan(20, 20);
+    let f: Vec<u32> = m.faces().nth(300).unwrap().to_vec();
+    m.push_face(&[f[0], f[2], f[1]]);
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("doubled.ply");
+    write_ply(&input, &m, PlyEncoding::BinaryLittleEndian);
+    split_into_cells(&input, dir.path(), &small(40)).unwrap();
+    let out = dir.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let refused = || {
+        let e = cell_pieces(dir.path(), BOUNDARY_WEIGHT, &out).unwrap_err();
+        let SplitError::NotLocal { repair, path, .. } = &e else {
+            panic!("{e}")
+        };
+        assert_eq!(*repair, GlobalRepair::MultiEdge);
+        assert!(path.to_string_lossy().ends_with(".face"), "{e}");
+        e.to_string()
+    };
+    // The first refusal in cell order, whichever task finished first.
+    assert_eq!(refused(), refused());
+    assert_eq!(std::fs::read_dir(&out).unwrap().count(), 0, "pieces left");
+}
+
+#[test]
+fn the_first_cells_drawn_in_memory_are_the_cells_the_split_writes_from_a_partial_sample() {
+    // A sample of a quarter of the vertices: the reservoir replaces points, so its draws, seeded
+    // from the counts, must be the same in memory as in the split.
+    let m = scan_with_fans_and_books(40, 30);
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("scan.ply");
+    write_ply(&input, &m, PlyEncoding::Ascii);
+    let options = sampled(100, m.n_vertices() / 4);
+    let manifest = split_into_cells(&input, dir.path(), &options).unwrap();
+    assert!(manifest.sample.1 < manifest.input_vertices);
+    let labels = std::fs::read(dir.path().join("cell_of.u32")).unwrap();
+    let points = super::first::InputPoints {
+        positions: &m.positions,
+        polygons: m.n_faces() as u64,
+        source: None,
+    };
+    let cells =
+        super::first::first_cells_sampled(&points, m.n_vertices(), 100, options.sample_size);
+    assert_eq!(cells.n_cells, manifest.cells.len());
+    let written: Vec<u32> = labels
+        .chunks_exact(4)
+        .map(|b| u32::from_le_bytes(b.try_into().unwrap()))
+        .collect();
+    assert_eq!(cells.cell_of, written);
+}
