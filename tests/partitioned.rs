@@ -346,6 +346,18 @@ fn a_partitioned_hierarchy_carries_the_pins_of_its_passes_in_memory_and_through_
     let (files, _) = ProgressiveMesh::from_polygons(&poly, &through_files, &NoProgress).unwrap();
     assert_eq!(files.pins(), pm.pins());
     let _ = std::fs::remove_dir(&dir);
+    // The parts of a hierarchy carry its pins, and a record that does not fit is refused.
+    let parts = pm.to_parts();
+    assert_eq!(
+        ProgressiveMesh::from_parts(parts.clone()).unwrap().pins(),
+        pm.pins()
+    );
+    let misfit = meshpyr::pm::Pins::from_passes([(parts.splits.len() + 1, vec![0])]);
+    let refused = ProgressiveMesh::from_parts(meshpyr::pm::PmParts {
+        pins: Some(misfit),
+        ..parts
+    });
+    assert!(refused.is_err());
     let n = poly.n_vertices();
     let (one_block, _) = ProgressiveMesh::from_polygons(&poly, &blocks(n), &NoProgress).unwrap();
     assert!(

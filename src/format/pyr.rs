@@ -445,6 +445,8 @@ pub(super) fn decode_releasing(bytes: &[u8], release: Release<'_>) -> Result<Pyr
             splits,
             faces,
             errors,
+            // Read from their own section below, so that its errors name its place.
+            pins: None,
         },
         n_base_faces,
         permutation.then_some(mesh_to_pm),

@@ -2,7 +2,7 @@
 //! a damaged file must give an error here, never a panic or a debug assertion later in the
 //! cursor, the analysis or the synthesis.
 
-use super::{PmError, ProgressiveMesh, VertexSplit};
+use super::{Pins, PmError, ProgressiveMesh, VertexSplit};
 use crate::mesh::{Mesh, SlotIndex, VertexId};
 #[cfg(test)]
 use crate::pm::collapse::vertex_split;
@@ -24,6 +24,10 @@ pub struct PmParts {
     pub faces: Vec<[u32; 3]>,
     /// Quadric error of each split's collapse.
     pub errors: Vec<f32>,
+    /// Per pass of a hierarchy built in blocks, its run of splits and the vertices pinned in it
+    /// ([`ProgressiveMesh::pins`]): its detail pyramid leaves them untouched in their pass.
+    /// `None` for a hierarchy built in one piece.
+    pub pins: Option<Pins>,
 }
 
 fn invalid(reason: impl Into<String>) -> PmError {
@@ -202,6 +206,7 @@ impl ProgressiveMesh {
             splits: self.splits().to_vec(),
             faces: self.finest_faces().to_vec(),
             errors: self.split_errors().to_vec(),
+            pins: self.pins().cloned(),
         }
     }
 
@@ -215,6 +220,7 @@ impl ProgressiveMesh {
             splits,
             faces,
             errors,
+            pins,
         } = parts;
         let total = positions.len();
         let n_fin = n_base
@@ -255,7 +261,7 @@ impl ProgressiveMesh {
         }) {
             return Err(invalid("finest face out of range or degenerate"));
         }
-        Ok(ProgressiveMesh {
+        let mut pm = ProgressiveMesh {
             n_base,
             positions,
             pm_to_mesh,
@@ -268,7 +274,9 @@ impl ProgressiveMesh {
             keeps_seams: false,
             pins: None,
             first_pieces: None,
-        })
+        };
+        pm.set_pins(pins).map_err(|e| invalid(e.to_string()))?;
+        Ok(pm)
     }
 }
 

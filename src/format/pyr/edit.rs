@@ -38,18 +38,16 @@ pub(crate) fn with_positions(
             .ok_or_else(|| internal("vertex source out of range"))?;
         pm_positions.push(p);
     }
-    let mut new_pm = ProgressiveMesh::from_parts(PmParts {
+    let new_pm = ProgressiveMesh::from_parts(PmParts {
         n_base: pm.n_base_vertices(),
         positions: pm_positions,
         pm_to_mesh: pm.pm_to_mesh().to_vec(),
         splits: pm.splits().to_vec(),
         faces: pm.finest_faces().to_vec(),
         errors: pm.split_errors().to_vec(),
+        // The same splits, so the same passes: the edited hierarchy's pyramid keeps the rule.
+        pins: pm.pins().cloned(),
     })
     .map_err(|e| internal(&e.to_string()))?;
-    // The same splits, so the same passes: the edited hierarchy's pyramid keeps the rule.
-    new_pm
-        .set_pins(pm.pins().cloned())
-        .map_err(|e| internal(&e.to_string()))?;
     Ok((new_input, new_pm))
 }
