@@ -200,26 +200,7 @@ fn a_ply_split_into_cells_and_an_obj_of_the_same_mesh_write_the_pyr_bytes_of_the
 fn a_scan_whose_repair_the_cells_refuse_is_built_from_the_whole_mesh_with_the_same_bytes() {
     // A Möbius band: the builder cuts the edge its walk over the whole component meets first,
     // which no cell can decide alone.
-    let n = 400u32;
-    let positions = (0..2 * n)
-        .map(|i| {
-            let (k, side) = ((i % n) as f64, (i / n) as f64 - 0.5);
-            let a = k / n as f64 * std::f64::consts::TAU;
-            let r = 3.0 + side * (a / 2.0).cos();
-            DVec3::new(r * a.cos(), r * a.sin(), side * (a / 2.0).sin())
-        })
-        .collect();
-    let mut poly = PolygonMesh::from_triangles(positions, &[]);
-    for k in 0..n {
-        let (a, b) = (k, n + k);
-        let (c, d) = if k + 1 == n {
-            (n, 0)
-        } else {
-            (k + 1, n + k + 1)
-        };
-        poly.push_face(&[a, c, d]);
-        poly.push_face(&[a, d, b]);
-    }
+    let poly = common::mobius_band(400);
     let dir = tempfile::tempdir().unwrap();
     let ply = dir.path().join("mobius.ply");
     meshpyr::io::write_mesh(&ply, &poly).unwrap();

@@ -6,8 +6,8 @@
 use meshpyr::io::read_mesh;
 use meshpyr::mesh::Mesh;
 use meshpyr::pm::blocks::{
-    Flips, Manifest, SplitError, SplitOptions, cell_fans, cell_pieces, hierarchy_from_cells,
-    split_into_cells,
+    Flips, GlobalRepair, Manifest, SplitError, SplitOptions, cell_fans, cell_pieces,
+    hierarchy_from_cells, split_into_cells,
 };
 use meshpyr::pm::{PmOptions, ProgressiveMesh};
 use meshpyr::progress::NoProgress;
@@ -218,4 +218,32 @@ fn the_split_of_a_large_scan_holds_its_sample_and_buffers_not_the_mesh() {
     );
     // Far below the whole mesh's first pieces (hundreds of bytes per input vertex).
     assert!(grown < 1000 * largest * threads, "grew {grown} bytes");
+}
+
+#[test]
+fn a_mobius_band_is_refused_as_an_orientation_the_cells_cannot_decide() {
+    let band = common::mobius_band(60);
+    let repaired = Mesh::from_polygons(&band).unwrap();
+    assert!(repaired.report.orientation_cuts > 0);
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("mobius.ply");
+    meshpyr::io::write_mesh(&input, &band).unwrap();
+    let options = SplitOptions {
+        buffer_bytes: 64,
+        sample_size: 300,
+        ..SplitOptions::new(15)
+    };
+    split_into_cells(&input, dir.path(), &options).unwrap();
+    let e = cell_pieces(dir.path(), 10.0, dir.path()).unwrap_err();
+    let SplitError::NotLocal { repair, path, .. } = &e else {
+        panic!("{e}")
+    };
+    assert_eq!(*repair, GlobalRepair::Orientation);
+    assert!(path.to_string_lossy().ends_with(".face"), "{e}");
+    assert!(e.to_string().contains("one process"), "{e}");
+    let left = folder_bytes(dir.path());
+    assert!(
+        left.iter().all(|(n, _)| !n.starts_with("first.piece")),
+        "pieces left"
+    );
 }

@@ -281,3 +281,29 @@ pub fn byte_patterns(n: u32, len: u32) -> impl Iterator<Item = Vec<u8>> {
 pub fn closed_loop_bound(p: &meshpyr::pyramid::DetailPyramid) -> f64 {
     0.5 * 3f64.sqrt() * p.detail_step() + 1e-12 * p.bbox_diagonal()
 }
+
+/// A Möbius band of `2n` vertices: a strip of `n` quads (two triangles each) whose ends are
+/// glued with a half twist, so that no orientation of its triangles agrees along every edge
+/// (the builder cuts the edge its walk meets first).
+pub fn mobius_band(n: u32) -> PolygonMesh {
+    let positions = (0..2 * n)
+        .map(|i| {
+            let (k, side) = ((i % n) as f64, (i / n) as f64 - 0.5);
+            let a = k / n as f64 * std::f64::consts::TAU;
+            let r = 3.0 + side * (a / 2.0).cos();
+            DVec3::new(r * a.cos(), r * a.sin(), side * (a / 2.0).sin())
+        })
+        .collect();
+    let mut band = PolygonMesh::from_triangles(positions, &[]);
+    for k in 0..n {
+        let (a, b) = (k, n + k);
+        let (c, d) = if k + 1 == n {
+            (n, 0)
+        } else {
+            (k + 1, n + k + 1)
+        };
+        band.push_face(&[a, c, d]);
+        band.push_face(&[a, d, b]);
+    }
+    band
+}

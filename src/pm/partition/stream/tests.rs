@@ -326,53 +326,6 @@ fn flipped_patches_across_cells_are_oriented_as_the_builder_orients_them() {
 }
 
 #[test]
-fn a_mobius_band_is_refused_as_an_orientation_the_cells_cannot_decide() {
-    // A strip of quads whose ends are glued with a half twist.
-    let n = 60u32;
-    let positions = (0..2 * n)
-        .map(|i| {
-            let (k, side) = ((i % n) as f64, (i / n) as f64 - 0.5);
-            let a = k / n as f64 * std::f64::consts::TAU;
-            let r = 3.0 + side * (a / 2.0).cos();
-            DVec3::new(r * a.cos(), r * a.sin(), side * (a / 2.0).sin())
-        })
-        .collect();
-    let mut m = PolygonMesh::from_triangles(positions, &[]);
-    for k in 0..n {
-        let (a, b) = (k, n + k);
-        let (c, d) = match k + 1 == n {
-            true => (n, 0),
-            false => (k + 1, n + k + 1),
-        };
-        m.push_face(&[a, c, d]);
-        m.push_face(&[a, d, b]);
-    }
-    assert!(
-        CornerTable::from_polygons(&m)
-            .unwrap()
-            .report
-            .orientation_cuts
-            > 0
-    );
-    let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("mobius.ply");
-    write_ply(&input, &m, PlyEncoding::BinaryLittleEndian);
-    split_into_cells(&input, dir.path(), &small(15)).unwrap();
-    let e = cell_pieces(dir.path(), BOUNDARY_WEIGHT, dir.path()).unwrap_err();
-    let SplitError::NotLocal { repair, path, .. } = &e else {
-        panic!("{e}")
-    };
-    assert_eq!(*repair, GlobalRepair::Orientation);
-    assert!(path.to_string_lossy().ends_with(".face"), "{e}");
-    assert!(e.to_string().contains("one process"), "{e}");
-    let left = folder(dir.path());
-    assert!(
-        left.iter().all(|(n, _)| !n.starts_with("first.piece")),
-        "pieces left"
-    );
-}
-
-#[test]
 fn a_triangle_doubled_back_to_back_is_refused_as_a_multi_edge_the_builder_detaches() {
     // Its edges have three triangles each; the pairs leave two edges between the same two
     // vertices, which the builder detaches in a loop over the whole mesh.
@@ -520,8 +473,9 @@ fn a_hierarchy_built_from_the_cells_replays_every_split_and_leaves_no_file() {
     );
 }
 
-#[test]
-fn the_pieces_are_the_same_bytes_on_any_number_of_threads() {
+/// A scan with fans, books and a flipped patch across cells, written as binary PLY and split
+/// into cells of 30 in the folder it returns (its `cells` subfolder); the scan's vertex count.
+fn flipped_scan_split() -> (tempfile::TempDir, std::path::PathBuf, usize) {
     let m = flipped(&scan_with_fans_and_books(30, 24), |i| {
         (100..500).contains(&i)
     });
@@ -531,6 +485,12 @@ fn the_pieces_are_the_same_bytes_on_any_number_of_threads() {
     let cells = dir.path().join("cells");
     std::fs::create_dir(&cells).unwrap();
     split_into_cells(&input, &cells, &small(30)).unwrap();
+    (dir, cells, m.n_vertices())
+}
+
+#[test]
+fn the_pieces_are_the_same_bytes_on_any_number_of_threads() {
+    let (dir, cells, _) = flipped_scan_split();
     let pieces_on = |threads: usize| {
         let out = dir.path().join(format!("on{threads}"));
         std::fs::create_dir(&out).unwrap();
@@ -548,15 +508,7 @@ fn the_pieces_are_the_same_bytes_on_any_number_of_threads() {
 
 #[test]
 fn the_cell_rounds_through_files_write_the_pieces_of_the_rounds_in_memory() {
-    let m = flipped(&scan_with_fans_and_books(30, 24), |i| {
-        (100..500).contains(&i)
-    });
-    let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("scan.ply");
-    write_ply(&input, &m, PlyEncoding::BinaryLittleEndian);
-    let cells = dir.path().join("cells");
-    std::fs::create_dir(&cells).unwrap();
-    split_into_cells(&input, &cells, &small(30)).unwrap();
+    let (dir, cells, n_vertices) = flipped_scan_split();
     let pieces_by = |name: &str, in_memory: bool| {
         let out = dir.path().join(name);
         std::fs::create_dir(&out).unwrap();
@@ -567,7 +519,7 @@ fn the_cell_rounds_through_files_write_the_pieces_of_the_rounds_in_memory() {
         (folder(&out), copies)
     };
     let (files, copies) = pieces_by("files", false);
-    assert!(files.len() >= 16 && copies.n_vertices > m.n_vertices() as u64);
+    assert!(files.len() >= 16 && copies.n_vertices > n_vertices as u64);
     assert_eq!((files, copies), pieces_by("memory", true));
 }
 
