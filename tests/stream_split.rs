@@ -141,6 +141,31 @@ fn write_grid(path: &Path, n: u32) {
     w.flush().unwrap();
 }
 
+/// Runs `f`, watching this process's anonymous memory every 2 ms: its result, how far the
+/// memory grew above where it started, and the seconds it took.
+fn with_memory_growth<R>(f: impl FnOnce() -> R) -> (R, u64, f64) {
+    use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+    let before = anonymous_bytes();
+    let peak = AtomicU64::new(before);
+    let done = AtomicBool::new(false);
+    let (result, seconds) = std::thread::scope(|scope| {
+        scope.spawn(|| {
+            while !done.load(Ordering::Relaxed) {
+                peak.fetch_max(anonymous_bytes(), Ordering::Relaxed);
+                std::thread::sleep(std::time::Duration::from_millis(2));
+            }
+        });
+        let start = std::time::Instant::now();
+        let result = f();
+        let seconds = start.elapsed().as_secs_f64();
+        done.store(true, Ordering::Relaxed);
+        (result, seconds)
+    });
+    // Read once the watcher has ended (the scope joins it), its last sample included.
+    let grown = peak.load(Ordering::Relaxed).saturating_sub(before);
+    (result, grown, seconds)
+}
+
 #[test]
 #[ignore = "a measurement on a 1.5M-vertex scan: cargo test --test stream_split -- --ignored"]
 fn the_split_of_a_large_scan_holds_its_sample_and_buffers_not_the_mesh() {
@@ -154,26 +179,8 @@ fn the_split_of_a_large_scan_holds_its_sample_and_buffers_not_the_mesh() {
         sample_size: 1 << 18,
         ..SplitOptions::new(50_000)
     };
-    let before = anonymous_bytes();
-    let peak = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(before));
-    let done = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    let watcher = {
-        let (peak, done) = (peak.clone(), done.clone());
-        std::thread::spawn(move || {
-            while !done.load(std::sync::atomic::Ordering::Relaxed) {
-                peak.fetch_max(anonymous_bytes(), std::sync::atomic::Ordering::Relaxed);
-                std::thread::sleep(std::time::Duration::from_millis(2));
-            }
-        })
-    };
-    let start = std::time::Instant::now();
-    let manifest = split_into_cells(&input, &out, &options).unwrap();
-    let seconds = start.elapsed().as_secs_f64();
-    done.store(true, std::sync::atomic::Ordering::Relaxed);
-    watcher.join().unwrap();
-    let grown = peak
-        .load(std::sync::atomic::Ordering::Relaxed)
-        .saturating_sub(before);
+    let (manifest, grown, seconds) =
+        with_memory_growth(|| split_into_cells(&input, &out, &options).unwrap());
     let nv = (n * n) as u64;
     let cells = manifest.cells.len() as u64;
     let bound = 32 * (1 << 18) + cells * 2 * (64 << 10) + (64 << 20);
@@ -187,26 +194,8 @@ fn the_split_of_a_large_scan_holds_its_sample_and_buffers_not_the_mesh() {
     );
     assert!(grown < bound, "grew {grown} bytes");
 
-    let before = anonymous_bytes();
-    peak.store(before, std::sync::atomic::Ordering::Relaxed);
-    done.store(false, std::sync::atomic::Ordering::Relaxed);
-    let watcher = {
-        let (peak, done) = (peak.clone(), done.clone());
-        std::thread::spawn(move || {
-            while !done.load(std::sync::atomic::Ordering::Relaxed) {
-                peak.fetch_max(anonymous_bytes(), std::sync::atomic::Ordering::Relaxed);
-                std::thread::sleep(std::time::Duration::from_millis(2));
-            }
-        })
-    };
-    let start = std::time::Instant::now();
-    let (pieces, _) = cell_pieces(&out, 10.0, dir.path()).unwrap();
-    let seconds = start.elapsed().as_secs_f64();
-    done.store(true, std::sync::atomic::Ordering::Relaxed);
-    watcher.join().unwrap();
-    let grown = peak
-        .load(std::sync::atomic::Ordering::Relaxed)
-        .saturating_sub(before);
+    let ((pieces, _), grown, seconds) =
+        with_memory_growth(|| cell_pieces(&out, 10.0, dir.path()).unwrap());
     let largest = manifest.cells.iter().map(|c| c.vertices).max().unwrap_or(0);
     let threads = rayon::current_num_threads() as u64;
     println!(
