@@ -201,17 +201,24 @@ fn pinned_of(pinned: &[bool]) -> Vec<u32> {
 /// order within a cell. The cell tasks write each cell's piece so (a face goes to the cell of
 /// its first vertex, in triangle order), and the order of the faces is what breaks the ties
 /// between a block's candidates, so every path's first pass sees the same blocks.
-pub(crate) fn in_cell_order(
-    faces: &mut Vec<[u32; 3]>,
-    wedges: &mut Vec<[u32; 3]>,
-    cell_of: &[u32],
-) {
-    let mut order: Vec<u32> = (0..faces.len() as u32).collect();
-    order.sort_by_key(|&i| cell_of[faces[i as usize][0] as usize]);
+fn in_cell_order(faces: &mut Vec<[u32; 3]>, wedges: &mut Vec<[u32; 3]>, cell_of: &[u32]) {
+    let order = cell_order(faces.len(), |t| faces[t][0], cell_of);
     *faces = order.iter().map(|&i| faces[i as usize]).collect();
     if !wedges.is_empty() {
         *wedges = order.iter().map(|&i| wedges[i as usize]).collect();
     }
+}
+
+/// The order [`in_cell_order`] puts `n_faces` faces in, as face indices, given each face's
+/// first vertex: by the cell of that vertex, in face order within a cell (a stable sort).
+pub(crate) fn cell_order(
+    n_faces: usize,
+    first_vertex: impl Fn(usize) -> u32,
+    cell_of: &[u32],
+) -> Vec<u32> {
+    let mut order: Vec<u32> = (0..n_faces as u32).collect();
+    order.sort_by_key(|&t| cell_of[first_vertex(t as usize) as usize]);
+    order
 }
 
 /// Takes a pass's results into the whole mesh: their quadrics into `quadrics`, their faces

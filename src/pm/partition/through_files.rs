@@ -312,7 +312,7 @@ impl Driver<'_> {
 }
 
 /// The whole mesh's faces, positions and initial quadrics as pieces: the faces in the order of
-/// the first pass's cells (`cell_of`, as `super::in_cell_order` puts them), cut into runs of
+/// the first pass's cells (`cell_of`, [`super::cell_order`]), cut into runs of
 /// about a block's faces, the records of the vertices with faces in runs of a block's
 /// vertices. Each run's faces and records are made by the task that writes them, from the
 /// working mesh and the quadrics, so that the driver never holds the whole mesh's records
@@ -338,8 +338,7 @@ fn first_pieces(
             rim: quadric.rim(v).copied(),
         },
     };
-    let mut order: Vec<u32> = (0..faces as u32).collect();
-    order.sort_by_key(|&t| cell_of[flat.triangle(t as usize)[0] as usize]);
+    let order = super::cell_order(faces, |t| flat.triangle(t)[0], cell_of);
     let face_run = 2 * max_block.max(1);
     let vertex_runs: Vec<_> = vertices.chunks(max_block.max(1)).collect();
     let n = faces.div_ceil(face_run).max(vertex_runs.len());
@@ -379,60 +378,54 @@ fn write_cells(mut info: PassInfo, cells: Cells, dir: &Scratch) -> Result<PathBu
 
 /// The pass's cells read off the state's pieces, one cell per piece (each vertex in the cell
 /// of the piece holding its record), written with `info` to the pass's file.
-fn piece_cells(
-    state: &State,
-    mut info: PassInfo,
-    dir: &Scratch,
-) -> Result<PathBuf, BlockFileError> {
-    let parts = round(state.pieces.len(), |i| {
-        contents::read_positions(&state.pieces[i])
-    })?;
-    info.n_cells = parts.len() as u32;
-    let mut labels = vec![u32::MAX; info.n_vertices as usize];
-    for (k, part) in parts.iter().enumerate() {
-        for &(v, _) in part {
-            *label_slot(&mut labels, v, dir)? = k as u32;
-        }
-    }
-    let out = dir.file(format!("p{}.pass", info.pass));
-    contents::write_pass(&out, &info, &labels)?;
-    Ok(out)
-}
-
-/// Vertex `v`'s label in `labels`, or an error naming the scratch folder.
-fn label_slot<'a>(
-    labels: &'a mut [u32],
-    v: u32,
-    dir: &Scratch,
-) -> Result<&'a mut u32, BlockFileError> {
-    let what = || BlockFileError::new(&dir.0, 0, format!("vertex {v} out of range"));
-    labels.get_mut(v as usize).ok_or_else(what)
+fn piece_cells(state: &State, info: PassInfo, dir: &Scratch) -> Result<PathBuf, BlockFileError> {
+    let parts = piece_positions(state)?;
+    let n_cells = parts.len();
+    let in_piece = parts.iter().enumerate();
+    let pairs = in_piece.flat_map(|(k, part)| part.iter().map(move |&(v, _)| (v, k as u32)));
+    let cell_of = labels(info.n_vertices, pairs, dir)?;
+    write_cells(info, Cells { cell_of, n_cells }, dir)
 }
 
 /// The pass's cells from the current vertices' positions (`cells_of` labels positions given
 /// in ascending vertex order), written with `info` to the pass's file.
 fn cut_cells(
     state: &State,
-    mut info: PassInfo,
+    info: PassInfo,
     cells_of: impl Fn(&[glam::DVec3]) -> Cells,
     dir: &Scratch,
 ) -> Result<PathBuf, BlockFileError> {
-    let parts = round(state.pieces.len(), |i| {
-        contents::read_positions(&state.pieces[i])
-    })?;
-    let mut points: Vec<(u32, glam::DVec3)> = parts.into_iter().flatten().collect();
+    let mut points: Vec<(u32, glam::DVec3)> =
+        piece_positions(state)?.into_iter().flatten().collect();
     points.sort_unstable_by_key(|p| p.0);
     let positions: Vec<glam::DVec3> = points.iter().map(|p| p.1).collect();
     let cells = cells_of(&positions);
     drop(positions);
-    info.n_cells = cells.n_cells as u32;
-    let mut labels = vec![u32::MAX; info.n_vertices as usize];
-    for ((v, _), c) in points.iter().zip(cells.cell_of) {
-        *label_slot(&mut labels, *v, dir)? = c;
+    let pairs = points.iter().map(|p| p.0).zip(cells.cell_of);
+    let cell_of = labels(info.n_vertices, pairs, dir)?;
+    write_cells(info, Cells { cell_of, ..cells }, dir)
+}
+
+/// Every piece's records' vertices and positions, piece by piece.
+fn piece_positions(state: &State) -> Result<Vec<Vec<(u32, glam::DVec3)>>, BlockFileError> {
+    round(state.pieces.len(), |i| {
+        contents::read_positions(&state.pieces[i])
+    })
+}
+
+/// One label per vertex of `n_vertices` from `(vertex, cell)` pairs, `u32::MAX` for a vertex
+/// without one; a vertex out of range is an error naming the scratch folder.
+fn labels(
+    n_vertices: u64,
+    pairs: impl Iterator<Item = (u32, u32)>,
+    dir: &Scratch,
+) -> Result<Vec<u32>, BlockFileError> {
+    let mut labels = vec![u32::MAX; n_vertices as usize];
+    for (v, c) in pairs {
+        let what = || BlockFileError::new(&dir.0, 0, format!("vertex {v} out of range"));
+        *labels.get_mut(v as usize).ok_or_else(what)? = c;
     }
-    let out = dir.file(format!("p{}.pass", info.pass));
-    contents::write_pass(&out, &info, &labels)?;
-    Ok(out)
+    Ok(labels)
 }
 
 /// The blocks of a pass, as files.
