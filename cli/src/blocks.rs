@@ -75,35 +75,31 @@ impl PathOptions {
         let chosen =
             memory::choose_build_path(job, &size, self.block_vertices, self.memory, &allowance);
         keeping_seams(path, &chosen, input, self.block_files.is_some())?;
-        let scratch = match (&chosen, &self.block_files) {
-            (_, Some(dir)) => Some(dir.clone()),
-            (
-                BuildPath::Partitioned {
-                    by_memory: Some(_), ..
-                },
-                None,
-            ) if !meshpyr::pm::keeps_texture_seams(input) => output.map(folder_of),
+        // Chosen by memory, without a folder given: the task files go next to the output.
+        let by_memory = match chosen {
+            BuildPath::Partitioned {
+                by_memory: Some((need, _)),
+                ..
+            } if self.block_files.is_none() && !meshpyr::pm::keeps_texture_seams(input) => {
+                output.map(|o| (folder_of(o), need))
+            }
             _ => None,
         };
-        let files = match (&chosen, &scratch, &self.block_files) {
-            (BuildPath::Partitioned { by_memory, .. }, Some(dir), None) => {
-                let need = by_memory.map_or(0, |(need, _)| need);
-                format!(
-                    ", through task files in {}; this process still holds the whole mesh \
-                     (about {}: docs/partitioned.md)",
-                    dir.display(),
-                    memory::Bytes(need)
-                )
-            }
-            _ => String::new(),
-        };
+        let files = by_memory.as_ref().map_or(String::new(), |(dir, need)| {
+            format!(
+                ", through task files in {}; this process still holds the whole mesh \
+                 (about {}: docs/partitioned.md)",
+                dir.display(),
+                memory::Bytes(*need)
+            )
+        });
         global.say(format_args!(
             "{}: building the hierarchy {chosen}{files}",
             path.display()
         ));
         Ok(PmOptions {
             block_vertices: chosen.block_vertices(),
-            block_scratch: scratch,
+            block_scratch: self.block_files.clone().or(by_memory.map(|(dir, _)| dir)),
             block_runner: self.runner.clone(),
             block_input: Some(path.to_path_buf()),
             ..PmOptions::default()
